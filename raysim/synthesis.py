@@ -54,7 +54,7 @@ def synthesize_if(tau: np.ndarray, amplitude, config: RadarConfig, *, out: np.nd
     config : RadarConfig
         Waveform (``f_c``, ``mu``, ``f_s``, samples per chirp).
     out : ndarray, shape ``[chirp, channel, sample]``, complex64, optional
-        Buffer to add into (it is *not* cleared); a zeroed one is made if omitted.
+        Buffer to add into (it is *not* cleared); a new one is made if omitted.
     chirp_block : int
         Chirps processed together (bounds the temporaries).
 
@@ -65,8 +65,12 @@ def synthesize_if(tau: np.ndarray, amplitude, config: RadarConfig, *, out: np.nd
     tau, amp = _check_paths(tau, amplitude, config)
     n_path, n_chirp, n_chan = tau.shape
     k = config.num_samples
-    if out is None:
-        out = np.zeros((n_chirp, n_chan, k), dtype=np.complex64)
+    fresh = out is None and n_path > 0
+    if out is None and n_path == 0:
+        return np.zeros((n_chirp, n_chan, k), dtype=np.complex64)
+    if fresh:
+        # written block by block below: np.empty avoids touching every page twice
+        out = np.empty((n_chirp, n_chan, k), dtype=np.complex64)
     elif out.shape != (n_chirp, n_chan, k) or out.dtype != np.complex64:
         raise ValueError(
             f"out must be complex64 of shape {(n_chirp, n_chan, k)}, got {out.dtype} {out.shape}"
@@ -88,9 +92,11 @@ def synthesize_if(tau: np.ndarray, amplitude, config: RadarConfig, *, out: np.nd
             head = (amp[p, n0:n1, :, None] * np.exp(1j * (phase0[..., None]
                                                  + 2 * np.pi * fb[..., None] * coarse)))
             tail = np.exp(1j * 2 * np.pi * fb[..., None] * fine)
+            target = view[n0:n1] if (fresh and p == 0) else blk
             np.multiply(head.astype(np.complex64)[..., :, None],
-                        tail.astype(np.complex64)[..., None, :], out=blk)
-            view[n0:n1] += blk
+                        tail.astype(np.complex64)[..., None, :], out=target)
+            if target is blk:
+                view[n0:n1] += blk
     return out
 
 
