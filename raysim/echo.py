@@ -167,7 +167,8 @@ def point_target_delays(config: RadarConfig, array: VirtualArray, trajectory: Tr
 
     Returns
     -------
-    tau : ndarray, shape ``[target, chirp, channel]`` (or ``[..., sample]`` with ``intra_chirp``) [s]
+    tau : ndarray, shape ``[target, chirp, channel]`` [s]
+        With ``intra_chirp`` a trailing ``sample`` axis is added.
     amplitude : ndarray, same shape as ``tau`` [sqrt(W)]
     """
     targets = list(targets)

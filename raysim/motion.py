@@ -147,7 +147,7 @@ class Trajectory:
         return self.states(t)[2][..., :3]
 
     def euler(self, t) -> np.ndarray:
-        """Euler angles ``(yaw, pitch, roll)`` (scipy ``"ZYX"`` order), shape ``[time, 3]`` [rad]."""
+        """Euler angles ``(yaw, pitch, roll)`` (scipy ``"ZYX"``), shape ``[time, 3]`` [rad]."""
         q = self.states(t)[0]
         return q[..., [5, 4, 3]]
 

@@ -4,8 +4,16 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from raysim.motion import (HoverJitterSpec, Ramp, Sinusoid, Trajectory, constant_velocity,
-                           hover_jitter, sinusoid, stationary)
+from raysim.motion import (
+    HoverJitterSpec,
+    Ramp,
+    Sinusoid,
+    Trajectory,
+    constant_velocity,
+    hover_jitter,
+    sinusoid,
+    stationary,
+)
 
 #: Central-difference step [s] and the agreement it allows (O(h^2) truncation).
 FD_STEP = 1e-6

@@ -11,8 +11,13 @@ from scipy.spatial.transform import Rotation
 from raysim import metrics, processing
 from raysim.arrays import ti_3tx4rx, upa
 from raysim.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.echo import (PointTarget, direction, noise_power, point_target_delays,
-                         simulate_point_targets)
+from raysim.echo import (
+    PointTarget,
+    direction,
+    noise_power,
+    point_target_delays,
+    simulate_point_targets,
+)
 from raysim.motion import Ramp, Trajectory, constant_velocity, sinusoid
 from raysim.synthesis import synthesize_if, synthesize_if_direct
 
