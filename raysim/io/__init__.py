@@ -1,0 +1,20 @@
+"""Recorded-data import and export.
+
+* :mod:`raysim.io.ti_dca1000`: TI mmWave DCA1000 raw ADC captures
+  (``read_dca1000``, ``write_dca1000``) as ``[frame, chirp, channel, sample]``
+  cubes with ramp time stamps.
+* :mod:`raysim.io.imu_log`: IMU logs as CSV with units in the header
+  (``read_imu_csv``, ``write_imu_csv``).
+"""
+
+from raysim.io.imu_log import read_imu_csv, write_imu_csv
+from raysim.io.ti_dca1000 import (
+    Dca1000Capture,
+    Dca1000Format,
+    parse_dca1000,
+    read_dca1000,
+    write_dca1000,
+)
+
+__all__ = ["Dca1000Capture", "Dca1000Format", "parse_dca1000", "read_dca1000",
+           "write_dca1000", "read_imu_csv", "write_imu_csv"]
