@@ -385,6 +385,8 @@ class ImuSamples:
         Realised errors and truth times (simulation only).
     source : str
         Where the samples come from (preset name, file path).
+    rate : float or None
+        Nominal output rate on the IMU clock [Hz] (None when unknown).
     """
 
     time: np.ndarray
@@ -393,6 +395,7 @@ class ImuSamples:
     spec: ImuSpec | None = None
     truth: ImuErrorState | None = None
     source: str = ""
+    rate: float | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.time, dtype=float)
@@ -604,7 +607,8 @@ class Imu:
                               gyro_bias=b_g, accel_bias=b_a, time_offset=self.time_offset,
                               clock_drift_ppm=self.clock_drift_ppm, seed=seed_value)
         return ImuSamples(t_imu, gyro, accel, spec=self.spec, truth=truth,
-                          source=f"simulated {self.spec.name} IMU at {self.rate:g} Hz")
+                          source=f"simulated {self.spec.name} IMU at {self.rate:g} Hz",
+                          rate=self.rate)
 
     def _corrupt(self, u: np.ndarray, err: SensorErrors, what: str, rngs: dict,
                  matrix, turn_on) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -161,6 +161,7 @@ def test_to_arrays_gives_plain_writable_copies():
     t[0] = -1.0
     assert s.time[0] != -1.0
     np.testing.assert_allclose(s.mean_rate, 500.0)
+    assert s.rate == 500.0
 
 
 # ------------------------------------------------------------------ error models

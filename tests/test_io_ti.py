@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from raysim.config import RadarConfig
 from raysim.imu import DEG, STANDARD_GRAVITY, ImuSamples, simulate_imu
@@ -320,3 +322,18 @@ def test_imu_csv_writer_validates(tmp_path):
         write_imu_csv(tmp_path / "x.csv", _samples(), gyro_unit="rpm")
     with pytest.raises(ValueError, match="ImuSamples"):
         write_imu_csv(tmp_path / "x.csv", np.zeros((3, 7)))
+
+
+@settings(max_examples=40, deadline=None)
+@given(layout=st.sampled_from(["2lane", "4lane"]), cplx=st.booleans(),
+       num_rx=st.integers(1, 4), num_tx=st.integers(1, 3), num_loops=st.integers(1, 4),
+       half_samples=st.integers(1, 5), n_frames=st.integers(1, 3), seed=st.integers(0, 99))
+def test_round_trip_property(tmp_path_factory, layout, cplx, num_rx, num_tx, num_loops,
+                             half_samples, n_frames, seed):
+    fmt = Dca1000Format(num_samples=2 * half_samples, slot_interval=40e-6, num_rx=num_rx,
+                        num_tx=num_tx, num_loops=num_loops, layout=layout, complex=cplx)
+    cube = random_cube(fmt, n_frames, seed)
+    path = write_dca1000(tmp_path_factory.mktemp("dca") / "a.bin", cube, fmt)
+    cap = read_dca1000(path, fmt)
+    np.testing.assert_array_equal(cap.cube, cube)
+    assert cap.chirp_time.shape == (n_frames, num_loops, num_tx)

@@ -33,9 +33,12 @@ device drives and on the ADC output format. Two layouts are supported:
 
 These are the layouts unpacked by TI's ``readDCA1000`` MATLAB scripts for
 the two device families (mmWave Studio user guide; TI application note
-SWRA581, "Mmwave Radar Device ADC Raw Data Capture"). Check the lane count set
-in mmWave Studio for your board; files that still contain the raw UDP packet
-headers (``adc_data_Raw_0.bin`` from a CLI capture) are not supported.
+SWRA581, "Mmwave Radar Device ADC Raw Data Capture"). What decides the layout
+is the LVDS lane configuration of the capture, not the part number alone:
+xWR18xx parts such as the AWR1843 are normally captured over two lanes and
+then use ``"2lane"``. Files that still contain the raw UDP packet headers
+(``adc_data_Raw_0.bin`` from a DCA1000 CLI capture before post-processing)
+are not supported.
 
 Chirp order (TDM MIMO): the file holds frames, each frame ``num_loops`` loops,
 each loop one ramp per transmit slot in chirp-configuration order::
