@@ -1,0 +1,548 @@
+"""From a :class:`~raysim.scenario.Scenario` to frames, stores and metrics.
+
+* :func:`frame_source` returns a callable ``f -> RadarFrame`` for frame ``f``
+  (exact point-target oracle, or the Sionna RT renderer for bundled / mesh
+  scenes, loaded once);
+* :func:`render` writes every frame to a Zarr store with the truth pose and
+  the IMU log, resuming after the last complete frame;
+* :func:`analyse` measures the CONVENTIONS.md metrics of frames (range, angle,
+  pseudo-velocity, Doppler width, entropies);
+* :func:`evaluate` renders a scenario in memory and measures the uncompensated
+  data and, when the ``compensation`` package provides them, the paper and
+  exact compensation chains.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .frame import RadarFrame
+from .scenario import Scenario
+
+__all__ = [
+    "FeatureUnavailable", "Reference", "RenderSummary", "CHAINS", "frame_source",
+    "reference_target", "imu_log", "render", "render_frames", "render_dataset", "analyse",
+    "compensate", "evaluate", "gate_snapshots", "METRIC_UNITS",
+]
+
+#: Names of the processing chains compared by :func:`evaluate` and the reports.
+CHAINS = ("uncompensated", "paper", "exact")
+
+#: Unit of every metric returned by :func:`analyse`.
+METRIC_UNITS = {
+    "range_m": "m", "az_deg": "deg", "el_deg": "deg", "angle_error_deg": "deg",
+    "pseudo_velocity_mps": "m/s", "doppler_width_hz": "Hz", "doppler_width_bins": "bins",
+    "entropy_ae_nats": "nats", "entropy_rd_nats": "nats", "peak_power_db": "dB(W)",
+}
+
+#: Half-width of the azimuth / elevation scan of :func:`analyse` [deg].
+ANGLE_LIMIT_DEG = 60.0
+#: Step of the azimuth / elevation scan of :func:`analyse` [deg].
+ANGLE_STEP_DEG = 1.0
+#: Most slow-time snapshots beamformed into the angle map (decimated beyond).
+MAX_SNAPSHOTS = 256
+#: Half-width of the range window searched around a known target range [m].
+RANGE_SEARCH_M = 1.5
+
+
+class FeatureUnavailable(RuntimeError):
+    """A part of the simulator that this run needs is not installed or not working."""
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Truth direction and range of the reference target, from the nominal radar pose.
+
+    Attributes
+    ----------
+    range_m : float
+        Range [m].
+    az_deg, el_deg : float
+        Direction in frame A at the nominal attitude [deg].
+    """
+
+    range_m: float
+    az_deg: float
+    el_deg: float
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Unit vector in A, shape ``[3]``."""
+        from .echo import direction
+
+        return direction(math.radians(self.az_deg), math.radians(self.el_deg))
+
+
+@dataclass
+class RenderSummary:
+    """What :func:`render` did.
+
+    Attributes
+    ----------
+    path : str
+        Zarr store.
+    frames_total : int
+        Frames the scenario asks for.
+    frames_rendered : int
+        Frames computed by this call.
+    frames_resumed : int
+        Frames found complete in the store and skipped.
+    """
+
+    path: str
+    frames_total: int
+    frames_rendered: int
+    frames_resumed: int
+    notes: list[str] = field(default_factory=list)
+
+
+# ------------------------------------------------------------------- sources
+def _rt_scene(scenario: Scenario):
+    try:
+        from .rt.render import render_scene
+        from .rt.scenes import load_scene
+        from .rt.trace import MonostaticTracer
+    except ImportError as exc:
+        raise FeatureUnavailable(
+            f"scene kind {scenario.scene.kind!r} needs the ray tracer (raysim.rt with Sionna "
+            f"RT): {exc}") from None
+    target = scenario.scene.name if scenario.scene.kind == "bundled" else scenario.scene.path
+    if scenario.scene.kind == "mesh" and not str(target).endswith(".xml"):
+        raise ValueError(f"scene.path: got {target!r}, expected a Mitsuba .xml scene file "
+                         f"(convert other meshes with scenes/generate.py as a model)")
+    cfg = scenario.radar_config()
+    try:
+        scene = load_scene(target, frequency=cfg.carrier_frequency)
+    except ValueError:
+        raise
+    except Exception as exc:  # backend failures (no LLVM, no GPU) are not bad input
+        raise FeatureUnavailable(f"cannot load scene {target!r} with Sionna RT: "
+                                 f"{type(exc).__name__}: {exc}") from None
+    tracer = MonostaticTracer(max_depth=max(1, scenario.scene.max_depth), seed=scenario.seed)
+    return scene, tracer, render_scene
+
+
+def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFrame]:
+    """A callable that renders frame ``f`` of the scenario.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    trajectory : Trajectory, optional
+        Re-use an already built motion (default: ``scenario.trajectory()``).
+
+    Returns
+    -------
+    callable
+        ``source(f) -> RadarFrame`` with ``data`` ``[chirp, channel, sample]``;
+        the callable carries ``source.reference`` (a :class:`Reference` or None).
+
+    Raises
+    ------
+    FeatureUnavailable
+        For a ray-traced scene when Sionna RT cannot be used here.
+    """
+    from .echo import simulate_point_targets
+
+    cfg = scenario.radar_config()
+    arr = scenario.virtual_array()
+    traj = scenario.trajectory() if trajectory is None else trajectory
+    lever = scenario.lever_arm
+    if scenario.scene.kind == "points":
+        targets = scenario.point_targets()
+
+        def source(f: int) -> RadarFrame:
+            return simulate_point_targets(cfg, arr, targets, traj, lever_arm=lever, frame=f,
+                                          intra_chirp=scenario.intra_chirp,
+                                          noise=scenario.noise, seed=scenario.seed + f)
+
+        source.reference = reference_target(scenario)
+        return source
+
+    scene, tracer, render_scene = _rt_scene(scenario)
+
+    def rt_source(f: int) -> RadarFrame:
+        return render_scene(scene, cfg, arr, traj, lever, tracer=tracer, frame=f,
+                            noise=scenario.noise, seed=scenario.seed + f)
+
+    rt_source.reference = reference_target(scenario, scene)
+    return rt_source
+
+
+def reference_target(scenario: Scenario, rt_scene=None) -> Reference | None:
+    """Range and direction of the first target seen from the nominal radar pose.
+
+    Point scenes: the first ``[[scene.targets]]`` entry. Ray-traced scenes: the
+    first discrete target of the loaded scene (None when it has none).
+    """
+    if scenario.scene.kind == "points":
+        t = scenario.scene.targets[0]
+        return Reference(t.range_m, t.az_deg, t.el_deg)
+    targets = getattr(rt_scene, "targets", None) or []
+    if not targets:
+        return None
+    from .echo import az_el
+
+    d = np.asarray(targets[0].position, dtype=float) - scenario.lever_arm
+    r = float(np.linalg.norm(d))
+    az, el = az_el(d / r)
+    return Reference(r, float(np.degrees(az)), float(np.degrees(el)))
+
+
+def imu_log(scenario: Scenario, trajectory=None):
+    """Simulate the scenario's IMU over all frames as an ``imu_time`` Dataset.
+
+    Returns
+    -------
+    xarray.Dataset or None
+        See :func:`raysim.storage.imu_dataset`; None when :mod:`raysim.imu`
+        is not available.
+    """
+    try:
+        from .imu import simulate_imu
+    except ImportError:
+        return None
+    from .storage import imu_dataset
+
+    traj = scenario.trajectory() if trajectory is None else trajectory
+    start, end = scenario.time_span()
+    rate = scenario.imu.rate_hz
+    s = simulate_imu(traj, scenario.imu_spec(), rate=rate, start=start, end=end + 2.0 / rate,
+                     seed=scenario.imu_seed, time_offset=scenario.imu.time_offset_s,
+                     clock_drift_ppm=scenario.imu.clock_drift_ppm)
+    t, w, a = s.to_arrays()
+    ds = imu_dataset(t, w, a, source=f"simulated, preset {scenario.imu.preset}")
+    ds.attrs.update({"imu_rate_hz": float(rate), "imu_seed": int(scenario.imu_seed),
+                     "imu_time_offset_s": float(scenario.imu.time_offset_s),
+                     "imu_clock_drift_ppm": float(scenario.imu.clock_drift_ppm)})
+    return ds
+
+
+def _scenario_key(scenario: Scenario) -> str:
+    d = scenario.to_dict()
+    d.pop("output", None)
+    return json.dumps(d, sort_keys=True, separators=(",", ":"))
+
+
+def _store_attrs(scenario: Scenario, reference: Reference | None) -> dict:
+    attrs = {"scenario_json": _scenario_key(scenario), "scenario_name": scenario.name,
+             "frames_planned": int(scenario.frames), "motion_name": scenario.trajectory().name}
+    if reference is not None:
+        attrs.update({"reference_range_m": reference.range_m,
+                      "reference_az_deg": reference.az_deg,
+                      "reference_el_deg": reference.el_deg})
+    return attrs
+
+
+def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
+           progress: bool = False, export_netcdf: str | Path | None = None,
+           max_frames: int | None = None) -> RenderSummary:
+    """Render every frame of a scenario into a Zarr store, resuming if interrupted.
+
+    Frame ``f`` is appended only after frames ``0 .. f-1``; a store written by
+    the same scenario (``output`` aside) is continued from its first missing
+    frame. Each frame is marked complete only after its arrays are written.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    store : path
+        Zarr store (a folder).
+    overwrite : bool
+        Start again even if the store holds frames of this or another scenario.
+    progress : bool
+        Show a tqdm progress bar on stderr.
+    export_netcdf : path, optional
+        Also export the finished store to this NetCDF file.
+    max_frames : int, optional
+        Stop after rendering this many new frames (the store stays resumable).
+
+    Returns
+    -------
+    RenderSummary
+
+    Raises
+    ------
+    ValueError
+        The store holds frames of a different scenario (and ``overwrite`` is False).
+    """
+    from . import storage
+
+    store = Path(store)
+    traj = scenario.trajectory()
+    done = 0
+    if store.exists() and not overwrite:
+        if not storage.store_exists(store):
+            raise ValueError(f"{str(store)!r} exists and is not a Zarr store; choose another "
+                             f"--out or pass --overwrite")
+        import zarr
+
+        attrs = dict(zarr.open_group(str(store), mode="r").attrs)
+        if attrs.get("scenario_json") != _scenario_key(scenario):
+            raise ValueError(f"store {str(store)!r} holds frames of a different scenario "
+                             f"({attrs.get('scenario_name')!r}); pass --overwrite to replace "
+                             f"it or choose another --out")
+        done = storage.repair_store(store)
+    elif store.exists() and overwrite:
+        import shutil
+
+        shutil.rmtree(store) if store.is_dir() else store.unlink()
+
+    todo = list(range(done, scenario.frames))
+    if max_frames is not None:
+        todo = todo[: max(0, int(max_frames))]
+    summary = RenderSummary(str(store), scenario.frames, 0, done)
+    if todo:
+        source = frame_source(scenario, traj)
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=scenario.frames, initial=done, unit="frame", desc="render")
+        try:
+            for f in todo:
+                fr = source(f)
+                if f == 0 or not storage.store_exists(store):
+                    imu = imu_log(scenario, traj)
+                    if imu is None:
+                        summary.notes.append("raysim.imu is not available: no IMU log stored")
+                    ds = storage.frames_to_dataset([fr], traj, imu=imu,
+                                                   attrs=_store_attrs(scenario, source.reference))
+                    storage.write_store(store, ds, overwrite=True)
+                else:
+                    storage.append_frames(store, storage.frames_to_dataset([fr], traj))
+                summary.frames_rendered += 1
+                if bar is not None:
+                    bar.update(1)
+        finally:
+            if bar is not None:
+                bar.close()
+    if export_netcdf is not None and storage.frames_complete(store) == scenario.frames:
+        storage.export_netcdf(storage.open_store(store), export_netcdf)
+    return summary
+
+
+def render_frames(scenario: Scenario, trajectory=None) -> list[RadarFrame]:
+    """All frames of a scenario in memory (``[chirp, channel, sample]`` each)."""
+    source = frame_source(scenario, trajectory)
+    return [source(f) for f in range(scenario.frames)]
+
+
+def render_dataset(scenario: Scenario) -> object:
+    """All frames, truth pose and IMU log as one in-memory :class:`xarray.Dataset`."""
+    from . import storage
+
+    traj = scenario.trajectory()
+    source = frame_source(scenario, traj)
+    frames = [source(f) for f in range(scenario.frames)]
+    return storage.frames_to_dataset(frames, traj, imu=imu_log(scenario, traj),
+                                     attrs=_store_attrs(scenario, source.reference))
+
+
+# ------------------------------------------------------------------ analysis
+def gate_snapshots(data: np.ndarray, range_bin: float) -> np.ndarray:
+    """Hann-windowed range DFT of IF data at one (fractional) range bin.
+
+    Parameters
+    ----------
+    data : ndarray, shape ``[chirp, channel, sample]``
+    range_bin : float
+        Range-FFT bin (unpadded FFT of length ``sample``).
+
+    Returns
+    -------
+    ndarray, shape ``[chirp, channel]``, complex64
+        Equal to ``range_compress(data)[..., range_bin]`` for an integer bin.
+    """
+    from .processing import window
+
+    k = data.shape[-1]
+    w = window("hann", k)
+    kern = (w / w.sum()) * np.exp(-2j * np.pi * range_bin * np.arange(k) / k)
+    return (data @ kern.astype(np.complex64)).astype(np.complex64)
+
+
+def _parabolic_peak(y: np.ndarray, i: int) -> float:
+    from .metrics import parabolic_offset
+
+    if 0 < i < y.size - 1:
+        db = 10 * np.log10(np.maximum(y[i - 1: i + 2], 1e-300))
+        return i + parabolic_offset(db[0], db[1], db[2])
+    return float(i)
+
+
+def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
+            angle_limit_deg: float = ANGLE_LIMIT_DEG, angle_step_deg: float = ANGLE_STEP_DEG,
+            return_maps: bool = False):
+    """CONVENTIONS.md metrics of one or more frames of the same radar.
+
+    Procedure: range profile of frame 0 (Hann, summed over chirps and
+    channels), peak within :data:`RANGE_SEARCH_M` of the reference range (or
+    the global peak) refined by a parabola on dB; channel snapshots of every
+    frame at that range; non-coherent azimuth-elevation beam scan (grid
+    ``+-angle_limit_deg`` in steps of ``angle_step_deg``, at most
+    :data:`MAX_SNAPSHOTS` snapshots) and its interpolated peak and entropy;
+    slow-time signal of frame 0 beamformed towards the reference direction (or
+    the measured one) for the pseudo-velocity and Doppler width; entropy of the
+    range-Doppler map of frame 0.
+
+    Parameters
+    ----------
+    frames : sequence of RadarFrame
+    reference : Reference, optional
+        Truth target; sets the range window, the beam for the Doppler metrics
+        and the angle error.
+    return_maps : bool
+        Also return the maps (``range_profile``, ``rd``, ``ae``).
+
+    Returns
+    -------
+    dict
+        Metric name -> value, units in :data:`METRIC_UNITS`
+        (``angle_error_deg`` is NaN without a reference). With
+        ``return_maps``, a tuple ``(metrics, maps)``.
+    """
+    from .metrics import doppler_mainlobe_width, pseudo_velocity
+    from .processing import (Map, azimuth_elevation_map, beamform, range_compress,
+                             range_doppler_map)
+
+    frames = list(frames)
+    if not frames:
+        raise ValueError("frames is empty: nothing to analyse")
+    if not (0 < angle_step_deg <= angle_limit_deg <= 90):
+        raise ValueError(f"need 0 < angle_step_deg <= angle_limit_deg <= 90, got "
+                         f"{angle_step_deg!r}, {angle_limit_deg!r}")
+    cfg, arr = frames[0].config, frames[0].array
+    wl = cfg.center_wavelength
+    rc0 = range_compress(frames[0].data)                       # [chirp, channel, range]
+    profile = np.sum(np.abs(rc0) ** 2, axis=(0, 1))             # [range]
+    r_axis = cfg.range_axis(rc0.shape[-1])[: rc0.shape[-1]]
+    n_range = r_axis.size
+    profile = profile[:n_range]
+    search = profile.copy()
+    if reference is not None:
+        outside = np.abs(r_axis - reference.range_m) > RANGE_SEARCH_M
+        if not np.all(outside):
+            search[outside] = 0.0
+    i = int(np.argmax(search))
+    fbin = _parabolic_peak(profile, i)
+    range_m = float(np.interp(fbin, np.arange(n_range), r_axis))
+    rd = range_doppler_map(rc0, cfg)
+    del rc0
+
+    snaps = np.concatenate([gate_snapshots(fr.data, i) for fr in frames])  # [snapshot, channel]
+    step = max(1, int(math.ceil(snaps.shape[0] / MAX_SNAPSHOTS)))
+    grid = np.deg2rad(np.arange(-angle_limit_deg, angle_limit_deg + 1e-9, angle_step_deg))
+    ae = azimuth_elevation_map(snaps[::step], arr, wl, grid, grid)
+    pk = ae.peak()
+    az_deg, el_deg = math.degrees(pk["azimuth"]), math.degrees(pk["elevation"])
+
+    if reference is not None:
+        from .metrics import angle_error_deg
+
+        u = reference.direction
+        err = angle_error_deg(pk["azimuth"], pk["elevation"], math.radians(reference.az_deg),
+                              math.radians(reference.el_deg))
+    else:
+        from .echo import direction
+
+        u = direction(pk["azimuth"], pk["elevation"])
+        err = math.nan
+    n_chirp = frames[0].data.shape[0]
+    slow = beamform(snaps[:n_chirp], arr, wl, np.reshape(u, (1, 3)))[:, 0]
+    width = doppler_mainlobe_width(slow, cfg.chirp_interval)
+    metrics = {
+        "range_m": range_m,
+        "az_deg": az_deg,
+        "el_deg": el_deg,
+        "angle_error_deg": float(err),
+        "pseudo_velocity_mps": pseudo_velocity(slow, cfg.chirp_interval, wl),
+        "doppler_width_hz": width,
+        "doppler_width_bins": width / cfg.doppler_resolution,
+        "entropy_ae_nats": ae.entropy(),
+        "entropy_rd_nats": rd.entropy(),
+        "peak_power_db": float(10 * np.log10(max(profile[i] / snaps.shape[1], 1e-300))),
+    }
+    if return_maps:
+        return metrics, {"range_profile": Map(profile, ("range",), {"range": r_axis}),
+                         "rd": rd, "ae": ae, "range_bin": i}
+    return metrics
+
+
+# -------------------------------------------------------------- compensation
+def compensate(frames: Sequence[RadarFrame], chain: str, imu, *, scenario: Scenario | None = None
+               ) -> list[RadarFrame]:
+    """Apply a compensation chain of the ``compensation`` package to frames.
+
+    Parameters
+    ----------
+    frames : sequence of RadarFrame
+    chain : {"paper", "exact"}
+    imu : xarray.Dataset
+        IMU log (``imu_time``, ``imu_gyro``, ``imu_accel``).
+    scenario : Scenario, optional
+        Source of the IMU clock parameters.
+
+    Raises
+    ------
+    FeatureUnavailable
+        When the ``compensation`` package does not provide the chain.
+    """
+    if chain not in ("paper", "exact"):
+        raise ValueError(f"chain: got {chain!r}, expected 'paper' or 'exact'")
+    try:
+        import compensation
+    except ImportError as exc:
+        raise FeatureUnavailable(f"the compensation package is not installed: {exc}") from None
+    fn = getattr(compensation, f"compensate_{chain}", None)
+    if fn is None:
+        raise FeatureUnavailable(f"the compensation package has no {chain} chain "
+                                 f"(compensation.compensate_{chain}) yet")
+    return [fn(fr, imu) for fr in frames]
+
+
+def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, return_frames: bool = False):
+    """Render a scenario in memory and measure every chain.
+
+    Returns
+    -------
+    dict
+        ``{"reference": Reference or None, "chains": {chain: metrics}, "notes": [str]}``;
+        chains that cannot run here are listed in ``notes`` instead. With
+        ``return_frames``, ``"frames"`` (chain -> frames) and ``"imu"`` are added.
+    """
+    bad = [c for c in chains if c not in CHAINS]
+    if bad:
+        raise ValueError(f"chains: got {bad}, expected names from {list(CHAINS)}")
+    traj = scenario.trajectory()
+    source = frame_source(scenario, traj)
+    frames = [source(f) for f in range(scenario.frames)]
+    out: dict = {"reference": source.reference, "chains": {}, "notes": []}
+    per_chain = {}
+    imu = None
+    if any(c != "uncompensated" for c in chains):
+        imu = imu_log(scenario, traj)
+    for chain in chains:
+        if chain == "uncompensated":
+            fr = frames
+        else:
+            if imu is None:
+                out["notes"].append(f"{chain}: raysim.imu is not available")
+                continue
+            try:
+                fr = compensate(frames, chain, imu, scenario=scenario)
+            except (FeatureUnavailable, ImportError) as exc:
+                out["notes"].append(f"{chain}: {exc}")
+                continue
+        per_chain[chain] = fr
+        out["chains"][chain] = analyse(fr, source.reference)
+    if return_frames:
+        out["frames"] = per_chain
+        out["imu"] = imu
+    return out
