@@ -138,6 +138,23 @@ def test_round_trip_exact(tmp_path, layout, cplx, num_rx, num_tx):
     np.testing.assert_array_equal(cap.channel_rx, np.tile(np.arange(num_rx), num_tx))
 
 
+def test_read_frame_subset(tmp_path):
+    fmt = Dca1000Format(num_samples=8, slot_interval=60e-6, num_rx=3, num_tx=2, num_loops=4,
+                        layout="4lane", frame_period=2e-3)
+    cube = random_cube(fmt, 6, seed=4)
+    path = write_dca1000(tmp_path / "a.bin", cube, fmt)
+    full = read_dca1000(path, fmt)
+    part = read_dca1000(path, fmt, frames=slice(2, 5))
+    np.testing.assert_array_equal(part.cube, cube[2:5])
+    np.testing.assert_array_equal(part.chirp_time, full.chirp_time[2:5])
+    np.testing.assert_array_equal(read_dca1000(path, fmt, frames=slice(-1, None)).cube,
+                                  cube[-1:])
+    with pytest.raises(ValueError, match="selects no frame"):
+        read_dca1000(path, fmt, frames=slice(6, 9))
+    with pytest.raises(ValueError, match="step 1"):
+        read_dca1000(path, fmt, frames=slice(0, 6, 2))
+
+
 def test_4lane_unused_lanes_are_zero_in_file(tmp_path):
     fmt = Dca1000Format(num_samples=4, slot_interval=60e-6, num_rx=2, layout="4lane")
     cube = random_cube(fmt, 1, seed=3)

@@ -214,9 +214,9 @@ class Dca1000Format:
         return (f"{self.num_loops} loops x {self.num_tx} tx x {self.num_lanes} lanes x "
                 f"{self.num_samples} samples x {iq} x 2 bytes = {self.bytes_per_frame} bytes")
 
-    def chirp_times(self, num_frames: int) -> np.ndarray:
-        """Ramp start times, shape ``[frame, chirp, tx_slot]`` [s]."""
-        f = np.arange(num_frames)[:, None, None] * self.frame_interval
+    def chirp_times(self, num_frames: int, first_frame: int = 0) -> np.ndarray:
+        """Ramp start times of frames ``first_frame ...``, shape ``[frame, chirp, tx_slot]`` [s]."""
+        f = (first_frame + np.arange(num_frames))[:, None, None] * self.frame_interval
         slot = (np.arange(self.num_loops)[None, :, None] * self.num_tx
                 + np.arange(self.num_tx)[None, None, :])
         return float(self.t0) + f + slot * self.slot_interval
@@ -267,8 +267,24 @@ def _check_format(fmt) -> Dca1000Format:
     return fmt
 
 
+def _count_frames(n_words: int, fmt: Dca1000Format, drop_incomplete: bool, where: str) -> int:
+    n_frames, extra = divmod(n_words, fmt.words_per_frame)
+    if extra and not drop_incomplete:
+        raise ValueError(
+            f"{where}capture holds {2 * n_words} bytes, which is not a whole number of "
+            f"frames of {fmt.bytes_per_frame} bytes ({fmt.describe_frame()}): "
+            f"{n_frames} complete frame(s) and {2 * extra} bytes left over. The capture is "
+            f"truncated or the format does not match; pass drop_incomplete=True to keep the "
+            f"complete frames")
+    if n_frames == 0:
+        raise ValueError(
+            f"{where}capture holds {2 * n_words} bytes, less than one frame of "
+            f"{fmt.bytes_per_frame} bytes ({fmt.describe_frame()})")
+    return n_frames
+
+
 def parse_dca1000(words, fmt: Dca1000Format, *, drop_incomplete: bool = False,
-                  path: str = "") -> Dca1000Capture:
+                  path: str = "", first_frame: int = 0) -> Dca1000Capture:
     """Unpack a DCA1000 ``int16`` stream.
 
     Parameters
@@ -281,6 +297,9 @@ def parse_dca1000(words, fmt: Dca1000Format, *, drop_incomplete: bool = False,
         Drop a trailing partial frame instead of raising.
     path : str
         Source file, used in messages and stored in the result.
+    first_frame : int
+        Index of the first frame in ``words`` within the capture (sets the
+        time stamps).
 
     Returns
     -------
@@ -293,22 +312,11 @@ def parse_dca1000(words, fmt: Dca1000Format, *, drop_incomplete: bool = False,
         wrong format) or holds no complete frame.
     """
     fmt = _check_format(fmt)
+    first_frame = _positive_int("first_frame", first_frame, lo=0)
     words = np.asarray(words)
     if words.ndim != 1 or words.dtype.kind not in "iu":
         raise ValueError(f"words must be a 1-D integer array, got {words.dtype} {words.shape}")
-    where = f"{path}: " if path else ""
-    n_frames, extra = divmod(words.size, fmt.words_per_frame)
-    if extra and not drop_incomplete:
-        raise ValueError(
-            f"{where}capture holds {2 * words.size} bytes, which is not a whole number of "
-            f"frames of {fmt.bytes_per_frame} bytes ({fmt.describe_frame()}): "
-            f"{n_frames} complete frame(s) and {2 * extra} bytes left over. The capture is "
-            f"truncated or the format does not match; pass drop_incomplete=True to keep the "
-            f"complete frames")
-    if n_frames == 0:
-        raise ValueError(
-            f"{where}capture holds {2 * words.size} bytes, less than one frame of "
-            f"{fmt.bytes_per_frame} bytes ({fmt.describe_frame()})")
+    n_frames = _count_frames(words.size, fmt, drop_incomplete, f"{path}: " if path else "")
     w = words[: n_frames * fmt.words_per_frame].astype(np.int32)
     if fmt.adc_bits < 16:
         w = np.where(w > 2 ** (fmt.adc_bits - 1) - 1, w - 2 ** fmt.adc_bits, w)
@@ -335,11 +343,12 @@ def parse_dca1000(words, fmt: Dca1000Format, *, drop_incomplete: bool = False,
     cube.real = re
     cube.imag = 0.0 if im is None else im
     cube = cube.reshape(n_frames, fmt.num_loops, fmt.num_channels, k)
-    return Dca1000Capture(cube=cube, chirp_time=fmt.chirp_times(n_frames), fmt=fmt, path=path)
+    return Dca1000Capture(cube=cube, chirp_time=fmt.chirp_times(n_frames, first_frame), fmt=fmt,
+                          path=path)
 
 
 def read_dca1000(path: str | os.PathLike, fmt: Dca1000Format, *,
-                 drop_incomplete: bool = False) -> Dca1000Capture:
+                 drop_incomplete: bool = False, frames: slice | None = None) -> Dca1000Capture:
     """Read a DCA1000 capture file.
 
     Parameters
@@ -350,6 +359,9 @@ def read_dca1000(path: str | os.PathLike, fmt: Dca1000Format, *,
         Layout and timing (module docstring).
     drop_incomplete : bool
         Drop a trailing partial frame instead of raising.
+    frames : slice or None
+        Frames to load (step 1), e.g. ``slice(10, 20)``; only those bytes are
+        read (memory-mapped). None loads all frames.
 
     Returns
     -------
@@ -377,8 +389,22 @@ def read_dca1000(path: str | os.PathLike, fmt: Dca1000Format, *,
     if size % 2:
         raise ValueError(f"{path}: size {size} bytes is odd; a DCA1000 capture is a stream of "
                          f"2-byte int16 words (truncated capture?)")
-    words = np.fromfile(path, dtype=_INT16)
-    return parse_dca1000(words, fmt, drop_incomplete=drop_incomplete, path=str(path))
+    if frames is None:
+        words = np.fromfile(path, dtype=_INT16)
+        return parse_dca1000(words, fmt, drop_incomplete=drop_incomplete, path=str(path))
+    if not isinstance(frames, slice) or frames.step not in (None, 1):
+        raise ValueError(f"frames must be a slice with step 1 or None, got {frames!r}")
+    total = _count_frames(size // 2, fmt, drop_incomplete, f"{path}: ")
+    start, stop, _ = frames.indices(total)
+    if stop <= start:
+        raise ValueError(f"{path}: frames={frames!r} selects no frame of the {total} in the "
+                         f"capture")
+    words = np.memmap(path, dtype=_INT16, mode="r", offset=start * fmt.bytes_per_frame,
+                      shape=((stop - start) * fmt.words_per_frame,))
+    try:
+        return parse_dca1000(np.array(words), fmt, path=str(path), first_frame=start)
+    finally:
+        del words
 
 
 def write_dca1000(path: str | os.PathLike, cube, fmt: Dca1000Format) -> Path:
