@@ -89,6 +89,8 @@ class PathSet:
         Bitwise OR of ``interactions`` over the bounces.
     polarimetric : ndarray, shape ``[path, 2, 2]``, complex128
         Sionna's ``[rx_pol, tx_pol]`` matrix (V, H) per path, same scaling as ``amplitude``.
+    solver_delay : ndarray, shape ``[path]``
+        Sionna's own two-way delay (float32 precision) [s], kept for validation.
     tx_position, rx_position : ndarray, shape ``[3]``
         Transmitter / receiver positions used by the trace, in W [m].
     trace_time : float
@@ -106,6 +108,7 @@ class PathSet:
     interactions: np.ndarray
     kind: np.ndarray
     polarimetric: np.ndarray
+    solver_delay: np.ndarray
     tx_position: np.ndarray
     rx_position: np.ndarray
     trace_time: float = 0.0
@@ -133,7 +136,7 @@ class PathSet:
             raise ValueError(f"mask must have shape ({self.num_paths},), got {mask.shape}")
         fields = {n: getattr(self, n)[mask] for n in (
             "first_vertex", "last_vertex", "length", "amplitude", "velocity", "doppler",
-            "interactions", "kind", "polarimetric")}
+            "interactions", "kind", "polarimetric", "solver_delay")}
         return PathSet(**fields, tx_position=self.tx_position, rx_position=self.rx_position,
                        trace_time=self.trace_time, dropped=dict(self.dropped))
 
@@ -152,7 +155,7 @@ class PathSet:
             np.pad(s.interactions, ((0, 0), (0, depth - s.interactions.shape[1]))) for s in sets])
         fields = {n: np.concatenate([getattr(s, n) for s in sets]) for n in (
             "first_vertex", "last_vertex", "length", "amplitude", "velocity", "doppler", "kind",
-            "polarimetric")}
+            "polarimetric", "solver_delay")}
         dropped: dict = {}
         for s in sets:
             for k, v in s.dropped.items():
@@ -168,7 +171,7 @@ class PathSet:
         order = np.lexsort(keys) if self.num_paths else np.arange(0)
         fields = {n: getattr(self, n)[order] for n in (
             "first_vertex", "last_vertex", "length", "amplitude", "velocity", "doppler",
-            "interactions", "kind", "polarimetric")}
+            "interactions", "kind", "polarimetric", "solver_delay")}
         return PathSet(**fields, tx_position=self.tx_position, rx_position=self.rx_position,
                        trace_time=self.trace_time, dropped=dict(self.dropped))
 
@@ -390,10 +393,12 @@ class MonostaticTracer:
         inter = np.asarray(paths.interactions).reshape(-1, n_all).T.astype(np.uint32)
         verts_s = np.asarray(paths.vertices, dtype=np.float64).reshape(-1, n_all, 3)
         doppler = -np.asarray(paths.doppler, dtype=np.float64).reshape(-1)
+        tau = np.asarray(paths.tau, dtype=np.float64).reshape(-1)
         depth = np.count_nonzero(inter, axis=1)
         keep = valid & (depth > 0) & np.any(pol != 0, axis=(1, 2))
         dropped = {"invalid": int(n_all - keep.sum())}
-        pol, inter, depth, doppler = pol[keep], inter[keep], depth[keep], doppler[keep]
+        pol, inter, depth, doppler, tau = (pol[keep], inter[keep], depth[keep], doppler[keep],
+                                           tau[keep])
         verts = scene.to_world(verts_s[:, keep, :])              # [depth, path, 3]
         n = pol.shape[0]
         idx = np.arange(n)
@@ -444,14 +449,14 @@ class MonostaticTracer:
         ok = in_range & in_fov
         return PathSet(first[ok], last[ok], length[ok], scale * amp[ok], velocity[ok],
                        doppler[ok], np.ascontiguousarray(inter[ok]), kind[ok], scale * pol[ok],
-                       np.array(radar_w), np.array(radar_w), float(time), dropped)
+                       tau[ok], np.array(radar_w), np.array(radar_w), float(time), dropped)
 
 
 def _empty(radar_w, time) -> PathSet:
     z3 = np.zeros((0, 3))
     return PathSet(z3, z3.copy(), np.zeros(0), np.zeros(0, complex), z3.copy(), np.zeros(0),
                    np.zeros((0, 1), np.uint32), np.zeros(0, np.uint32),
-                   np.zeros((0, 2, 2), complex), np.array(radar_w), np.array(radar_w),
+                   np.zeros((0, 2, 2), complex), np.zeros(0), np.array(radar_w), np.array(radar_w),
                    float(time), {})
 
 

@@ -1,0 +1,51 @@
+"""Fixtures of the ray-tracing tests: backend, warm kernel cache, small radar."""
+
+from __future__ import annotations
+
+import pytest
+
+from raysim.arrays import upa
+from raysim.config import RadarConfig
+
+#: Dr.Jit threads used by the tests (the CI machine has 2 cores).
+RT_TEST_THREADS = 2
+
+
+@pytest.fixture(scope="session")
+def rt_backend():
+    """Configure Sionna RT on the CPU (LLVM) variant; skip when it cannot run here."""
+    from raysim.rt import backend
+
+    try:
+        return backend.configure("cpu", threads=RT_TEST_THREADS)
+    except backend.BackendError as err:
+        pytest.skip(f"Sionna RT LLVM backend unavailable: {err}")
+
+
+@pytest.fixture(scope="module")
+def warm_kernels(rt_backend):
+    """Trace a tiny scene once so that the Dr.Jit kernels are compiled and cached.
+
+    The first Sionna call of a process compiles its kernels (about 0.7 s with an
+    empty cache, 0.04 s with a warm one); warming up front keeps per-test
+    timings meaningful.
+    """
+    from raysim.rt.scenes import load_scene
+    from raysim.rt.trace import MonostaticTracer
+
+    cfg = RadarConfig(num_chirps=4)
+    scene = load_scene("flat_reflectors", frequency=cfg.carrier_frequency)
+    MonostaticTracer(samples_per_src=1000, max_depth=1)(scene, cfg)
+    return rt_backend
+
+
+@pytest.fixture(scope="session")
+def rt_radar() -> RadarConfig:
+    """Paper waveform with few chirps (tests that need no Doppler resolution)."""
+    return RadarConfig(num_chirps=8)
+
+
+@pytest.fixture(scope="session")
+def upa4(rt_radar):
+    """4 x 4 virtual UPA at half a wavelength."""
+    return upa(4, 4, wavelength=rt_radar.wavelength)
