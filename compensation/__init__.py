@@ -2,6 +2,45 @@
 
 Independent of :mod:`raysim`: inputs are plain arrays (cube, element
 positions, timing, IMU samples), so recorded data can be compensated directly.
+
+Modules
+-------
+``strapdown``
+    :func:`integrate_imu`: gyro and accelerometer samples to the pose at the
+    chirp times (:class:`PlatformMotion`).
+``paper``
+    The published chain: :func:`slow_time_correction`, :func:`tilt_correction`,
+    :func:`yaw_projection`, :func:`paper_chain`.
+``exact``
+    :func:`rigid_body_projection`: all six degrees of freedom in one
+    beamformer on a fixed global grid.
+``projection``
+    :func:`beam_projection` (the engine) and its result :class:`BeamCube`.
+``geometry``
+    Direction and angle-grid helpers.
+
+Axis names: ``chirp, channel, sample`` for IF data, ``range, doppler,
+azimuth, elevation`` for processed data (CONVENTIONS.md).
 """
 
+from .exact import rigid_body_projection
+from .geometry import az_el, direction, grid_directions
+from .paper import (
+    PAPER_STEPS,
+    paper_chain,
+    range_change,
+    slow_time_correction,
+    tilt_correction,
+    yaw_projection,
+)
+from .projection import BeamCube, beam_projection
+from .strapdown import STANDARD_GRAVITY, PlatformMotion, integrate_imu, static_motion
+
 __version__ = "0.1.0"
+
+__all__ = [
+    "BeamCube", "PAPER_STEPS", "PlatformMotion", "STANDARD_GRAVITY", "az_el",
+    "beam_projection", "direction", "grid_directions", "integrate_imu", "paper_chain",
+    "range_change", "rigid_body_projection", "slow_time_correction", "static_motion",
+    "tilt_correction", "yaw_projection",
+]

@@ -1,0 +1,335 @@
+"""Chirp-wise beam projection onto a fixed global angle grid.
+
+One engine serves three beamformers:
+
+* nominal (no motion): the conventional beam scan;
+* the paper's yaw projection: per-chirp steering with ``u_B = Rz(gamma_n)^T u_G``;
+* the exact rigid-body projection: per-chirp steering from the full attitude
+  and the displacement of the radar phase centre (all six degrees of freedom,
+  lever arm included), focused on each range gate, so the slow-time motion
+  phase is removed together with the array-manifold change.
+
+Signal model (CONVENTIONS.md). A static scatterer at world point
+``P = R u_G`` (``R`` the gate range, ``u_G`` a grid direction, both from the
+nominal radar phase centre) seen from a radar whose phase centre is displaced
+by ``d_n`` and whose attitude is ``R_n`` gives, after range compression at the
+mid-chirp wavelength ``lambda``::
+
+    x[n, m] ~ exp(+j 2 pi / lambda (2 rho_n - v_n . p_m))
+    rho_n = |P - d_n| - R,      v_n = R_n^T (P - d_n) / |P - d_n|
+
+with ``p_m`` the virtual positions (``p_tx + p_rx``) in the radar frame. The
+projection is the matched filter ``y[n] = sum_m conj(model[n, m]) x[n, m] / M``:
+a static scatterer in the beam gives a slow-time sequence without motion
+phase. Only the array aperture is treated in the far field (error
+``|p|^2 / (8 R)``, a few micrometres for the paper's 39 mm aperture at 15 m).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import scipy.fft
+
+from ._checks import choice, finite_array, positive, rotation_matrices
+from .geometry import grid_directions
+
+#: Grid-alignment tolerance of :func:`lattice_vectors` [m].
+LATTICE_TOL = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class BeamCube:
+    """Beam outputs on a fixed global angle grid, per chirp and range gate.
+
+    Attributes
+    ----------
+    data : ndarray, shape ``[chirp, range, azimuth, elevation]``, complex64
+        Beamformed, range-compressed samples (channel-averaged, so a unit
+        echo gives 1 in its beam) [same unit as the input cube].
+    chirp_time : ndarray, shape ``[chirp]``
+        Chirp start times [s].
+    range : ndarray, shape ``[range]``
+        Range of each gate from the nominal radar phase centre [m].
+    azimuth, elevation : ndarray, shapes ``[azimuth]``, ``[elevation]``
+        Global grid axes [rad] (directions in W at the nominal attitude).
+    wavelength : float
+        Wavelength used for the phases [m] (mid-chirp wavelength for
+        range-compressed data).
+    """
+
+    data: np.ndarray
+    chirp_time: np.ndarray
+    range: np.ndarray
+    azimuth: np.ndarray
+    elevation: np.ndarray
+    wavelength: float
+
+    dims = ("chirp", "range", "azimuth", "elevation")
+
+    def __post_init__(self) -> None:
+        expected = (len(self.chirp_time), len(self.range), len(self.azimuth),
+                    len(self.elevation))
+        if self.data.shape != expected:
+            raise ValueError(f"data shape {self.data.shape} does not match the axes "
+                             f"[chirp, range, azimuth, elevation] = {expected}")
+
+    @property
+    def chirp_interval(self) -> float:
+        """Mean slow-time sampling period [s] (NaN for a single chirp)."""
+        t = np.asarray(self.chirp_time)
+        return float(np.mean(np.diff(t))) if t.size > 1 else float("nan")
+
+    def doppler(self, *, window: str | None = "hann", n_fft: int | None = None) -> np.ndarray:
+        """Slow-time FFT (fft-shifted), gain-normalised.
+
+        Returns
+        -------
+        ndarray, shape ``[doppler, range, azimuth, elevation]``, complex64
+        """
+        n = self.data.shape[0]
+        if window is None:
+            w = np.ones(n)
+        else:
+            from scipy.signal import get_window
+
+            w = get_window(window, n, fftbins=True)
+        w = (w / w.sum()).astype(np.float32)
+        spec = scipy.fft.fft(self.data * w[:, None, None, None], n=n_fft, axis=0, workers=-1)
+        return np.fft.fftshift(spec, axes=0).astype(np.complex64, copy=False)
+
+    def doppler_frequency(self, n_fft: int | None = None) -> np.ndarray:
+        """Doppler frequency of each fft-shifted bin, shape ``[doppler]`` [Hz]."""
+        n = self.data.shape[0] if n_fft is None else int(n_fft)
+        return np.fft.fftshift(np.fft.fftfreq(n, d=self.chirp_interval))
+
+    def velocity(self, n_fft: int | None = None) -> np.ndarray:
+        """Range rate of each Doppler bin ``f_D lambda / 2``, shape ``[doppler]`` [m/s]."""
+        return self.doppler_frequency(n_fft) * self.wavelength / 2.0
+
+    def coherent_power(self, *, window: str | None = None) -> np.ndarray:
+        """Power of the (optionally windowed) sum over chirps, i.e. the zero-Doppler beam.
+
+        Returns
+        -------
+        ndarray, shape ``[range, azimuth, elevation]``, float64
+        """
+        n = self.data.shape[0]
+        if window is None:
+            s = self.data.mean(axis=0)
+        else:
+            from scipy.signal import get_window
+
+            w = get_window(window, n, fftbins=True)
+            s = np.tensordot(w / w.sum(), self.data, axes=(0, 0))
+        return np.abs(s.astype(np.complex128)) ** 2
+
+    def chirp_power(self, chirp: int) -> np.ndarray:
+        """Power map of one chirp, shape ``[range, azimuth, elevation]``."""
+        return np.abs(self.data[chirp].astype(np.complex128)) ** 2
+
+
+def lattice_vectors(positions, grid_shape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Origin and steps of a regular planar grid of element positions.
+
+    Parameters
+    ----------
+    positions : ndarray, shape ``[channel, 3]``
+        Element positions, x index major, y index minor [m].
+    grid_shape : (int, int)
+        ``(nx, ny)``.
+
+    Returns
+    -------
+    p0, a, b : ndarray, shape ``[3]`` each
+        ``positions[ix * ny + iy] = p0 + ix a + iy b`` [m].
+
+    Raises
+    ------
+    ValueError
+        If the positions do not form that grid.
+    """
+    p = np.asarray(positions, dtype=float)
+    nx, ny = (int(v) for v in grid_shape)
+    if nx < 1 or ny < 1 or nx * ny != p.shape[0]:
+        raise ValueError(f"grid_shape {tuple(grid_shape)} does not match {p.shape[0]} channels")
+    p0 = p[0]
+    a = p[ny] - p0 if nx > 1 else np.zeros(3)
+    b = p[1] - p0 if ny > 1 else np.zeros(3)
+    ix, iy = np.divmod(np.arange(nx * ny), ny)
+    model = p0 + ix[:, None] * a + iy[:, None] * b
+    err = np.abs(model - p).max()
+    if err > LATTICE_TOL + 1e-9 * np.abs(p).max():
+        raise ValueError(f"element_positions do not form a regular {nx} x {ny} grid "
+                         f"(x index major, y minor); deviation {err:.3g} m")
+    return p0, a, b
+
+
+def _powers(z: np.ndarray, n: int) -> np.ndarray:
+    """``z ** arange(n)`` along a new last axis by doubling (complex64, O(log n) passes)."""
+    out = np.empty(z.shape + (n,), dtype=np.complex64)
+    out[..., 0] = 1.0
+    if n == 1:
+        return out
+    out[..., 1] = z
+    have = 2
+    zp = (z * z).astype(np.complex64)
+    while have < n:
+        take = min(have, n - have)
+        np.multiply(out[..., :take], zp[..., None], out=out[..., have:have + take])
+        have += take
+        zp = zp * zp
+    return out
+
+
+def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azimuth,
+                    elevation, range_gates=None, chirp_time=None, attitude=None,
+                    displacement=None, focus: Literal["near", "far"] = "near",
+                    grid_shape: tuple[int, int] | None = None,
+                    method: Literal["auto", "lattice", "direct"] = "auto",
+                    chirp_block: int = 32, gate_block: int = 8) -> BeamCube:
+    """Project every chirp onto a fixed global angle grid, removing the platform motion.
+
+    Parameters
+    ----------
+    rc : ndarray, shape ``[chirp, channel, range]``
+        Range-compressed cube (complex).
+    element_positions : ndarray, shape ``[channel, 3]``
+        Virtual positions ``p_virt = p_tx + p_rx`` in the radar frame A [m]
+        (one-way phase convention ``2 pi / lambda u . p_virt``).
+    wavelength : float
+        Wavelength of the phases [m]; for range-compressed data the mid-chirp
+        wavelength ``c / (f_c + B / 2)``.
+    range_axis : array_like, shape ``[range]``
+        Range of each bin of ``rc`` [m] (only the selected gates are used).
+    azimuth, elevation : array_like, shapes ``[azimuth]``, ``[elevation]``
+        Global grid [rad].
+    range_gates : array_like of int, shape ``[gate]``, optional
+        Range bins to process (default all). The cost grows linearly with
+        their number; gate the cells of interest.
+    chirp_time : array_like, shape ``[chirp]``, optional
+        Chirp times [s] carried by the result (default ``arange(chirp)``).
+    attitude : array_like, shape ``[chirp, 3, 3]``, optional
+        ``R_WB`` per chirp; default identity.
+    displacement : array_like, shape ``[chirp, 3]``, optional
+        Radar phase-centre displacement from its nominal position, in W [m];
+        default zero.
+    focus : {"near", "far"}
+        ``"near"``: exact range from the displaced phase centre to the focal
+        point ``R u_G`` of each gate; ``"far"``: plane-wave phase
+        ``-u_G . d_n`` and steering direction ``u_G``.
+    grid_shape : (int, int), optional
+        ``(nx, ny)`` when the positions form a regular grid (x major, y minor);
+        enables the separable ``"lattice"`` method.
+    method : {"auto", "lattice", "direct"}
+        ``"lattice"`` factorises the steering as a product of two 1-D
+        geometric sequences (cost ``chirp * direction * (nx + ny)`` exponentials
+        plus one batched matrix product); ``"direct"`` builds the full
+        ``[direction, channel]`` steering per chirp (any geometry). ``"auto"``
+        picks ``"lattice"`` when ``grid_shape`` is given.
+    chirp_block, gate_block : int
+        Chirps and gates processed together (bound the temporaries). Within
+        a block of gates the steering direction is taken at the block's mean
+        range (the direction change across 8 gates of 15 cm is below 1e-5 rad
+        for centimetre displacements at 15 m); the range phase ``rho`` is
+        exact for every gate.
+
+    Returns
+    -------
+    BeamCube
+        ``data [chirp, range, azimuth, elevation]`` with the selected gates.
+
+    Notes
+    -----
+    ``y[n, g, d] = exp(-j 4 pi rho / lambda) / M sum_m exp(+j 2 pi / lambda
+    v_n . p_m) x[n, m, g]`` (see the module docstring). With no motion this is
+    the conventional beamformer ``a(u)^H x / M`` with
+    ``a = exp(-j 2 pi / lambda u . p)``.
+    """
+    x = np.asarray(rc)
+    if x.ndim != 3 or not np.iscomplexobj(x):
+        raise ValueError(f"rc must be a complex cube [chirp, channel, range], got "
+                         f"{x.dtype} array of shape {x.shape}")
+    n_chirp, n_chan, n_range = x.shape
+    p = finite_array("element_positions", element_positions, shape=(n_chan, 3),
+                     what="(one row per channel of rc)")
+    lam = positive("wavelength", wavelength)
+    r_axis = finite_array("range_axis", range_axis, ndim=1)
+    if r_axis.size < n_range:
+        raise ValueError(f"range_axis has {r_axis.size} entries but rc has {n_range} range bins")
+    az = finite_array("azimuth", azimuth, ndim=1)
+    el = finite_array("elevation", elevation, ndim=1)
+    if az.size < 1 or el.size < 1:
+        raise ValueError("azimuth and elevation must each hold at least one angle")
+    if range_gates is None:
+        gates = np.arange(n_range)
+    else:
+        gates = np.atleast_1d(np.asarray(range_gates))
+        if gates.ndim != 1 or not np.issubdtype(gates.dtype, np.integer) or gates.size < 1 or \
+                gates.min() < -n_range or gates.max() >= n_range:
+            raise ValueError(f"range_gates must be integer bin indices in [0, {n_range}), "
+                             f"got {range_gates!r}")
+        gates = gates % n_range
+    times = np.arange(n_chirp, dtype=float) if chirp_time is None else finite_array(
+        "chirp_time", chirp_time, shape=(n_chirp,))
+    rot = None if attitude is None else rotation_matrices("attitude", attitude, n_chirp)
+    disp = None if displacement is None else finite_array("displacement", displacement,
+                                                          shape=(n_chirp, 3))
+    choice("focus", focus, ("near", "far"))
+    choice("method", method, ("auto", "lattice", "direct"))
+    if method == "auto":
+        method = "lattice" if grid_shape is not None else "direct"
+    if method == "lattice":
+        if grid_shape is None:
+            raise ValueError('method="lattice" needs grid_shape=(nx, ny)')
+        p0, step_a, step_b = lattice_vectors(p, grid_shape)
+        nx, ny = (int(v) for v in grid_shape)
+    chirp_block = max(1, int(chirp_block))
+    gate_block = max(1, int(gate_block))
+
+    u_grid = grid_directions(az, el).reshape(-1, 3)             # [D, 3]
+    n_dir = u_grid.shape[0]
+    k = 2.0 * np.pi / lam
+    out = np.empty((n_chirp, gates.size, n_dir), dtype=np.complex64)
+    cdtype = np.complex64
+
+    for g0 in range(0, gates.size, gate_block):
+        gsel = gates[g0:g0 + gate_block]
+        ranges = r_axis[gsel]                                   # [G]
+        r_mid = float(ranges.mean())
+        xg = x[:, :, gsel]                                      # [N, M, G]
+        for n0 in range(0, n_chirp, chirp_block):
+            n1 = min(n0 + chirp_block, n_chirp)
+            c = n1 - n0
+            d = np.zeros((c, 3)) if disp is None else disp[n0:n1]
+            # --- range phase rho [c, G, D] and look direction w [c, D, 3]
+            if focus == "near":
+                focal = r_mid * u_grid[None] - d[:, None, :]                  # [c, D, 3]
+                w = focal / np.linalg.norm(focal, axis=-1, keepdims=True)
+                fp = ranges[None, :, None, None] * u_grid[None, None] - d[:, None, None, :]
+                rho = np.linalg.norm(fp, axis=-1) - ranges[None, :, None]     # [c, G, D]
+            else:
+                w = np.broadcast_to(u_grid[None], (c, n_dir, 3))
+                rho = np.broadcast_to(-(d @ u_grid.T)[:, None, :], (c, gsel.size, n_dir))
+            v = w if rot is None else np.einsum("cdi,cij->cdj", w, rot[n0:n1])  # R^T w
+            xb = xg[n0:n1].astype(cdtype, copy=False)                          # [c, M, G]
+            if method == "lattice":
+                za = np.exp(1j * k * (v @ step_a)).astype(cdtype)                 # [c, D]
+                zb = np.exp(1j * k * (v @ step_b)).astype(cdtype)
+                ea = _powers(za, nx)                                             # [c, D, nx]
+                eb = _powers(zb, ny)                                             # [c, D, ny]
+                # X[c, ix, iy, G] -> [c, ny, nx * G]
+                xr = xb.reshape(c, nx, ny, -1).transpose(0, 2, 1, 3).reshape(c, ny, -1)
+                z = np.matmul(eb, xr).reshape(c, n_dir, nx, -1)                   # [c, D, nx, G]
+                y = np.einsum("cdi,cdig->cgd", ea, z)                              # [c, G, D]
+                base = k * (v @ p0)                                              # [c, D]
+            else:
+                steer = np.exp(1j * k * (v @ p.T)).astype(cdtype)                 # [c, D, M]
+                y = np.matmul(steer, xb).transpose(0, 2, 1)                      # [c, G, D]
+                base = np.zeros((c, n_dir))
+            phase = base[:, None, :] - 2.0 * k * rho                             # [c, G, D]
+            out[n0:n1, g0:g0 + gsel.size] = y * (np.exp(1j * phase) / n_chan).astype(cdtype)
+    return BeamCube(out.reshape(n_chirp, gates.size, az.size, el.size), times,
+                    r_axis[gates].copy(), az.copy(), el.copy(), lam)
