@@ -4,6 +4,7 @@ Run from the repository root::
 
     python scenes/generate.py            # all scenes
     python scenes/generate.py parking_lot
+    python scenes/generate.py --out /tmp/scenes   # somewhere else
 
 Every scene is written to ``scenes/<name>/``: ``<name>.xml`` (Mitsuba 3 scene
 with Sionna radio materials), ``meshes/*.ply`` (binary PLY, face normals) and
@@ -32,6 +33,8 @@ import numpy as np
 import trimesh
 
 HERE = Path(__file__).resolve().parent
+#: Where scenes are written (``--out`` changes it).
+OUT_ROOT = HERE
 #: Format version of the JSON sidecar.
 SIDECAR_VERSION = 1
 
@@ -78,7 +81,7 @@ def _fractal_heights(rng: np.random.Generator, n: int, spacing: float, rms: floa
 
 def write_scene(name: str, shapes: list[tuple[str, trimesh.Trimesh, MaterialSpec]], *,
                 hover_altitude: float, description: str, targets: list[dict],
-                out_root: Path = HERE) -> Path:
+                out_root: Path | None = None) -> Path:
     """Write ``<out_root>/<name>/`` and return the XML path.
 
     Parameters
@@ -91,7 +94,7 @@ def write_scene(name: str, shapes: list[tuple[str, trimesh.Trimesh, MaterialSpec
         Constant-RCS sensing targets: ``name``, ``position`` (S, m),
         ``rcs_dbsm``, optional ``velocity`` (S, m/s) and ``size`` (m).
     """
-    folder = out_root / name
+    folder = (OUT_ROOT if out_root is None else Path(out_root)) / name
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     mats: dict[str, MaterialSpec] = {}
     shape_xml = []
@@ -192,6 +195,15 @@ GENERATORS = {"flat_reflectors": flat_reflectors, "parking_lot": parking_lot,
 
 
 def main(argv: list[str]) -> int:
+    global OUT_ROOT
+    argv = list(argv)
+    if "--out" in argv:
+        i = argv.index("--out")
+        if i + 1 >= len(argv):
+            print("--out needs a folder", file=sys.stderr)
+            return 2
+        OUT_ROOT = Path(argv[i + 1])
+        del argv[i: i + 2]
     names = argv or list(GENERATORS)
     for name in names:
         if name not in GENERATORS:

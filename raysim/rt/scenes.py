@@ -135,7 +135,8 @@ Dry soils at 35-94 GHz measure ``eps_r' = 2.5-3.5`` and ``eps_r'' = 0.05-0.3``
 et al., IEEE TGRS 23(1), 1985, extrapolated). ``eps_r'' = 0.10`` at 77 GHz is a
 conductivity ``sigma = eps_r'' omega eps_0 = 0.43 S/m``. Roughness: a few
 millimetres RMS height (``k s ~ 1-3`` at 77 GHz), so a large diffuse share
-``S = 0.5`` (Lambertian). Normal-incidence Fresnel reflection ``|Gamma| = -11.4 dB``.
+``S = 0.5`` (Lambertian). Normal-incidence Fresnel reflection ``|Gamma| = -11.4 dB``;
+Sionna keeps ``sqrt(1 - S^2)`` of the reflected amplitude specular (-1.25 dB).
 """
 
 ASPHALT = MaterialSpec("asphalt-77ghz", relative_permittivity=3.18, conductivity=0.43,
@@ -148,7 +149,7 @@ and measurements of scattering from road surfaces at millimeter-wave
 frequencies", IEEE TAP 45(11), 1997: ``eps_r ~ 3.18 - j 0.1`` at 94 GHz),
 ``sigma = 0.43 S/m`` at 77 GHz. RMS height about 0.5-1 mm (``k s ~ 0.8-1.6``)
 gives a moderate diffuse share ``S = 0.3``. Normal-incidence Fresnel
-reflection ``|Gamma| = -10.9 dB``.
+reflection ``|Gamma| = -11.0 dB``; Sionna keeps ``sqrt(1 - S^2)`` of it specular.
 """
 
 METAL = MaterialSpec("metal", itu_type="metal", thickness=0.01, scattering_coefficient=0.2,
