@@ -1,0 +1,515 @@
+"""IF synthesis for many paths with a non-uniform FFT along fast time.
+
+For one chirp ``n`` and one channel ``m`` the stop-and-hop IF samples are a
+sum of complex tones (CONVENTIONS.md)::
+
+    s[n, m, k] = sum_p a[p, n, m] exp(+j 2 pi (f_c tau + mu tau k / f_s - mu tau^2 / 2))
+
+with ``tau = tau[p, n, m]``. Written with the beat frequency in cycles per
+sample ``nu = mu tau / f_s`` this is ``sum_p c_p exp(+j k x_p)``, ``x_p = 2 pi nu``:
+a type-1 NUFFT from the non-uniform points ``x_p`` to the uniform ``sample``
+grid. :func:`synthesize_nufft` evaluates it with FINUFFT for every
+``(chirp, channel)`` pair, so each path keeps its *exact* delay at every
+channel: near-field curvature, the ``mu tau^2 / 2`` term, the change of beat
+frequency across channels and any array layout (TDM slots, irregular
+elements) enter exactly. The only approximation is FINUFFT's own, set by
+``eps``. See ``docs/speed.md`` for why the array axis is not folded into a
+2-D/3-D transform.
+
+Cost per chirp: about ``num_channels * (num_paths * (w + 10) + 2 K log 2K)``
+operations, ``w ~ -log10(eps) + 1`` kernel width, against
+``num_channels * num_paths * K`` complex multiplies for the tone sum.
+
+:class:`PathDelays` is the compact description of many paths (vertex
+positions and lengths, not delays): ``tau[path, chirp, channel]`` is computed
+one chirp and one block of channels at a time and never stored whole.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from .arrays import VirtualArray
+from .config import SPEED_OF_LIGHT, RadarConfig
+
+#: Smallest tolerance the NUFFT path accepts: the output is complex64
+#: (relative rounding ~6e-8) and strengths are rounded in float32 above 1e-6.
+MIN_EPS = 1e-7
+#: Working-set target of one (chirp, channel block) of path arrays [bytes].
+BLOCK_BYTES = 48 * 2**20
+#: Bytes of temporaries per (path, channel) pair inside a channel block.
+_BYTES_PER_PAIR = 64
+
+
+def check_eps(eps: float, *, floor: float = MIN_EPS) -> float:
+    """Validate a relative tolerance ``eps`` in ``[floor, 1)``."""
+    try:
+        value = float(eps)
+    except (TypeError, ValueError):
+        raise ValueError(f"eps must be a number, got {eps!r}") from None
+    if not math.isfinite(value) or not floor <= value < 1.0:
+        raise ValueError(f"eps must lie in [{floor:g}, 1), got {eps!r}")
+    return value
+
+
+def check_chirps(chirps, num_chirps: int) -> range:
+    """Validate a chirp selection: ``None`` (all) or a step-1 ``range`` inside the frame."""
+    if chirps is None:
+        return range(num_chirps)
+    if (not isinstance(chirps, range) or chirps.step != 1
+            or (len(chirps) and (chirps[0] < 0 or chirps[-1] >= num_chirps))):
+        raise ValueError(f"chirps must be a step-1 range within [0, {num_chirps}), "
+                         f"got {chirps!r}")
+    return chirps
+
+
+def default_threads() -> int:
+    """Worker threads used by default: the CPUs this process may run on."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)
+
+
+# --------------------------------------------------------------------------- sources
+@dataclass(frozen=True, eq=False)
+class PathDelays:
+    """Compact description of propagation paths between moving array elements.
+
+    The delay of path ``p`` at chirp ``n`` and channel ``m`` is::
+
+        tau[p, n, m] = (|x_tx[n, m] - v_first[p, n]| + L[p, n]
+                        + |v_last[p, n] - x_rx[n, m]|) / c
+
+    i.e. the exact spherical distance from the transmit element to the first
+    interaction point, the length of the path between its first and last
+    interaction points, and the distance from the last one back to the receive
+    element. A point target is ``v_first = v_last`` and ``L = 0``. Memory is
+    ``O(path + chirp * channel)``; the ``[path, chirp, channel]`` delays are
+    produced block by block by :meth:`delays`.
+
+    Attributes
+    ----------
+    first_vertex : ndarray, shape ``[path, 3]`` or ``[path, chirp, 3]``
+        First interaction point in the world frame W [m].
+    last_vertex : ndarray, shape ``[path, 3]`` or ``[path, chirp, 3]``
+        Last interaction point in W [m].
+    interior_length : ndarray, shape ``[path]`` or ``[path, chirp]``
+        Path length between the first and the last interaction point [m].
+    amplitude : ndarray, shape ``[path]`` or ``[path, chirp]``, complex
+        Complex IF amplitude of each path [sqrt(W)], without the propagation
+        phase (the delay supplies it); the same for every channel.
+    tx_positions : ndarray, shape ``[chirp, channel, 3]``
+        World position of each channel's transmit phase centre at each chirp [m].
+    rx_positions : ndarray, shape ``[chirp, channel, 3]`` or None
+        Receive phase centres [m]; ``None`` means the same as ``tx_positions``
+        (a monostatic-equivalent virtual array).
+    """
+
+    first_vertex: np.ndarray
+    last_vertex: np.ndarray
+    interior_length: np.ndarray
+    amplitude: np.ndarray
+    tx_positions: np.ndarray
+    rx_positions: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        tx = np.asarray(self.tx_positions, dtype=np.float64)
+        if tx.ndim != 3 or tx.shape[2] != 3 or 0 in tx.shape:
+            raise ValueError(f"tx_positions must have shape [chirp, channel, 3], got {tx.shape}")
+        n_chirp = tx.shape[0]
+        rx = None
+        if self.rx_positions is not None:
+            rx = np.asarray(self.rx_positions, dtype=np.float64)
+            if rx.shape != tx.shape:
+                raise ValueError(
+                    f"rx_positions shape {rx.shape} must equal tx_positions shape {tx.shape}")
+        first = np.asarray(self.first_vertex, dtype=np.float64)
+        last = np.asarray(self.last_vertex, dtype=np.float64)
+        for name, v in (("first_vertex", first), ("last_vertex", last)):
+            if not (v.ndim in (2, 3) and v.shape[-1] == 3 and v.shape[0] >= 1
+                    and (v.ndim == 2 or v.shape[1] == n_chirp)):
+                raise ValueError(
+                    f"{name} must have shape [path, 3] or [path, {n_chirp}, 3], got {v.shape}")
+        n_path = first.shape[0]
+        if last.shape[0] != n_path:
+            raise ValueError(
+                f"last_vertex has {last.shape[0]} paths but first_vertex has {n_path}")
+        length = np.asarray(self.interior_length, dtype=np.float64)
+        amp = np.asarray(self.amplitude)
+        if not np.iscomplexobj(amp):
+            amp = amp.astype(np.complex128)
+        for name, v in (("interior_length", length), ("amplitude", amp)):
+            if v.shape not in ((n_path,), (n_path, n_chirp)):
+                raise ValueError(
+                    f"{name} must have shape [{n_path}] or [{n_path}, {n_chirp}], got {v.shape}")
+        for name, v in (("first_vertex", first), ("last_vertex", last), ("tx_positions", tx),
+                        ("interior_length", length), ("amplitude", amp)):
+            if not np.all(np.isfinite(v)):
+                raise ValueError(f"{name} contains NaN or inf values")
+        if rx is not None and not np.all(np.isfinite(rx)):
+            raise ValueError("rx_positions contains NaN or inf values")
+        if np.any(length < 0):
+            raise ValueError(f"interior_length must be >= 0 m, got min {length.min()!r}")
+        for name, v in (("first_vertex", first), ("last_vertex", last),
+                        ("interior_length", length), ("amplitude", amp),
+                        ("tx_positions", tx), ("rx_positions", rx)):
+            object.__setattr__(self, name, v)
+
+    @classmethod
+    def for_array(cls, first_vertex, last_vertex, interior_length, amplitude,
+                  config: RadarConfig, array: VirtualArray, trajectory=None, *,
+                  lever_arm=(0.0, 0.0, 0.0), frame: int = 0, t0: float = 0.0) -> PathDelays:
+        """Paths seen by ``array`` on a moving platform (element poses per chirp).
+
+        Parameters
+        ----------
+        first_vertex, last_vertex, interior_length, amplitude
+            As the attributes of the class.
+        config : RadarConfig
+        array : VirtualArray
+        trajectory : Trajectory, optional
+            Body motion; stationary if omitted.
+        lever_arm : array_like, shape ``[3]``
+            Radar phase centre in the body frame B [m].
+        frame : int
+            Frame index (chirp times ``config.chirp_times(frame, t0)``).
+        t0 : float
+            Time of the first chirp of frame 0 [s].
+        """
+        tx, rx = element_positions(config, array, trajectory, lever_arm=lever_arm,
+                                   frame=frame, t0=t0)
+        return cls(first_vertex, last_vertex, interior_length, amplitude, tx, rx)
+
+    # ---------------------------------------------------------------- sizes
+    @property
+    def num_paths(self) -> int:
+        """Number of paths."""
+        return self.first_vertex.shape[0]
+
+    @property
+    def num_chirps(self) -> int:
+        """Number of chirps described."""
+        return self.tx_positions.shape[0]
+
+    @property
+    def num_channels(self) -> int:
+        """Number of channels."""
+        return self.tx_positions.shape[1]
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """``(path, chirp, channel)`` extent of the delays described."""
+        return (self.num_paths, self.num_chirps, self.num_channels)
+
+    @property
+    def nbytes(self) -> int:
+        """Memory held by the description [bytes]."""
+        arrays = (self.first_vertex, self.last_vertex, self.interior_length, self.amplitude,
+                  self.tx_positions, self.rx_positions)
+        return int(sum(a.nbytes for a in arrays if a is not None))
+
+    # ---------------------------------------------------------------- blocks
+    def _vertex(self, v: np.ndarray, n: int) -> np.ndarray:
+        return v if v.ndim == 2 else v[:, n]
+
+    def delays(self, chirp: int, channels: slice = slice(None)) -> np.ndarray:
+        """Exact delays of one chirp, shape ``[channel, path]`` [s] (channel-major).
+
+        Parameters
+        ----------
+        chirp : int
+            Chirp index.
+        channels : slice
+            Channels to compute.
+        """
+        x_tx = self.tx_positions[chirp, channels]                    # [channel, 3]
+        centre = x_tx.mean(axis=0)
+        d_tx = _distances(x_tx - centre, self._vertex(self.first_vertex, chirp) - centre)
+        if self.rx_positions is None and self.last_vertex is self.first_vertex:
+            d_rx = d_tx
+        else:
+            x_rx = x_tx if self.rx_positions is None else self.rx_positions[chirp, channels]
+            d_rx = _distances(x_rx - centre, self._vertex(self.last_vertex, chirp) - centre)
+        length = self.interior_length if self.interior_length.ndim == 1 \
+            else self.interior_length[:, chirp]
+        tau = d_tx + d_rx
+        tau += length
+        tau *= 1.0 / SPEED_OF_LIGHT
+        return tau
+
+    def amplitudes(self, chirp: int) -> np.ndarray:
+        """Complex amplitude of every path at one chirp, shape ``[path]`` [sqrt(W)]."""
+        return self.amplitude if self.amplitude.ndim == 1 else self.amplitude[:, chirp]
+
+    def dense(self) -> tuple[np.ndarray, np.ndarray]:
+        """Materialise ``tau, amplitude``, each of shape ``[path, chirp, channel]``.
+
+        Only for small descriptions (tests, references): the result has
+        ``path * chirp * channel`` elements.
+        """
+        tau = np.stack([self.delays(n) for n in range(self.num_chirps)], axis=0)
+        amp = np.stack([np.broadcast_to(self.amplitudes(n)[None, :], (self.num_channels,
+                                                                      self.num_paths))
+                        for n in range(self.num_chirps)], axis=0)
+        return tau.transpose(2, 0, 1).copy(), amp.transpose(2, 0, 1).copy()
+
+
+def _distances(elements: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """``|vertex - element|`` for every pair, shape ``[element, vertex]`` [m].
+
+    Uses ``|v|^2 - 2 e.v + |e|^2`` with coordinates taken relative to the array
+    centroid (``|e|`` a few cm), so the cancellation error is ~1e-16 of the range.
+    """
+    d2 = elements @ (-2.0 * vertices.T)                               # [element, vertex]
+    d2 += np.einsum("ij,ij->i", vertices, vertices)[None, :]
+    d2 += np.einsum("ij,ij->i", elements, elements)[:, None]
+    np.maximum(d2, 0.0, out=d2)
+    return np.sqrt(d2, out=d2)
+
+
+def element_positions(config: RadarConfig, array: VirtualArray, trajectory=None, *,
+                      lever_arm=(0.0, 0.0, 0.0), frame: int = 0,
+                      t0: float = 0.0) -> tuple[np.ndarray, np.ndarray | None]:
+    """World positions of the transmit and receive phase centres at every chirp.
+
+    Returns
+    -------
+    tx : ndarray, shape ``[chirp, channel, 3]`` [m]
+    rx : ndarray, shape ``[chirp, channel, 3]`` [m], or None when the array is a
+        single-slot virtual array with ``p_tx = p_rx`` (monostatic-equivalent).
+    """
+    from .echo import element_times, element_world_positions
+    from .motion import stationary
+
+    trajectory = stationary() if trajectory is None else trajectory
+    lever_arm = np.asarray(lever_arm, dtype=float)
+    if lever_arm.shape != (3,) or not np.all(np.isfinite(lever_arm)):
+        raise ValueError(f"lever_arm must be 3 finite numbers [m], got {lever_arm!r}")
+    times = element_times(config, array, frame, t0)
+    tx = element_world_positions(trajectory, times, array.tx_positions, lever_arm)
+    if array.num_slots == 1 and np.array_equal(array.tx_positions, array.rx_positions):
+        return tx, None
+    return tx, element_world_positions(trajectory, times, array.rx_positions, lever_arm)
+
+
+class _DenseSource:
+    """``tau``/``amplitude`` arrays of shape ``[path, chirp, channel]`` as a block source."""
+
+    def __init__(self, tau, amplitude) -> None:
+        tau = np.asarray(tau, dtype=np.float64)
+        if tau.ndim != 3 or 0 in tau.shape:
+            raise ValueError(f"tau must have shape [path, chirp, channel], got shape {tau.shape}")
+        if not np.all(np.isfinite(tau)):
+            raise ValueError("tau contains NaN or inf delays")
+        amp = np.asarray(amplitude)
+        try:
+            amp = np.broadcast_to(amp, tau.shape)
+        except ValueError:
+            raise ValueError(
+                f"amplitude shape {amp.shape} does not broadcast to tau shape {tau.shape}"
+            ) from None
+        if not np.all(np.isfinite(amp)):
+            raise ValueError("amplitude contains NaN or inf values")
+        self.tau, self.amp = tau, amp
+        self.shape = tau.shape
+
+    @property
+    def num_paths(self) -> int:
+        return self.shape[0]
+
+    @property
+    def num_chirps(self) -> int:
+        return self.shape[1]
+
+    @property
+    def num_channels(self) -> int:
+        return self.shape[2]
+
+    def delays(self, chirp: int, channels: slice = slice(None)) -> np.ndarray:
+        return np.ascontiguousarray(self.tau[:, chirp, channels].T)
+
+    def channel_amplitudes(self, chirp: int, channels: slice = slice(None)) -> np.ndarray:
+        return self.amp[:, chirp, channels].T
+
+
+def as_source(tau, amplitude=None):
+    """Wrap ``tau``/``amplitude`` arrays or a :class:`PathDelays` as a block source."""
+    if isinstance(tau, PathDelays):
+        if amplitude is not None:
+            raise ValueError("amplitude must be None when tau is a PathDelays "
+                             "(its amplitudes are part of the description)")
+        return tau
+    if amplitude is None:
+        raise ValueError("amplitude is required when tau is an array of delays")
+    return _DenseSource(tau, amplitude)
+
+
+def _block_amplitudes(src, chirp: int, channels: slice) -> np.ndarray:
+    """Amplitudes ``[channel, path]`` or ``[1, path]`` (broadcast) of one block."""
+    if isinstance(src, PathDelays):
+        return src.amplitudes(chirp)[None, :]
+    return src.channel_amplitudes(chirp, channels)
+
+
+def dense_blocks(src, chirps: range, max_elements: int = 2**22
+                 ) -> Iterator[tuple[int, slice, np.ndarray, np.ndarray]]:
+    """Yield ``(chirp, channels, tau, amplitude)`` with ``tau``/``amplitude`` of
+    shape ``[path, 1, channel_block]``, bounded to ``max_elements`` each.
+
+    Used to feed the tone and direct sums from a :class:`PathDelays` without
+    materialising ``[path, chirp, channel]``.
+    """
+    n_path, n_chan = src.num_paths, src.num_channels
+    step = max(1, min(n_chan, max_elements // max(n_path, 1)))
+    for n in chirps:
+        for m0 in range(0, n_chan, step):
+            ch = slice(m0, min(m0 + step, n_chan))
+            tau = src.delays(n, ch).T[:, None, :]
+            amp = np.broadcast_to(_block_amplitudes(src, n, ch).T[:, None, :], tau.shape)
+            yield n, ch, tau, amp
+
+
+# --------------------------------------------------------------------------- NUFFT
+class _Worker:
+    """One FINUFFT plan and its scratch buffers (one per thread)."""
+
+    def __init__(self, num_samples: int, eps: float) -> None:
+        import finufft
+
+        self.plan = finufft.Plan(1, (num_samples,), n_trans=1, eps=eps, isign=1,
+                                 dtype="complex128", nthreads=1, spread_sort=0, modeord=0)
+        self.buf = np.empty(num_samples, dtype=np.complex128)
+
+
+def _strengths(tau: np.ndarray, amp: np.ndarray, config: RadarConfig, exact_trig: bool
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """NUFFT points ``x [channel, path]`` [rad/sample] and strengths ``c [channel, path]``.
+
+    ``x = 2 pi (nu - round(nu))`` with ``nu = mu tau / f_s``, and
+    ``c = a exp(j 2 pi (f_c tau - mu tau^2 / 2 + h x / (2 pi)))``, ``h = K // 2``:
+    the shift ``h`` maps FINUFFT's centred modes ``j = -h..K-1-h`` to samples
+    ``k = j + h``. Phases are reduced in float64 before any rounding.
+    """
+    fc, mu, fs = config.carrier_frequency, config.chirp_rate, config.sample_rate
+    h = config.num_samples // 2
+    nu = tau * (mu / fs)
+    nu -= np.rint(nu)                                   # wrapped beat [cycles/sample]
+    cyc = tau * fc
+    cyc -= (0.5 * mu) * tau * tau
+    cyc += h * nu
+    cyc -= np.rint(cyc)                                 # [-0.5, 0.5] cycles
+    cyc *= 2.0 * np.pi
+    if exact_trig:
+        c = np.exp(1j * cyc)
+    else:
+        ph = cyc.astype(np.float32)
+        c = np.empty(tau.shape, dtype=np.complex128)
+        c.real = np.cos(ph)
+        c.imag = np.sin(ph)
+    c *= amp
+    nu *= 2.0 * np.pi
+    return nu, c
+
+
+def _render_group(src, config: RadarConfig, worker: _Worker, chirp: int, channels: range,
+                  block: int, exact_trig: bool, out_rows: np.ndarray) -> None:
+    """Render chirp ``chirp`` for ``channels`` into ``out_rows[channel - first, sample]``."""
+    first = channels.start
+    for m0 in range(channels.start, channels.stop, block):
+        ch = slice(m0, min(m0 + block, channels.stop))
+        tau = src.delays(chirp, ch)                      # [channel, path]
+        amp = _block_amplitudes(src, chirp, ch)          # [channel or 1, path]
+        x, c = _strengths(tau, amp, config, exact_trig)
+        for i in range(x.shape[0]):
+            worker.plan.setpts(x[i])
+            worker.plan.execute(c[i], out=worker.buf)
+            out_rows[ch.start - first + i] += worker.buf
+
+
+def synthesize_nufft(tau, amplitude, config: RadarConfig, *, eps: float = 1e-6,
+                     out: np.ndarray | None = None, chirps: range | None = None,
+                     threads: int | None = None) -> np.ndarray:
+    """Sum of IF tones on the ``[chirp, channel, sample]`` grid by 1-D type-1 NUFFTs.
+
+    Parameters
+    ----------
+    tau : ndarray, shape ``[path, chirp, channel]``, or PathDelays
+        Two-way delay of each path at each chirp and channel [s], or the
+        compact description from which they are computed block by block.
+    amplitude : array_like, broadcastable to ``tau``, or None
+        Complex IF amplitude [sqrt(W)] without the propagation phase; ``None``
+        when ``tau`` is a :class:`PathDelays`.
+    config : RadarConfig
+        Waveform (``f_c``, ``mu``, ``f_s``, samples per chirp).
+    eps : float
+        Requested relative error of the result (l2 over the rendered block),
+        in ``[1e-7, 1)``.
+    out : ndarray, shape ``[len(chirps), channel, sample]``, complex64, optional
+        Buffer to add into (not cleared).
+    chirps : range, optional
+        Chirps to render (default all); ``out`` holds them in order.
+    threads : int, optional
+        Worker threads (default: the usable CPUs); channels are split between them.
+
+    Returns
+    -------
+    ndarray, shape ``[chirp, channel, sample]``, complex64
+
+    Notes
+    -----
+    Every ``(chirp, channel)`` row is one FINUFFT type-1 transform
+    ``f_j = sum_p c_p exp(+i j x_p)``, ``j = -K//2 .. K-1-K//2``, with
+    ``x_p = 2 pi mu tau / f_s`` (wrapped to ``[-pi, pi)``) and strengths that
+    carry ``a exp(j 2 pi (f_c tau - mu tau^2 / 2))`` and the shift from centred
+    modes to samples. FINUFFT's tolerance is relative to the l2 norm of the
+    output; the float32 rounding of the strength phase (``eps >= 1e-6``) adds
+    at most 2e-7 rad per path. Temporaries are bounded by
+    :data:`BLOCK_BYTES` per thread.
+    """
+    eps = check_eps(eps)
+    src = as_source(tau, amplitude)
+    n_path, n_chirp, n_chan = src.num_paths, src.num_chirps, src.num_channels
+    k = config.num_samples
+    chirps = check_chirps(chirps, n_chirp)
+    if out is None:
+        out = np.zeros((len(chirps), n_chan, k), dtype=np.complex64)
+    elif out.shape != (len(chirps), n_chan, k) or out.dtype != np.complex64:
+        raise ValueError(f"out must be complex64 of shape {(len(chirps), n_chan, k)}, "
+                         f"got {out.dtype} {out.shape}")
+    threads = default_threads() if threads is None else int(threads)
+    if threads < 1:
+        raise ValueError(f"threads must be >= 1, got {threads!r}")
+    threads = min(threads, n_chan)
+    # the NUFFT error adds to a ~1e-7 floor (float32 phases, complex64 output)
+    exact_trig = eps < 1e-6
+    nufft_eps = max(0.5 * eps, 1e-14)
+    block = max(1, min(n_chan, BLOCK_BYTES // (_BYTES_PER_PAIR * max(n_path, 1))))
+    bounds = np.linspace(0, n_chan, threads + 1).round().astype(int)
+    groups = [range(bounds[i], bounds[i + 1]) for i in range(threads)]
+    workers = [_Worker(k, nufft_eps) for _ in range(threads)]
+    acc = np.empty((n_chan, k), dtype=np.complex128)
+    pool = ThreadPoolExecutor(threads) if threads > 1 else None
+    try:
+        for i, n in enumerate(chirps):
+            acc[...] = 0.0
+            jobs = [(g, w) for g, w in zip(groups, workers, strict=True) if len(g)]
+            if pool is None:
+                for g, w in jobs:
+                    _render_group(src, config, w, n, g, block, exact_trig, acc[g.start:g.stop])
+            else:
+                futures = [pool.submit(_render_group, src, config, w, n, g, block, exact_trig,
+                                       acc[g.start:g.stop]) for g, w in jobs]
+                for f in futures:
+                    f.result()
+            out[i] += acc
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    return out
