@@ -78,3 +78,38 @@ def test_trace_is_deterministic_and_sorted(clutter_scene):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert np.all(np.diff(a.length) >= 0)
     assert np.all(a.length / 2 < config.max_range)
+
+
+#: Largest azimuth ripple of diffuse ground backscatter (45 deg vs 0 deg sectors) [dB].
+DIFFUSE_AZIMUTH_RIPPLE_TOL_DB = 0.5
+
+
+def test_diffuse_clutter_has_no_polarisation_azimuth_pattern(warm_kernels):
+    """Flat ground: the used amplitude is azimuth-independent; raw co-pol is not.
+
+    Sionna's diffuse model mirrors linear polarisation on backscatter, so the
+    raw co-polarised entry falls off as ``cos(2 az)`` (a four-fold pattern,
+    several dB down at 45 deg). The tracer's ``||H||_F / sqrt(2)`` must not.
+    """
+    from raysim.rt.scenes import load_scene
+    from raysim.rt.trace import DIFFUSE, MonostaticTracer
+
+    scene = load_scene("flat_reflectors", include_targets=False)
+    p = MonostaticTracer(samples_per_src=20_000, specular=False, targets=False,
+                         diffuse_phase="none")(scene, RadarConfig(num_chirps=4))
+    d = (p.kind & DIFFUSE) != 0
+    v = p.first_vertex[d]
+    r = p.length[d] / 2
+    az = np.mod(np.arctan2(v[:, 1], v[:, 0]), np.pi / 2)
+    off_nadir = np.arccos(v[:, 2] / r)
+    ring = (off_nadir > np.deg2rad(20)) & (off_nadir < np.deg2rad(50))
+    near0 = ring & ((az < np.deg2rad(10)) | (az > np.deg2rad(80)))
+    near45 = ring & (np.abs(az - np.pi / 4) < np.deg2rad(10))
+    assert near0.sum() > 100 and near45.sum() > 100
+
+    def ripple_db(a):
+        x = np.abs(a) ** 2 * r**4
+        return 10 * np.log10(x[near45].mean() / x[near0].mean())
+
+    assert abs(ripple_db(p.amplitude[d])) < DIFFUSE_AZIMUTH_RIPPLE_TOL_DB
+    assert ripple_db(p.polarimetric[d][:, 0, 0]) < -3.0      # the trap, documented
