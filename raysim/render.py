@@ -399,7 +399,10 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
         Truth target; sets the range window, the beam for the Doppler metrics
         and the angle error.
     return_maps : bool
-        Also return the maps (``range_profile``, ``rd``, ``ae``).
+        Also return the maps: ``range_profile`` (:class:`~raysim.processing.Map`
+        over ``range``), ``rd`` (``range, doppler``), ``ae`` (``azimuth, elevation``),
+        ``range_bin`` (int), ``slow_time`` (``[chirp]`` beamformed signal of frame 0)
+        and ``look_direction`` (``[3]``).
 
     Returns
     -------
@@ -409,8 +412,7 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
         ``return_maps``, a tuple ``(metrics, maps)``.
     """
     from .metrics import doppler_mainlobe_width, pseudo_velocity
-    from .processing import (Map, azimuth_elevation_map, beamform, range_compress,
-                             range_doppler_map)
+    from .processing import Map, azimuth_elevation_map, beamform, range_compress, range_doppler_map
 
     frames = list(frames)
     if not frames:
@@ -471,7 +473,8 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     }
     if return_maps:
         return metrics, {"range_profile": Map(profile, ("range",), {"range": r_axis}),
-                         "rd": rd, "ae": ae, "range_bin": i}
+                         "rd": rd, "ae": ae, "range_bin": i, "slow_time": slow,
+                         "look_direction": np.asarray(u)}
     return metrics
 
 

@@ -51,8 +51,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import (BaseModel, ConfigDict, Field, ValidationError, field_validator,
-                      model_validator)
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 __all__ = [
     "RadarSection", "ArraySection", "TargetSpec", "SceneSection", "SinusoidSpec",
@@ -387,8 +386,14 @@ class Scenario(_Section):
     def trajectory(self):
         """Platform motion as a :class:`~raysim.motion.Trajectory` (SI, radians)."""
         from .cases import get_case
-        from .motion import (HoverJitterSpec, Sinusoid, Trajectory, constant_velocity,
-                             hover_jitter, stationary)
+        from .motion import (
+            HoverJitterSpec,
+            Sinusoid,
+            Trajectory,
+            constant_velocity,
+            hover_jitter,
+            stationary,
+        )
 
         m = self.motion
         parts: list[Trajectory] = []
@@ -698,7 +703,13 @@ def _toml_scalar(v: Any) -> str:
             return "inf" if v > 0 else "-inf"
         if math.isnan(v):
             return "nan"
-        return repr(v)
+        text = repr(v)
+        if "e" not in text and abs(v) >= 1e5:
+            for digits in range(1, 18):  # shortest exact exponent form: 77e9 -> 7.7e+10
+                short = f"{v:.{digits}e}"
+                if float(short) == v:
+                    return short
+        return text
     if isinstance(v, str):
         return json.dumps(v)
     if isinstance(v, (list, tuple)):
@@ -722,7 +733,9 @@ def dumps_toml(data: dict, _prefix: str = "") -> str:
     for k, v in tables:
         name = f"{_prefix}{k}"
         body = dumps_toml(v, name + ".")
-        out += f"\n\n[{name}]\n" + body
+        only_subtables = v and all(isinstance(x, dict) or (isinstance(x, list) and x and all(
+            isinstance(y, dict) for y in x)) for x in v.values())
+        out += ("\n\n" + body) if only_subtables else (f"\n\n[{name}]\n" + body)
     for k, items in arrays:
         name = f"{_prefix}{k}"
         for item in items:

@@ -58,7 +58,8 @@ __all__ = [
     "IF_DIMS", "FORMAT_VERSION", "radar_attrs", "config_from_attrs", "array_from_dataset",
     "frames_to_dataset", "dataset_to_frames", "frame_from_dataset", "imu_dataset",
     "write_store", "append_frames", "frames_complete", "repair_store", "open_store",
-    "store_exists", "scenario_of", "export_netcdf", "read_netcdf", "atomic_write_bytes", "atomic_write_text",
+    "store_exists", "scenario_of", "export_netcdf", "read_netcdf", "atomic_write_bytes",
+    "atomic_write_text",
 ]
 
 #: Dimensions of the IF cube, in order.
@@ -80,6 +81,12 @@ _RADAR_FIELDS = {  # RadarConfig field -> attribute suffix (unit in the name)
 
 
 # ------------------------------------------------------------------- atomic io
+def _default_mode(path: str) -> None:
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(path, 0o666 & ~umask)
+
+
 def atomic_write_bytes(path: str | Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
     path = Path(path)
@@ -90,6 +97,7 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> None:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
+        _default_mode(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -469,6 +477,7 @@ def export_netcdf(ds: xr.Dataset, path: str | Path) -> None:
     os.close(fd)
     try:
         out.to_netcdf(tmp, engine=_netcdf_engine(), format="NETCDF4", encoding=encoding)
+        _default_mode(tmp)
         os.replace(tmp, path)
     finally:
         Path(tmp).unlink(missing_ok=True)
