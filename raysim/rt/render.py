@@ -22,7 +22,7 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
                  frame: int = 0, t0: float = 0.0, retrace_every: int | None = None,
                  if_band: str = "cull", path_chunk: int = 256,
                  hover_altitude: float | None = None, noise: bool = False,
-                 seed: int | None = None) -> RadarFrame:
+                 seed: int | None = None, synthesizer=None) -> RadarFrame:
     """Simulate one IF frame of a ray-traced scene seen from a moving platform.
 
     The scene is traced once from the radar's pose at the first chirp of the
@@ -64,6 +64,10 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         Add thermal noise ``k T0 F f_s`` per complex sample.
     seed : int, optional
         Noise seed.
+    synthesizer : callable, optional
+        IF synthesis ``f(tau, amplitude, config, out=cube)`` (default
+        :func:`raysim.synthesis.synthesize_if`, whose cost is one complex
+        multiply per path, chirp, channel and sample).
 
     Returns
     -------
@@ -101,7 +105,7 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         num_paths += paths.num_paths
         _, cut = synthesize_paths(paths, config, array, trajectory, lever, out=data[c0:c1],
                                   chirps=np.arange(c0, c1), path_chunk=path_chunk, frame=frame,
-                                  t0=t0, if_band=if_band)
+                                  t0=t0, if_band=if_band, synthesizer=synthesizer)
         for k, v in paths.dropped.items():
             dropped[k] = dropped.get(k, 0) + v
         dropped["if_band"] = dropped.get("if_band", 0) + cut

@@ -218,7 +218,7 @@ def iter_reprojected(paths: PathSet, config: RadarConfig, array: VirtualArray,
 def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
                      trajectory: Trajectory | None = None, lever_arm=(0.0, 0.0, 0.0), *,
                      out: np.ndarray | None = None, chirps=None, path_chunk: int = 256,
-                     **options) -> tuple[np.ndarray, int]:
+                     synthesizer=None, **options) -> tuple[np.ndarray, int]:
     """IF cube of frozen paths via :func:`raysim.synthesis.synthesize_if`.
 
     Parameters
@@ -231,6 +231,10 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         Chirp subset.
     path_chunk : int
         Paths re-projected at once.
+    synthesizer : callable, optional
+        ``f(tau, amplitude, config, out=cube)`` adding tones into ``cube``;
+        default :func:`raysim.synthesis.synthesize_if`. Plug a faster one
+        (e.g. a NUFFT) here for many paths.
     **options
         ``frame``, ``t0``, ``if_band``, ``taper`` of :func:`reproject`.
 
@@ -246,11 +250,14 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         out = np.zeros(shape, dtype=np.complex64)
     elif out.shape != shape or out.dtype != np.complex64:
         raise ValueError(f"out must be complex64 of shape {shape}, got {out.dtype} {out.shape}")
+    synth = synthesize_if if synthesizer is None else synthesizer
+    if not callable(synth):
+        raise ValueError(f"synthesizer must be callable, got {synthesizer!r}")
     dropped = 0
     for part in iter_reprojected(paths, config, array, trajectory, lever_arm,
                                  path_chunk=path_chunk, chirps=chirps, **options):
         dropped += part.dropped_if_band
         if part.tau.shape[0]:
-            synthesize_if(part.tau, part.amplitude, config, out=out)
+            synth(part.tau, part.amplitude, config, out=out)
     return out, dropped
 
