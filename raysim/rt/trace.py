@@ -215,7 +215,7 @@ class MonostaticTracer:
         Trace diffuse reflections (distributed clutter).
     samples_per_src : int
         Rays shot from the radar; sets the number of diffuse paths (about
-        5 % of the samples hit ground within the window of a down-looking radar).
+        8 % of the samples give kept ground paths for a radar 15 m up).
     target_depth : int
         Interactions of target paths including the scattering event
         (``RCSSolver``); 1 = direct legs only, 2 adds one specular bounce per leg.
