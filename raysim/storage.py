@@ -405,17 +405,20 @@ def append_frames(path: str | Path, ds: xr.Dataset) -> int:
     keep = [v for v in ds.variables if "frame" in ds[v].dims]
     part = ds[[v for v in keep if v in ds.data_vars]]
     part = part.drop_vars([c for c in part.coords if "frame" not in part[c].dims])
-    part.attrs = {}
+    part.attrs = attrs  # xarray rewrites the group attributes: keep them (frames_complete = n)
     part.to_zarr(str(path), append_dim="frame", consolidated=False)
     n += int(ds.sizes["frame"])
     g = zarr.open_group(str(path), mode="r+")
     attrs["frames_complete"] = n
-    g.attrs.update(attrs)  # xarray's append rewrites the group attributes
+    g.attrs.update(attrs)
     return n
 
 
 def open_store(path: str | Path, *, load: bool = True) -> xr.Dataset:
     """Open a Zarr frame store, restricted to its complete frames.
+
+    A frame left half-written by an interrupted append (arrays longer than
+    ``frames_complete``) is cut off first (see :func:`repair_store`).
 
     Parameters
     ----------
@@ -427,8 +430,14 @@ def open_store(path: str | Path, *, load: bool = True) -> xr.Dataset:
     ValueError
         If ``path`` is not a raysim Zarr store.
     """
+    import zarr
+
     if not store_exists(path):
         raise ValueError(f"{str(path)!r} is not a Zarr store (no zarr.json / .zgroup found)")
+    g = zarr.open_group(str(path), mode="r")
+    n_done = int(g.attrs.get("frames_complete", -1))
+    if n_done >= 0 and any(a.shape[0] != n_done for _, a in _frame_arrays(g)):
+        repair_store(path)  # half-appended frame of an interrupted render: drop it
     ds = xr.open_zarr(str(path), consolidated=False)
     n = int(ds.attrs.get("frames_complete", ds.sizes.get("frame", 0)))
     if ds.sizes.get("frame", 0) != n:

@@ -318,7 +318,7 @@ def _client(scheduler: str | None, n_workers: int, threads_per_worker: int, proc
     if scheduler:
         return Client(scheduler), None
     cluster = LocalCluster(n_workers=n_workers, threads_per_worker=threads_per_worker,
-                           processes=processes, dashboard_address=None)
+                           processes=processes, dashboard_address=":0")
     return Client(cluster), cluster
 
 

@@ -1,0 +1,90 @@
+"""HTML reports: self-contained, complete, and rendered by headless Chromium when present."""
+
+from __future__ import annotations
+
+import base64
+import os
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from raysim.cli import main
+from raysim.render import render
+from raysim.report import collect_from_scenario, software_versions, write_report
+from raysim.scenario import scenario_from_case
+
+SMALL = {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4,
+         "radar.chirp_duration_s": 12.8e-6}
+#: A screenshot counts as not blank above this share of non-background pixels.
+MIN_INK_FRACTION = 0.03
+
+
+@pytest.fixture(scope="module")
+def report_html(tmp_path_factory):
+    s = scenario_from_case("rotation_y").with_values(SMALL)
+    path = tmp_path_factory.mktemp("report") / "r.html"
+    write_report(collect_from_scenario(s, source="test"), path)
+    return path
+
+
+def test_report_is_self_contained_and_complete(report_html):
+    text = report_html.read_text()
+    assert text.startswith("<!DOCTYPE html>") and text.rstrip().endswith("</html>")
+    # no external resources: every image is an embedded PNG
+    assert not re.search(r"""(src|href)=['"](?!data:)""", text)
+    pngs = re.findall(r"data:image/png;base64,([A-Za-z0-9+/=]+)", text)
+    assert len(pngs) == 5
+    for p in pngs:
+        assert base64.b64decode(p)[:8] == b"\x89PNG\r\n\x1a\n"
+    for needle in ("Range-azimuth", "Range-elevation", "Range-Doppler", "Doppler cuts",
+                   "pseudo_velocity_mps", "entropy_ae_nats", "Values reported in the paper",
+                   "Run parameters", "Software versions", "sionna-rt", "mitsuba", "drjit",
+                   "numpy", "uncompensated"):
+        assert needle in text, needle
+
+
+def test_versions_listed():
+    v = software_versions()
+    assert v["numpy"] == np.__version__
+    assert {"sionna-rt", "mitsuba", "drjit", "python"} <= set(v)
+
+
+def test_report_cli_from_store_and_errors(tmp_path, capsys):
+    s = scenario_from_case("stationary").with_values(SMALL)
+    render(s, tmp_path / "s.zarr")
+    assert main(["report", str(tmp_path / "s.zarr"), "--out", str(tmp_path / "s.html")]) == 0
+    assert "Range-Doppler" in (tmp_path / "s.html").read_text()
+    capsys.readouterr()
+    assert main(["report", str(tmp_path / "nothing"), "--out", str(tmp_path / "x.html")]) == 2
+    assert "expected a Zarr store" in capsys.readouterr().err
+    assert main(["report", "--case", "stationary", str(tmp_path / "s.zarr")]) == 2
+
+
+def _chromium() -> str | None:
+    return os.environ.get("RAYSIM_CHROMIUM") or next(
+        (p for p in (shutil.which(n) for n in ("chromium", "chromium-browser", "google-chrome"))
+         if p), None)
+
+
+def test_report_renders_in_chromium(report_html, tmp_path):
+    chrome = _chromium()
+    if chrome is None:
+        pytest.skip("chromium is not installed (scripts/check_report_chromium.sh installs it)")
+    shot = tmp_path / "shot.png"
+    subprocess.run([chrome, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                    "--window-size=1200,1800", f"--screenshot={shot}",
+                    report_html.resolve().as_uri()], capture_output=True, timeout=120,
+                   check=False)
+    assert shot.is_file(), "chromium wrote no screenshot"
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(shot)[..., :3]
+    assert img.shape[:2] == (1800, 1200)
+    ink = np.mean(np.any(np.abs(img - img[0, 0]) > 0.05, axis=-1))
+    assert ink > MIN_INK_FRACTION, f"screenshot looks blank ({ink:.3%} non-background pixels)"
+    # the figures are drawn: some strongly coloured (viridis) pixels exist
+    saturation = img.max(axis=-1) - img.min(axis=-1)
+    assert np.mean(saturation > 0.3) > 0.01

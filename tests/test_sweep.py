@@ -1,0 +1,112 @@
+"""Dask sweeps: values, gathering into xarray, resume after interruption and after failures."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import raysim.sweep as sweep_mod
+from raysim.cli import main
+from raysim.scenario import scenario_from_case
+from raysim.sweep import SweepSpec, parse_values, run_sweep, sweep_points
+
+SMALL = {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4,
+         "radar.chirp_duration_s": 12.8e-6}
+
+
+@pytest.fixture(scope="module")
+def spec():
+    """3 azimuths x 2 seeds = 6 points on a small radar."""
+    base = scenario_from_case("stationary").with_values({**SMALL, "noise": True})
+    return SweepSpec(base, {"scene.targets.0.az_deg": [0.0, 10.0, 20.0]}, (0, 1),
+                     ("uncompensated",))
+
+
+@pytest.fixture(scope="module")
+def client():
+    distributed = pytest.importorskip("distributed")
+    cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                       dashboard_address=":0")
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def test_parse_values():
+    assert parse_values("1,2,4") == [1, 2, 4]
+    assert parse_values("[0.5, 1.5]") == [0.5, 1.5]
+    assert parse_values("range(0, 10, 5)") == [0, 5]
+    assert parse_values("linspace(0, 1, 3)") == [0.0, 0.5, 1.0]
+    assert parse_values("logspace(0, 2, 3)") == [1.0, 10.0, 100.0]
+    assert parse_values("ideal,tactical") == ["ideal", "tactical"]
+    for bad in ("range(a)", "linspace(0, 1)", ""):
+        with pytest.raises(ValueError):
+            parse_values(bad)
+
+
+def test_points_are_validated_and_keyed(spec):
+    pts = sweep_points(spec)
+    assert len(pts) == 6 and len({p.key for p in pts}) == 6
+    with pytest.raises(ValueError, match=r"radar.num_chirps: got 1, expected >= 4"):
+        sweep_points(SweepSpec(spec.base, {"radar.num_chirps": [32, 1]}))
+    with pytest.raises(ValueError, match="seeds="):
+        SweepSpec(spec.base, {"seed": [1]})
+
+
+def test_sweep_on_local_cluster_resumes_after_interruption(spec, client, tmp_path,
+                                                           monkeypatch):
+    calls = []
+    real = sweep_mod._point_metrics
+
+    def counting(scenario, chains):
+        calls.append((scenario.scene.targets[0].az_deg, scenario.seed))
+        if scenario.scene.targets[0].az_deg == 10.0 and scenario.seed == 1:
+            raise RuntimeError("worker lost")          # an interruption inside one point
+        return real(scenario, chains)
+
+    monkeypatch.setattr(sweep_mod, "_point_metrics", counting)
+    # first run: stopped after 3 points
+    r1 = run_sweep(spec, tmp_path, client=client, limit=3)
+    assert len(r1.computed) == 3 and not r1.failed
+    assert int(r1.dataset["point_done"].sum()) == 3
+    # second run: computes the rest; one point fails, the others are kept
+    r2 = run_sweep(spec, tmp_path, client=client)
+    assert sorted(r2.skipped) == sorted(r1.computed)
+    assert len(r2.computed) == 2 and len(r2.failed) == 1
+    assert "worker lost" in next(iter(r2.failed.values()))
+    assert len(calls) == 6
+    # third run with the point fixed: only the failed point is computed
+    monkeypatch.setattr(sweep_mod, "_point_metrics", real)
+    r3 = run_sweep(spec, tmp_path, client=client)
+    assert r3.computed == list(r2.failed) and len(r3.skipped) == 5
+
+    ds = r3.dataset
+    assert ds["az_deg"].dims == ("scene.targets.0.az_deg", "seed", "chain")
+    assert bool(ds["point_done"].all())
+    np.testing.assert_allclose(ds["az_deg"].sel(chain="uncompensated").values,
+                               np.repeat([[0.0], [10.0], [20.0]], 2, axis=1), atol=0.1)
+    import xarray as xr
+
+    on_disk = xr.open_dataset(r3.path)
+    np.testing.assert_array_equal(on_disk["az_deg"].values, ds["az_deg"].values)
+    on_disk.close()
+    records = list((tmp_path / "points").glob("*.json"))
+    assert len(records) == 6
+    assert json.loads(records[0].read_text())["chains"]["uncompensated"]["range_m"] > 14
+
+
+def test_sweep_cli_default_local_cluster(tmp_path, capsys):
+    args = ["sweep", "--case", "stationary", "--chains", "uncompensated", "--no-progress",
+            "--param", "scene.targets.0.range_m=10,12", "--out", str(tmp_path)]
+    for k, v in SMALL.items():
+        args += ["--set", f"{k}={v}"]
+    assert main(args + ["--limit", "1"]) == 0
+    assert "1/2 points done (1 computed now" in capsys.readouterr().out
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "2/2 points done (1 computed now, 1 from before, 0 failed)" in out
+    assert main(["sweep", "--case", "stationary", "--param", "radar.nope=1",
+                 "--out", str(tmp_path)]) == 2
