@@ -168,20 +168,22 @@ def lattice_vectors(positions, grid_shape) -> tuple[np.ndarray, np.ndarray, np.n
 
 
 def _powers(z: np.ndarray, n: int) -> np.ndarray:
-    """``z ** arange(n)`` along a new last axis by doubling (complex64, O(log n) passes)."""
-    out = np.empty(z.shape + (n,), dtype=np.complex64)
-    out[..., 0] = 1.0
-    if n == 1:
-        return out
-    out[..., 1] = z
+    """``z ** arange(n)`` along a new last axis by doubling (complex64, O(log n) passes).
+
+    The powers are built along a leading axis (contiguous blocks) and moved last.
+    """
+    out = np.empty((n,) + z.shape, dtype=np.complex64)
+    out[0] = 1.0
+    if n > 1:
+        out[1] = z
     have = 2
     zp = (z * z).astype(np.complex64)
     while have < n:
         take = min(have, n - have)
-        np.multiply(out[..., :take], zp[..., None], out=out[..., have:have + take])
+        np.multiply(out[:take], zp, out=out[have:have + take])
         have += take
         zp = zp * zp
-    return out
+    return np.ascontiguousarray(np.moveaxis(out, 0, -1))
 
 
 def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azimuth,
@@ -306,28 +308,39 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
             d = np.zeros((c, 3)) if disp is None else disp[n0:n1]
             # --- range phase rho [c, G, D] and look direction w [c, D, 3]
             if focus == "near":
-                focal = r_mid * u_grid[None] - d[:, None, :]                  # [c, D, 3]
-                w = focal / np.linalg.norm(focal, axis=-1, keepdims=True)
                 fp = ranges[None, :, None, None] * u_grid[None, None] - d[:, None, None, :]
-                rho = np.linalg.norm(fp, axis=-1) - ranges[None, :, None]     # [c, G, D]
+                dist = np.sqrt(np.einsum("cgdi,cgdi->cgd", fp, fp))           # [c, G, D]
+                rho = dist - ranges[None, :, None]
+                if gsel.size == 1:
+                    w = fp[:, 0] / dist[:, 0, :, None]                         # [c, D, 3]
+                else:
+                    focal = r_mid * u_grid[None] - d[:, None, :]
+                    w = focal / np.sqrt(np.einsum("cdi,cdi->cd", focal, focal))[..., None]
             else:
                 w = np.broadcast_to(u_grid[None], (c, n_dir, 3))
                 rho = np.broadcast_to(-(d @ u_grid.T)[:, None, :], (c, gsel.size, n_dir))
-            v = w if rot is None else np.einsum("cdi,cij->cdj", w, rot[n0:n1])  # R^T w
+            v = w if rot is None else w @ rot[n0:n1]                       # R^T w
             xb = xg[n0:n1].astype(cdtype, copy=False)                          # [c, M, G]
             if method == "lattice":
                 za = np.exp(1j * k * (v @ step_a)).astype(cdtype)                 # [c, D]
                 zb = np.exp(1j * k * (v @ step_b)).astype(cdtype)
                 ea = _powers(za, nx)                                             # [c, D, nx]
                 eb = _powers(zb, ny)                                             # [c, D, ny]
-                # X[c, ix, iy, G] -> [c, ny, nx * G]
-                xr = xb.reshape(c, nx, ny, -1).transpose(0, 2, 1, 3).reshape(c, ny, -1)
-                z = np.matmul(eb, xr).reshape(c, n_dir, nx, -1)                   # [c, D, nx, G]
-                y = np.einsum("cdi,cdig->cgd", ea, z)                              # [c, G, D]
+                # X[c, ix, iy, G] -> [c, ny, nx * G]; one BLAS product per chirp
+                xr = np.ascontiguousarray(
+                    xb.reshape(c, nx, ny, -1).transpose(0, 2, 1, 3).reshape(c, ny, -1))
+                z = np.empty((c, n_dir, nx * gsel.size), dtype=cdtype)
+                for i in range(c):
+                    np.matmul(eb[i], xr[i], out=z[i])                            # [D, nx * G]
+                z = z.reshape(c, n_dir, nx, gsel.size)
+                z *= ea[..., None]
+                y = z.sum(axis=2).transpose(0, 2, 1)                             # [c, G, D]
                 base = k * (v @ p0)                                              # [c, D]
             else:
-                steer = np.exp(1j * k * (v @ p.T)).astype(cdtype)                 # [c, D, M]
-                y = np.matmul(steer, xb).transpose(0, 2, 1)                      # [c, G, D]
+                y = np.empty((c, gsel.size, n_dir), dtype=cdtype)
+                for i in range(c):
+                    steer = np.exp(1j * k * (v[i] @ p.T)).astype(cdtype)          # [D, M]
+                    y[i] = (steer @ xb[i]).T                                     # [G, D]
                 base = np.zeros((c, n_dir))
             phase = base[:, None, :] - 2.0 * k * rho                             # [c, G, D]
             out[n0:n1, g0:g0 + gsel.size] = y * (np.exp(1j * phase) / n_chan).astype(cdtype)
