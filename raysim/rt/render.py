@@ -11,7 +11,7 @@ from ..config import RadarConfig
 from ..echo import noise_power
 from ..frame import RadarFrame
 from ..motion import Trajectory, stationary
-from .reproject import IF_BAND_MODES, synthesize_paths
+from .reproject import IF_BAND_MODES, SPECULAR_MODES, synthesize_paths
 from .scenes import RadarScene, SceneDescriptor, load_scene
 from .trace import MonostaticTracer, PathSet
 
@@ -22,7 +22,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
                  frame: int = 0, t0: float = 0.0, retrace_every: int | None = None,
                  if_band: str = "cull", path_chunk: int = 256,
                  hover_altitude: float | None = None, noise: bool = False,
-                 seed: int | None = None, synthesizer=None) -> RadarFrame:
+                 seed: int | None = None, synthesizer=None,
+                 specular: str = "image") -> RadarFrame:
     """Simulate one IF frame of a ray-traced scene seen from a moving platform.
 
     The scene is traced once from the radar's pose at the first chirp of the
@@ -68,6 +69,9 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         IF synthesis ``f(tau, amplitude, config, out=cube)`` (default
         :func:`raysim.synthesis.synthesize_if`, whose cost is one complex
         multiply per path, chirp, channel and sample).
+    specular : {"image", "frozen"}
+        Re-projection of single-bounce specular paths: exact image method
+        (default) or frozen reflection point (see :mod:`raysim.rt.reproject`).
 
     Returns
     -------
@@ -82,6 +86,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         raise ValueError(f"array must be a VirtualArray, got {type(array)}")
     if if_band not in IF_BAND_MODES:
         raise ValueError(f"if_band must be one of {IF_BAND_MODES}, got {if_band!r}")
+    if specular not in SPECULAR_MODES:
+        raise ValueError(f"specular must be one of {SPECULAR_MODES}, got {specular!r}")
     if retrace_every is not None and (int(retrace_every) != retrace_every or retrace_every < 1):
         raise ValueError(f"retrace_every must be a positive integer or None, "
                          f"got {retrace_every!r}")
@@ -105,7 +111,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         num_paths += paths.num_paths
         _, cut = synthesize_paths(paths, config, array, trajectory, lever, out=data[c0:c1],
                                   chirps=np.arange(c0, c1), path_chunk=path_chunk, frame=frame,
-                                  t0=t0, if_band=if_band, synthesizer=synthesizer)
+                                  t0=t0, if_band=if_band, synthesizer=synthesizer,
+                                  specular=specular)
         for k, v in paths.dropped.items():
             dropped[k] = dropped.get(k, 0) + v
         dropped["if_band"] = dropped.get("if_band", 0) + cut
