@@ -8,8 +8,8 @@
 * :func:`analyse` measures the CONVENTIONS.md metrics of frames (range, angle,
   pseudo-velocity, Doppler width, entropies);
 * :func:`evaluate` renders a scenario in memory and measures the uncompensated
-  data and, when the ``compensation`` package provides them, the paper and
-  exact compensation chains.
+  data and, with the ``compensation`` package, the paper and exact
+  compensation chains (IMU log integrated by :func:`platform_motion`).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from .scenario import Scenario
 __all__ = [
     "FeatureUnavailable", "Reference", "RenderSummary", "CHAINS", "frame_source",
     "reference_target", "imu_log", "render", "render_frames", "render_dataset", "analyse",
-    "compensate", "evaluate", "gate_snapshots", "METRIC_UNITS",
+    "platform_motion", "evaluate", "gate_snapshots", "METRIC_UNITS", "IMU_MARGIN_S",
 ]
 
 #: Names of the processing chains compared by :func:`evaluate` and the reports.
@@ -213,7 +213,8 @@ def imu_log(scenario: Scenario, trajectory=None):
     traj = scenario.trajectory() if trajectory is None else trajectory
     start, end = scenario.time_span()
     rate = scenario.imu.rate_hz
-    s = simulate_imu(traj, scenario.imu_spec(), rate=rate, start=start, end=end + 2.0 / rate,
+    margin = max(IMU_MARGIN_S, 4.0 / rate)
+    s = simulate_imu(traj, scenario.imu_spec(), rate=rate, start=start - margin, end=end + margin,
                      seed=scenario.imu_seed, time_offset=scenario.imu.time_offset_s,
                      clock_drift_ppm=scenario.imu.clock_drift_ppm)
     t, w, a = s.to_arrays()
@@ -377,32 +378,82 @@ def _parabolic_peak(y: np.ndarray, i: int) -> float:
     return float(i)
 
 
-def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
-            angle_limit_deg: float = ANGLE_LIMIT_DEG, angle_step_deg: float = ANGLE_STEP_DEG,
-            return_maps: bool = False):
-    """CONVENTIONS.md metrics of one or more frames of the same radar.
+def _beamformer(chain: str, frame: RadarFrame, motion):
+    """``bf(rc, chirps, ranges, az, el, direction) -> [chirp, range, azimuth, elevation]``.
 
-    Procedure: range profile of frame 0 (Hann, summed over chirps and
+    ``rc`` is ``[chirp, channel, range]`` (the chirps ``chirps`` of ``frame``),
+    ``ranges`` the range of each of its bins [m], ``az``/``el`` grid axes
+    [rad], ``direction`` the slow-time correction direction of the paper chain.
+    """
+    arr, cfg = frame.array, frame.config
+    wl = cfg.center_wavelength
+    if chain == "uncompensated":
+        from .processing import az_el_grid
+
+        def bf(rc, chirps, ranges, az, el, direction=None):
+            a = arr.steering_vector(az_el_grid(az, el), wl).astype(np.complex64)
+            y = np.swapaxes(rc, 1, 2) @ a.conj().T / arr.num_channels      # [chirp, range, dir]
+            return y.reshape(y.shape[:2] + (len(az), len(el)))
+        return bf
+    try:
+        from compensation import paper_chain, rigid_body_projection
+    except ImportError as exc:
+        raise FeatureUnavailable(f"the {chain} chain needs the compensation package: "
+                                 f"{exc}") from None
+    kw = dict(element_positions=arr.virtual_positions, wavelength=wl,
+              grid_shape=arr.grid_shape)
+
+    def bf(rc, chirps, ranges, az, el, direction=None):
+        mot = motion.select(np.asarray(chirps))
+        if chain == "exact":
+            out = rigid_body_projection(rc, motion=mot, range_axis=ranges, azimuth=az,
+                                        elevation=el, **kw)
+        else:
+            out = paper_chain(rc, motion=mot, direction=direction, range_axis=ranges,
+                              azimuth=az, elevation=el, **kw)
+        return out.data
+    return bf
+
+
+def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
+            chain: str = "uncompensated", motion=None,
+            angle_limit_deg: float = ANGLE_LIMIT_DEG, angle_step_deg: float = ANGLE_STEP_DEG,
+            return_maps: bool = False, range_angle_chirps: int = 16):
+    """CONVENTIONS.md metrics of one or more frames, through one processing chain.
+
+    Procedure: range profile of frame 0 (Hann, power summed over chirps and
     channels), peak within :data:`RANGE_SEARCH_M` of the reference range (or
     the global peak) refined by a parabola on dB; channel snapshots of every
-    frame at that range; non-coherent azimuth-elevation beam scan (grid
-    ``+-angle_limit_deg`` in steps of ``angle_step_deg``, at most
-    :data:`MAX_SNAPSHOTS` snapshots) and its interpolated peak and entropy;
-    slow-time signal of frame 0 beamformed towards the reference direction (or
-    the measured one) for the pseudo-velocity and Doppler width; entropy of the
-    range-Doppler map of frame 0.
+    frame at that gate; azimuth-elevation map (grid ``+-angle_limit_deg`` in
+    steps of ``angle_step_deg``, power summed over at most
+    :data:`MAX_SNAPSHOTS` chirps) and its interpolated peak and entropy;
+    slow-time signal of frame 0 at that gate in the beam towards the
+    reference direction (or the measured one) for the pseudo-velocity and the
+    Doppler width; range-Doppler map of the same beam and its entropy.
+
+    The beams are a conventional beamformer for ``chain="uncompensated"``;
+    ``"paper"`` and ``"exact"`` use :func:`compensation.paper_chain` (slow-time
+    phase towards the chain's own angle estimate) and
+    :func:`compensation.rigid_body_projection` with the platform ``motion``.
 
     Parameters
     ----------
     frames : sequence of RadarFrame
+        ``data`` of shape ``[chirp, channel, sample]`` each.
     reference : Reference, optional
-        Truth target; sets the range window, the beam for the Doppler metrics
-        and the angle error.
+        Truth target (range window, Doppler beam, angle error).
+    chain : {"uncompensated", "paper", "exact"}
+    motion : compensation.PlatformMotion, optional
+        Pose at every chirp of all frames, frame after frame (required for
+        the compensated chains; see :func:`platform_motion`).
     return_maps : bool
-        Also return the maps: ``range_profile`` (:class:`~raysim.processing.Map`
-        over ``range``), ``rd`` (``range, doppler``), ``ae`` (``azimuth, elevation``),
-        ``range_bin`` (int), ``slow_time`` (``[chirp]`` beamformed signal of frame 0)
-        and ``look_direction`` (``[3]``).
+        Also return the maps: ``range_profile`` (``range``), ``rd``
+        (``range, doppler``), ``ae`` (``azimuth, elevation``), ``ra``
+        (``range, azimuth``), ``re`` (``range, elevation``) as
+        :class:`~raysim.processing.Map`, ``slow_time`` (``[chirp]``) and
+        ``range_bin``.
+    range_angle_chirps : int
+        Chirps of frame 0 whose power is summed in the ``ra`` / ``re`` maps.
 
     Returns
     -------
@@ -411,141 +462,199 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
         (``angle_error_deg`` is NaN without a reference). With
         ``return_maps``, a tuple ``(metrics, maps)``.
     """
-    from .metrics import doppler_mainlobe_width, pseudo_velocity
-    from .processing import Map, azimuth_elevation_map, beamform, range_compress, range_doppler_map
+    from .echo import direction
+    from .metrics import angle_error_deg, doppler_mainlobe_width, pseudo_velocity
+    from .processing import Map, doppler_fft, range_compress
 
     frames = list(frames)
     if not frames:
         raise ValueError("frames is empty: nothing to analyse")
+    if chain not in CHAINS:
+        raise ValueError(f"chain: got {chain!r}, expected one of {list(CHAINS)}")
+    if chain != "uncompensated" and motion is None:
+        raise ValueError(f"chain {chain!r} needs motion (the platform pose at every chirp)")
     if not (0 < angle_step_deg <= angle_limit_deg <= 90):
         raise ValueError(f"need 0 < angle_step_deg <= angle_limit_deg <= 90, got "
                          f"{angle_step_deg!r}, {angle_limit_deg!r}")
-    cfg, arr = frames[0].config, frames[0].array
+    cfg = frames[0].config
+    n = frames[0].data.shape[0]
+    if motion is not None and motion.num_chirps != n * len(frames):
+        raise ValueError(f"motion has {motion.num_chirps} chirps, frames have "
+                         f"{n * len(frames)}")
+    bfs = [_beamformer(chain, fr, None if motion is None else
+                       motion.select(slice(k * n, (k + 1) * n)))
+           for k, fr in enumerate(frames)]
     wl = cfg.center_wavelength
+
     rc0 = range_compress(frames[0].data)                       # [chirp, channel, range]
-    profile = np.sum(np.abs(rc0) ** 2, axis=(0, 1))             # [range]
-    r_axis = cfg.range_axis(rc0.shape[-1])[: rc0.shape[-1]]
-    n_range = r_axis.size
-    profile = profile[:n_range]
+    n_range = rc0.shape[-1]
+    r_axis = cfg.range_axis(n_range)[:n_range]
+    profile = np.sum(np.abs(rc0) ** 2, axis=(0, 1))[: r_axis.size]
     search = profile.copy()
     if reference is not None:
         outside = np.abs(r_axis - reference.range_m) > RANGE_SEARCH_M
         if not np.all(outside):
             search[outside] = 0.0
     i = int(np.argmax(search))
-    fbin = _parabolic_peak(profile, i)
-    range_m = float(np.interp(fbin, np.arange(n_range), r_axis))
-    rd = range_doppler_map(rc0, cfg)
-    del rc0
+    range_m = float(np.interp(_parabolic_peak(profile, i), np.arange(r_axis.size), r_axis))
+    gate_r = r_axis[[i]]
 
-    snaps = np.concatenate([gate_snapshots(fr.data, i) for fr in frames])  # [snapshot, channel]
-    step = max(1, int(math.ceil(snaps.shape[0] / MAX_SNAPSHOTS)))
     grid = np.deg2rad(np.arange(-angle_limit_deg, angle_limit_deg + 1e-9, angle_step_deg))
-    ae = azimuth_elevation_map(snaps[::step], arr, wl, grid, grid)
+    step = max(1, int(math.ceil(n * len(frames) / MAX_SNAPSHOTS)))
+    pick = np.arange(0, n, step)
+    power = 0.0
+    snaps0 = None
+    for k, (fr, bf) in enumerate(zip(frames, bfs, strict=True)):
+        snaps = gate_snapshots(fr.data, i)[:, :, None]          # [chirp, channel, 1]
+        if k == 0:
+            snaps0 = snaps
+        beams = bf(snaps[pick], pick, gate_r, grid, grid, reference.direction
+                   if reference is not None else None)
+        power = power + np.sum(np.abs(beams[:, 0].astype(np.complex128)) ** 2, axis=0)
+    ae = Map(power, ("azimuth", "elevation"), {"azimuth": grid, "elevation": grid})
     pk = ae.peak()
-    az_deg, el_deg = math.degrees(pk["azimuth"]), math.degrees(pk["elevation"])
-
+    u_hat = direction(pk["azimuth"], pk["elevation"])
     if reference is not None:
-        from .metrics import angle_error_deg
-
-        u = reference.direction
-        err = angle_error_deg(pk["azimuth"], pk["elevation"], math.radians(reference.az_deg),
-                              math.radians(reference.el_deg))
+        look_az, look_el = math.radians(reference.az_deg), math.radians(reference.el_deg)
+        err = angle_error_deg(pk["azimuth"], pk["elevation"], look_az, look_el)
     else:
-        from .echo import direction
-
-        u = direction(pk["azimuth"], pk["elevation"])
-        err = math.nan
-    n_chirp = frames[0].data.shape[0]
-    slow = beamform(snaps[:n_chirp], arr, wl, np.reshape(u, (1, 3)))[:, 0]
+        look_az, look_el, err = pk["azimuth"], pk["elevation"], math.nan
+    all_chirps = np.arange(n)
+    slow = bfs[0](snaps0, all_chirps, gate_r, [look_az], [look_el], u_hat)[:, 0, 0, 0]
+    beam_rc = bfs[0](rc0, all_chirps, r_axis, [look_az], [look_el], u_hat)[:, :, 0, 0]
+    spec = doppler_fft(beam_rc, axis=0)                          # [doppler, range]
+    rd = Map(np.abs(spec.T) ** 2, ("range", "doppler"),
+             {"range": r_axis, "doppler": cfg.velocity_axis(spec.shape[0])})
     width = doppler_mainlobe_width(slow, cfg.chirp_interval)
     metrics = {
         "range_m": range_m,
-        "az_deg": az_deg,
-        "el_deg": el_deg,
+        "az_deg": math.degrees(pk["azimuth"]),
+        "el_deg": math.degrees(pk["elevation"]),
         "angle_error_deg": float(err),
         "pseudo_velocity_mps": pseudo_velocity(slow, cfg.chirp_interval, wl),
         "doppler_width_hz": width,
         "doppler_width_bins": width / cfg.doppler_resolution,
         "entropy_ae_nats": ae.entropy(),
         "entropy_rd_nats": rd.entropy(),
-        "peak_power_db": float(10 * np.log10(max(profile[i] / snaps.shape[1], 1e-300))),
+        "peak_power_db": float(10 * np.log10(max(profile[i] / (n * snaps0.shape[1]),
+                                                  1e-300))),
     }
-    if return_maps:
-        return metrics, {"range_profile": Map(profile, ("range",), {"range": r_axis}),
-                         "rd": rd, "ae": ae, "range_bin": i, "slow_time": slow,
-                         "look_direction": np.asarray(u)}
-    return metrics
+    if not return_maps:
+        return metrics
+    ra_pick = np.unique(np.linspace(0, n - 1, min(n, range_angle_chirps)).astype(int))
+    ra = bfs[0](rc0[ra_pick], ra_pick, r_axis, grid, [look_el], u_hat)[:, :, :, 0]
+    re_ = bfs[0](rc0[ra_pick], ra_pick, r_axis, [look_az], grid, u_hat)[:, :, 0, :]
+    maps = {
+        "range_profile": Map(profile, ("range",), {"range": r_axis}), "rd": rd, "ae": ae,
+        "ra": Map(np.sum(np.abs(ra) ** 2, axis=0), ("range", "azimuth"),
+                  {"range": r_axis, "azimuth": grid}),
+        "re": Map(np.sum(np.abs(re_) ** 2, axis=0), ("range", "elevation"),
+                  {"range": r_axis, "elevation": grid}),
+        "range_bin": i, "slow_time": slow,
+    }
+    return metrics, maps
 
 
 # -------------------------------------------------------------- compensation
-def compensate(frames: Sequence[RadarFrame], chain: str, imu, *, scenario: Scenario | None = None
-               ) -> list[RadarFrame]:
-    """Apply a compensation chain of the ``compensation`` package to frames.
+#: IMU record margin before the first and after the last chirp [s].
+IMU_MARGIN_S = 0.02
+
+
+def platform_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory=None):
+    """Strapdown-integrate an IMU log to the platform pose at every chirp.
+
+    Initial attitude, position and velocity at the first chirp are taken from
+    the truth trajectory (the flight controller's state).
 
     Parameters
     ----------
-    frames : sequence of RadarFrame
-    chain : {"paper", "exact"}
+    scenario : Scenario
+        Lever arm and IMU clock offset.
     imu : xarray.Dataset
-        IMU log (``imu_time``, ``imu_gyro``, ``imu_accel``).
-    scenario : Scenario, optional
-        Source of the IMU clock parameters.
+        ``imu_time`` [s, IMU clock], ``imu_gyro`` [rad/s], ``imu_accel`` [m/s^2].
+    chirp_times : ndarray, shape ``[chirp]``
+        Chirp start times of all frames, in order [s].
+
+    Returns
+    -------
+    compensation.PlatformMotion
 
     Raises
     ------
     FeatureUnavailable
-        When the ``compensation`` package does not provide the chain.
+        Without the compensation package.
     """
-    if chain not in ("paper", "exact"):
-        raise ValueError(f"chain: got {chain!r}, expected 'paper' or 'exact'")
     try:
-        import compensation
+        from compensation import integrate_imu
     except ImportError as exc:
-        raise FeatureUnavailable(f"the compensation package is not installed: {exc}") from None
-    fn = getattr(compensation, f"compensate_{chain}", None)
-    if fn is None:
-        raise FeatureUnavailable(f"the compensation package has no {chain} chain "
-                                 f"(compensation.compensate_{chain}) yet")
-    return [fn(fr, imu) for fr in frames]
+        raise FeatureUnavailable(f"compensation needs the compensation package: {exc}") from None
+    traj = scenario.trajectory() if trajectory is None else trajectory
+    t = np.asarray(chirp_times, dtype=float).ravel()
+    t_ref = float(t[0])
+    return integrate_imu(np.asarray(imu["imu_time"].values), np.asarray(imu["imu_gyro"].values),
+                         np.asarray(imu["imu_accel"].values), t, lever_arm=scenario.lever_arm,
+                         time_offset=scenario.imu.time_offset_s, reference_time=t_ref,
+                         initial_attitude=traj.attitude([t_ref]).as_matrix()[0],
+                         initial_position=traj.position([t_ref])[0], velocity="given",
+                         initial_velocity=traj.velocity([t_ref])[0])
 
 
-def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, return_frames: bool = False):
-    """Render a scenario in memory and measure every chain.
+def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None, imu=None,
+             reference: Reference | None = None, return_maps: bool = False) -> dict:
+    """Render a scenario in memory (unless ``frames`` are given) and measure every chain.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    chains : sequence of str
+        Subset of :data:`CHAINS`.
+    frames : list of RadarFrame, optional
+        Frames already rendered (or read from a store).
+    imu : xarray.Dataset, optional
+        IMU log; simulated from the scenario if omitted.
+    reference : Reference, optional
+        Truth target when ``frames`` are given (default: the scenario's first
+        point target).
+    return_maps : bool
+        Also return the maps of every chain (see :func:`analyse`).
 
     Returns
     -------
     dict
-        ``{"reference": Reference or None, "chains": {chain: metrics}, "notes": [str]}``;
-        chains that cannot run here are listed in ``notes`` instead. With
-        ``return_frames``, ``"frames"`` (chain -> frames) and ``"imu"`` are added.
+        ``{"reference": Reference or None, "chains": {chain: metrics}, "notes": [str]}``
+        (plus ``"maps": {chain: maps}`` with ``return_maps``); chains that
+        cannot run here are skipped with a note.
     """
     bad = [c for c in chains if c not in CHAINS]
     if bad:
         raise ValueError(f"chains: got {bad}, expected names from {list(CHAINS)}")
     traj = scenario.trajectory()
-    source = frame_source(scenario, traj)
-    frames = [source(f) for f in range(scenario.frames)]
-    out: dict = {"reference": source.reference, "chains": {}, "notes": []}
-    per_chain = {}
-    imu = None
-    if any(c != "uncompensated" for c in chains):
-        imu = imu_log(scenario, traj)
+    if frames is None:
+        source = frame_source(scenario, traj)
+        frames = [source(f) for f in range(scenario.frames)]
+        reference = source.reference
+    elif reference is None and scenario.scene.kind == "points":
+        reference = reference_target(scenario)
+    out: dict = {"reference": reference, "chains": {}, "notes": []}
+    if return_maps:
+        out["maps"] = {}
+    motion = None
     for chain in chains:
-        if chain == "uncompensated":
-            fr = frames
+        try:
+            if chain != "uncompensated" and motion is None:
+                if imu is None:
+                    imu = imu_log(scenario, traj)
+                if imu is None:
+                    raise FeatureUnavailable("raysim.imu is not available")
+                times = np.concatenate([fr.chirp_times for fr in frames])
+                motion = platform_motion(scenario, imu, times, traj)
+            res = analyse(frames, reference, chain=chain, motion=motion,
+                          return_maps=return_maps)
+        except FeatureUnavailable as exc:
+            out["notes"].append(f"{chain}: {exc}")
+            continue
+        if return_maps:
+            out["chains"][chain], out["maps"][chain] = res
         else:
-            if imu is None:
-                out["notes"].append(f"{chain}: raysim.imu is not available")
-                continue
-            try:
-                fr = compensate(frames, chain, imu, scenario=scenario)
-            except (FeatureUnavailable, ImportError) as exc:
-                out["notes"].append(f"{chain}: {exc}")
-                continue
-        per_chain[chain] = fr
-        out["chains"][chain] = analyse(fr, source.reference)
-    if return_frames:
-        out["frames"] = per_chain
-        out["imu"] = imu
+            out["chains"][chain] = res
     return out

@@ -29,14 +29,14 @@ from pathlib import Path
 import numpy as np
 
 from .frame import RadarFrame
-from .render import CHAINS, METRIC_UNITS, FeatureUnavailable, Reference
+from .render import CHAINS, METRIC_UNITS, Reference
 
 __all__ = ["ReportData", "collect_from_scenario", "collect_from_dataset", "build_report",
-           "write_report", "software_versions", "range_angle_map", "DYNAMIC_RANGE_DB"]
+           "write_report", "software_versions", "DYNAMIC_RANGE_DB"]
 
 #: Colour-scale depth of the maps [dB].
 DYNAMIC_RANGE_DB = 40.0
-#: Most chirps summed (non-coherently) into the range-angle maps.
+#: Chirps of frame 0 summed (in power) into the range-angle maps.
 RANGE_ANGLE_CHIRPS = 16
 #: Distributions whose versions the report lists.
 VERSION_PACKAGES = ("raysim", "numpy", "scipy", "xarray", "zarr", "dask", "matplotlib",
@@ -50,38 +50,42 @@ class ReportData:
     Attributes
     ----------
     title : str
-    frames : dict
-        Chain name -> list of :class:`~raysim.frame.RadarFrame` (same radar).
-    reference : Reference or None
-        Truth target.
+    result : dict
+        Output of :func:`raysim.render.evaluate` with ``return_maps=True``
+        (``reference``, ``chains`` metrics, ``maps``, ``notes``).
+    frame : RadarFrame
+        Frame 0 (its config and array describe the radar).
+    num_frames : int
     scenario_toml : str
         Run parameters as TOML ('' when unknown).
     paper : dict
         Values the paper reports for this case (may be empty).
-    notes : list of str
-        Chains that could not run, and why.
     source : str
         Where the frames came from (scenario file, store path).
     """
 
     title: str
-    frames: dict
-    reference: Reference | None = None
+    result: dict
+    frame: RadarFrame
+    num_frames: int = 1
     scenario_toml: str = ""
     paper: dict = field(default_factory=dict)
-    notes: list = field(default_factory=list)
     source: str = ""
 
 
 # ------------------------------------------------------------------ collect
 def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
                           source: str = "") -> ReportData:
-    """Render a scenario in memory and apply every available chain."""
-    from .render import evaluate
+    """Render a scenario in memory and measure every available chain."""
+    from .render import evaluate, frame_source
 
-    res = evaluate(scenario, chains=chains, return_frames=True)
-    return ReportData(scenario.name, res["frames"], res["reference"], scenario.to_toml(),
-                      _paper_values(scenario), list(res["notes"]), source or scenario.name)
+    traj = scenario.trajectory()
+    src = frame_source(scenario, traj)
+    frames = [src(f) for f in range(scenario.frames)]
+    res = evaluate(scenario, chains=chains, frames=frames, reference=src.reference,
+                   return_maps=True)
+    return ReportData(scenario.name, res, frames[0], len(frames), scenario.to_toml(),
+                      _paper_values(scenario), source or scenario.name)
 
 
 def _paper_values(scenario) -> dict:
@@ -93,8 +97,9 @@ def _paper_values(scenario) -> dict:
 
 
 def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = "") -> ReportData:
-    """Frames of a stored Dataset (Zarr / NetCDF) plus the chains its IMU log allows."""
-    from .render import compensate
+    """Frames of a stored Dataset (Zarr / NetCDF), measured through every chain its IMU log
+    and scenario allow."""
+    from .render import analyse, evaluate
     from .storage import dataset_to_frames, scenario_of
 
     frames = dataset_to_frames(ds)
@@ -103,54 +108,26 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
     if "reference_range_m" in ds.attrs:
         ref = Reference(float(ds.attrs["reference_range_m"]), float(ds.attrs["reference_az_deg"]),
                         float(ds.attrs["reference_el_deg"]))
-    out = ReportData(str(ds.attrs.get("scenario_name", "stored frames")), {}, ref,
-                     scenario.to_toml() if scenario is not None else "",
-                     _paper_values(scenario), [], source)
+    title = str(ds.attrs.get("scenario_name", "stored frames"))
+    if scenario is None:
+        m, maps = analyse(frames, ref, return_maps=True)
+        res = {"reference": ref, "chains": {"uncompensated": m},
+               "maps": {"uncompensated": maps},
+               "notes": ["the store carries no scenario: compensation chains skipped"]}
+        return ReportData(title, res, frames[0], len(frames), "", {}, source)
     imu = ds[["imu_gyro", "imu_accel"]] if "imu_gyro" in ds else None
-    for chain in chains:
-        if chain == "uncompensated":
-            out.frames[chain] = frames
-            continue
-        if imu is None:
-            out.notes.append(f"{chain}: the store has no IMU log")
-            continue
-        try:
-            out.frames[chain] = compensate(frames, chain, imu, scenario=scenario)
-        except (FeatureUnavailable, ImportError) as exc:
-            out.notes.append(f"{chain}: {exc}")
-    return out
+    notes = []
+    if imu is None:
+        chains = [c for c in chains if c == "uncompensated"]
+        notes.append("the store has no IMU log: compensation chains skipped")
+    res = evaluate(scenario, chains=chains, frames=frames, imu=imu, reference=ref,
+                   return_maps=True)
+    res["notes"] = notes + res["notes"]
+    return ReportData(title, res, frames[0], len(frames), scenario.to_toml(),
+                      _paper_values(scenario), source)
 
 
 # ------------------------------------------------------------------- maps
-def range_angle_map(frame: RadarFrame, look: str, fixed_deg: float, *,
-                    limit_deg: float = 60.0, step_deg: float = 1.0,
-                    max_chirps: int = RANGE_ANGLE_CHIRPS):
-    """Range-azimuth (``look="azimuth"``) or range-elevation map of one frame.
-
-    Beam scan over ``+-limit_deg`` with the other angle fixed at ``fixed_deg``,
-    power summed over up to ``max_chirps`` evenly spaced chirps.
-
-    Returns
-    -------
-    raysim.processing.Map
-        dims ``(range, azimuth)`` or ``(range, elevation)``; angle coordinate [rad].
-    """
-    from .processing import Map, az_el_grid, beamform, range_compress
-
-    if look not in ("azimuth", "elevation"):
-        raise ValueError(f"look: got {look!r}, expected 'azimuth' or 'elevation'")
-    cfg, arr = frame.config, frame.array
-    step = max(1, frame.data.shape[0] // max_chirps)
-    rc = range_compress(frame.data[::step])                     # [chirp, channel, range]
-    ang = np.deg2rad(np.arange(-limit_deg, limit_deg + 1e-9, step_deg))
-    fixed = np.array([math.radians(fixed_deg)])
-    u = az_el_grid(ang, fixed) if look == "azimuth" else az_el_grid(fixed, ang)
-    y = beamform(np.swapaxes(rc, 1, 2), arr, cfg.center_wavelength, u)  # [chirp, range, angle]
-    power = np.sum(np.abs(y) ** 2, axis=0)
-    n = rc.shape[-1]
-    return Map(power, ("range", look), {"range": cfg.range_axis(n)[:n], look: ang})
-
-
 def _png(fig) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=90, bbox_inches="tight")
@@ -169,6 +146,8 @@ def _map_figure(maps: dict, kind: str, reference: Reference | None, max_range: f
         m = maps[chain]
         db = m.db(-DYNAMIC_RANGE_DB)
         d0, d1 = m.dims
+        if (d0, d1) == ("azimuth", "elevation"):      # azimuth across, elevation up
+            d0, d1, db = d1, d0, db.T
         c0 = np.asarray(m.coords[d0], dtype=float)
         c1 = np.asarray(m.coords[d1], dtype=float)
         if d1 in ("azimuth", "elevation"):
@@ -187,7 +166,7 @@ def _map_figure(maps: dict, kind: str, reference: Reference | None, max_range: f
             ax.set_ylim(0, max_range)
         if reference is not None:
             mark = {"range": reference.range_m, "azimuth": reference.az_deg,
-                    "elevation": reference.el_deg, "doppler": 0.0}
+                    "elevation": reference.el_deg, "doppler": 0.0}  # static target
             ax.plot(mark[d1], mark[d0], marker="+", color="red", markersize=12, mew=1.5)
         ax.set_title(f"{chain}: {kind}")
     fig.colorbar(im, ax=axes[0].tolist(), label="power [dB rel. max]", shrink=0.9)
@@ -259,24 +238,18 @@ def build_report(data: ReportData) -> str:
     import matplotlib
 
     matplotlib.use("Agg", force=False)
-    from .render import analyse
-
-    if not data.frames:
-        raise ValueError("nothing to report: no chain produced frames")
-    chains = [c for c in CHAINS if c in data.frames]
-    first = data.frames[chains[0]][0]
-    cfg, arr = first.config, first.array
-    ref = data.reference
-    metrics, rd, ae, ra, re_, slow = {}, {}, {}, {}, {}, {}
-    for chain in chains:
-        frames = data.frames[chain]
-        m, maps = analyse(frames, ref, return_maps=True)
-        metrics[chain] = m
-        rd[chain], ae[chain], slow[chain] = maps["rd"], maps["ae"], maps["slow_time"]
-        el0 = ref.el_deg if ref is not None else m["el_deg"]
-        az0 = ref.az_deg if ref is not None else m["az_deg"]
-        ra[chain] = range_angle_map(frames[0], "azimuth", el0)
-        re_[chain] = range_angle_map(frames[0], "elevation", az0)
+    res = data.result
+    chains = [c for c in CHAINS if c in res["chains"]]
+    if not chains:
+        raise ValueError("nothing to report: no chain could be evaluated")
+    cfg, arr = data.frame.config, data.frame.array
+    ref = res["reference"]
+    metrics = res["chains"]
+    ra = {c: res["maps"][c]["ra"] for c in chains}
+    re_ = {c: res["maps"][c]["re"] for c in chains}
+    rd = {c: res["maps"][c]["rd"] for c in chains}
+    ae = {c: res["maps"][c]["ae"] for c in chains}
+    slow = {c: res["maps"][c]["slow_time"] for c in chains}
     rmax = min(cfg.max_range, 2.0 * ref.range_m) if ref is not None else None
     figs = [
         ("Range-azimuth maps", _map_figure(ra, "range-azimuth", ref, rmax),
@@ -285,10 +258,11 @@ def build_report(data: ReportData) -> str:
         ("Range-elevation maps", _map_figure(re_, "range-elevation", ref, rmax),
          "Beam scan at the target azimuth, frame 0."),
         ("Range-Doppler maps", _map_figure(rd, "range-Doppler", ref, rmax),
-         "Hann windows in fast and slow time, power summed over channels, frame 0."),
-        ("Azimuth-elevation maps", _map_figure(ae, "azimuth-elevation", None, None),
-         "Non-coherent beam scan at the target range gate over all frames; its entropy is "
-         "entropy_ae_nats."),
+         "Hann windows in fast and slow time, beam towards the target (through each chain), "
+         "frame 0; its entropy is entropy_rd_nats."),
+        ("Azimuth-elevation maps", _map_figure(ae, "azimuth-elevation", ref, None),
+         "Beam power at the target range gate summed over the chirps of all frames (through "
+         "each chain); its entropy is entropy_ae_nats."),
         ("Doppler cuts", _doppler_figure(slow, cfg),
          "Slow-time signal of frame 0 at the target range, beamformed to the target."),
     ]
@@ -301,7 +275,7 @@ def build_report(data: ReportData) -> str:
     if ref is not None:
         parts.append(f"<p>Reference target: range {ref.range_m:.3f} m, azimuth "
                      f"{ref.az_deg:.2f} deg, elevation {ref.el_deg:.2f} deg.</p>")
-    for note in data.notes:
+    for note in res["notes"]:
         parts.append(f"<p class='note'>Note: {html.escape(note)}</p>")
 
     parts.append("<h2>Metrics</h2><table><tr><th>metric</th><th>unit</th>"
@@ -325,7 +299,7 @@ def build_report(data: ReportData) -> str:
                      f"{_png(fig)}'><p class='muted'>{html.escape(caption)}</p>")
 
     derived = {
-        "frames": len(data.frames[chains[0]]), "chirps": cfg.num_chirps,
+        "frames": data.num_frames, "chirps": cfg.num_chirps,
         "samples per chirp": cfg.num_samples, "channels": arr.num_channels,
         "array": arr.name, "TDM slots": cfg.num_tx_slots,
         "range resolution [m]": cfg.range_resolution, "max range [m]": cfg.max_range,

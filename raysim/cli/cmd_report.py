@@ -86,7 +86,7 @@ def run(args) -> int:
         print(f"raysim report: {exc}", file=sys.stderr)
         return 1
     out = write_report(data, args.out or default_out)
-    for note in data.notes:
+    for note in data.result["notes"]:
         print(f"note: {note}", file=sys.stderr)
     print(f"report written: {out}")
     return 0
