@@ -118,3 +118,20 @@ def test_help_of_every_new_subcommand(capsys):
             main([cmd, "--help"])
         assert ex.value.code == 0
         assert "exit status" in capsys.readouterr().out
+
+
+def test_compensation_chains_restore_the_stationary_doppler(capsys):
+    pytest.importorskip("compensation")
+    code, out, _ = run_cli(["simulate", "--case", "rotation_y", "--json",
+                            "--set", "radar.num_chirps=128", "--set", "radar.sample_rate_hz=2.5e6",
+                            "--set", "array.nx=4", "--set", "array.ny=4"], capsys)
+    assert code == 0
+    res = json.loads(out)
+    assert set(res["chains"]) == {"uncompensated", "paper", "exact"} and not res["notes"]
+    unc, paper, exact = (res["chains"][c] for c in ("uncompensated", "paper", "exact"))
+    # pitch 10 deg at 20 Hz moves the target by several degrees and adds a range rate
+    assert abs(unc["pseudo_velocity_mps"]) > 0.2 and unc["angle_error_deg"] > 1.0
+    for m in (paper, exact):
+        assert abs(m["pseudo_velocity_mps"]) < 0.02
+        assert m["doppler_width_bins"] == pytest.approx(1.44, abs=0.02)
+    assert exact["angle_error_deg"] < 0.1
