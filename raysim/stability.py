@@ -54,13 +54,17 @@ Doppler velocity bin ``lambda_c / (2 N T_rep)``, or angle error above half the
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import importlib.util
 import json
 import math
 import os
 import tempfile
 import time
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field, replace
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -75,9 +79,9 @@ from .processing import Map
 
 __all__ = [
     "CHAINS", "ANGLE_CHIRPS", "GRAVITY", "Scenario", "Criteria", "PoseEstimate", "MapSpec",
-    "MAPS", "gated_cube", "estimate_pose", "reference_pose", "chain_corrections", "evaluate",
-    "run_map", "plot_map", "atomic_write", "write_stability", "write_netcdf", "read_netcdf",
-    "criteria_for", "fails",
+    "MAPS", "gated_cube", "compensated_slow_time", "estimate_pose", "reference_pose",
+    "chain_corrections", "evaluate", "run_map", "plot_map", "atomic_write", "write_stability",
+    "write_netcdf", "read_netcdf", "criteria_for", "fails",
 ]
 
 #: Compensation chains compared in every map.
@@ -101,6 +105,10 @@ FINE_HALF_WIDTH, FINE_STEP = np.deg2rad(2.0), np.deg2rad(0.1)
 
 _PHASE_FORMS = ("paper", "integrated")
 _INITS = ("truth", "hover")
+#: Axes whose values are integers (passed to the builders as int).
+_INT_AXES = ("num_chirps", "term_index", "error_axis_index", "init_index")
+#: Version of the per-point record format and of the chains (part of the point key).
+POINT_VERSION = 1
 #: Hover-assumption window either side of the frame for ``init="hover"`` [s].
 HOVER_WINDOW = 0.25
 
@@ -629,23 +637,61 @@ def _angle_between_deg(az, el, u_true) -> np.ndarray:
     return np.rad2deg(np.arccos(np.clip(direction(az, el) @ u_true, -1.0, 1.0)))
 
 
+def _slow_time(x: np.ndarray, corr: _Corrections, scenario: Scenario) -> np.ndarray:
+    """Compensated slow time towards the true direction, shape ``[chirp]``."""
+    lam = scenario.config.center_wavelength
+    ut = scenario.direction[None, :]
+    s = _beam(x, scenario.array, lam, _look(corr, ut, x.shape[0]))[:, 0]
+    return s * np.exp(-1j * 4 * np.pi / lam * corr.range_change(ut)[:, 0])
+
+
+def compensated_slow_time(scenario: Scenario, chain: str,
+                          pose: PoseEstimate | None = None) -> np.ndarray:
+    """Slow-time signal of the target's range gate after a chain, beamformed at the target.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    chain : str
+        One of :data:`CHAINS`.
+    pose : PoseEstimate, optional
+        Navigation solution; :func:`estimate_pose` when omitted.
+
+    Returns
+    -------
+    ndarray, shape ``[chirp]``, complex128
+        ``y_n(u)`` [sqrt(W)]: channel-averaged beam output towards the true
+        direction with the chain's spatial and slow-time corrections.
+    """
+    gate, _ = gated_cube(scenario)
+    times = scenario.config.chirp_times(0, scenario.t0)
+    if pose is None and chain != "none":
+        pose = estimate_pose(scenario, times)
+    corr = chain_corrections(chain, scenario, pose, times)
+    x = gate if corr.element_phase is None else gate * np.exp(-1j * corr.element_phase)
+    return _slow_time(x, corr, scenario)
+
+
 def _chain_metrics(gate: np.ndarray, corr: _Corrections, scenario: Scenario,
-                   chirp_times: np.ndarray) -> dict:
+                   chirp_times: np.ndarray, coherent_map: bool = True) -> dict:
     cfg, array = scenario.config, scenario.array
     lam = cfg.center_wavelength
     n = chirp_times.size
     x = gate if corr.element_phase is None else gate * np.exp(-1j * corr.element_phase)
     u_true = scenario.direction
-    # slow time towards the true direction, with the slow-time phase correction
-    ut = u_true[None, :]
-    s = _beam(x, array, lam, _look(corr, ut, n))[:, 0]
-    s = s * np.exp(-1j * 4 * np.pi / lam * corr.range_change(ut)[:, 0])
+    s = _slow_time(x, corr, scenario)
     pv = pseudo_velocity(s, cfg.chirp_interval, lam)
     width = doppler_mainlobe_width(s, cfg.chirp_interval)
     # single-chirp angle errors, worst over ANGLE_CHIRPS chirps
     idx = np.unique(np.linspace(0, n - 1, ANGLE_CHIRPS + 2).round().astype(int)[1:-1])
     ae = _single_chirp_direction(x, corr, idx, array, lam)
     errs = _angle_between_deg(ae[:, 0], ae[:, 1], u_true)
+    out = {"pseudo_velocity": float(pv), "doppler_width_hz": float(width),
+           "angle_error_deg": float(errs.max()),
+           "angle_error_mid_deg": float(errs[np.argmin(np.abs(idx - n // 2))]),
+           "focused_angle_error_deg": math.nan, "entropy": math.nan}
+    if not coherent_map:
+        return out
     # coherent azimuth-elevation map over the frame
     gaz, gel = _grid(scenario.target_az, scenario.target_el, MAP_HALF_WIDTH, MAP_STEP)
     u = _dirs(gaz, gel)
@@ -656,19 +702,14 @@ def _chain_metrics(gate: np.ndarray, corr: _Corrections, scenario: Scenario,
     img = np.abs(y.sum(axis=0)) ** 2
     pk = map_peak(Map(img.reshape(gaz.size, gel.size), ("azimuth", "elevation"),
                       {"azimuth": gaz, "elevation": gel}))
-    return {
-        "pseudo_velocity": float(pv),
-        "doppler_width_hz": float(width),
-        "angle_error_deg": float(errs.max()),
-        "angle_error_mid_deg": float(errs[np.argmin(np.abs(idx - n // 2))]),
-        "focused_angle_error_deg": float(_angle_between_deg(pk["azimuth"], pk["elevation"],
-                                                            u_true)),
-        "entropy": float(image_entropy(img)),
-    }
+    out["focused_angle_error_deg"] = float(_angle_between_deg(pk["azimuth"], pk["elevation"],
+                                                              u_true))
+    out["entropy"] = float(image_entropy(img))
+    return out
 
 
 def evaluate(scenario: Scenario, chains: Sequence[str] = CHAINS, *,
-             strapdown: str = "auto") -> dict:
+             strapdown: str = "auto", coherent_map: bool = True) -> dict:
     """Metrics of every chain at one scenario.
 
     Parameters
@@ -678,6 +719,10 @@ def evaluate(scenario: Scenario, chains: Sequence[str] = CHAINS, *,
         Subset of :data:`CHAINS`.
     strapdown : {"auto", "compensation", "reference"}
         Navigation solution, see :func:`estimate_pose`.
+    coherent_map : bool
+        Also form the coherent azimuth-elevation map (``entropy`` and
+        ``focused_angle_error_deg``; NaN when False). The failure criteria
+        need only the pseudo-velocity and the angle error.
 
     Returns
     -------
@@ -698,7 +743,7 @@ def evaluate(scenario: Scenario, chains: Sequence[str] = CHAINS, *,
     out: dict = {}
     for c in chains:
         out[c] = _chain_metrics(gate, chain_corrections(c, scenario, pose, times), scenario,
-                                times)
+                                times, coherent_map)
     out["warnings"] = list(pose.warnings) if pose is not None else []
     out["strapdown"] = pose.source if pose is not None else ""
     return out
@@ -853,8 +898,8 @@ MAPS: dict[str, MapSpec] = {m.name: m for m in (
             _b_imu_grade, seeds=3, quick_seeds=1, log_axes=("scale",),
             note="terms: " + ", ".join(f"{i}={t}" for i, t in enumerate(IMU_TERMS))),
     MapSpec("imu_rate", "IMU rate x motion frequency (pitch 10 deg)",
-            (("imu_rate_hz", "Hz", (100, 200, 400, 1000, 2000, 8000), (200, 2000)),
-             ("frequency_hz", "Hz", (2, 5, 10, 20, 40), (5, 20))),
+            (("imu_rate_hz", "Hz", (50, 100, 200, 400, 1000, 2000), (50, 400)),
+             ("frequency_hz", "Hz", (2, 5, 10, 20, 40), (10, 40))),
             _b_imu_rate, log_axes=("imu_rate_hz", "frequency_hz")),
     MapSpec("clock", "IMU-radar time offset x clock drift (rotation_y case)",
             (("time_offset_ms", "ms", (0, 0.05, 0.1, 0.2, 0.5, 1, 2), (0, 0.2, 2)),
@@ -873,9 +918,57 @@ MAPS: dict[str, MapSpec] = {m.name: m for m in (
 )}
 
 
+def _point_key(spec: MapSpec, kw: dict, seed: int, chains: Sequence[str]) -> str:
+    blob = json.dumps({"map": spec.name, "values": kw, "seed": int(seed),
+                       "chains": list(chains), "version": POINT_VERSION},
+                      sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def _evaluate_point(spec: MapSpec, kw: dict, seed: int, chains: Sequence[str]) -> dict:
+    """One map point: scenario, metrics and thresholds (a plain, JSON-ready dict)."""
+    scn = spec.build(seed=seed, **kw)
+    res = evaluate(scn, chains)
+    crit = criteria_for(scn.config, scn.array)
+    return {"values": kw, "seed": int(seed),
+            "metrics": {c: res[c] for c in chains}, "criteria": asdict(crit),
+            "warnings": res["warnings"], "strapdown": res["strapdown"]}
+
+
+def _load_record(path: Path) -> dict | None:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None                             # missing or unreadable: compute again
+
+
+def _have_distributed() -> bool:
+    return importlib.util.find_spec("distributed") is not None
+
+
+@contextlib.contextmanager
+def _dask_client(client=None):
+    """The given ``distributed.Client``, or an in-process one (1 worker, 2 threads)."""
+    if client is not None:
+        yield client
+        return
+    from distributed import Client, LocalCluster
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)       # dashboard port already in use
+        cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                               dashboard_address=None)
+    try:
+        with Client(cluster) as cl:
+            yield cl
+    finally:
+        cluster.close()
+
+
 def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] = CHAINS,
-            progress: bool = True, points: Iterable[dict] | None = None):
-    """Evaluate a stability map.
+            progress: bool = True, points_dir: str | os.PathLike | None = None,
+            executor: str = "auto", client=None):
+    """Evaluate a stability map, point by point, resumably.
 
     Parameters
     ----------
@@ -886,6 +979,16 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
     chains : sequence of str
     progress : bool
         Show a progress bar (tqdm, on stderr).
+    points_dir : path-like, optional
+        Folder of per-point records (``<key>.json``, written atomically as each
+        point finishes); points already recorded there are not computed again,
+        so an interrupted map resumes where it stopped.
+    executor : {"auto", "dask", "serial"}
+        ``"dask"``: one task per point on an in-process ``distributed``
+        LocalCluster (one worker, two threads); ``"serial"``: a plain loop;
+        ``"auto"``: Dask when ``distributed`` is importable.
+    client : distributed.Client, optional
+        Run the points on this client (any scheduler whose workers import raysim).
 
     Returns
     -------
@@ -893,7 +996,8 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
         Variables of :data:`METRICS` with dims ``(chain, <axis 0>, <axis 1>, seed)``,
         ``fail`` (bool, :func:`fails`), ``worse_than_none`` (bool: residual
         pseudo-velocity or angle error above the baseline's), and the
-        thresholds as attributes.
+        thresholds ``velocity_bin`` [m/s], ``half_beamwidth_deg``,
+        ``doppler_bin_hz`` per grid point.
     """
     import xarray as xr
 
@@ -901,46 +1005,87 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
         if spec not in MAPS:
             raise ValueError(f"unknown stability map {spec!r}; expected one of {sorted(MAPS)}")
         spec = MAPS[spec]
+    if executor not in ("auto", "dask", "serial"):
+        raise ValueError(f"executor must be 'auto', 'dask' or 'serial', got {executor!r}")
+    for c in chains:
+        if c not in CHAINS:
+            raise ValueError(f"chain must be one of {CHAINS}, got {c!r}")
     names = [a[0] for a in spec.axes]
     values = [np.asarray(a[3] if quick else a[2], dtype=float) for a in spec.axes]
     n_seed = spec.quick_seeds if quick else spec.seeds
     shape = (len(chains),) + tuple(v.size for v in values) + (n_seed,)
-    data = {m: np.full(shape, np.nan) for m in METRICS}
-    crit = np.empty(shape[1:-1], dtype=object)
-    warn: list[str] = []
-    source = set()
     grid = list(np.ndindex(*shape[1:-1]))
-    todo = [(g, s) for g in grid for s in range(n_seed)]
+    todo = []
+    for g in grid:
+        kw = {name: (int(v[i]) if name in _INT_AXES else float(v[i]))
+              for name, v, i in zip(names, values, g, strict=True)}
+        for s in range(n_seed):
+            todo.append((g, s, kw, _point_key(spec, kw, s, chains)))
+    pdir = None if points_dir is None else Path(points_dir)
+    records: dict[str, dict] = {}
+    if pdir is not None:
+        pdir.mkdir(parents=True, exist_ok=True)
+        for *_, key in todo:
+            rec = _load_record(pdir / f"{key}.json")
+            if rec is not None:
+                records[key] = rec
+    missing = [t for t in todo if t[3] not in records]
     bar = None
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=len(todo), desc=spec.name, leave=False)
-    for g, s in todo:
-        kw = {name: (int(v[i]) if float(v[i]).is_integer() and name in ("num_chirps",)
-                     else float(v[i])) for name, v, i in zip(names, values, g, strict=True)}
-        scn = spec.build(seed=s, **kw)
-        res = evaluate(scn, chains)
-        for ci, c in enumerate(chains):
-            for m in METRICS:
-                data[m][(ci,) + g + (s,)] = res[c][m]
-        crit[g] = criteria_for(scn.config, scn.array)
-        warn.extend(f"{kw}: {w}" for w in res["warnings"])
-        source.add(res["strapdown"])
+        bar = tqdm(total=len(todo), initial=len(todo) - len(missing), desc=spec.name,
+                   unit="point", leave=False)
+
+    def done(key: str, rec: dict) -> None:
+        records[key] = rec
+        if pdir is not None:
+            atomic_write(pdir / f"{key}.json", lambda p: p.write_text(json.dumps(rec)))
         if bar is not None:
             bar.update(1)
-    if bar is not None:
-        bar.close()
-    vbin = np.vectorize(lambda c: c.velocity_bin)(crit)
-    hbw = np.vectorize(lambda c: c.half_beamwidth_deg)(crit)
-    dbin = np.vectorize(lambda c: c.doppler_bin_hz)(crit)
+
+    use_dask = client is not None or executor == "dask" or (
+        executor == "auto" and len(missing) > 1 and _have_distributed())
+    try:
+        if missing and use_dask:
+            from distributed import as_completed
+
+            with _dask_client(client) as cl:
+                futures = {cl.submit(_evaluate_point, spec, kw, s, tuple(chains),
+                                     pure=False): key for _, s, kw, key in missing}
+                try:
+                    for fut in as_completed(futures):
+                        done(futures[fut], fut.result())
+                except BaseException:
+                    cl.cancel(list(futures))
+                    raise
+        else:
+            for _, s, kw, key in missing:
+                done(key, _evaluate_point(spec, kw, s, chains))
+    finally:
+        if bar is not None:
+            bar.close()
+
+    data = {m: np.full(shape, np.nan) for m in METRICS}
+    thresholds = {k: np.full(shape[1:-1], np.nan)
+                  for k in ("velocity_bin", "half_beamwidth_deg", "doppler_bin_hz")}
+    warn: list[str] = []
+    source = set()
+    for g, s, kw, key in todo:
+        rec = records[key]
+        for ci, c in enumerate(chains):
+            for m in METRICS:
+                data[m][(ci,) + g + (s,)] = rec["metrics"][c][m]
+        for k in thresholds:
+            thresholds[k][g] = rec["criteria"][k]
+        warn.extend(f"{kw}: {w}" for w in rec["warnings"])
+        source.add(rec["strapdown"])
     dims = ("chain",) + tuple(names) + ("seed",)
     coords = {"chain": list(chains), "seed": np.arange(n_seed)}
     coords.update({n: v for n, v in zip(names, values, strict=True)})
     ds = xr.Dataset({m: (dims, data[m]) for m in METRICS}, coords=coords)
-    ds["velocity_bin"] = (tuple(names), vbin.astype(float))
-    ds["half_beamwidth_deg"] = (tuple(names), hbw.astype(float))
-    ds["doppler_bin_hz"] = (tuple(names), dbin.astype(float))
+    for k, v in thresholds.items():
+        ds[k] = (tuple(names), v)
     ds["fail"] = ((np.abs(ds.pseudo_velocity) > ds.velocity_bin)
                   | (ds.angle_error_deg > ds.half_beamwidth_deg))
     if "none" in chains:
@@ -1108,11 +1253,13 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
 
 
 def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
-                    maps: Sequence[str] | None = None, progress: bool = True) -> dict:
+                    maps: Sequence[str] | None = None, progress: bool = True,
+                    executor: str = "auto") -> dict:
     """Produce every stability map: NetCDF, JSON and PNG per map plus ``summary.json``.
 
     Each file is written atomically; a map already finished in ``out_dir``
-    (its ``.nc`` exists with the same ``quick`` flag) is reused, so an
+    (its ``.nc`` exists with the same ``quick`` flag) is reused, and every
+    finished point of an unfinished map is kept under ``points/<map>/``, so an
     interrupted run resumes where it stopped.
 
     Parameters
@@ -1122,6 +1269,10 @@ def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
         Small axes and fewer seeds (a few minutes on 2 cores).
     maps : sequence of str, optional
         Subset of :data:`MAPS` (default all).
+    progress : bool
+        Progress bars on stderr.
+    executor : {"auto", "dask", "serial"}
+        See :func:`run_map`.
 
     Returns
     -------
@@ -1133,7 +1284,29 @@ def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
     for n in names:
         if n not in MAPS:
             raise ValueError(f"unknown stability map {n!r}; expected one of {sorted(MAPS)}")
+    if executor not in ("auto", "dask", "serial"):
+        raise ValueError(f"executor must be 'auto', 'dask' or 'serial', got {executor!r}")
     out.mkdir(parents=True, exist_ok=True)
+    with contextlib.ExitStack() as stack:
+        client = None
+        if executor == "dask" or (executor == "auto" and _have_distributed()):
+            client = stack.enter_context(_dask_client())
+        return _write_maps(out, names, quick, progress, client)
+
+
+def _same_axes(ds, spec: MapSpec, quick: bool) -> bool:
+    """Whether a stored map was computed on the axes (and seeds) the spec asks for now."""
+    if int(ds.attrs.get("quick", -1)) != int(quick):
+        return False
+    for name, _, full, short in spec.axes:
+        want = np.asarray(short if quick else full, dtype=float)
+        if name not in ds.coords or ds[name].size != want.size or not np.allclose(
+                ds[name].values, want):
+            return False
+    return ds.sizes.get("seed", 0) == (spec.quick_seeds if quick else spec.seeds)
+
+
+def _write_maps(out: Path, names: list, quick: bool, progress: bool, client) -> dict:
     summary = {}
     for n in names:
         nc = out / f"{n}.nc"
@@ -1143,11 +1316,13 @@ def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
                 old = read_netcdf(nc)
             except ValueError:
                 old = None                     # unreadable: recompute and replace
-            if old is not None and int(old.attrs.get("quick", -1)) == int(quick):
+            if old is not None and _same_axes(old, MAPS[n], quick):
                 ds = old
         if ds is None:
             t = time.perf_counter()
-            ds = run_map(n, quick=quick, progress=progress)
+            ds = run_map(n, quick=quick, progress=progress, client=client,
+                         executor="serial" if client is None else "dask",
+                         points_dir=out / "points" / f"{n}{'_quick' if quick else ''}")
             ds.attrs["seconds"] = round(time.perf_counter() - t, 2)
             write_netcdf(ds, nc)
         summ = _summary(ds)

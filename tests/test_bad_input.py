@@ -496,12 +496,12 @@ def test_interrupted_stability_run_keeps_finished_maps(tmp_path, monkeypatch):
     monkeypatch.setattr(stability, "run_map", fake_run_map)
     monkeypatch.setattr(stability, "evaluate", _cheap_evaluate)
     with pytest.raises(KeyboardInterrupt):
-        stability.write_stability(tmp_path, quick=True, progress=False)
+        stability.write_stability(tmp_path, quick=True, progress=False, executor="serial")
     names = sorted(p.name for p in tmp_path.iterdir())
     assert names == ["lever_arm.json", "lever_arm.nc", "lever_arm.png"]   # no partial files
     calls.clear()
     monkeypatch.setattr(stability, "run_map", real)
-    stability.write_stability(tmp_path, quick=True, progress=False)
+    stability.write_stability(tmp_path, quick=True, progress=False, executor="serial")
     assert (tmp_path / "clock.nc").exists() and (tmp_path / "summary.json").exists()
 
 

@@ -22,6 +22,9 @@ def register(subparsers) -> None:
     p.add_argument("--maps", nargs="+", metavar="NAME", default=None,
                    help="only these maps (default: all)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--executor", choices=("auto", "dask", "serial"), default="auto",
+                   help="run the points on an in-process Dask cluster (auto: when installed) "
+                   "or in a plain loop")
     p.set_defaults(func=run)
 
 
@@ -35,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--maps: unknown stability map {bad[0]!r}; expected one of "
                              f"{sorted(MAPS)}")
     summary = write_stability(args.out, quick=args.quick, maps=args.maps,
-                              progress=not args.no_progress)
+                              progress=not args.no_progress, executor=args.executor)
     for name, s in summary.items():
         fails = {c: max(_flat(r["fail_fraction"])) for c, r in s["chains"].items()}
         print(f"{name}: worst fail fraction per chain {fails}", file=sys.stdout)
