@@ -26,7 +26,7 @@ from .frame import RadarFrame
 from .scenario import Scenario
 
 __all__ = [
-    "FeatureUnavailable", "Reference", "RenderSummary", "CHAINS", "frame_source",
+    "FeatureUnavailable", "Reference", "RenderSummary", "CHAINS", "LazyFrames", "frame_source",
     "reference_target", "imu_log", "render", "render_frames", "render_dataset", "analyse",
     "platform_motion", "evaluate", "gate_snapshots", "METRIC_UNITS", "IMU_MARGIN_S",
 ]
@@ -329,6 +329,41 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
     return summary
 
 
+class LazyFrames(Sequence):
+    """The frames of a scenario, rendered when accessed (frame 0 is kept).
+
+    Analyses of many large frames (the paper's yaw case: 20 frames of 490 MB)
+    then hold about two frames in memory instead of all of them, at the price
+    of rendering a frame again for every pass over the sequence.
+    """
+
+    def __init__(self, source: Callable[[int], RadarFrame], num_frames: int):
+        self._source = source
+        self._n = int(num_frames)
+        self._first: RadarFrame | None = None
+        self.reference = getattr(source, "reference", None)
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, f):
+        if isinstance(f, slice):
+            return [self[i] for i in range(self._n)[f]]
+        f = int(f) + (self._n if int(f) < 0 else 0)
+        if not 0 <= f < self._n:
+            raise IndexError(f"frame {f} out of range (0..{self._n - 1})")
+        if f == 0:
+            if self._first is None:
+                self._first = self._source(0)
+            return self._first
+        return self._source(f)
+
+    def chirp_times(self) -> np.ndarray:
+        """Chirp start times of all frames, frame after frame, shape ``[frame * chirp]`` [s]."""
+        cfg = self[0].config
+        return np.concatenate([cfg.chirp_times(f) for f in range(self._n)])
+
+
 def render_frames(scenario: Scenario, trajectory=None) -> list[RadarFrame]:
     """All frames of a scenario in memory (``[chirp, channel, sample]`` each)."""
     source = frame_source(scenario, trajectory)
@@ -466,8 +501,9 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     from .metrics import angle_error_deg, doppler_mainlobe_width, pseudo_velocity
     from .processing import Map, doppler_fft, range_compress
 
-    frames = list(frames)
-    if not frames:
+    if not isinstance(frames, Sequence):
+        frames = list(frames)
+    if len(frames) == 0:
         raise ValueError("frames is empty: nothing to analyse")
     if chain not in CHAINS:
         raise ValueError(f"chain: got {chain!r}, expected one of {list(CHAINS)}")
@@ -481,9 +517,9 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     if motion is not None and motion.num_chirps != n * len(frames):
         raise ValueError(f"motion has {motion.num_chirps} chirps, frames have "
                          f"{n * len(frames)}")
-    bfs = [_beamformer(chain, fr, None if motion is None else
+    bfs = [_beamformer(chain, frames[0], None if motion is None else
                        motion.select(slice(k * n, (k + 1) * n)))
-           for k, fr in enumerate(frames)]
+           for k in range(len(frames))]
     wl = cfg.center_wavelength
 
     rc0 = range_compress(frames[0].data)                       # [chirp, channel, range]
@@ -504,8 +540,8 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     pick = np.arange(0, n, step)
     power = 0.0
     snaps0 = None
-    for k, (fr, bf) in enumerate(zip(frames, bfs, strict=True)):
-        snaps = gate_snapshots(fr.data, i)[:, :, None]          # [chirp, channel, 1]
+    for k, bf in enumerate(bfs):
+        snaps = gate_snapshots(frames[k].data, i)[:, :, None]   # [chirp, channel, 1]
         if k == 0:
             snaps0 = snaps
         beams = bf(snaps[pick], pick, gate_r, grid, grid, reference.direction
@@ -608,8 +644,9 @@ def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None,
     scenario : Scenario
     chains : sequence of str
         Subset of :data:`CHAINS`.
-    frames : list of RadarFrame, optional
-        Frames already rendered (or read from a store).
+    frames : sequence of RadarFrame, optional
+        Frames already rendered (or read from a store); default a
+        :class:`LazyFrames` of the scenario.
     imu : xarray.Dataset, optional
         IMU log; simulated from the scenario if omitted.
     reference : Reference, optional
@@ -630,9 +667,8 @@ def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None,
         raise ValueError(f"chains: got {bad}, expected names from {list(CHAINS)}")
     traj = scenario.trajectory()
     if frames is None:
-        source = frame_source(scenario, traj)
-        frames = [source(f) for f in range(scenario.frames)]
-        reference = source.reference
+        frames = LazyFrames(frame_source(scenario, traj), scenario.frames)
+        reference = frames.reference
     elif reference is None and scenario.scene.kind == "points":
         reference = reference_target(scenario)
     out: dict = {"reference": reference, "chains": {}, "notes": []}
@@ -646,7 +682,8 @@ def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None,
                     imu = imu_log(scenario, traj)
                 if imu is None:
                     raise FeatureUnavailable("raysim.imu is not available")
-                times = np.concatenate([fr.chirp_times for fr in frames])
+                times = (frames.chirp_times() if isinstance(frames, LazyFrames)
+                         else np.concatenate([fr.chirp_times for fr in frames]))
                 motion = platform_motion(scenario, imu, times, traj)
             res = analyse(frames, reference, chain=chain, motion=motion,
                           return_maps=return_maps)

@@ -77,12 +77,10 @@ class ReportData:
 def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
                           source: str = "") -> ReportData:
     """Render a scenario in memory and measure every available chain."""
-    from .render import evaluate, frame_source
+    from .render import LazyFrames, evaluate, frame_source
 
-    traj = scenario.trajectory()
-    src = frame_source(scenario, traj)
-    frames = [src(f) for f in range(scenario.frames)]
-    res = evaluate(scenario, chains=chains, frames=frames, reference=src.reference,
+    frames = LazyFrames(frame_source(scenario, scenario.trajectory()), scenario.frames)
+    res = evaluate(scenario, chains=chains, frames=frames, reference=frames.reference,
                    return_maps=True)
     return ReportData(scenario.name, res, frames[0], len(frames), scenario.to_toml(),
                       _paper_values(scenario), source or scenario.name)
