@@ -110,6 +110,15 @@ class PathDelays:
     rx_positions : ndarray, shape ``[chirp, channel, 3]`` or None
         Receive phase centres [m]; ``None`` means the same as ``tx_positions``
         (a monostatic-equivalent virtual array).
+    velocity : ndarray, shape ``[path, 3]``, or None
+        Velocity of the scattering points [m/s] (moving clutter, targets). The
+        vertices then move as ``v + velocity (t - reference_time)`` with ``t``
+        the channel's transmit instant, so TDM slots are exact; the vertices
+        must be given as ``[path, 3]``.
+    element_times : ndarray, shape ``[chirp, channel]``, or None
+        Transmit instant of every (chirp, channel) [s]; required with ``velocity``.
+    reference_time : float
+        Time at which the vertices are given [s].
     """
 
     first_vertex: np.ndarray
@@ -118,6 +127,9 @@ class PathDelays:
     amplitude: np.ndarray
     tx_positions: np.ndarray
     rx_positions: np.ndarray | None = None
+    velocity: np.ndarray | None = None
+    element_times: np.ndarray | None = None
+    reference_time: float = 0.0
 
     def __post_init__(self) -> None:
         tx = np.asarray(self.tx_positions, dtype=np.float64)
@@ -157,15 +169,35 @@ class PathDelays:
             raise ValueError("rx_positions contains NaN or inf values")
         if np.any(length < 0):
             raise ValueError(f"interior_length must be >= 0 m, got min {length.min()!r}")
+        vel = times = None
+        if self.velocity is not None:
+            vel = np.asarray(self.velocity, dtype=np.float64)
+            if vel.shape != (n_path, 3) or not np.all(np.isfinite(vel)):
+                raise ValueError(f"velocity must be finite with shape [{n_path}, 3] [m/s], "
+                                 f"got shape {vel.shape}")
+            if first.ndim != 2 or last.ndim != 2:
+                raise ValueError("with velocity, first_vertex and last_vertex must have shape "
+                                 f"[path, 3], got {first.shape} and {last.shape}")
+            if self.element_times is None:
+                raise ValueError("element_times [chirp, channel] is required with velocity")
+            if not math.isfinite(self.reference_time):
+                raise ValueError(f"reference_time must be finite, got {self.reference_time!r}")
+        if self.element_times is not None:
+            times = np.asarray(self.element_times, dtype=np.float64)
+            if times.shape != tx.shape[:2] or not np.all(np.isfinite(times)):
+                raise ValueError(f"element_times must be finite with shape {tx.shape[:2]} [s], "
+                                 f"got shape {times.shape}")
         for name, v in (("first_vertex", first), ("last_vertex", last),
                         ("interior_length", length), ("amplitude", amp),
-                        ("tx_positions", tx), ("rx_positions", rx)):
+                        ("tx_positions", tx), ("rx_positions", rx), ("velocity", vel),
+                        ("element_times", times)):
             object.__setattr__(self, name, v)
 
     @classmethod
     def for_array(cls, first_vertex, last_vertex, interior_length, amplitude,
                   config: RadarConfig, array: VirtualArray, trajectory=None, *,
-                  lever_arm=(0.0, 0.0, 0.0), frame: int = 0, t0: float = 0.0) -> PathDelays:
+                  lever_arm=(0.0, 0.0, 0.0), frame: int = 0, t0: float = 0.0,
+                  velocity=None, reference_time: float = 0.0) -> PathDelays:
         """Paths seen by ``array`` on a moving platform (element poses per chirp).
 
         Parameters
@@ -182,10 +214,75 @@ class PathDelays:
             Frame index (chirp times ``config.chirp_times(frame, t0)``).
         t0 : float
             Time of the first chirp of frame 0 [s].
+        velocity : array_like, shape ``[path, 3]``, optional
+            Velocity of the scattering points [m/s].
+        reference_time : float
+            Time at which the vertices are given [s].
         """
+        from .echo import element_times
+
         tx, rx = element_positions(config, array, trajectory, lever_arm=lever_arm,
                                    frame=frame, t0=t0)
-        return cls(first_vertex, last_vertex, interior_length, amplitude, tx, rx)
+        times = None if velocity is None else element_times(config, array, frame, t0)
+        return cls(first_vertex, last_vertex, interior_length, amplitude, tx, rx,
+                   velocity=velocity, element_times=times, reference_time=reference_time)
+
+    @classmethod
+    def from_pathset(cls, paths, config: RadarConfig, array: VirtualArray, trajectory=None, *,
+                     lever_arm=(0.0, 0.0, 0.0), frame: int = 0, t0: float = 0.0,
+                     if_band: str = "cull") -> PathDelays:
+        """Compact form of a ray-traced :class:`raysim.rt.trace.PathSet`.
+
+        Same delays as :func:`raysim.rt.reproject.reproject` (frozen scattering
+        points, first and last legs re-measured from the moving elements,
+        ``interior_length = length - |v_f - x_tx,0| - |v_l - x_rx,0|``, moving
+        scattering points at each channel's transmit instant), without
+        materialising ``[path, chirp, channel]``.
+
+        Parameters
+        ----------
+        paths : PathSet
+        config, array, trajectory, lever_arm, frame, t0
+            As for :meth:`for_array`.
+        if_band : {"cull", "none"}
+            ``"cull"`` drops paths whose one-way range leaves ``[0, max_range)``
+            at the first or last chirp of the frame on any channel.
+        """
+        if if_band not in ("cull", "none"):
+            raise ValueError(f"if_band must be 'cull' or 'none', got {if_band!r}")
+        first = np.asarray(paths.first_vertex, dtype=np.float64)
+        last = np.asarray(paths.last_vertex, dtype=np.float64)
+        base = (paths.length - np.linalg.norm(first - paths.tx_position, axis=-1)
+                - np.linalg.norm(last - paths.rx_position, axis=-1))
+        base = np.maximum(base, 0.0)
+        vel = np.asarray(paths.velocity, dtype=np.float64)
+        pd = cls.for_array(first, last, base, paths.amplitude, config, array, trajectory,
+                           lever_arm=lever_arm, frame=frame, t0=t0,
+                           velocity=vel if np.any(vel) else None,
+                           reference_time=float(paths.trace_time))
+        if if_band == "none" or pd.num_paths == 0:
+            return pd
+        ok = np.ones(pd.num_paths, dtype=bool)
+        step = max(1, 2**22 // max(pd.num_paths, 1))
+        for n in sorted({0, pd.num_chirps - 1}):
+            for m0 in range(0, pd.num_channels, step):
+                r = 0.5 * SPEED_OF_LIGHT * pd.delays(n, slice(m0, m0 + step))
+                ok &= np.all((r >= 0) & (r < config.max_range), axis=0)
+        if ok.all():
+            return pd
+        return pd.select(ok)
+
+    def select(self, mask: np.ndarray) -> PathDelays:
+        """The paths where ``mask`` [path] (bool) is True."""
+        mask = np.asarray(mask)
+        if mask.shape != (self.num_paths,) or mask.dtype != bool:
+            raise ValueError(f"mask must be bool of shape ({self.num_paths},), "
+                             f"got {mask.dtype} {mask.shape}")
+        return PathDelays(self.first_vertex[mask], self.last_vertex[mask],
+                          self.interior_length[mask], self.amplitude[mask], self.tx_positions,
+                          self.rx_positions,
+                          None if self.velocity is None else self.velocity[mask],
+                          self.element_times, self.reference_time)
 
     # ---------------------------------------------------------------- sizes
     @property
@@ -212,7 +309,7 @@ class PathDelays:
     def nbytes(self) -> int:
         """Memory held by the description [bytes]."""
         arrays = (self.first_vertex, self.last_vertex, self.interior_length, self.amplitude,
-                  self.tx_positions, self.rx_positions)
+                  self.tx_positions, self.rx_positions, self.velocity, self.element_times)
         return int(sum(a.nbytes for a in arrays if a is not None))
 
     # ---------------------------------------------------------------- blocks
@@ -229,20 +326,90 @@ class PathDelays:
         channels : slice
             Channels to compute.
         """
-        x_tx = self.tx_positions[chirp, channels]                    # [channel, 3]
-        centre = x_tx.mean(axis=0)
-        d_tx = _distances(x_tx - centre, self._vertex(self.first_vertex, chirp) - centre)
-        if self.rx_positions is None and self.last_vertex is self.first_vertex:
-            d_rx = d_tx
+        centre = self.tx_positions[chirp].mean(axis=0)       # array centroid at this chirp
+        x_tx = self.tx_positions[chirp, channels] - centre           # [channel, 3]
+        x_rx = x_tx if self.rx_positions is None else self.rx_positions[chirp, channels] - centre
+        if self.velocity is None:
+            tau = self._two_way(x_tx, x_rx, chirp, None, centre)
         else:
-            x_rx = x_tx if self.rx_positions is None else self.rx_positions[chirp, channels]
-            d_rx = _distances(x_rx - centre, self._vertex(self.last_vertex, chirp) - centre)
+            times = self.element_times[chirp, channels]
+            tau = np.empty((x_tx.shape[0], self.num_paths))
+            for t in np.unique(times):                               # one group per TDM slot
+                idx = np.flatnonzero(times == t)
+                tau[idx] = self._two_way(x_tx[idx], x_rx[idx], chirp, float(t), centre)
         length = self.interior_length if self.interior_length.ndim == 1 \
             else self.interior_length[:, chirp]
-        tau = d_tx + d_rx
         tau += length
         tau *= 1.0 / SPEED_OF_LIGHT
         return tau
+
+    def _prepared(self, chirp: int, t: float | None, centre: np.ndarray):
+        """Vertices of one chirp relative to the array centroid, prepared for
+        :func:`_distances` (cached: every channel block of a chirp reuses them).
+
+        Returns ``(first, last, twin, back)``: ``first``/``last`` are
+        ``(-2 v^T [3, path] contiguous, |v|^2 [path])`` and ``back`` indexes the
+        paths whose last vertex differs from the first (``twin`` is their complement).
+        """
+        key = (chirp, t)
+        cache = self.__dict__.setdefault("_prep_cache", {})
+        hit = cache.get(key)
+        if hit is not None:
+            return hit
+        first = self._vertex(self.first_vertex, chirp) - centre
+        last = self._vertex(self.last_vertex, chirp) - centre
+        if t is not None:
+            shift = self.velocity * (t - self.reference_time)
+            first = first + shift
+            last = last + shift
+        twin = np.all(first == last, axis=-1)
+        back = np.flatnonzero(~twin)
+
+        def prep(v):
+            return np.ascontiguousarray(-2.0 * v.T), np.einsum("ij,ij->i", v, v)
+
+        hit = (prep(first), prep(last[back]), twin, back)
+        if len(cache) >= 4:
+            cache.clear()
+        cache[key] = hit
+        return hit
+
+    def _two_way(self, x_tx, x_rx, chirp, t, centre) -> np.ndarray:
+        """``|x_tx - v_first| + |v_last - x_rx|`` [m], shape ``[channel, path]``.
+
+        Element positions are relative to ``centre``. With a monostatic-
+        equivalent array the return leg is reused for every path whose last
+        vertex is its first (single-bounce paths).
+        """
+        first, last, twin, back = self._prepared(chirp, t, centre)
+        d = _distances(x_tx, *first)
+        if self.rx_positions is None:
+            if back.size == 0:
+                d *= 2.0
+                return d
+            out = d + d
+            out[:, back] = d[:, back] + _distances(x_rx, *last)
+            return out
+        if back.size == self.num_paths:
+            d += _distances(x_rx, *last)
+            return d
+        full = _distances(x_rx, *self._prepared_all_last(chirp, t, centre))
+        d += full
+        return d
+
+    def _prepared_all_last(self, chirp, t, centre):
+        key = ("last", chirp, t)
+        cache = self.__dict__.setdefault("_prep_cache", {})
+        hit = cache.get(key)
+        if hit is None:
+            last = self._vertex(self.last_vertex, chirp) - centre
+            if t is not None:
+                last = last + self.velocity * (t - self.reference_time)
+            hit = (np.ascontiguousarray(-2.0 * last.T), np.einsum("ij,ij->i", last, last))
+            if len(cache) >= 4:
+                cache.clear()
+            cache[key] = hit
+        return hit
 
     def amplitudes(self, chirp: int) -> np.ndarray:
         """Complex amplitude of every path at one chirp, shape ``[path]`` [sqrt(W)]."""
@@ -261,14 +428,16 @@ class PathDelays:
         return tau.transpose(2, 0, 1).copy(), amp.transpose(2, 0, 1).copy()
 
 
-def _distances(elements: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+def _distances(elements: np.ndarray, minus_2vt: np.ndarray, v2: np.ndarray) -> np.ndarray:
     """``|vertex - element|`` for every pair, shape ``[element, vertex]`` [m].
 
-    Uses ``|v|^2 - 2 e.v + |e|^2`` with coordinates taken relative to the array
-    centroid (``|e|`` a few cm), so the cancellation error is ~1e-16 of the range.
+    ``minus_2vt`` is ``-2 v^T`` (shape ``[3, vertex]``, contiguous) and ``v2`` is
+    ``|v|^2``. Uses ``|v|^2 - 2 e.v + |e|^2`` with coordinates relative to the
+    array centroid (``|e|`` a few cm), so the cancellation error is ~1e-16 of
+    the range.
     """
-    d2 = elements @ (-2.0 * vertices.T)                               # [element, vertex]
-    d2 += np.einsum("ij,ij->i", vertices, vertices)[None, :]
+    d2 = elements @ minus_2vt                                         # [element, vertex]
+    d2 += v2[None, :]
     d2 += np.einsum("ij,ij->i", elements, elements)[:, None]
     np.maximum(d2, 0.0, out=d2)
     return np.sqrt(d2, out=d2)
@@ -399,22 +568,24 @@ def _strengths(tau: np.ndarray, amp: np.ndarray, config: RadarConfig, exact_trig
     """
     fc, mu, fs = config.carrier_frequency, config.chirp_rate, config.sample_rate
     h = config.num_samples // 2
-    nu = tau * (mu / fs)
-    nu -= np.rint(nu)                                   # wrapped beat [cycles/sample]
-    cyc = tau * fc
-    cyc -= (0.5 * mu) * tau * tau
-    cyc += h * nu
-    cyc -= np.rint(cyc)                                 # [-0.5, 0.5] cycles
-    cyc *= 2.0 * np.pi
+    tmp = np.empty_like(tau)
+    # f_c tau - mu tau^2 / 2 + h nu = tau (f_c + h mu / f_s - mu tau / 2)  (mod 1: h is integer)
+    cyc = tau * (-0.5 * mu)
+    cyc += fc + h * mu / fs
+    cyc *= tau
+    cyc -= np.rint(cyc, out=tmp)                         # [-0.5, 0.5] cycles
+    nu = np.multiply(tau, mu / fs, out=tmp)
+    nu -= np.rint(nu)                                    # wrapped beat [cycles/sample]
+    nu *= 2.0 * np.pi
     if exact_trig:
-        c = np.exp(1j * cyc)
+        c = np.exp((2j * np.pi) * cyc)
     else:
-        ph = cyc.astype(np.float32)
+        ph = np.multiply(cyc, 2.0 * np.pi, out=np.empty(tau.shape, np.float32),
+                         casting="same_kind")
         c = np.empty(tau.shape, dtype=np.complex128)
         c.real = np.cos(ph)
         c.imag = np.sin(ph)
     c *= amp
-    nu *= 2.0 * np.pi
     return nu, c
 
 

@@ -184,3 +184,48 @@ def test_bad_inputs(short_radar):
         synthesize(pd, 1.0, short_radar)
     with pytest.raises(ValueError, match="threads"):
         synthesize_nufft(pd, None, short_radar, threads=0)
+
+
+def test_moving_scatterers_tdm_exact(rng):
+    """Velocity form: vertices move to each channel's own transmit instant (TDM slots)."""
+    cfg = RadarConfig(num_chirps=3, num_tx_slots=3)
+    arr = ti_3tx4rx(cfg.wavelength)
+    n = 30
+    first = rng.uniform(-10, 10, (n, 3)) + [0, 0, 25]
+    last = first + rng.normal(0, 2, (n, 3)) * (rng.random((n, 1)) < 0.5)
+    vel = rng.normal(0, 5, (n, 3))
+    pd = PathDelays.for_array(first, last, np.zeros(n), np.ones(n), cfg, arr, velocity=vel,
+                              reference_time=1e-4)
+    tau, _ = pd.dense()
+    tx, rx = element_positions(cfg, arr)
+    times = cfg.chirp_times()[:, None] + arr.tx_slot[None, :] * cfg.slot_interval
+    shift = vel[:, None, None, :] * (times[None, :, :, None] - 1e-4)
+    ref = (np.linalg.norm(first[:, None, None] + shift - tx[None], axis=-1)
+           + np.linalg.norm(last[:, None, None] + shift - rx[None], axis=-1)) / SPEED_OF_LIGHT
+    np.testing.assert_allclose(tau, ref, rtol=0, atol=DELAY_ATOL)
+
+
+def test_from_pathset_matches_reprojection(rng):
+    trace = pytest.importorskip("raysim.rt.trace")
+    reproject = pytest.importorskip("raysim.rt.reproject")
+    cfg = RadarConfig(num_chirps=4, num_tx_slots=3)
+    arr = ti_3tx4rx(cfg.wavelength)
+    n = 40
+    f = rng.uniform(-10, 10, (n, 3)) + [0, 0, 20]
+    last = f + rng.normal(0, 1, (n, 3)) * (rng.random((n, 1)) < 0.5)
+    length = (np.linalg.norm(f, axis=1) + np.linalg.norm(last, axis=1)
+              + np.linalg.norm(f - last, axis=1))
+    length[0] = 3 * cfg.max_range                                  # culled: outside the band
+    vel = rng.normal(0, 2, (n, 3)) * (rng.random((n, 1)) < 0.3)
+    origin = np.zeros(3)
+    ps = trace.PathSet(f, last, length, rng.normal(size=n) + 0j, vel, np.zeros(n),
+                       np.zeros((n, 2), np.uint32), np.zeros(n, np.uint32),
+                       np.zeros((n, 2, 2), complex), length / SPEED_OF_LIGHT, origin, origin,
+                       trace_time=2e-4)
+    traj = sinusoid("roll", 0.01, 3.0)
+    ref = reproject.reproject(ps, cfg, arr, traj)
+    pd = PathDelays.from_pathset(ps, cfg, arr, traj)
+    tau, amp = pd.dense()
+    assert pd.num_paths == ref.tau.shape[0] == n - 1
+    np.testing.assert_allclose(tau, ref.tau, rtol=0, atol=DELAY_ATOL)
+    np.testing.assert_allclose(amp, np.broadcast_to(ref.amplitude, amp.shape))
