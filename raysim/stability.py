@@ -81,7 +81,7 @@ __all__ = [
     "CHAINS", "ANGLE_CHIRPS", "GRAVITY", "Scenario", "Criteria", "PoseEstimate", "MapSpec",
     "MAPS", "gated_cube", "compensated_slow_time", "estimate_pose", "reference_pose",
     "chain_corrections", "evaluate", "run_map", "plot_map", "atomic_write", "write_stability",
-    "write_netcdf", "read_netcdf", "criteria_for", "fails",
+    "write_netcdf", "read_netcdf", "criteria_for", "fails", "first_failure",
 ]
 
 #: Compensation chains compared in every map.
@@ -1172,6 +1172,33 @@ def read_netcdf(path: str | os.PathLike):
     return ds
 
 
+def first_failure(fail_fraction) -> dict:
+    """The failure boundary as a table: first failing value of axis 0 per value of axis 1.
+
+    Parameters
+    ----------
+    fail_fraction : xarray.DataArray
+        Fraction of seeds failing, dims ``(<axis 0>, <axis 1>)`` (one chain).
+
+    Returns
+    -------
+    dict
+        ``{str(axis-1 value): smallest axis-0 value from which every larger
+        value fails (fraction >= 0.5), or None}``.
+    """
+    a0, a1 = fail_fraction.dims
+    out = {}
+    for v1 in fail_fraction[a1].values:
+        col = fail_fraction.sel({a1: v1}).values >= 0.5
+        first = None
+        for i in range(col.size):
+            if col[i:].all():
+                first = float(fail_fraction[a0].values[i])
+                break
+        out[f"{v1:g}"] = first
+    return out
+
+
 def _summary(ds) -> dict:
     """JSON-ready summary: metric arrays (seed median) and failure flags per chain."""
     out = {"map": ds.attrs["map"], "title": ds.attrs["title"], "note": ds.attrs["note"],
@@ -1186,6 +1213,7 @@ def _summary(ds) -> dict:
         sub = ds.sel(chain=c)
         rec = {m: np.round(sub[m].median("seed").values, 6).tolist() for m in METRICS}
         rec["fail_fraction"] = sub.fail.mean("seed").values.tolist()
+        rec["first_failure"] = first_failure(sub.fail.mean("seed"))
         if "worse_than_none" in ds:
             rec["worse_than_none_fraction"] = sub.worse_than_none.mean("seed").values.tolist()
         out["chains"][c] = rec
@@ -1198,8 +1226,10 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
 
     Rows: residual pseudo-velocity [Doppler bins] and angle error [half
     beamwidths]; columns: chains. Colour is log10 of the normalised metric, so
-    the failure boundary is the 0 contour (drawn black); where a chain is
-    worse than no compensation the boundary of that region is drawn dashed red.
+    the failure boundary of each criterion is the 0 contour (drawn black), the
+    boundary of the combined criterion (either fails, majority of seeds) is
+    dotted white, and where a chain is worse than no compensation the boundary
+    of that region is drawn dashed red.
     """
     import matplotlib
 
@@ -1211,6 +1241,7 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
     pv = (np.abs(ds.pseudo_velocity) / ds.velocity_bin).median("seed")
     ae = (ds.angle_error_deg / ds.half_beamwidth_deg).median("seed")
     worse = ds.worse_than_none.mean("seed") if "worse_than_none" in ds else None
+    fail = ds.fail.mean("seed")
     fig, grid = plt.subplots(2, len(chains), figsize=(3.6 * len(chains), 6.4), squeeze=False,
                              constrained_layout=True)
     for row, (metric, label) in enumerate(((pv, "|v| / Doppler bin"),
@@ -1227,6 +1258,10 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
                                  cmap="RdYlGn_r", shading="nearest")
             if min(z.shape) > 1:
                 ax.contour(xs, ys, z, levels=[0.0], colors="k", linewidths=2)
+                f = fail.sel(chain=c).values.astype(float)
+                if 0 < f.max() and f.min() < 1:
+                    ax.contour(xs, ys, f, levels=[0.5], colors="w", linestyles=":",
+                               linewidths=1.5)
                 if worse is not None and c != "none":
                     w = worse.sel(chain=c).values.astype(float)
                     if 0 < w.max() and w.min() < 1:
@@ -1239,8 +1274,8 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
                 ax.set_ylabel(f"{axes[0]} [{ds[axes[0]].attrs.get('units', '')}]", fontsize=8)
             ax.set_title(f"{c}: {label}", fontsize=8)
         fig.colorbar(mesh, ax=grid[row, -1], label="log10 (fail above 0)")
-    fig.suptitle(f"{ds.attrs['title']}  (black: failure boundary; red dashed: worse than none)",
-                 fontsize=9)
+    fig.suptitle(f"{ds.attrs['title']}  (black: boundary of this criterion; white dotted: "
+                 f"either criterion fails; red dashed: worse than none)", fontsize=9)
     path = Path(path)
 
     def write(tmp: Path) -> None:
