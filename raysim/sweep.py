@@ -115,7 +115,8 @@ class SweepSpec:
             if not vals:
                 raise ValueError(f"parameter {k!r}: empty list of values")
             if k == "seed":
-                raise ValueError("sweep the seed with seeds=..., not as a parameter")
+                raise ValueError("sweep the seed with --seeds (SweepSpec seeds=...), "
+                                 "not as a parameter")
             params[k] = vals
         object.__setattr__(self, "parameters", params)
         seeds = tuple(int(s) for s in self.seeds)

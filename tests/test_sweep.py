@@ -52,7 +52,7 @@ def test_points_are_validated_and_keyed(spec):
     assert len(pts) == 6 and len({p.key for p in pts}) == 6
     with pytest.raises(ValueError, match=r"radar.num_chirps: got 1, expected >= 4"):
         sweep_points(SweepSpec(spec.base, {"radar.num_chirps": [32, 1]}))
-    with pytest.raises(ValueError, match="seeds="):
+    with pytest.raises(ValueError, match="--seeds"):
         SweepSpec(spec.base, {"seed": [1]})
 
 
