@@ -492,6 +492,21 @@ def atomic_write_json(path, data: dict) -> None:
         raise
 
 
+def atomic_write_png(fig, path) -> None:
+    """Save a matplotlib figure as PNG atomically (temporary file, then rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=120, format="png")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
 def _json_default(value):
     if isinstance(value, np.generic):
         return value.item()
@@ -558,7 +573,7 @@ def run(*, quick: bool = False, memory: bool = True, chart: str | None = None,
         from .charts.speed_accuracy import draw_chart, measure_knobs
 
         log("speed-versus-accuracy chart")
-        knobs = measure_knobs(quick=quick)
+        knobs = measure_knobs(quick=quick, log=log)
         draw_chart(knobs, chart)
         result["chart"] = {"png": str(chart), "knobs": knobs}
     result["machine"]["loadavg_end"] = list(os.getloadavg())

@@ -229,3 +229,42 @@ def test_from_pathset_matches_reprojection(rng):
     assert pd.num_paths == ref.tau.shape[0] == n - 1
     np.testing.assert_allclose(tau, ref.tau, rtol=0, atol=DELAY_ATOL)
     np.testing.assert_allclose(amp, np.broadcast_to(ref.amplitude, amp.shape))
+
+
+# ---------------------------------------------------------------- speed-accuracy chart
+def test_pareto_front_rules():
+    from raysim.charts.speed_accuracy import pareto_front
+
+    # (time, error): b is dominated by a (faster, as accurate); d ties a within the time
+    # tolerance and is more accurate; c is slowest but most accurate
+    front = pareto_front([1.0, 2.0, 5.0, 1.05], [1e-3, 1e-3, 1e-9, 1e-4])
+    assert front.tolist() == [False, False, True, True]
+    with pytest.raises(ValueError, match="times"):
+        pareto_front([1.0], [1.0, 2.0])
+
+
+def test_chart_default_on_pareto_front(monkeypatch, tmp_path):
+    """Every knob measured on a reduced frame; the default must be on its Pareto front."""
+    import raysim.bench as bench
+    from raysim.charts import speed_accuracy as sa
+
+    full = bench.paper_setup
+
+    def small_setup(num_chirps=16):
+        cfg, _, traj, lever = full(16)
+        return cfg, upa(4, 4, wavelength=cfg.wavelength), traj, lever
+
+    monkeypatch.setattr(bench, "paper_setup", small_setup)
+    monkeypatch.setattr(sa, "REPEAT", 3)
+    monkeypatch.setattr(sa, "KNOB_PATHS", 400)
+    measured = sa.measure_knobs(quick=True, log=lambda m: None)
+    names = [k["knob"] for k in measured["knobs"]]
+    assert names == ["nufft_eps", "motion", "geometry", "chirp_block"]
+    for k in measured["knobs"]:
+        assert k["default_on_front"], k
+        assert sum(s["default"] for s in k["settings"]) == 1, k["knob"]
+        ref = [s for s in k["settings"] if s.get("reference")]
+        assert all(s["rel_error"] == 0.0 for s in ref)
+    png = tmp_path / "chart.png"
+    sa.draw_chart(measured, png)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -1,0 +1,1 @@
+"""Charts drawn from measured results (one PNG per chart module)."""

@@ -1,0 +1,312 @@
+"""Speed-versus-accuracy chart: time per frame against error for each fidelity knob.
+
+For every knob the simulator exposes, :func:`measure_knobs` renders the same
+scene at each setting and records the time per paper frame (256 chirps) and
+the relative l2 error of the IF cube against the knob's highest-fidelity
+setting. :func:`draw_chart` draws one panel per knob, marks the Pareto front
+(no other setting is both faster and more accurate) and highlights the
+default. Knobs:
+
+``nufft_eps``
+    NUFFT tolerance ``eps`` (reference: the complex128 direct sum), 2,000
+    ground paths of a drone hovering 20 m up.
+``motion``
+    Stop-and-hop (pose frozen per chirp, default) against intra-chirp motion
+    (delays at every sample, the reference), one target at 15 m, paper
+    pitch oscillation 10 deg at 20 Hz.
+``geometry``
+    Plane-wave element delays (range and direction at the array centroid)
+    against the exact spherical delays (default and reference), 2,000 ground
+    paths from 2 m to 60 m.
+``chirp_block``
+    Chirps synthesised per block in :func:`raysim.streaming.render_stream`
+    (memory against per-call overhead); same values, so only time differs.
+
+Ray-tracing knobs (samples, depth, re-trace interval) need Sionna RT's LLVM
+backend and a scene; they are not measured here and the result says so.
+
+Dominance uses :data:`TIME_TOLERANCE`: a setting dominates another only if it
+is faster by more than that fraction (timing noise on a shared machine) and
+not less accurate, or as fast and strictly more accurate.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+#: Relative timing difference below which two settings count as equally fast.
+TIME_TOLERANCE = 0.10
+#: Paths of the multipath knobs (the chirp-block knob uses a quarter).
+KNOB_PATHS = 2_000
+#: Timing repeats per setting (best of); tests raise it for tiny, noisy problems.
+REPEAT = 1
+#: Error plotted for the reference setting itself (zero on a log axis).
+REFERENCE_ERROR_FLOOR = 1e-9
+#: Defaults of the simulator, per knob.
+DEFAULTS = {"nufft_eps": "1e-06", "motion": "stop-and-hop", "geometry": "spherical",
+            "chirp_block": "16"}
+
+
+def pareto_front(times, errors, *, time_tolerance: float = TIME_TOLERANCE) -> np.ndarray:
+    """Mask of the settings no other setting dominates.
+
+    Parameters
+    ----------
+    times : array_like, shape ``[setting]``
+        Time per frame [s].
+    errors : array_like, shape ``[setting]``
+        Relative error (dimensionless).
+    time_tolerance : float
+        Fraction by which a setting must be faster to dominate on time.
+
+    Returns
+    -------
+    ndarray of bool, shape ``[setting]``
+    """
+    t = np.asarray(times, dtype=float)
+    e = np.asarray(errors, dtype=float)
+    if t.shape != e.shape or t.ndim != 1:
+        raise ValueError(f"times and errors must be 1-D of equal length, got {t.shape}, {e.shape}")
+    if not 0 <= time_tolerance < 1:
+        raise ValueError(f"time_tolerance must lie in [0, 1), got {time_tolerance!r}")
+    front = np.ones(t.size, dtype=bool)
+    for i in range(t.size):
+        faster = t < t[i] * (1 - time_tolerance)
+        as_fast = t <= t[i] * (1 + time_tolerance)
+        dominated = (faster & (e <= e[i])) | (as_fast & (e < e[i]) & ~np.isclose(e, e[i],
+                                                                                 rtol=1e-3))
+        dominated[i] = False
+        front[i] = not dominated.any()
+    return front
+
+
+def _rel(x, ref) -> float:
+    return float(np.linalg.norm(np.asarray(x) - ref) / np.linalg.norm(ref))
+
+
+def _cpu(fn: Callable, *args, repeat: int = 1, **kwargs):
+    best, out = np.inf, None
+    for _ in range(repeat):
+        t0 = time.process_time()
+        out = fn(*args, **kwargs)
+        best = min(best, time.process_time() - t0)
+    return best, out
+
+
+def _knob(name: str, label: str, settings: list[dict], note: str) -> dict:
+    times = [s["s_per_frame"] for s in settings]
+    errors = [max(s["rel_error"], REFERENCE_ERROR_FLOOR) for s in settings]
+    front = pareto_front(times, errors)
+    default = DEFAULTS[name]
+    for s, f in zip(settings, front, strict=True):
+        s["pareto"] = bool(f)
+        s["default"] = s["setting"] == default
+    return {"knob": name, "label": label, "default": default, "note": note,
+            "default_on_front": bool(any(s["pareto"] for s in settings if s["default"])),
+            "settings": settings}
+
+
+def measure_nufft_eps(*, quick: bool) -> dict:
+    """NUFFT tolerance against the direct sum (2,000 hover paths)."""
+    from ..bench import hover_paths, paper_setup, subset
+    from ..synthesis_select import synthesize
+
+    cfg, arr, traj, lever = paper_setup()
+    pd = hover_paths(KNOB_PATHS, cfg, arr, traj, lever, seed=11)
+    n_t = 2 if quick else 8
+    timed = subset(pd, n_t, arr.num_channels)
+    acc = subset(pd, 1, 16)
+    ref = synthesize(acc, None, cfg, method="direct")
+    settings = []
+    scale = cfg.num_chirps / n_t
+    eps_values = (1e-2, 1e-4, 1e-6, 1e-7) if quick else (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
+    for eps in eps_values:
+        t, _ = _cpu(synthesize, timed, None, cfg, method="nufft", eps=eps, threads=1,
+                    repeat=REPEAT)
+        err = _rel(synthesize(acc, None, cfg, method="nufft", eps=eps), ref)
+        settings.append({"setting": f"{eps:.0e}", "s_per_frame": t * scale, "rel_error": err})
+    t_dir, _ = _cpu(synthesize, subset(pd, 1, 8 if quick else 32), None, cfg, method="direct")
+    settings.append({"setting": "direct", "s_per_frame": t_dir * cfg.num_chirps * (
+        arr.num_channels / (8 if quick else 32)), "rel_error": 0.0, "reference": True})
+    return _knob("nufft_eps", f"NUFFT tolerance eps ({KNOB_PATHS:,} paths)", settings,
+                 f"timed on {n_t} chirps x 400 channels, error on 1 chirp x 16 channels")
+
+
+def measure_motion(*, quick: bool) -> dict:
+    """Stop-and-hop against intra-chirp motion (one target, pitch 10 deg at 20 Hz)."""
+    from ..bench import paper_setup
+    from ..cases import get_case
+    from ..echo import simulate_point_targets
+
+    case = get_case("rotation_y")
+    n_c = 8 if quick else 32
+    cfg = case.config.with_(num_chirps=n_c)
+    arr = paper_setup(n_c)[1]                      # the paper's 20 x 20 UPA
+    tgt = [case.target()]
+    scale = case.config.num_chirps / n_c
+    t_ref, ref = _cpu(simulate_point_targets, cfg, arr, tgt, case.trajectory,
+                      lever_arm=case.lever_arm, intra_chirp=True, repeat=REPEAT)
+    t_sh, sh = _cpu(simulate_point_targets, cfg, arr, tgt, case.trajectory,
+                    lever_arm=case.lever_arm, intra_chirp=False, repeat=REPEAT)
+    settings = [
+        {"setting": "stop-and-hop", "s_per_frame": t_sh * scale,
+         "rel_error": _rel(sh.data, ref.data.astype(np.complex128))},
+        {"setting": "intra-chirp", "s_per_frame": t_ref * scale, "rel_error": 0.0,
+         "reference": True},
+    ]
+    return _knob("motion", "platform motion within a chirp (rotation_y case)", settings,
+                 f"timed on {n_c} chirps x 400 channels")
+
+
+def plane_wave_delays(paths, chirp: int) -> np.ndarray:
+    """Plane-wave approximation of :meth:`PathDelays.delays`, shape ``[channel, path]`` [s].
+
+    Each leg is the exact distance to the array centroid minus the projection
+    of the element offset on the unit direction of the vertex (far-field).
+    """
+    from ..config import SPEED_OF_LIGHT
+
+    x = paths.tx_positions[chirp]
+    c = x.mean(axis=0)
+    off = x - c
+
+    def leg(v):
+        r = v - c
+        dist = np.linalg.norm(r, axis=1)
+        u = r / dist[:, None]
+        return dist[None, :] - off @ u.T
+
+    first = paths.first_vertex if paths.first_vertex.ndim == 2 else paths.first_vertex[:, chirp]
+    last = paths.last_vertex if paths.last_vertex.ndim == 2 else paths.last_vertex[:, chirp]
+    length = paths.interior_length if paths.interior_length.ndim == 1 \
+        else paths.interior_length[:, chirp]
+    return (leg(first) + leg(last) + length) / SPEED_OF_LIGHT
+
+
+def measure_geometry(*, quick: bool) -> dict:
+    """Plane-wave against exact spherical element delays (2,000 near ground paths)."""
+    from ..bench import paper_setup
+    from ..nufft_synthesis import PathDelays, synthesize_nufft
+
+    cfg, arr, traj, lever = paper_setup()
+    rng = np.random.default_rng(12)
+    n = KNOB_PATHS
+    r = rng.uniform(2.0, 60.0, n)
+    ang = rng.uniform(-np.pi, np.pi, n)
+    h = np.minimum(r, 2.0 + rng.uniform(0, 18.0, n))
+    g = np.sqrt(np.maximum(r**2 - h**2, 0.0))
+    pts = np.stack([g * np.cos(ang), g * np.sin(ang), h], axis=1)
+    amp = np.exp(2j * np.pi * rng.random(n)) / r**2
+    n_t = 2 if quick else 8
+    pd = PathDelays.for_array(pts, pts, np.zeros(n), amp, cfg.with_(num_chirps=n_t), arr, traj,
+                              lever_arm=lever)
+    scale = cfg.num_chirps / n_t
+
+    def render(delay_fn):
+        out = np.zeros((n_t, arr.num_channels, cfg.num_samples), np.complex64)
+        for k in range(n_t):
+            tau = delay_fn(pd, k)                                  # [channel, path]
+            synthesize_nufft(tau.T[:, None, :], np.broadcast_to(amp[:, None, None],
+                                                                (n, 1, arr.num_channels)),
+                             cfg.with_(num_chirps=1), eps=1e-6, out=out[k:k + 1], threads=1)
+        return out
+
+    t_sph, sph = _cpu(render, lambda p, k: p.delays(k), repeat=REPEAT)
+    t_pw, pw = _cpu(render, plane_wave_delays, repeat=REPEAT)
+    settings = [
+        {"setting": "spherical", "s_per_frame": t_sph * scale, "rel_error": 0.0,
+         "reference": True},
+        {"setting": "plane-wave", "s_per_frame": t_pw * scale, "rel_error": _rel(pw, sph)},
+    ]
+    return _knob("geometry", f"element geometry ({KNOB_PATHS:,} paths, 2-60 m)", settings,
+                 f"timed on {n_t} chirps x 400 channels, NUFFT eps 1e-6 for both")
+
+
+def measure_chirp_block(*, quick: bool) -> dict:
+    """Chirp block size of the streaming renderer (500 paths, 8 x 8 array, 256 chirps)."""
+    from ..arrays import upa
+    from ..bench import hover_paths, paper_setup
+    from ..streaming import render_stream
+    from ..synthesis_select import synthesize
+
+    cfg, _, traj, lever = paper_setup()
+    arr = upa(8, 8, wavelength=cfg.wavelength)
+    pd = hover_paths(KNOB_PATHS // (10 if quick else 4), cfg, arr, traj, lever, seed=13)
+    ref = synthesize(pd, None, cfg, method="direct", chirps=range(2))
+    settings = []
+    blocks = (1, 16, 256) if quick else (1, 4, 16, 64, 256)
+    for b in blocks:
+        first = {}
+
+        def keep(f, n0, block, first=first):
+            if n0 == 0:
+                first["x"] = block[:2].copy()
+
+        t, _ = _cpu(render_stream, lambda f: pd, cfg, keep, chirp_block=b, method="nufft",
+                    eps=1e-6, threads=1, progress=False, repeat=max(REPEAT, 1 if quick else 2))
+        err = _rel(first["x"], ref) if b >= 2 else None
+        settings.append({"setting": str(b), "s_per_frame": t, "rel_error": err})
+    common = max(s["rel_error"] for s in settings if s["rel_error"] is not None)
+    for s in settings:
+        if s["rel_error"] is None:
+            s["rel_error"] = common
+    return _knob("chirp_block", "chirps per block (streaming, 8 x 8 array)", settings,
+                 "whole 256-chirp frames; blocks give identical samples, error vs direct sum")
+
+
+def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print) -> dict:
+    """Measure every knob; returns ``{"knobs": [...], "not_measured": {...}}``."""
+    knobs = []
+    for fn in (measure_nufft_eps, measure_motion, measure_geometry, measure_chirp_block):
+        log(f"  chart knob: {fn.__name__.removeprefix('measure_')}")
+        knobs.append(fn(quick=quick))
+    return {"quick": bool(quick), "time_tolerance": TIME_TOLERANCE, "knobs": knobs,
+            "not_measured": {"trace_samples_depth_retrace": (
+                "ray-tracing knobs need Sionna RT (LLVM backend) and a scene; not part of "
+                "this chart")},
+            "time_unit": "CPU seconds per 256-chirp paper frame (extrapolated from the "
+                         "chirps timed, see each knob's note)"}
+
+
+def draw_chart(measured: dict, path) -> None:
+    """One PNG, one panel per knob: time per frame vs error, Pareto front, default starred."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..bench import atomic_write_png
+
+    knobs = measured["knobs"]
+    fig, axes = plt.subplots(1, len(knobs), figsize=(4.2 * len(knobs), 4.0), squeeze=False)
+    for ax, k in zip(axes[0], knobs, strict=True):
+        s = k["settings"]
+        t = np.array([x["s_per_frame"] for x in s])
+        e = np.array([max(x["rel_error"], REFERENCE_ERROR_FLOOR) for x in s])
+        front = np.array([x["pareto"] for x in s])
+        order = np.argsort(t[front])
+        ax.plot(t[front][order], e[front][order], "-", color="tab:green", lw=1.5,
+                label="Pareto front", zorder=1)
+        ax.scatter(t[~front], e[~front], color="tab:gray", s=30, label="dominated", zorder=2)
+        ax.scatter(t[front], e[front], color="tab:green", s=30, zorder=2)
+        for x, ti, ei in zip(s, t, e, strict=True):
+            ax.annotate(x["setting"] + (" (ref)" if x.get("reference") else ""), (ti, ei),
+                        textcoords="offset points", xytext=(4, 4), fontsize=7)
+            if x["default"]:
+                ax.scatter([ti], [ei], marker="*", s=220, facecolor="gold", edgecolor="k",
+                           zorder=3, label="default")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("time per paper frame [CPU s]")
+        ax.set_ylabel("relative error vs highest fidelity")
+        ax.set_title(k["label"], fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    fig.suptitle("raysim speed vs accuracy (reference shown at "
+                 f"{REFERENCE_ERROR_FLOOR:g}; 'quick' = {measured.get('quick')})", fontsize=10)
+    fig.tight_layout()
+    atomic_write_png(fig, path)
+    plt.close(fig)
