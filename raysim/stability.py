@@ -7,9 +7,9 @@ CONVENTIONS.md metrics of a single static point target:
 
 * residual pseudo-velocity [m/s] (and in Doppler velocity bins),
 * Doppler mainlobe width [Hz],
-* instantaneous angle error [deg]: worst of :data:`ANGLE_CHIRPS` chirps spread
-  over the frame, each beam-scanned on its own (as the paper's single-chirp RA
-  map),
+* instantaneous angle error [deg]: worst over :data:`ANGLE_CHIRPS` chirps
+  spread over the frame and the chirps of extreme true roll, pitch and yaw,
+  each beam-scanned on its own (as the paper's single-chirp RA map),
 * entropy [nats] of the azimuth-elevation map integrated coherently over the
   frame on a fixed global grid (the paper's yaw metric); the sum runs over at
   most :data:`MAP_CHIRPS` evenly strided chirps (a 4 kHz slow-time rate for
@@ -108,7 +108,7 @@ _INITS = ("truth", "hover")
 #: Axes whose values are integers (passed to the builders as int).
 _INT_AXES = ("num_chirps", "term_index", "error_axis_index", "init_index")
 #: Version of the per-point record format and of the chains (part of the point key).
-POINT_VERSION = 1
+POINT_VERSION = 2
 #: Hover-assumption window either side of the frame for ``init="hover"`` [s].
 HOVER_WINDOW = 0.25
 
@@ -672,6 +672,20 @@ def compensated_slow_time(scenario: Scenario, chain: str,
     return _slow_time(x, corr, scenario)
 
 
+def _angle_chirps(scenario: Scenario, chirp_times: np.ndarray) -> np.ndarray:
+    """Chirps whose single-chirp angle error is measured, shape ``[k]`` (sorted, unique).
+
+    :data:`ANGLE_CHIRPS` chirps evenly spread over the frame plus, for each
+    true Euler angle (roll, pitch, yaw), the chirps where it is largest and
+    smallest, so the worst attitude of the frame is always included.
+    """
+    n = chirp_times.size
+    even = np.linspace(0, n - 1, ANGLE_CHIRPS + 2).round().astype(int)[1:-1]
+    q = scenario.trajectory.states(chirp_times)[0][:, 3:]
+    extremes = np.concatenate([np.argmax(q, axis=0), np.argmin(q, axis=0)])
+    return np.unique(np.concatenate([even, extremes]))
+
+
 def _chain_metrics(gate: np.ndarray, corr: _Corrections, scenario: Scenario,
                    chirp_times: np.ndarray, coherent_map: bool = True) -> dict:
     cfg, array = scenario.config, scenario.array
@@ -682,8 +696,7 @@ def _chain_metrics(gate: np.ndarray, corr: _Corrections, scenario: Scenario,
     s = _slow_time(x, corr, scenario)
     pv = pseudo_velocity(s, cfg.chirp_interval, lam)
     width = doppler_mainlobe_width(s, cfg.chirp_interval)
-    # single-chirp angle errors, worst over ANGLE_CHIRPS chirps
-    idx = np.unique(np.linspace(0, n - 1, ANGLE_CHIRPS + 2).round().astype(int)[1:-1])
+    idx = _angle_chirps(scenario, chirp_times)
     ae = _single_chirp_direction(x, corr, idx, array, lam)
     errs = _angle_between_deg(ae[:, 0], ae[:, 1], u_true)
     out = {"pseudo_velocity": float(pv), "doppler_width_hz": float(width),
@@ -1242,8 +1255,8 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
     ae = (ds.angle_error_deg / ds.half_beamwidth_deg).median("seed")
     worse = ds.worse_than_none.mean("seed") if "worse_than_none" in ds else None
     fail = ds.fail.mean("seed")
-    fig, grid = plt.subplots(2, len(chains), figsize=(3.6 * len(chains), 6.4), squeeze=False,
-                             constrained_layout=True)
+    fig, grid = plt.subplots(2, len(chains), figsize=(3.6 * len(chains), 6.4), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.9, bottom=0.09, top=0.9, wspace=0.3, hspace=0.42)
     for row, (metric, label) in enumerate(((pv, "|v| / Doppler bin"),
                                            (ae, "angle error / half beamwidth"))):
         for col, c in enumerate(chains):
@@ -1273,13 +1286,14 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
             if col == 0:
                 ax.set_ylabel(f"{axes[0]} [{ds[axes[0]].attrs.get('units', '')}]", fontsize=8)
             ax.set_title(f"{c}: {label}", fontsize=8)
-        fig.colorbar(mesh, ax=grid[row, -1], label="log10 (fail above 0)")
+        cax = fig.add_axes([0.92, 0.56 - 0.47 * row, 0.012, 0.34])
+        fig.colorbar(mesh, cax=cax, label="log10 (fail above 0)")
     fig.suptitle(f"{ds.attrs['title']}  (black: boundary of this criterion; white dotted: "
                  f"either criterion fails; red dashed: worse than none)", fontsize=9)
     path = Path(path)
 
     def write(tmp: Path) -> None:
-        fig.savefig(tmp, format="png", dpi=110)
+        fig.savefig(tmp, format="png", dpi=100)
 
     try:
         return atomic_write(path, write)
