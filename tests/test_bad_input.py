@@ -12,6 +12,7 @@ half-written may stay on disk.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from collections.abc import Callable
@@ -498,7 +499,10 @@ def test_interrupted_stability_run_keeps_finished_maps(tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         stability.write_stability(tmp_path, quick=True, progress=False, executor="serial")
     names = sorted(p.name for p in tmp_path.iterdir())
-    assert names == ["lever_arm.json", "lever_arm.nc", "lever_arm.png"]   # no partial files
+    assert names == ["lever_arm.json", "lever_arm.nc", "lever_arm.png", "points"]
+    assert not [p for p in tmp_path.rglob("*") if p.name.startswith(".")]  # no partial files
+    for rec in (tmp_path / "points").rglob("*.json"):
+        json.loads(rec.read_text())                                        # complete records
     calls.clear()
     monkeypatch.setattr(stability, "run_map", real)
     stability.write_stability(tmp_path, quick=True, progress=False, executor="serial")
