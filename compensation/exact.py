@@ -23,7 +23,8 @@ def rigid_body_projection(rc, element_positions, motion: PlatformMotion, *, wave
                           focus: Literal["near", "far"] = "near",
                           grid_shape: tuple[int, int] | None = None,
                           method: Literal["auto", "lattice", "direct"] = "auto",
-                          chirp_block: int = 32, gate_block: int = 8) -> BeamCube:
+                          weights=None, chirp_block: int = 32,
+                          gate_block: int = 8) -> BeamCube:
     """Motion-compensated beams of a range-compressed cube on a fixed global grid.
 
     Parameters
@@ -43,7 +44,7 @@ def rigid_body_projection(rc, element_positions, motion: PlatformMotion, *, wave
         Global grid axes [rad].
     range_gates : array_like of int, optional
         Range bins to process (default all).
-    focus, grid_shape, method, chirp_block, gate_block
+    focus, grid_shape, method, weights, chirp_block, gate_block
         See :func:`compensation.projection.beam_projection`.
 
     Returns
@@ -75,5 +76,6 @@ def rigid_body_projection(rc, element_positions, motion: PlatformMotion, *, wave
                            azimuth=azimuth, elevation=elevation, range_gates=range_gates,
                            chirp_time=motion.time, attitude=motion.attitude,
                            displacement=motion.radar_displacement, focus=focus,
-                           grid_shape=grid_shape, method=method, chirp_block=chirp_block,
+                           grid_shape=grid_shape, method=method, weights=weights,
+                           chirp_block=chirp_block,
                            gate_block=gate_block)

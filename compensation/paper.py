@@ -204,7 +204,8 @@ def tilt_correction(cube, element_positions, attitude, *, wavelength: float) -> 
 def yaw_projection(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
                    range_axis, azimuth, elevation, range_gates=None,
                    grid_shape: tuple[int, int] | None = None,
-                   method: Literal["auto", "lattice", "direct"] = "auto") -> BeamCube:
+                   method: Literal["auto", "lattice", "direct"] = "auto",
+                   weights=None) -> BeamCube:
     """The paper's chirp-wise beam projection for yaw onto a fixed global grid.
 
     ``y_n(u_G) = W_n^H x_n / M`` with ``W_n = exp(-j 2 pi / lambda P^T Rz(gamma_n)^T u_G)``;
@@ -215,7 +216,7 @@ def yaw_projection(rc, element_positions, motion: PlatformMotion, *, wavelength:
     rc : ndarray, shape ``[chirp, channel, range]``
     element_positions : ndarray, shape ``[channel, 3]``
     motion : PlatformMotion
-    wavelength, range_axis, azimuth, elevation, range_gates, grid_shape, method
+    wavelength, range_axis, azimuth, elevation, range_gates, grid_shape, method, weights
         See :func:`compensation.projection.beam_projection`.
 
     Returns
@@ -227,7 +228,7 @@ def yaw_projection(rc, element_positions, motion: PlatformMotion, *, wavelength:
     return beam_projection(rc, element_positions, wavelength=wavelength, range_axis=range_axis,
                            azimuth=azimuth, elevation=elevation, range_gates=range_gates,
                            chirp_time=motion.time, attitude=yaw_matrices(yaw), focus="far",
-                           grid_shape=grid_shape, method=method)
+                           grid_shape=grid_shape, method=method, weights=weights)
 
 
 def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
@@ -235,7 +236,8 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
                 steps=PAPER_STEPS,
                 rotation_phase: Literal["displacement", "paper"] = "displacement",
                 grid_shape: tuple[int, int] | None = None,
-                method: Literal["auto", "lattice", "direct"] = "auto") -> BeamCube:
+                method: Literal["auto", "lattice", "direct"] = "auto",
+                weights=None) -> BeamCube:
     """The published compensation chain on a range-compressed cube.
 
     Applies, as selected in ``steps``: the tilt (roll/pitch) element phase, the
@@ -254,7 +256,7 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
     direction : array_like, shape ``[3]``
         Target direction in W for the slow-time correction (the paper applies
         it per target after angle estimation).
-    range_axis, azimuth, elevation, range_gates, grid_shape, method
+    range_axis, azimuth, elevation, range_gates, grid_shape, method, weights
         See :func:`compensation.projection.beam_projection`.
     steps : sequence of {"tilt", "translation", "rotation", "yaw"}
     rotation_phase : {"displacement", "paper"}
@@ -277,8 +279,9 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
     if "yaw" in steps:
         return yaw_projection(x, element_positions, motion, wavelength=wavelength,
                               range_axis=range_axis, azimuth=azimuth, elevation=elevation,
-                              range_gates=range_gates, grid_shape=grid_shape, method=method)
+                              range_gates=range_gates, grid_shape=grid_shape, method=method,
+                              weights=weights)
     return beam_projection(x, element_positions, wavelength=wavelength, range_axis=range_axis,
                            azimuth=azimuth, elevation=elevation, range_gates=range_gates,
                            chirp_time=motion.time, focus="far", grid_shape=grid_shape,
-                           method=method)
+                           method=method, weights=weights)

@@ -168,10 +168,7 @@ def lattice_vectors(positions, grid_shape) -> tuple[np.ndarray, np.ndarray, np.n
 
 
 def _powers(z: np.ndarray, n: int) -> np.ndarray:
-    """``z ** arange(n)`` along a new last axis by doubling (complex64, O(log n) passes).
-
-    The powers are built along a leading axis (contiguous blocks) and moved last.
-    """
+    """``z ** arange(n)`` along a new leading axis by doubling (complex64, O(log n) passes)."""
     out = np.empty((n,) + z.shape, dtype=np.complex64)
     out[0] = 1.0
     if n > 1:
@@ -183,7 +180,7 @@ def _powers(z: np.ndarray, n: int) -> np.ndarray:
         np.multiply(out[:take], zp, out=out[have:have + take])
         have += take
         zp = zp * zp
-    return np.ascontiguousarray(np.moveaxis(out, 0, -1))
+    return out
 
 
 def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azimuth,
@@ -191,7 +188,7 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
                     displacement=None, focus: Literal["near", "far"] = "near",
                     grid_shape: tuple[int, int] | None = None,
                     method: Literal["auto", "lattice", "direct"] = "auto",
-                    chirp_block: int = 32, gate_block: int = 8) -> BeamCube:
+                    weights=None, chirp_block: int = 32, gate_block: int = 8) -> BeamCube:
     """Project every chirp onto a fixed global angle grid, removing the platform motion.
 
     Parameters
@@ -231,6 +228,10 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
         plus one batched matrix product); ``"direct"`` builds the full
         ``[direction, channel]`` steering per chirp (any geometry). ``"auto"``
         picks ``"lattice"`` when ``grid_shape`` is given.
+    weights : array_like, shape ``[channel]``, optional
+        Real channel taper (e.g. a separable Taylor window) applied before the
+        sum; the output is divided by ``sum(weights)`` so a unit echo still
+        gives 1 in its beam. Default uniform.
     chirp_block, gate_block : int
         Chirps and gates processed together (bound the temporaries). Within
         a block of gates the steering direction is taken at the block's mean
@@ -279,6 +280,14 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
     rot = None if attitude is None else rotation_matrices("attitude", attitude, n_chirp)
     disp = None if displacement is None else finite_array("displacement", displacement,
                                                           shape=(n_chirp, 3))
+    if weights is None:
+        taper, norm = None, float(n_chan)
+    else:
+        taper = finite_array("weights", weights, shape=(n_chan,), what="(one per channel)")
+        norm = float(taper.sum())
+        if norm <= 0:
+            raise ValueError(f"weights must have a positive sum, got {norm!r}")
+        taper = taper.astype(np.float32)
     choice("focus", focus, ("near", "far"))
     choice("method", method, ("auto", "lattice", "direct"))
     if method == "auto":
@@ -302,6 +311,8 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
         ranges = r_axis[gsel]                                   # [G]
         r_mid = float(ranges.mean())
         xg = x[:, :, gsel]                                      # [N, M, G]
+        if taper is not None:
+            xg = xg * taper[None, :, None]
         for n0 in range(0, n_chirp, chirp_block):
             n1 = min(n0 + chirp_block, n_chirp)
             c = n1 - n0
@@ -324,17 +335,16 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
             if method == "lattice":
                 za = np.exp(1j * k * (v @ step_a)).astype(cdtype)                 # [c, D]
                 zb = np.exp(1j * k * (v @ step_b)).astype(cdtype)
-                ea = _powers(za, nx)                                             # [c, D, nx]
-                eb = _powers(zb, ny)                                             # [c, D, ny]
-                # X[c, ix, iy, G] -> [c, ny, nx * G]; one BLAS product per chirp
-                xr = np.ascontiguousarray(
-                    xb.reshape(c, nx, ny, -1).transpose(0, 2, 1, 3).reshape(c, ny, -1))
-                z = np.empty((c, n_dir, nx * gsel.size), dtype=cdtype)
+                ea = _powers(za, nx)                                             # [nx, c, D]
+                eb = _powers(zb, ny)                                             # [ny, c, D]
+                # X[c, ix, iy, G] -> [c, nx * G, ny]; one BLAS product per chirp
+                xr = xb.reshape(c, nx, ny, -1).transpose(0, 1, 3, 2).reshape(c, -1, ny)
+                z = np.empty((c, nx * gsel.size, n_dir), dtype=cdtype)
                 for i in range(c):
-                    np.matmul(eb[i], xr[i], out=z[i])                            # [D, nx * G]
-                z = z.reshape(c, n_dir, nx, gsel.size)
-                z *= ea[..., None]
-                y = z.sum(axis=2).transpose(0, 2, 1)                             # [c, G, D]
+                    np.matmul(xr[i], eb[:, i, :], out=z[i])                      # [nx * G, D]
+                z = z.reshape(c, nx, gsel.size, n_dir)
+                z *= ea.transpose(1, 0, 2)[:, :, None, :]
+                y = z.sum(axis=1)                                                # [c, G, D]
                 base = k * (v @ p0)                                              # [c, D]
             else:
                 y = np.empty((c, gsel.size, n_dir), dtype=cdtype)
@@ -343,6 +353,6 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
                     y[i] = (steer @ xb[i]).T                                     # [G, D]
                 base = np.zeros((c, n_dir))
             phase = base[:, None, :] - 2.0 * k * rho                             # [c, G, D]
-            out[n0:n1, g0:g0 + gsel.size] = y * (np.exp(1j * phase) / n_chan).astype(cdtype)
+            out[n0:n1, g0:g0 + gsel.size] = y * (np.exp(1j * phase) / norm).astype(cdtype)
     return BeamCube(out.reshape(n_chirp, gates.size, az.size, el.size), times,
                     r_axis[gates].copy(), az.copy(), el.copy(), lam)

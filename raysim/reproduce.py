@@ -83,6 +83,9 @@ class ReproductionSettings:
         estimate [deg].
     map_half_width_deg, map_step_deg : float
         Azimuth-elevation grid of the accumulated map (entropy) [deg].
+    map_taper_sll_db : float or None
+        Sidelobe level of the separable Taylor taper (nbar 4) used for the
+        accumulated azimuth-elevation map [dB]; None for uniform weights.
     range_half_width : float
         Range window of the RA/RD figures around the target [m].
     imu_rate : float
@@ -97,6 +100,7 @@ class ReproductionSettings:
     angle_step_deg: float = 0.5
     map_half_width_deg: float = 30.0
     map_step_deg: float = 1.0
+    map_taper_sll_db: float | None = 35.0
     range_half_width: float = 3.0
     imu_rate: float = IMU_RATE
     velocity: str = "given"
@@ -105,7 +109,7 @@ class ReproductionSettings:
     def quick(cls, **changes) -> ReproductionSettings:
         """Reduced sizes for tests: 2.5 MHz sampling, coarser angle grids."""
         base = dict(sample_rate=2.5e6, angle_step_deg=0.5, angle_half_width_deg=12.0,
-                    map_step_deg=1.5, map_half_width_deg=30.0, range_half_width=1.5)
+                    map_step_deg=2.0, map_half_width_deg=24.0, range_half_width=1.5)
         base.update(changes)
         return cls(**base)
 
@@ -132,6 +136,7 @@ class _CaseData:
     el_a: np.ndarray
     az_m: np.ndarray
     el_m: np.ndarray
+    map_weights: np.ndarray | None = None
     stationary: dict = field(default_factory=dict)
 
 
@@ -158,6 +163,16 @@ def _render(case: PaperCase, settings: ReproductionSettings, trajectory, num_fra
     return cfg, arr, r_axis, gate, window, rc_window, np.stack(rc_gate), np.stack(times)
 
 
+def _taper(grid_shape, sll_db):
+    """Separable Taylor taper ``[channel]`` (x major, y minor), or None."""
+    if sll_db is None:
+        return None
+    from scipy.signal.windows import taylor
+
+    nx, ny = grid_shape
+    return np.outer(taylor(nx, nbar=4, sll=sll_db), taylor(ny, nbar=4, sll=sll_db)).ravel()
+
+
 def prepare_case(case: PaperCase, settings: ReproductionSettings) -> _CaseData:
     """Render a case's frames (and its stationary reference) once, keeping the gated cells."""
     frames = case.num_frames if settings.yaw_frames is None or case.num_frames == 1 \
@@ -171,7 +186,8 @@ def prepare_case(case: PaperCase, settings: ReproductionSettings) -> _CaseData:
         az_a=_axis(case.target_az, settings.angle_half_width_deg, settings.angle_step_deg),
         el_a=_axis(case.target_el, settings.angle_half_width_deg, settings.angle_step_deg),
         az_m=_axis(case.target_az, settings.map_half_width_deg, settings.map_step_deg),
-        el_m=_axis(case.target_el, settings.map_half_width_deg, settings.map_step_deg))
+        el_m=_axis(case.target_el, settings.map_half_width_deg, settings.map_step_deg),
+        map_weights=_taper(arr.grid_shape, settings.map_taper_sll_db))
     # stationary reference: same target and grids, platform at rest (every frame identical)
     _, _, _, _, _, rc_w0, rc_g0, _ = _render(case, settings, stationary(), 1)
     ref = _evaluate_uncompensated(data, rc_gate=np.repeat(rc_g0, frames, axis=0))
@@ -227,7 +243,7 @@ def _evaluate_uncompensated(data: _CaseData, rc_gate=None) -> dict:
     for f in range(rc_gate.shape[0]):
         mean = rc_gate[f].mean(axis=0, keepdims=True)       # coherent sum commutes
         acc = acc + beam_projection(mean, azimuth=data.az_m, elevation=data.el_m,
-                                    **kw).chirp_power(0)[0]
+                                    weights=data.map_weights, **kw).chirp_power(0)[0]
     out.update(_accumulated(data, acc))
     return out
 
@@ -239,11 +255,12 @@ def _evaluate_compensated(data: _CaseData, motion, chain: str) -> dict:
     frames = [motion.select(slice(f * n, (f + 1) * n)) for f in range(data.rc_gate.shape[0])]
     rp = "paper" if chain == "paper_vrt" else "displacement"
 
-    def run(rc, mot, az, el, u=None):
+    def run(rc, mot, az, el, u=None, weights=None):
         if chain == "exact":
-            return rigid_body_projection(rc, motion=mot, azimuth=az, elevation=el, **kw)
+            return rigid_body_projection(rc, motion=mot, azimuth=az, elevation=el,
+                                         weights=weights, **kw)
         return paper_chain(rc, motion=mot, azimuth=az, elevation=el, rotation_phase=rp,
-                           direction=data.u_true if u is None else u, **kw)
+                           direction=data.u_true if u is None else u, weights=weights, **kw)
 
     sel = slice(ANGLE_CHIRP, ANGLE_CHIRP + 1)
     ang = _angle(data, run(data.rc_gate[0][sel], frames[0].select(sel), data.az_a,
@@ -254,7 +271,8 @@ def _evaluate_compensated(data: _CaseData, motion, chain: str) -> dict:
     out.update(ang)
     acc = 0.0
     for f, mot in enumerate(frames):
-        acc = acc + run(data.rc_gate[f], mot, data.az_m, data.el_m, u_hat).coherent_power()[0]
+        acc = acc + run(data.rc_gate[f], mot, data.az_m, data.el_m, u_hat,
+                        data.map_weights).coherent_power()[0]
     out.update(_accumulated(data, acc))
     return out
 
@@ -380,7 +398,7 @@ def run_case(case: PaperCase, *, imu: str = "ideal", seeds=(0,),
 
 def reproduce(cases=None, *, imu: str = "ideal", seeds: int = 1,
               settings: ReproductionSettings | None = None, out_dir: str | None = None,
-              figures: bool = True, progress=None) -> dict:
+              figures: bool = True, chains=CHAINS, progress=None) -> dict:
     """Run the paper's experiments and (optionally) write the table and figures.
 
     Parameters
@@ -396,6 +414,8 @@ def reproduce(cases=None, *, imu: str = "ideal", seeds: int = 1,
         Directory for ``reproduction.json``, ``reproduction.csv`` and figures.
     figures : bool
         Write the RA/RD/RE figures into ``out_dir/figures``.
+    chains : sequence of str
+        Subset of :data:`CHAINS`.
     progress : callable, optional
         Called with a message string after each case.
 
@@ -421,7 +441,7 @@ def reproduce(cases=None, *, imu: str = "ideal", seeds: int = 1,
     t0 = time.perf_counter()
     for name in names:
         rows.extend(run_case(PAPER_CASES[name], imu=imu, seeds=range(int(seeds)),
-                             settings=settings, figures_dir=fig_dir))
+                             settings=settings, figures_dir=fig_dir, chains=chains))
         if progress is not None:
             progress(f"{name}: done after {time.perf_counter() - t0:.1f} s")
     result = {"meta": {"imu": imu, "seeds": int(seeds), "imu_rate_hz": settings.imu_rate,

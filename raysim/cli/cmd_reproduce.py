@@ -33,6 +33,9 @@ def register(subparsers) -> None:
                    help="IMU output rate")
     p.add_argument("--quick", action="store_true",
                    help="reduced sizes (2.5 MHz sampling, coarser angle grids)")
+    p.add_argument("--chains", default=",".join(("uncompensated", "paper", "paper_vrt", "exact")),
+                   metavar="NAMES", help="comma-separated chains: uncompensated, paper, "
+                   "paper_vrt (published rotation phase v_r(nT) nT), exact")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
     p.set_defaults(func=run)
 
@@ -49,10 +52,11 @@ def run(args) -> int:
     if args.imu_rate <= 0:
         raise ValueError(f"--imu-rate must be a positive rate in Hz, got {args.imu_rate}")
     cases = None if not args.cases else [c.strip() for c in args.cases.split(",") if c.strip()]
+    chains = tuple(c.strip() for c in args.chains.split(",") if c.strip())
     make = ReproductionSettings.quick if args.quick else ReproductionSettings
     settings = make(imu_rate=args.imu_rate, velocity=args.velocity)
     result = reproduce(cases, imu=args.imu, seeds=seeds, settings=settings, out_dir=args.out,
-                       figures=not args.no_figures,
+                       figures=not args.no_figures, chains=chains,
                        progress=lambda msg: print(msg, file=sys.stderr, flush=True))
     print(format_table(result["rows"]))
     print(f"\nwrote {args.out}/reproduction.json, {args.out}/reproduction.csv"
