@@ -27,7 +27,7 @@ backend and a scene; they are not measured here and the result says so.
 
 Dominance uses :data:`TIME_TOLERANCE`: a setting dominates another only if it
 is faster by more than that fraction (timing noise on a shared machine) and
-not less accurate, or as fast and strictly more accurate.
+not less accurate, or at least as fast and strictly more accurate.
 """
 
 from __future__ import annotations
@@ -75,9 +75,8 @@ def pareto_front(times, errors, *, time_tolerance: float = TIME_TOLERANCE) -> np
     front = np.ones(t.size, dtype=bool)
     for i in range(t.size):
         faster = t < t[i] * (1 - time_tolerance)
-        as_fast = t <= t[i] * (1 + time_tolerance)
-        dominated = (faster & (e <= e[i])) | (as_fast & (e < e[i]) & ~np.isclose(e, e[i],
-                                                                                 rtol=1e-3))
+        more_accurate = (e < e[i]) & ~np.isclose(e, e[i], rtol=1e-3)
+        dominated = (faster & (e <= e[i] * (1 + 1e-3))) | ((t <= t[i]) & more_accurate)
         dominated[i] = False
         front[i] = not dominated.any()
     return front
