@@ -12,8 +12,8 @@ block of output, the NUFFT accumulator ``[channel, sample]`` in complex128 and
 :data:`raysim.nufft_synthesis.BLOCK_BYTES` of temporaries per thread, plus
 what the writer keeps: nothing for :class:`NpyWriter` (a memory-mapped
 ``.npy`` file), one frame cube for :class:`FrameWriter`. For the paper frame
-(256 x 400 x 600, 491 MB complex64) and 1e5 paths that is at most about
-1.7 x one cube including the writer's frame; ``raysim bench`` measures it.
+(256 x 400 x 600, 491 MB complex64) and 1e5 paths that is about 1.35 x one
+cube including the writer's frame; ``raysim bench`` measures it.
 
 Long renders show a progress bar on stderr (tqdm), one step per chirp block.
 """
@@ -70,12 +70,13 @@ def peak_bytes(num_paths: int, num_channels: int, num_samples: int, *, chirp_blo
 
     ``path_bytes`` (the source's own arrays) + one complex64 chirp block + one
     complex128 ``[channel, sample]`` accumulator + ``min(BLOCK_BYTES,
-    64 B * path * channel)`` per thread.
+    64 B * path * channel)`` per thread + the per-chirp vertex cache of a
+    :class:`~raysim.nufft_synthesis.PathDelays` (at most 256 B per path).
     """
     block = chirp_block * num_channels * num_samples * 8
     acc = num_channels * num_samples * 16
     temps = threads * min(BLOCK_BYTES, 64 * num_paths * num_channels)
-    return int(path_bytes + block + acc + temps)
+    return int(path_bytes + block + acc + temps + 256 * num_paths)
 
 
 def render_stream(source: Callable[[int], object], config: RadarConfig, writer: Writer, *,

@@ -13,7 +13,7 @@ from raysim.echo import PointTarget, direction, point_target_delays, simulate_po
 from raysim.motion import sinusoid
 from raysim.nufft_synthesis import PathDelays, element_positions, synthesize_nufft
 from raysim.synthesis import synthesize_if_direct
-from raysim.synthesis_select import choose_method, estimate_seconds, synthesize
+from raysim.synthesis_select import choose_method, estimate_seconds, synthesize, tones_error
 
 #: Tolerances the NUFFT must meet (relative l2 error over the cube).
 EPS_VALUES = (1e-3, 1e-4, 1e-5, 1e-6)
@@ -146,6 +146,9 @@ def test_auto_choice():
     assert choose_method(1, 256, 400, 600, 1e-5) == "tones"
     assert choose_method(100_000, 256, 400, 600, 1e-5) == "nufft"
     assert choose_method(1000, 256, 400, 600, 1e-7) == "direct"
+    # complex64 accumulation: many tones cannot reach 1e-6 whatever they cost
+    assert tones_error(100_000) > 1e-6 > tones_error(10)
+    assert choose_method(100_000, 1, 1, 600, 1e-6) == "nufft"
     assert estimate_seconds("nufft", 1e5, 256, 400, 600, 1e-5) * 50 < estimate_seconds(
         "direct", 1e5, 256, 400, 600)
 
