@@ -22,7 +22,7 @@ def rigid_body_projection(rc, element_positions, motion: PlatformMotion, *, wave
                           range_axis, azimuth, elevation, range_gates=None,
                           focus: Literal["near", "far"] = "near",
                           grid_shape: tuple[int, int] | None = None,
-                          method: Literal["auto", "lattice", "direct"] = "auto",
+                          method: Literal["auto", "nufft", "lattice", "direct"] = "auto",
                           weights=None, chirp_block: int = 32,
                           gate_block: int = 8) -> BeamCube:
     """Motion-compensated beams of a range-compressed cube on a fixed global grid.

@@ -204,7 +204,7 @@ def tilt_correction(cube, element_positions, attitude, *, wavelength: float) -> 
 def yaw_projection(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
                    range_axis, azimuth, elevation, range_gates=None,
                    grid_shape: tuple[int, int] | None = None,
-                   method: Literal["auto", "lattice", "direct"] = "auto",
+                   method: Literal["auto", "nufft", "lattice", "direct"] = "auto",
                    weights=None) -> BeamCube:
     """The paper's chirp-wise beam projection for yaw onto a fixed global grid.
 
@@ -236,7 +236,7 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
                 steps=PAPER_STEPS,
                 rotation_phase: Literal["displacement", "paper"] = "displacement",
                 grid_shape: tuple[int, int] | None = None,
-                method: Literal["auto", "lattice", "direct"] = "auto",
+                method: Literal["auto", "nufft", "lattice", "direct"] = "auto",
                 weights=None) -> BeamCube:
     """The published compensation chain on a range-compressed cube.
 

@@ -1,0 +1,116 @@
+"""Cost of motion compensation relative to the bare FFT chain on the same paper frame.
+
+Both chains start from the same IF cube ``[chirp, channel, sample]`` (the
+paper's 256 x 400 x 600 rotation-about-Y frame) and produce the same products:
+
+* bare: range FFT of the whole cube, Doppler FFT of the whole cube, the
+  range-Doppler power map (summed over channels), and an angle-Doppler cube at
+  the gated range cells (Doppler spectra beamformed onto the global grid);
+* compensated: the same range FFT, Doppler FFT and range-Doppler map (used for
+  detection and gating), plus strapdown integration of the IMU samples, the
+  exact rigid-body projection of the gated cells onto the same grid for every
+  chirp, and the Doppler FFT of the beams.
+
+Prints one JSON object with the timings (best of ``--repeat``) and the ratio.
+Run: ``python benchmarks/bench_compensation.py [--gates 3] [--grid-step-deg 2]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+
+import numpy as np
+
+from compensation import integrate_imu, rigid_body_projection
+from raysim.cases import get_case
+from raysim.echo import simulate_point_targets
+from raysim.imu import simulate_imu
+from raysim.processing import az_el_grid, doppler_fft, range_compress, steering_matrix
+
+
+def _best(fn, repeat: int) -> tuple[float, object]:
+    best, out = float("inf"), None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", default="rotation_y")
+    ap.add_argument("--gates", type=int, default=3, help="gated range cells around the target")
+    ap.add_argument("--grid-half-width-deg", type=float, default=30.0)
+    ap.add_argument("--grid-step-deg", type=float, default=1.0)
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args(argv)
+
+    case = get_case(args.case)
+    cfg, arr = case.config, case.array()
+    frame = simulate_point_targets(cfg, arr, [case.target()], case.trajectory,
+                                   lever_arm=case.lever_arm)
+    cube = frame.data
+    tc = frame.chirp_times
+    imu = simulate_imu(case.trajectory, "ideal", rate=1000.0, start=tc[0] - 0.02,
+                       end=tc[-1] + 0.02).to_arrays()
+    lam = cfg.center_wavelength
+    r_axis = cfg.range_axis()
+    g0 = int(np.argmin(np.abs(r_axis - case.target_range)))
+    gates = np.arange(g0 - args.gates // 2, g0 - args.gates // 2 + args.gates)
+    n = int(round(args.grid_half_width_deg / args.grid_step_deg))
+    off = np.deg2rad(np.arange(-n, n + 1) * args.grid_step_deg)
+    az, el = case.target_az + off, case.target_el + off
+    steer = steering_matrix(arr, lam, az_el_grid(az, el)).conj().T.astype(np.complex64)
+
+    def front_end():
+        rc = range_compress(cube)                                   # [chirp, channel, range]
+        spec = doppler_fft(rc, axis=0)                              # [doppler, channel, range]
+        rd = np.einsum("dcr,dcr->rd", spec, spec.conj()).real       # [range, doppler]
+        return rc, spec, rd
+
+    def bare():
+        rc, spec, rd = front_end()
+        ad = [(spec[:, :, g] @ steer) / arr.num_channels for g in gates]   # [doppler, D]
+        return rd, np.abs(np.stack(ad, axis=1)) ** 2
+
+    def compensated():
+        rc, spec, rd = front_end()
+        motion = integrate_imu(*imu, tc, lever_arm=case.lever_arm, velocity="given",
+                               initial_velocity=case.trajectory.velocity([tc[0]])[0])
+        beams = rigid_body_projection(rc, arr.virtual_positions, motion, wavelength=lam,
+                                      range_axis=r_axis, azimuth=az, elevation=el,
+                                      range_gates=gates, grid_shape=arr.grid_shape)
+        return rd, np.abs(beams.doppler()) ** 2
+
+    rc_fixed = range_compress(cube)
+
+    def projection_only(rc=rc_fixed):
+        motion = integrate_imu(*imu, tc, lever_arm=case.lever_arm, velocity="given",
+                               initial_velocity=case.trajectory.velocity([tc[0]])[0])
+        return rigid_body_projection(rc, arr.virtual_positions, motion, wavelength=lam,
+                                     range_axis=r_axis, azimuth=az, elevation=el,
+                                     range_gates=gates, grid_shape=arr.grid_shape).doppler()
+
+    bare(), compensated()                                            # warm-up
+    t_bare, _ = _best(bare, args.repeat)
+    t_comp, _ = _best(compensated, args.repeat)
+    t_proj, _ = _best(projection_only, args.repeat)
+    result = {
+        "case": case.name, "cube_shape": list(cube.shape), "gates": int(gates.size),
+        "directions": int(az.size * el.size), "grid_step_deg": args.grid_step_deg,
+        "bare_s": t_bare, "compensated_s": t_comp, "ratio": t_comp / t_bare,
+        "strapdown_plus_projection_s": t_proj, "repeat": args.repeat,
+        "cpu_count": os.cpu_count(), "load_average": list(os.getloadavg()),
+        "python": platform.python_version(), "numpy": np.__version__,
+    }
+    print(json.dumps(result, indent=2))
+    return result
+
+
+if __name__ == "__main__":
+    main()
