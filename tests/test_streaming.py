@@ -140,3 +140,14 @@ def test_progress_and_peak_memory_in_subprocess():
     assert "4/4" in res.stderr
     # thread stacks and FINUFFT/FFTW plans come on top of the array estimate
     assert grown < bound + 16 * 2**20
+
+
+def test_bench_cli_validation_and_atomic_json(tmp_path, capsys):
+    from raysim.bench import atomic_write_json
+    from raysim.cli import main
+
+    assert main(["bench", "--chart-only"]) == 2
+    assert "--chart-only needs --chart" in capsys.readouterr().err
+    out = tmp_path / "sub" / "r.json"
+    atomic_write_json(out, {"a": np.float32(1.5), "b": np.arange(3)})
+    assert out.read_text().startswith("{") and list(tmp_path.joinpath("sub").iterdir()) == [out]
