@@ -1,0 +1,132 @@
+"""Scene entropy report: stationary clutter ridge, hover spread, compensation margin, outputs."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from raysim import scene_report as sr
+
+pytestmark = pytest.mark.sionna
+
+#: RD power of a stationary platform outside the zero-Doppler ridge (bins -1..+1) [dB].
+#: Frozen paths give identical chirps; measured about -143 dB (float32 rounding).
+STATIONARY_RIDGE_TOL_DB = -100.0
+#: The hovering, uncompensated platform leaks at least this much off the ridge [dB]
+#: (measured -14.6 dB for the parking lot to -8.2 dB for the flat ground).
+HOVER_RIDGE_MIN_DB = -18.0
+#: Exact chain: clutter leakage off the ridge at most [dB] (measured about -25 dB, set
+#: by the platform displacement times the beamwidth, see docs/scenes.md).
+EXACT_RIDGE_MAX_DB = -20.0
+#: Settings of the tests: the ``--quick`` report.
+SETTINGS = sr.QUICK
+
+
+@pytest.fixture(scope="module")
+def results(warm_kernels):
+    """Every bundled scene, all four chains (QUICK settings)."""
+    from raysim.rt.scenes import SCENES
+
+    return {name: sr.evaluate_scene(name, SETTINGS, progress=False) for name in SCENES}
+
+
+def test_stationary_clutter_is_a_zero_doppler_ridge(results):
+    """Stationary platform: all RD power in the zero-Doppler mainlobe, for every scene."""
+    for name, r in results.items():
+        leak = r.chains["stationary"].ridge_leakage_db
+        print(f"{name}: stationary RD power off the zero-Doppler ridge {leak:.1f} dB")
+        assert leak < STATIONARY_RIDGE_TOL_DB
+        assert r.path_kinds["diffuse"] > 100                      # distributed clutter
+
+
+def test_hover_spreads_the_range_doppler_map(results):
+    """Hovering without compensation: RD entropy rises and power leaves the ridge."""
+    for name, r in results.items():
+        st, unc = r.chains["stationary"], r.chains["uncompensated"]
+        rise = unc.entropy["rd"] - st.entropy["rd"]
+        print(f"{name}: RD entropy {st.entropy['rd']:.4f} -> {unc.entropy['rd']:.4f} nats "
+              f"(+{rise:.4f}); off-ridge {unc.ridge_leakage_db:.1f} dB")
+        assert rise > sr.MIN_HOVER_SPREAD_NATS
+        assert unc.ridge_leakage_db > HOVER_RIDGE_MIN_DB
+
+
+def test_exact_chain_restores_map_entropy(results):
+    """Exact chain, ideal IMU: every map's entropy within ENTROPY_MARGIN_NATS of stationary.
+
+    The uncompensated maps must miss the margin somewhere, so the margin is
+    tight enough to see the motion.
+    """
+    for name, r in results.items():
+        st = r.chains["stationary"].entropy
+        ex = r.chains["exact"].entropy
+        unc = r.chains["uncompensated"].entropy
+        for m in sr.MAPS:
+            print(f"{name} {m.upper()}: stationary {st[m]:.4f}, uncompensated {unc[m]:.4f}, "
+                  f"paper {r.chains['paper'].entropy[m]:.4f}, exact {ex[m]:.4f} nats")
+            assert abs(ex[m] - st[m]) <= sr.ENTROPY_MARGIN_NATS, (name, m)
+        assert max(abs(unc[m] - st[m]) for m in sr.MAPS) > sr.ENTROPY_MARGIN_NATS
+        assert r.chains["exact"].ridge_leakage_db < EXACT_RIDGE_MAX_DB
+        assert r.chains["exact"].ridge_leakage_db < r.chains["uncompensated"].ridge_leakage_db
+
+
+def test_reflectors_are_detected_where_they_are(results):
+    """CFAR detections of the exact chain match every known reflector of flat_reflectors."""
+    r = results["flat_reflectors"]
+    assert len(r.targets) == 4
+    for t in r.targets:
+        for chain in ("stationary", "exact"):
+            m = t["match"][chain]
+            print(f"{t['name']} ({chain}): error {m['error_m']:.2f} m, radius {m['radius_m']:.2f}")
+            assert m["detected"], (t["name"], chain)
+    d = r.to_dict()
+    json.dumps(d)                                             # JSON-ready
+    assert d["exact_within_margin"]
+
+
+def test_write_report_files(tmp_path, warm_kernels):
+    """Figures, JSON, markdown and HTML written atomically (no temporary files left)."""
+    tiny = replace(SETTINGS, num_chirps=16, array_size=4, samples_per_src=2000,
+                   grid_step_deg=12.0, range_window=(14.0, 20.0))
+    summary = sr.write_scene_report(tmp_path, scenes=["flat_reflectors"], settings=tiny,
+                                    progress=False)
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == sorted(["flat_reflectors.json", "flat_reflectors_ra.png",
+                            "flat_reflectors_rd.png", "flat_reflectors_re.png", "index.html",
+                            "report.md", "summary.json"])
+    data = json.loads((tmp_path / "summary.json").read_text())
+    assert set(data["flat_reflectors"]["entropy_nats"]) == set(sr.CHAINS)
+    assert summary["flat_reflectors"]["entropy_nats"] == data["flat_reflectors"]["entropy_nats"]
+    assert (tmp_path / "flat_reflectors_rd.png").read_bytes()[:4] == b"\x89PNG"
+    assert "<table>" in (tmp_path / "index.html").read_text()
+
+
+def test_cfar_finds_a_point_in_noise():
+    """CA-CFAR: one strong cell in exponential noise is the strongest detection."""
+    rng = np.random.default_rng(3)
+    cube = rng.exponential(1.0, (80, 9, 9))
+    cube[40, 4, 5] = 1e3
+    hits = sr.cfar_detect(cube)
+    assert tuple(hits[0]) == (40, 4, 5)
+    with pytest.raises(ValueError, match="cube"):
+        sr.cfar_detect(-cube)
+
+
+def test_bad_input_is_named():
+    """Settings and names are checked with messages that name the value."""
+    with pytest.raises(ValueError, match="num_chirps"):
+        sr.ReportSettings(num_chirps=4)
+    with pytest.raises(ValueError, match="range_window"):
+        sr.ReportSettings(range_window=(30.0, 20.0))
+    with pytest.raises(ValueError, match="grid_step_deg"):
+        sr.ReportSettings(grid_step_deg=0.0)
+    with pytest.raises(ValueError, match="preset"):
+        sr.ReportSettings(imu="perfect")
+    with pytest.raises(ValueError, match="unknown scene 'moon'"):
+        sr.evaluate_scene("moon")
+    from raysim.cli import main
+
+    assert main(["scene-report", "--scenes", "moon", "--out", "/nonexistent"]) == 2
+    assert main(["scene-report", "--imu", "perfect", "--out", "/nonexistent"]) == 2
