@@ -1,0 +1,188 @@
+"""``raysim compensate``: motion-compensate a stored IF cube with an IMU log.
+
+Input cube (``.npz``):
+
+=====================  =========================  =================================
+key                    shape                      meaning
+=====================  =========================  =================================
+``data``               ``[chirp, channel, sample]``  complex IF samples
+``chirp_times``        ``[chirp]``                chirp start times, radar clock [s]
+``element_positions``  ``[channel, 3]``           virtual positions p_tx + p_rx in A [m]
+``carrier_frequency``  scalar                     f_c [Hz]
+``bandwidth``          scalar                     B [Hz]
+``chirp_duration``     scalar                     T_c [s]
+``sample_rate``        scalar                     f_s [Hz] (complex sampling)
+``grid_shape``         ``[2]`` (optional)         (nx, ny), x major, y minor
+``lever_arm``          ``[3]`` (optional)         r_IR in B [m]
+=====================  =========================  =================================
+
+IMU log (CSV with a header): ``time_s, gyro_x, gyro_y, gyro_z, accel_x,
+accel_y, accel_z`` in s (IMU clock), rad/s and m/s^2 (body frame, specific
+force).
+
+Output (``.npz``, written to a temporary file then moved into place):
+``beams [chirp, range, azimuth, elevation]`` (complex64),
+``doppler_power [doppler, range, azimuth, elevation]`` (float32), and the axes
+``chirp_times`` [s], ``range_m``, ``azimuth_deg``, ``elevation_deg``,
+``velocity_mps``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+
+import numpy as np
+
+SPEED_OF_LIGHT = 299_792_458.0
+IMU_COLUMNS = ("time_s", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
+
+
+def _floats(text: str, n: int, name: str) -> np.ndarray:
+    try:
+        vals = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise ValueError(f"{name} must be {n} comma-separated numbers, got {text!r}") from None
+    if vals.size != n or not np.all(np.isfinite(vals)):
+        raise ValueError(f"{name} must be {n} comma-separated finite numbers, got {text!r}")
+    return vals
+
+
+def _span(text: str, name: str, with_step: bool) -> tuple:
+    parts = text.split(":")
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        raise ValueError(f"{name} must look like {'LO:HI:STEP' if with_step else 'LO:HI'}, "
+                         f"got {text!r}") from None
+    if len(vals) != (3 if with_step else 2) or not vals[0] <= vals[1] or \
+            (with_step and vals[2] <= 0):
+        raise ValueError(f"{name} must look like {'LO:HI:STEP' if with_step else 'LO:HI'} "
+                         f"with LO <= HI{' and STEP > 0' if with_step else ''}, got {text!r}")
+    return vals
+
+
+def register(subparsers) -> None:
+    """Add the ``compensate`` subcommand."""
+    p = subparsers.add_parser(
+        "compensate", help="motion-compensate a stored IF cube (.npz) with an IMU log (CSV)",
+        description=__doc__.split("\n\n")[0] + " Runs the exact rigid-body projection "
+        "(or the paper's chain) on the selected range cells and angle grid.",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("cube", help="input .npz (see `raysim compensate --help` keys)")
+    p.add_argument("imu", help="IMU CSV: time_s,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z")
+    p.add_argument("--out", required=True, help="output .npz")
+    p.add_argument("--range-m", default="0:1e9", metavar="LO:HI", help="range cells [m]")
+    p.add_argument("--az-deg", default="-60:60:1", metavar="LO:HI:STEP")
+    p.add_argument("--el-deg", default="-60:60:1", metavar="LO:HI:STEP")
+    p.add_argument("--lever-arm", default=None, metavar="X,Y,Z",
+                   help="r_IR in B [m] (default: from the cube, else 0,0,0)")
+    p.add_argument("--time-offset", type=float, default=0.0,
+                   help="IMU clock minus radar clock [s]")
+    p.add_argument("--velocity", choices=("hover", "given"), default="hover")
+    p.add_argument("--initial-velocity", default=None, metavar="VN,VE,VD",
+                   help="body velocity in W at the first chirp [m/s] (--velocity given)")
+    p.add_argument("--initial-attitude-deg", default="0,0,0", metavar="YAW,PITCH,ROLL",
+                   help="attitude at the first chirp, Z-Y-X Euler angles [deg]")
+    p.add_argument("--chain", choices=("exact", "paper"), default="exact")
+    p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
+                   help="target direction for the paper chain's slow-time correction [deg]")
+    p.set_defaults(func=run)
+
+
+def _load_cube(path: str) -> dict:
+    if not os.path.isfile(path):
+        raise ValueError(f"cube file {path!r} does not exist")
+    with np.load(path) as z:
+        need = ("data", "chirp_times", "element_positions", "carrier_frequency", "bandwidth",
+                "chirp_duration", "sample_rate")
+        missing = [k for k in need if k not in z]
+        if missing:
+            raise ValueError(f"cube file {path!r} lacks keys {missing}; expected {list(need)}")
+        out = {k: z[k] for k in z.files}
+    data = out["data"]
+    if data.ndim != 3 or not np.iscomplexobj(data):
+        raise ValueError(f"cube 'data' must be complex [chirp, channel, sample], got "
+                         f"{data.dtype} {data.shape}")
+    return out
+
+
+def _load_imu(path: str) -> np.ndarray:
+    if not os.path.isfile(path):
+        raise ValueError(f"IMU file {path!r} does not exist")
+    with open(path) as fh:
+        header = [h.strip() for h in fh.readline().split(",")]
+    if tuple(header) != IMU_COLUMNS:
+        raise ValueError(f"IMU CSV header must be {','.join(IMU_COLUMNS)}, got {header}")
+    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if table.shape[1] != 7:
+        raise ValueError(f"IMU CSV must have 7 columns, got {table.shape[1]}")
+    return table
+
+
+def run(args) -> int:
+    """Execute ``raysim compensate``; returns the exit code."""
+    from scipy.spatial.transform import Rotation
+
+    from compensation import integrate_imu, paper_chain, rigid_body_projection
+    from compensation.geometry import direction
+    from raysim.processing import range_compress
+
+    cube = _load_cube(args.cube)
+    imu = _load_imu(args.imu)
+    fc, bw = float(cube["carrier_frequency"]), float(cube["bandwidth"])
+    tc, fs = float(cube["chirp_duration"]), float(cube["sample_rate"])
+    lam = SPEED_OF_LIGHT / (fc + bw / 2)
+    lever = (_floats(args.lever_arm, 3, "--lever-arm") if args.lever_arm is not None
+             else np.asarray(cube.get("lever_arm", np.zeros(3)), dtype=float))
+    grid = tuple(int(v) for v in cube["grid_shape"]) if "grid_shape" in cube else None
+    ypr = np.deg2rad(_floats(args.initial_attitude_deg, 3, "--initial-attitude-deg"))
+    kwargs = {}
+    if args.velocity == "given":
+        if args.initial_velocity is None:
+            raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
+        kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
+    motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], cube["chirp_times"],
+                           lever_arm=lever, time_offset=args.time_offset,
+                           initial_attitude=Rotation.from_euler("ZYX", ypr).as_matrix(),
+                           velocity=args.velocity, **kwargs)
+    n_samples = cube["data"].shape[-1]
+    r_axis = SPEED_OF_LIGHT * np.arange(n_samples) * fs / n_samples / (2.0 * bw / tc)
+    r_lo, r_hi = _span(args.range_m, "--range-m", False)
+    gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
+    if gates.size == 0:
+        raise ValueError(f"--range-m {args.range_m} selects no range cell; cells span "
+                         f"0 .. {r_axis[-1]:.2f} m")
+    a0, a1, da = _span(args.az_deg, "--az-deg", True)
+    e0, e1, de = _span(args.el_deg, "--el-deg", True)
+    az = np.deg2rad(np.arange(a0, a1 + 1e-9, da))
+    el = np.deg2rad(np.arange(e0, e1 + 1e-9, de))
+    rc = range_compress(cube["data"])
+    common = dict(wavelength=lam, range_axis=r_axis, azimuth=az, elevation=el,
+                  range_gates=gates, grid_shape=grid)
+    if args.chain == "exact":
+        beams = rigid_body_projection(rc, cube["element_positions"], motion, **common)
+    else:
+        if args.direction_deg is None:
+            raise ValueError("--chain paper needs --direction-deg AZ,EL (target direction)")
+        d = np.deg2rad(_floats(args.direction_deg, 2, "--direction-deg"))
+        beams = paper_chain(rc, cube["element_positions"], motion, direction=direction(*d),
+                            **common)
+    spec = beams.doppler()
+    folder = os.path.dirname(os.path.abspath(args.out))
+    os.makedirs(folder, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=".tmp_", suffix=".npz", dir=folder)
+    os.close(fd)
+    try:
+        np.savez(tmp, beams=beams.data, doppler_power=(np.abs(spec) ** 2).astype(np.float32),
+                 chirp_times=beams.chirp_time, range_m=beams.range,
+                 azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
+                 velocity_mps=beams.velocity())
+        os.replace(tmp, args.out)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    print(f"wrote {args.out}: beams {beams.data.shape} [chirp, range, azimuth, elevation], "
+          f"chain {args.chain}")
+    return 0
