@@ -31,6 +31,8 @@ def register(subparsers) -> None:
     p.add_argument("--threads", type=int, default=None, metavar="N",
                    help="Dr.Jit threads of the ray tracer (default: all cores)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--bench-reprojection", action="store_true",
+                   help="only time re-projection vs re-tracing per chirp and print JSON")
     p.set_defaults(func=run)
 
 
@@ -52,6 +54,15 @@ def run(args: argparse.Namespace) -> int:
                          f"{sorted(PRESETS)}")
     if args.threads is not None and args.threads < 1:
         raise ValueError(f"--threads must be a positive integer, got {args.threads}")
+    if args.bench_reprojection:
+        import json
+
+        from raysim.rt import backend
+        from raysim.scene_report import bench_reprojection
+
+        backend.configure("cpu", threads=args.threads)
+        print(json.dumps(bench_reprojection(), indent=1))
+        return 0
     settings = replace(QUICK if args.quick else FULL, imu=args.imu)
     if args.jitter_seed is not None:
         settings = replace(settings, jitter_seed=args.jitter_seed)
