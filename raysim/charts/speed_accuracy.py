@@ -270,12 +270,22 @@ def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print) ->
                          "chirps timed, see each knob's note)"}
 
 
+def _decade_limits(values) -> tuple[float, float]:
+    """Log-axis limits around ``values`` spanning at least one decade."""
+    lo, hi = float(np.min(values)) / 1.5, float(np.max(values)) * 1.5
+    if hi / lo < 10.0:
+        mid = np.sqrt(lo * hi)
+        lo, hi = mid / np.sqrt(10.0), mid * np.sqrt(10.0)
+    return lo, hi
+
+
 def draw_chart(measured: dict, path) -> None:
     """One PNG, one panel per knob: time per frame vs error, Pareto front, default starred."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     from ..bench import atomic_write_png
 
@@ -291,14 +301,22 @@ def draw_chart(measured: dict, path) -> None:
                 label="Pareto front", zorder=1)
         ax.scatter(t[~front], e[~front], color="tab:gray", s=30, label="dominated", zorder=2)
         ax.scatter(t[front], e[front], color="tab:green", s=30, zorder=2)
-        for x, ti, ei in zip(s, t, e, strict=True):
+        for i, (x, ti, ei) in enumerate(zip(s, t, e, strict=True)):
             ax.annotate(x["setting"] + (" (ref)" if x.get("reference") else ""), (ti, ei),
-                        textcoords="offset points", xytext=(4, 4), fontsize=7)
+                        textcoords="offset points", xytext=(4, 4 + 9 * (i % 3)), fontsize=7)
             if x["default"]:
                 ax.scatter([ti], [ei], marker="*", s=220, facecolor="gold", edgecolor="k",
                            zorder=3, label="default")
-        ax.set_xscale("log")
+        if t.max() / t.min() < 3.0:          # settings about equally fast: linear time axis
+            pad = 0.05 * t.max()
+            ax.set_xlim(max(0.0, t.min() - pad), t.max() + pad)
+        else:
+            ax.set_xscale("log")
+            ax.set_xlim(*_decade_limits(t))
         ax.set_yscale("log")
+        ax.set_ylim(*_decade_limits(e))
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("time per paper frame [CPU s]")
         ax.set_ylabel("relative error vs highest fidelity")
         ax.set_title(k["label"], fontsize=9)
