@@ -81,7 +81,7 @@ __all__ = [
     "CHAINS", "ANGLE_CHIRPS", "GRAVITY", "Scenario", "Criteria", "PoseEstimate", "MapSpec",
     "MAPS", "gated_cube", "compensated_slow_time", "estimate_pose", "reference_pose",
     "chain_corrections", "evaluate", "run_map", "plot_map", "atomic_write", "write_stability",
-    "write_netcdf", "read_netcdf", "criteria_for", "fails", "first_failure",
+    "write_netcdf", "read_netcdf", "criteria_for", "fails", "failing_values",
 ]
 
 #: Compensation chains compared in every map.
@@ -1185,8 +1185,8 @@ def read_netcdf(path: str | os.PathLike):
     return ds
 
 
-def first_failure(fail_fraction) -> dict:
-    """The failure boundary as a table: first failing value of axis 0 per value of axis 1.
+def failing_values(fail_fraction) -> dict:
+    """The failure boundary as a table: failing values of axis 0 per value of axis 1.
 
     Parameters
     ----------
@@ -1196,19 +1196,13 @@ def first_failure(fail_fraction) -> dict:
     Returns
     -------
     dict
-        ``{str(axis-1 value): smallest axis-0 value from which every larger
-        value fails (fraction >= 0.5), or None}``.
+        ``{f"{axis-1 value:g}": [axis-0 values where fraction >= 0.5]}``.
     """
     a0, a1 = fail_fraction.dims
     out = {}
     for v1 in fail_fraction[a1].values:
         col = fail_fraction.sel({a1: v1}).values >= 0.5
-        first = None
-        for i in range(col.size):
-            if col[i:].all():
-                first = float(fail_fraction[a0].values[i])
-                break
-        out[f"{v1:g}"] = first
+        out[f"{v1:g}"] = [float(v) for v in fail_fraction[a0].values[col]]
     return out
 
 
@@ -1226,7 +1220,7 @@ def _summary(ds) -> dict:
         sub = ds.sel(chain=c)
         rec = {m: np.round(sub[m].median("seed").values, 6).tolist() for m in METRICS}
         rec["fail_fraction"] = sub.fail.mean("seed").values.tolist()
-        rec["first_failure"] = first_failure(sub.fail.mean("seed"))
+        rec["failing"] = failing_values(sub.fail.mean("seed"))
         if "worse_than_none" in ds:
             rec["worse_than_none_fraction"] = sub.worse_than_none.mean("seed").values.tolist()
         out["chains"][c] = rec
