@@ -236,14 +236,17 @@ class ChainResult:
     chain : str
         One of :data:`CHAINS`.
     maps : dict
-        ``"rd"``, ``"ra"``, ``"re"`` -> :class:`raysim.processing.Map` (power).
+        ``"rd"`` (dims ``range, doppler``), ``"ra"`` (``range, azimuth``), ``"re"``
+        (``azimuth, elevation``) -> :class:`raysim.processing.Map` of beam power [W]
+        (channel-averaged beams of IF amplitudes in sqrt(W)); axes in m, m/s, rad.
     cube : ndarray, shape ``[range, azimuth, elevation]``
-        Coherent (zero-Doppler) beam power.
+        Coherent (zero-Doppler, Hann-weighted) beam power [W].
     entropy : dict
         Map name -> image entropy [nats].
     detections : list of dict
-        CFAR detections: ``range_m``, ``az_deg``, ``el_deg``, ``velocity_mps``,
-        ``snr_db``, ``position_m`` (in W).
+        CFAR detections, strongest first: ``range_m``, ``az_deg``, ``el_deg``,
+        ``velocity_mps`` (range rate at the RD peak of the detection's gate),
+        ``power_db`` (relative to the cube's maximum), ``position_m`` (in W).
     ridge_leakage_db : float
         RD power outside the zero-Doppler ridge relative to the total [dB].
     seconds : float
