@@ -38,7 +38,6 @@ LEVER = np.array([0.0, 0.0, 0.10])
 def hover_frames(warm_kernels):
     """Stationary and hovering ray-traced frames of the reflectors, plus the IMU pose."""
     from compensation import integrate_imu
-
     from raysim.imu import simulate_imu
     from raysim.rt.render import render_scene
     from raysim.rt.scenes import load_scene
