@@ -1228,6 +1228,13 @@ def _summary(ds) -> dict:
     return out
 
 
+def _tick_labels(axis: str, values) -> list[str]:
+    names = {"init_index": _INITS, "term_index": IMU_TERMS, "error_axis_index": ("X", "Y", "Z")}
+    if axis in names:
+        return [names[axis][int(v)] for v in values]
+    return [f"{v:g}" for v in values]
+
+
 def plot_map(ds, path: str | os.PathLike) -> Path:
     """Figure of a stability map with the failure boundary drawn (matplotlib Agg).
 
@@ -1250,7 +1257,7 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
     worse = ds.worse_than_none.mean("seed") if "worse_than_none" in ds else None
     fail = ds.fail.mean("seed")
     fig, grid = plt.subplots(2, len(chains), figsize=(3.6 * len(chains), 6.4), squeeze=False)
-    fig.subplots_adjust(left=0.07, right=0.9, bottom=0.09, top=0.9, wspace=0.3, hspace=0.42)
+    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.09, top=0.9, wspace=0.42, hspace=0.42)
     for row, (metric, label) in enumerate(((pv, "|v| / Doppler bin"),
                                            (ae, "angle error / half beamwidth"))):
         for col, c in enumerate(chains):
@@ -1274,8 +1281,8 @@ def plot_map(ds, path: str | os.PathLike) -> Path:
                     if 0 < w.max() and w.min() < 1:
                         ax.contour(xs, ys, w, levels=[0.5], colors="r", linestyles="--")
             if len(axes) > 1:
-                ax.set_xticks(xs, [f"{v:g}" for v in ds[axes[1]].values], fontsize=7)
-                ax.set_yticks(ys, [f"{v:g}" for v in ds[axes[0]].values], fontsize=7)
+                ax.set_xticks(xs, _tick_labels(axes[1], ds[axes[1]].values), fontsize=7)
+                ax.set_yticks(ys, _tick_labels(axes[0], ds[axes[0]].values), fontsize=7)
                 ax.set_xlabel(f"{axes[1]} [{ds[axes[1]].attrs.get('units', '')}]", fontsize=8)
             if col == 0:
                 ax.set_ylabel(f"{axes[0]} [{ds[axes[0]].attrs.get('units', '')}]", fontsize=8)
