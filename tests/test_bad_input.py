@@ -89,13 +89,25 @@ def _validate(data):
     return validate_scenario(data)
 
 
+class CliError(Exception):
+    """A non-zero exit of the ``raysim`` command: ``"exit <code>: <stderr>"``."""
+
+
 def _cli(argv):
-    """Run the CLI; a non-zero exit becomes SystemExit with the code (stderr is captured)."""
+    """Run the CLI in-process; a non-zero exit raises CliError carrying the code and stderr."""
+    import contextlib
+    import io
+
     from raysim.cli import main
 
-    code = main(argv)
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        try:
+            code = main([str(a) for a in argv])
+        except SystemExit as exc:                       # argparse usage errors
+            code = exc.code
     if code:
-        raise SystemExit(code)
+        raise CliError(f"exit {code}: {err.getvalue()}")
     return code
 
 
@@ -325,10 +337,31 @@ CASES = [
         lambda _: _stability_scenario(target_az=2.0), ValueError, ("target_az", "2.0")),
     # ---------------------------------------------------------------------- CLI
     Bad("cli-stability-unknown-map",
-        lambda t: _cli(["stability", "--out", str(t / "o"), "--maps", "wind"]), SystemExit,
-        ("2",)),
-    Bad("cli-stability-missing-out", lambda _: _cli(["stability"]), SystemExit, ("2",)),
-    Bad("cli-unknown-subcommand", lambda _: _cli(["levitate"]), SystemExit, ("2",)),
+        lambda t: _cli(["stability", "--out", t / "o", "--maps", "wind"]), CliError,
+        ("exit 2", "--maps", "'wind'")),
+    Bad("cli-stability-missing-out", lambda _: _cli(["stability"]), CliError,
+        ("exit 2", "--out")),
+    Bad("cli-stability-bad-executor",
+        lambda t: _cli(["stability", "--out", t / "o", "--executor", "mpi"]), CliError,
+        ("exit 2", "'mpi'")),
+    Bad("cli-unknown-subcommand", lambda _: _cli(["levitate"]), CliError,
+        ("exit 2", "'levitate'")),
+    Bad("cli-simulate-unknown-case", lambda _: _cli(["simulate", "--case", "roll_x"]), CliError,
+        ("exit 2", "'roll_x'", "rotation_y")),
+    Bad("cli-simulate-unknown-imu",
+        lambda _: _cli(["simulate", "--case", "rotation_y", "--imu", "navigation_grade"]),
+        CliError, ("exit 2", "navigation_grade", "consumer_mems")),
+    Bad("cli-simulate-bad-motion",
+        lambda _: _cli(["simulate", "--case", "rotation_y", "--motion", "pitch:abc:20"]),
+        CliError, ("exit 2", "--motion", "pitch:abc:20")),
+    Bad("cli-render-missing-scenario",
+        lambda t: _cli(["render", t / "none.toml", "--out", t / "x.zarr"]), CliError,
+        ("exit 2", "none.toml")),
+    Bad("cli-compensate-missing-cube",
+        lambda t: _cli(["compensate", t / "none.npz", t / "none.csv", "--out", t / "o.npz"]),
+        CliError, ("exit 2", "none.npz", "does not exist")),
+    Bad("cli-scenes-unknown-scene", lambda _: _cli(["scenes", "describe", "moon"]), CliError,
+        ("exit 2", "'moon'", "flat_reflectors")),
 ]
 
 
@@ -340,8 +373,6 @@ def test_bad_input(case: Bad, tmp_path, capsys):
     with pytest.raises(case.exc) as info:
         case.call(tmp_path)
     msg = str(info.value)
-    if info.type is SystemExit:
-        msg = str(info.value.code)
     for needle in case.needles:
         assert needle in msg, f"message {msg!r} does not name {needle!r}"
 
