@@ -612,3 +612,84 @@ def test_rt_empty_mesh_is_named(tmp_path, rt_cpu):
 
     with pytest.raises(ValueError, match="empty.ply"):
         load_scene(_scene_file(tmp_path, "concrete", "empty.ply"), frequency=77e9)
+
+
+# ----------------------------------------------- interrupted writes of other writers
+def test_storage_atomic_write_interrupted_at_rename(tmp_path, monkeypatch):
+    """raysim.storage writes aside and renames: an interruption leaves no file at all."""
+    from raysim import storage
+
+    def boom(*_a, **_k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "replace", boom)
+    with pytest.raises(KeyboardInterrupt):
+        storage.atomic_write_text(tmp_path / "points.json", '{"a": 1}')
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_stability_netcdf_interrupted_at_rename(tmp_path, monkeypatch):
+    import xarray as xr
+
+    from raysim.stability import write_netcdf
+
+    ds = xr.Dataset({"fail": (("x",), np.array([True, False]))}, coords={"x": [0.0, 1.0]})
+
+    def boom(*_a, **_k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "replace", boom)
+    with pytest.raises(KeyboardInterrupt):
+        write_netcdf(ds, tmp_path / "map.nc")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.xfail(reason="missing guard rail: raysim.io.imu_log.write_imu_csv writes straight "
+                   "to the destination, so an interrupted write leaves a truncated CSV that "
+                   "reads back as a shorter, valid log; write to a temporary file in the same "
+                   "folder and os.replace it (raysim.storage.atomic_write_text)", strict=False)
+def test_imu_csv_write_interrupted_leaves_no_partial_file(tmp_path, monkeypatch):
+    from raysim.io import imu_log
+
+    samples = _imu_samples(np.arange(200) * 1e-3)
+    calls = []
+
+    def interrupted_repr(v):
+        calls.append(1)
+        if len(calls) > 300:
+            raise KeyboardInterrupt
+        return repr(v)
+
+    monkeypatch.setattr(imu_log, "repr", interrupted_repr, raising=False)
+    with pytest.raises(KeyboardInterrupt):
+        imu_log.write_imu_csv(tmp_path / "imu.csv", samples)
+    assert not (tmp_path / "imu.csv").exists()
+
+
+@pytest.mark.xfail(reason="missing guard rail: raysim.io.ti_dca1000.write_dca1000 calls "
+                   "ndarray.tofile on the destination, so an interrupted write leaves a "
+                   "truncated capture; write aside and os.replace", strict=False)
+def test_dca1000_write_interrupted_leaves_no_partial_file(tmp_path, monkeypatch):
+    from raysim.io import ti_dca1000
+    from raysim.io.ti_dca1000 import Dca1000Format
+
+    class HalfWritten(np.ndarray):
+        def tofile(self, fid, *a, **k):
+            np.asarray(self).ravel()[: self.size // 2].tofile(fid)
+            raise KeyboardInterrupt
+
+    real = np.ascontiguousarray
+
+    class NumpyProxy:
+        def __getattr__(self, name):
+            return getattr(np, name)
+
+        @staticmethod
+        def ascontiguousarray(a, dtype=None):
+            return real(a, dtype=dtype).view(HalfWritten)
+
+    monkeypatch.setattr(ti_dca1000, "np", NumpyProxy())
+    fmt = Dca1000Format(num_samples=16, slot_interval=60e-6, num_rx=4, num_tx=1, num_loops=4)
+    with pytest.raises(KeyboardInterrupt):
+        ti_dca1000.write_dca1000(tmp_path / "adc.bin", np.ones((2, 4, 4, 16), np.complex64), fmt)
+    assert not (tmp_path / "adc.bin").exists()
