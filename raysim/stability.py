@@ -193,6 +193,12 @@ class Scenario:
                 raise ValueError(f"{name} must be finite, got {getattr(self, name)!r}")
         if self.init not in _INITS:
             raise ValueError(f"init must be one of {_INITS}, got {self.init!r}")
+        if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        if isinstance(self.imu_spec, str):
+            from .imu import get_preset
+
+            get_preset(self.imu_spec)            # raises naming the unknown preset
 
     @property
     def target(self) -> PointTarget:
