@@ -13,14 +13,14 @@ Three ways to evaluate the same stop-and-hop tone sum
     ``2e-7 + 2e-8 sqrt(paths)`` (:func:`tones_error`; 6e-6 at 1e5 paths).
 ``"nufft"``
     :func:`raysim.nufft_synthesis.synthesize_nufft`, one FINUFFT type-1
-    transform per (chirp, channel), ~50 ns per (path, chirp, channel) plus
-    ~40 us per (chirp, channel); error set by ``eps``.
+    transform per (chirp, channel), ~80 ns per (path, chirp, channel) plus
+    ~40 us per (chirp, channel) on one thread; error set by ``eps``.
 
 ``method="auto"`` picks ``"direct"`` when ``eps < 1e-6`` (below what complex64
 output carries) and otherwise the cheaper of ``"tones"`` (only where
 :func:`tones_error` is below ``eps``) and ``"nufft"`` by the cost model
 :func:`estimate_seconds`; the tone sum wins for a handful of paths, the NUFFT
-from about 20-40 paths per frame on the paper radar.
+from about 20 paths per frame on the paper radar.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ METHODS = ("auto", "nufft", "tones", "direct")
 #: Cost-model constants [s], measured on 2 cores (see docs/speed.md).
 COST_DIRECT_PER_TERM = 22e-9
 COST_TONES_PER_TERM = 3.8e-9
-COST_NUFFT_PER_PAIR = 45e-9
+COST_NUFFT_PER_PAIR = 80e-9
 COST_NUFFT_PER_ROW = 40e-6
 #: Tolerance below which only the complex128 direct sum qualifies.
 DIRECT_BELOW_EPS = 1e-6
