@@ -33,10 +33,8 @@ SETTINGS = ReproductionSettings.quick()
                                   "stationary"])
 def test_exact_chain_restores_stationary_metrics(name):
     case = PAPER_CASES[name]
-    # the yaw case (20 frames) skips the paper chain to keep the suite fast
-    chains = ("uncompensated", "exact") if name == "yaw" else ("uncompensated", "paper", "exact")
     rows = {r["chain"]: r for r in run_case(case, imu="ideal", settings=SETTINGS,
-                                            chains=chains)}
+                                            chains=("uncompensated", "paper", "exact"))}
     ex = rows["exact"]
     assert abs(ex["pseudo_velocity_bins"]) <= PV_TOL_BINS
     assert ex["doppler_width_hz"] == pytest.approx(ex["stationary_width_hz"], rel=WIDTH_RTOL)
