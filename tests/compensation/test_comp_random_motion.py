@@ -75,3 +75,30 @@ def test_random_hover_motion_restored(seed):
     assert abs(got[0]) <= PV_TOL_BINS
     assert abs(got[1] - ref[1]) <= WIDTH_RTOL * ref[1]
     assert got[2] <= ANGLE_TOL_DEG
+
+
+def test_constant_velocity_doppler_closed_form_and_removal():
+    """Platform at constant velocity: f_D = 2 v_r / lambda_c before, 0 after compensation."""
+    from raysim.motion import constant_velocity
+
+    vel = np.array([0.4, -0.3, 0.5])
+    traj = constant_velocity(vel)
+    az0, el0 = np.deg2rad(20.0), np.deg2rad(-10.0)
+    tgt = PointTarget.at(12.0, az0, el0, radar_origin=LEVER)
+    rc = range_compress(simulate_point_targets(CFG, ARR, [tgt], traj, lever_arm=LEVER).data)
+    gate = int(np.argmin(np.abs(CFG.range_axis() - 12.0)))
+    kw = dict(wavelength=CFG.center_wavelength, range_axis=CFG.range_axis(),
+              range_gates=[gate], grid_shape=ARR.grid_shape, azimuth=[az0], elevation=[el0])
+    p = ARR.virtual_positions
+    u = np.array([np.cos(el0) * np.sin(az0), np.sin(el0), np.cos(el0) * np.cos(az0)])
+    v_r = -vel @ u                                   # range rate of the static target
+    plain = beam_projection(rc, p, **kw).data[:, 0, 0, 0]
+    f_d = metrics.doppler_peak_frequency(plain, CFG.chirp_interval)
+    assert abs(f_d - 2 * v_r / CFG.center_wavelength) <= 0.02 * CFG.doppler_resolution
+    tc = CFG.chirp_times()
+    s = simulate_imu(traj, "ideal", rate=1000.0, start=-0.01, end=tc[-1] + 0.01)
+    motion = integrate_imu(s.time, s.gyro, s.accel, tc, lever_arm=LEVER, velocity="given",
+                           initial_velocity=vel)
+    comp = rigid_body_projection(rc, p, motion, **kw).data[:, 0, 0, 0]
+    assert abs(metrics.doppler_peak_frequency(comp, CFG.chirp_interval)) <= (
+        PV_TOL_BINS * CFG.doppler_resolution)
