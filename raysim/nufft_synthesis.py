@@ -326,17 +326,23 @@ class PathDelays:
         channels : slice
             Channels to compute.
         """
+        return self._delays(chirp, channels, _fresh)
+
+    def _delays(self, chirp: int, channels: slice, alloc) -> np.ndarray:
+        """:meth:`delays` with its arrays from ``alloc(key, shape)`` (reusable scratch)."""
         centre = self.tx_positions[chirp].mean(axis=0)       # array centroid at this chirp
         x_tx = self.tx_positions[chirp, channels] - centre           # [channel, 3]
         x_rx = x_tx if self.rx_positions is None else self.rx_positions[chirp, channels] - centre
+        shape = (x_tx.shape[0], self.num_paths)
         if self.velocity is None:
-            tau = self._two_way(x_tx, x_rx, chirp, None, centre)
+            tau = self._two_way(x_tx, x_rx, chirp, None, centre, alloc("tau", shape))
         else:
             times = self.element_times[chirp, channels]
-            tau = np.empty((x_tx.shape[0], self.num_paths))
+            tau = alloc("tau", shape)
             for t in np.unique(times):                               # one group per TDM slot
                 idx = np.flatnonzero(times == t)
-                tau[idx] = self._two_way(x_tx[idx], x_rx[idx], chirp, float(t), centre)
+                tau[idx] = self._two_way(x_tx[idx], x_rx[idx], chirp, float(t), centre,
+                                         alloc("group", (idx.size, self.num_paths)))
         length = self.interior_length if self.interior_length.ndim == 1 \
             else self.interior_length[:, chirp]
         tau += length
@@ -374,7 +380,7 @@ class PathDelays:
         cache[key] = hit
         return hit
 
-    def _two_way(self, x_tx, x_rx, chirp, t, centre) -> np.ndarray:
+    def _two_way(self, x_tx, x_rx, chirp, t, centre, out) -> np.ndarray:
         """``|x_tx - v_first| + |v_last - x_rx|`` [m], shape ``[channel, path]``.
 
         Element positions are relative to ``centre``. With a monostatic-
@@ -382,19 +388,20 @@ class PathDelays:
         vertex is its first (single-bounce paths).
         """
         first, last, twin, back = self._prepared(chirp, t, centre)
-        d = _distances(x_tx, *first)
+        d = _distances(x_tx, *first, out=out)
         if self.rx_positions is None:
-            if back.size == 0:
+            if back.size:
+                d_back = d[:, back]
+                d_back += _distances(x_rx, *last)
                 d *= 2.0
-                return d
-            out = d + d
-            out[:, back] = d[:, back] + _distances(x_rx, *last)
-            return out
+                d[:, back] = d_back
+            else:
+                d *= 2.0
+            return d
         if back.size == self.num_paths:
             d += _distances(x_rx, *last)
             return d
-        full = _distances(x_rx, *self._prepared_all_last(chirp, t, centre))
-        d += full
+        d += _distances(x_rx, *self._prepared_all_last(chirp, t, centre))
         return d
 
     def _prepared_all_last(self, chirp, t, centre):
@@ -428,7 +435,13 @@ class PathDelays:
         return tau.transpose(2, 0, 1).copy(), amp.transpose(2, 0, 1).copy()
 
 
-def _distances(elements: np.ndarray, minus_2vt: np.ndarray, v2: np.ndarray) -> np.ndarray:
+def _fresh(key: str, shape: tuple, dtype=np.float64) -> np.ndarray:
+    """Allocator that always returns a new array (public results)."""
+    return np.empty(shape, dtype)
+
+
+def _distances(elements: np.ndarray, minus_2vt: np.ndarray, v2: np.ndarray,
+               out: np.ndarray | None = None) -> np.ndarray:
     """``|vertex - element|`` for every pair, shape ``[element, vertex]`` [m].
 
     ``minus_2vt`` is ``-2 v^T`` (shape ``[3, vertex]``, contiguous) and ``v2`` is
@@ -436,10 +449,14 @@ def _distances(elements: np.ndarray, minus_2vt: np.ndarray, v2: np.ndarray) -> n
     array centroid (``|e|`` a few cm), so the cancellation error is ~1e-16 of
     the range.
     """
-    d2 = elements @ minus_2vt                                         # [element, vertex]
+    # three broadcast multiply-adds instead of a K=3 matrix product: BLAS would wake
+    # its thread pool for every block, and the spinning threads steal the cores
+    d2 = np.multiply(elements[:, 0:1], minus_2vt[0], out=out)         # [element, vertex]
     d2 += v2[None, :]
+    for i in (1, 2):
+        d2 += elements[:, i:i + 1] * minus_2vt[i]
     d2 += np.einsum("ij,ij->i", elements, elements)[:, None]
-    np.maximum(d2, 0.0, out=d2)
+    np.abs(d2, out=d2)                 # rounding can leave -1e-16 |v|^2 for |v| ~ |e|
     return np.sqrt(d2, out=d2)
 
 
@@ -504,6 +521,9 @@ class _DenseSource:
     def delays(self, chirp: int, channels: slice = slice(None)) -> np.ndarray:
         return np.ascontiguousarray(self.tau[:, chirp, channels].T)
 
+    def _delays(self, chirp: int, channels: slice, alloc) -> np.ndarray:
+        return self.delays(chirp, channels)
+
     def channel_amplitudes(self, chirp: int, channels: slice = slice(None)) -> np.ndarray:
         return self.amp[:, chirp, channels].T
 
@@ -555,10 +575,20 @@ class _Worker:
         self.plan = finufft.Plan(1, (num_samples,), n_trans=1, eps=eps, isign=1,
                                  dtype="complex128", nthreads=1, spread_sort=0, modeord=0)
         self.buf = np.empty(num_samples, dtype=np.complex128)
+        self._scratch: dict[str, np.ndarray] = {}
+
+    def scratch(self, key: str, shape: tuple, dtype=np.float64) -> np.ndarray:
+        """A reusable array of ``shape`` for ``key`` (no fresh pages per block)."""
+        n = int(np.prod(shape))
+        a = self._scratch.get(key)
+        if a is None or a.size < n or a.dtype != np.dtype(dtype):
+            a = np.empty(n, dtype)
+            self._scratch[key] = a
+        return a[:n].reshape(shape)
 
 
-def _strengths(tau: np.ndarray, amp: np.ndarray, config: RadarConfig, exact_trig: bool
-               ) -> tuple[np.ndarray, np.ndarray]:
+def _strengths(tau: np.ndarray, amp: np.ndarray, config: RadarConfig, exact_trig: bool,
+               alloc=_fresh) -> tuple[np.ndarray, np.ndarray]:
     """NUFFT points ``x [channel, path]`` [rad/sample] and strengths ``c [channel, path]``.
 
     ``x = 2 pi (nu - round(nu))`` with ``nu = mu tau / f_s``, and
@@ -568,23 +598,25 @@ def _strengths(tau: np.ndarray, amp: np.ndarray, config: RadarConfig, exact_trig
     """
     fc, mu, fs = config.carrier_frequency, config.chirp_rate, config.sample_rate
     h = config.num_samples // 2
-    tmp = np.empty_like(tau)
+    shape = tau.shape
+    tmp = alloc("tmp", shape)
     # f_c tau - mu tau^2 / 2 + h nu = tau (f_c + h mu / f_s - mu tau / 2)  (mod 1: h is integer)
-    cyc = tau * (-0.5 * mu)
+    cyc = np.multiply(tau, -0.5 * mu, out=alloc("cyc", shape))
     cyc += fc + h * mu / fs
     cyc *= tau
     cyc -= np.rint(cyc, out=tmp)                         # [-0.5, 0.5] cycles
-    nu = np.multiply(tau, mu / fs, out=tmp)
-    nu -= np.rint(nu)                                    # wrapped beat [cycles/sample]
+    nu = np.multiply(tau, mu / fs, out=alloc("nu", shape))
+    nu -= np.rint(nu, out=tmp)                           # wrapped beat [cycles/sample]
     nu *= 2.0 * np.pi
+    c = alloc("c", shape, np.complex128)
     if exact_trig:
-        c = np.exp((2j * np.pi) * cyc)
+        np.exp(np.multiply(cyc, 2j * np.pi, out=c), out=c)
     else:
-        ph = np.multiply(cyc, 2.0 * np.pi, out=np.empty(tau.shape, np.float32),
+        ph = np.multiply(cyc, 2.0 * np.pi, out=alloc("ph", shape, np.float32),
                          casting="same_kind")
-        c = np.empty(tau.shape, dtype=np.complex128)
-        c.real = np.cos(ph)
-        c.imag = np.sin(ph)
+        cs = alloc("cs", shape, np.float32)
+        c.real = np.cos(ph, out=cs)
+        c.imag = np.sin(ph, out=cs)
     c *= amp
     return nu, c
 
@@ -595,9 +627,9 @@ def _render_group(src, config: RadarConfig, worker: _Worker, chirp: int, channel
     first = channels.start
     for m0 in range(channels.start, channels.stop, block):
         ch = slice(m0, min(m0 + block, channels.stop))
-        tau = src.delays(chirp, ch)                      # [channel, path]
+        tau = src._delays(chirp, ch, worker.scratch)     # [channel, path]
         amp = _block_amplitudes(src, chirp, ch)          # [channel or 1, path]
-        x, c = _strengths(tau, amp, config, exact_trig)
+        x, c = _strengths(tau, amp, config, exact_trig, worker.scratch)
         for i in range(x.shape[0]):
             worker.plan.setpts(x[i])
             worker.plan.execute(c[i], out=worker.buf)
