@@ -1153,13 +1153,15 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path
 
 
 def _netcdf_engine() -> str:
-    """``netcdf4`` or ``h5netcdf`` (NetCDF-4) when installed, else ``scipy`` (NetCDF-3)."""
-    import importlib.util
+    """``netcdf4`` (NetCDF-4) when netCDF4 imports, as :func:`raysim.storage.netcdf_engine`.
 
-    for module, engine in (("netCDF4", "netcdf4"), ("h5py", "h5netcdf")):
-        if importlib.util.find_spec(module) is not None:
-            return engine
-    return "scipy"
+    Falls back to ``h5netcdf``, then to ``scipy`` (NetCDF-3) only in an
+    installation without netCDF4 (a raysim dependency). Files of any of them
+    are read by the netcdf4 engine.
+    """
+    from .storage import netcdf_engine
+
+    return netcdf_engine() or "scipy"
 
 
 def write_netcdf(ds, path: str | os.PathLike) -> Path:

@@ -29,6 +29,12 @@ spanning two frames) and grow along ``frame``. The attribute
 ``frames_complete`` is updated only after a frame's arrays are fully written;
 :func:`open_store` and :func:`repair_store` ignore / cut anything beyond it,
 so an interrupted render keeps its finished frames and resumes at the next.
+Every chunk is written, even one equal to the fill value, so a chunk file
+that is missing from a store means damage: :func:`open_store` checks that the
+chunks of the floating-point variables (``if_data``, the pose, the axes) are
+all present for the complete frames and raises :class:`ValueError` naming the
+store, the variable and the frame otherwise; a chunk that cannot be decoded
+(truncated or corrupted file) is reported the same way.
 Files written whole (NetCDF exports) are written to a temporary name and
 moved into place with :func:`os.replace`.
 
@@ -39,12 +45,14 @@ which gives back exactly (bit for bit) the Dataset that was exported.
 
 from __future__ import annotations
 
+import functools
+import itertools
 import json
 import os
 import shutil
 import tempfile
 import uuid
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -58,8 +66,8 @@ __all__ = [
     "IF_DIMS", "FORMAT_VERSION", "radar_attrs", "config_from_attrs", "array_from_dataset",
     "frames_to_dataset", "dataset_to_frames", "frame_from_dataset", "imu_dataset",
     "write_store", "append_frames", "frames_complete", "repair_store", "open_store",
-    "store_exists", "scenario_of", "export_netcdf", "read_netcdf", "atomic_write_bytes",
-    "atomic_write_text",
+    "store_exists", "scenario_of", "export_netcdf", "read_netcdf", "netcdf_engine", "atomic_write",
+    "atomic_write_bytes", "atomic_write_text",
 ]
 
 #: Dimensions of the IF cube, in order.
@@ -87,21 +95,47 @@ def _default_mode(path: str) -> None:
     os.chmod(path, 0o666 & ~umask)
 
 
-def atomic_write_bytes(path: str | Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
+def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
+    """Create a file atomically: ``write(tmp)`` fills a temporary file, then rename.
+
+    The temporary file (``.<name>.<random>.tmp``) lives in the destination
+    folder, so :func:`os.replace` is atomic. If ``write`` raises, or the
+    process is interrupted (``KeyboardInterrupt``), the temporary file is
+    removed and an existing ``path`` is left untouched; a reader never sees a
+    half-written file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Final file; its folder is created if needed.
+    write : callable
+        ``write(tmp_path)`` writes the whole content to ``tmp_path`` (an
+        empty file that already exists).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
+        write(Path(tmp))
+        with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         _default_mode(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    return path
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
+    atomic_write(path, lambda tmp: tmp.write_bytes(data))
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:
@@ -339,7 +373,8 @@ def write_store(path: str | Path, ds: xr.Dataset, *, overwrite: bool = False) ->
     ds = ds.copy()
     ds.attrs["frames_complete"] = int(ds.sizes.get("frame", 0))
     try:
-        ds.to_zarr(tmp, mode="w", consolidated=False, encoding=_zarr_encoding(ds))
+        ds.to_zarr(tmp, mode="w", consolidated=False, encoding=_zarr_encoding(ds),
+                   write_empty_chunks=True)
         if path.exists():
             shutil.rmtree(path) if path.is_dir() else path.unlink()
         os.replace(tmp, path)
@@ -406,7 +441,7 @@ def append_frames(path: str | Path, ds: xr.Dataset) -> int:
     part = ds[[v for v in keep if v in ds.data_vars]]
     part = part.drop_vars([c for c in part.coords if "frame" not in part[c].dims])
     part.attrs = attrs  # xarray rewrites the group attributes: keep them (frames_complete = n)
-    part.to_zarr(str(path), append_dim="frame", consolidated=False)
+    part.to_zarr(str(path), append_dim="frame", consolidated=False, write_empty_chunks=True)
     n += int(ds.sizes["frame"])
     g = zarr.open_group(str(path), mode="r+")
     attrs["frames_complete"] = n
@@ -414,46 +449,146 @@ def append_frames(path: str | Path, ds: xr.Dataset) -> int:
     return n
 
 
+def _frame_span(arr, chunk: int, n: int) -> str:
+    """Frames covered by chunk number ``chunk`` along axis 0 of ``arr`` (``n`` frames)."""
+    lo = chunk * arr.chunks[0]
+    hi = min(lo + arr.chunks[0], n) - 1
+    return f"frame {lo}" if hi <= lo else f"frames {lo}-{hi}"
+
+
+def _check_chunks_present(path: Path, group, n_done: int) -> None:
+    """Raise ValueError for a missing chunk file of a floating-point variable.
+
+    The writers here keep every chunk (``write_empty_chunks=True``) and the
+    real-valued variables have the fill value NaN, so a missing float or
+    complex chunk is damage. Integer variables are not checked: Zarr's
+    default leaves out chunks equal to their fill value 0 (frame index 0).
+    """
+    for name, arr in group.arrays():
+        if arr.dtype.kind not in "fc" or arr.size == 0:
+            continue
+        dims = tuple(getattr(arr.metadata, "dimension_names", None)
+                     or arr.attrs.get("_ARRAY_DIMENSIONS", ()))
+        grid = list(arr.cdata_shape)
+        per_frame = bool(dims) and dims[0] == "frame" and n_done >= 0
+        if per_frame:
+            grid[0] = min(grid[0], -(-n_done // arr.chunks[0]))
+        folder = path / arr.path
+        for coords in itertools.product(*(range(g) for g in grid)):
+            key = arr.metadata.encode_chunk_key(coords)
+            if not (folder / key).is_file():
+                where, expected = (
+                    (f"{_frame_span(arr, coords[0], n_done)}, ",
+                     f"all chunk files of the {n_done} complete frames")
+                    if per_frame else ("", "all chunk files of the variable"))
+                raise ValueError(
+                    f"Zarr store {str(path)!r} is damaged: variable {name!r} has no chunk file "
+                    f"{key!r} ({where}chunk {coords}); expected {expected} (a missing one "
+                    f"would read as the fill value {np.asarray(arr.fill_value).item()!r})")
+
+
+def _load_checked(path: Path, ds: xr.Dataset, group) -> xr.Dataset:
+    """Read every variable into memory; an undecodable chunk becomes a ValueError."""
+    for name, var in ds.variables.items():
+        try:
+            var.load()
+        except MemoryError:
+            raise
+        except Exception as exc:
+            raise ValueError(
+                f"Zarr store {str(path)!r} is damaged: variable {name!r} cannot be read "
+                f"({_bad_chunks(group, str(name), ds.sizes.get('frame', 0))}): "
+                f"{type(exc).__name__}: {exc}; expected complete, decodable chunk files "
+                f"(a truncated or corrupted file?)") from exc
+    return ds
+
+
+def _bad_chunks(group, name: str, n: int) -> str:
+    """Which frames of variable ``name`` fail to decode (error path only)."""
+    try:
+        arr = group[name]
+        dims = tuple(getattr(arr.metadata, "dimension_names", None)
+                     or arr.attrs.get("_ARRAY_DIMENSIONS", ()))
+        if not dims or dims[0] != "frame":
+            return "not a per-frame variable"
+        bad = []
+        for c in range(-(-n // arr.chunks[0])):
+            try:
+                arr[c * arr.chunks[0]:min((c + 1) * arr.chunks[0], n)]
+            except Exception:
+                bad.append(_frame_span(arr, c, n))
+        return ", ".join(bad) if bad else "frame unknown"
+    except Exception:
+        return "frame unknown"
+
+
 def open_store(path: str | Path, *, load: bool = True) -> xr.Dataset:
     """Open a Zarr frame store, restricted to its complete frames.
 
     A frame left half-written by an interrupted append (arrays longer than
-    ``frames_complete``) is cut off first (see :func:`repair_store`).
+    ``frames_complete``) is cut off first (see :func:`repair_store`). The
+    chunk files of the floating-point variables (``if_data`` ...) must all be
+    present for the complete frames: a deleted chunk would otherwise read
+    back silently as the fill value.
 
     Parameters
     ----------
     load : bool
-        Read everything into memory (else variables stay lazy, dask-backed).
+        Read everything into memory (else variables stay lazy, dask-backed,
+        and a chunk that cannot be decoded fails only when it is computed).
 
     Raises
     ------
     ValueError
-        If ``path`` is not a raysim Zarr store.
+        If ``path`` is not a raysim Zarr store, or a chunk file is missing
+        or cannot be decoded (truncated, corrupted); the message names the
+        store, the variable and the frame.
     """
     import zarr
 
     if not store_exists(path):
         raise ValueError(f"{str(path)!r} is not a Zarr store (no zarr.json / .zgroup found)")
+    path = Path(path)
     g = zarr.open_group(str(path), mode="r")
     n_done = int(g.attrs.get("frames_complete", -1))
     if n_done >= 0 and any(a.shape[0] != n_done for _, a in _frame_arrays(g)):
         repair_store(path)  # half-appended frame of an interrupted render: drop it
-    ds = xr.open_zarr(str(path), consolidated=False)
+        g = zarr.open_group(str(path), mode="r")
+    _check_chunks_present(path, g, n_done)
+    # load: read through zarr directly (no dask graph); else lazy, dask-backed
+    ds = xr.open_zarr(str(path), consolidated=False, **({"chunks": None} if load else {}))
     n = int(ds.attrs.get("frames_complete", ds.sizes.get("frame", 0)))
     if ds.sizes.get("frame", 0) != n:
         ds = ds.isel(frame=slice(0, n))
-    return ds.load() if load else ds
+    return _load_checked(path, ds, g) if load else ds
 
 
 # ---------------------------------------------------------------------- netcdf
-def _netcdf_engine() -> str:
-    """``netcdf4`` when the netCDF4 library is installed, else ``h5netcdf`` (needs h5py)."""
-    import importlib.util
+@functools.cache
+def netcdf_engine() -> str | None:
+    """xarray engine for NetCDF-4 files: ``"netcdf4"`` when the netCDF4 library imports.
 
-    for module, engine in (("netCDF4", "netcdf4"), ("h5py", "h5netcdf")):
-        if importlib.util.find_spec(module) is not None:
-            return engine
-    raise FeatureUnavailableError("NetCDF export needs netCDF4 or h5netcdf with h5py installed")
+    ``"h5netcdf"`` (with h5py) is the fallback; None when neither imports.
+    netCDF4 is a dependency of raysim, so the fallback only serves stripped
+    installations.
+    """
+    import importlib
+
+    for module, engine in (("netCDF4", "netcdf4"), ("h5netcdf", "h5netcdf")):
+        try:
+            importlib.import_module(module)
+        except Exception:  # ImportError, or a broken shared library (OSError)
+            continue
+        return engine
+    return None
+
+
+def _netcdf_engine() -> str:
+    engine = netcdf_engine()
+    if engine is None:
+        raise FeatureUnavailableError("NetCDF export needs the netCDF4 package (a raysim "
+                                      "dependency) or h5netcdf with h5py; neither imports")
+    return engine
 
 
 class FeatureUnavailableError(RuntimeError):

@@ -178,7 +178,9 @@ def write_imu_csv(path: str | os.PathLike, samples: ImuSamples, *, time_unit: st
     Parameters
     ----------
     path : str or path-like
-        Output file (overwritten).
+        Output file (replaced atomically: written to a temporary file in the
+        same folder, then renamed, so an interrupted write leaves any previous
+        file untouched and no partial file).
     samples : ImuSamples
         ``time [sample]`` [s], ``gyro [sample, 3]`` [rad/s], ``accel [sample, 3]`` [m/s^2].
     time_unit : {"s", "ms", "us", "ns"}
@@ -209,11 +211,14 @@ def write_imu_csv(path: str | os.PathLike, samples: ImuSamples, *, time_unit: st
     if comment is None:
         comment = (f"raysim IMU log; source: {samples.source or 'unknown'}; body frame FRD; "
                    f"accel is specific force")
-    path = Path(path)
-    with path.open("w", newline="") as fh:
-        for line in comment.splitlines():
-            fh.write(f"# {line}\n")
-        fh.write(",".join(header) + "\n")
-        for row in data:
-            fh.write(",".join(repr(float(v)) for v in row) + "\n")
-    return path
+    from raysim.storage import atomic_write
+
+    def write(tmp: Path) -> None:
+        with tmp.open("w", newline="") as fh:
+            for line in comment.splitlines():
+                fh.write(f"# {line}\n")
+            fh.write(",".join(header) + "\n")
+            for row in data:
+                fh.write(",".join(repr(float(v)) for v in row) + "\n")
+
+    return atomic_write(path, write)

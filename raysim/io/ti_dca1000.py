@@ -413,7 +413,9 @@ def write_dca1000(path: str | os.PathLike, cube, fmt: Dca1000Format) -> Path:
     Parameters
     ----------
     path : str or path-like
-        Output file (overwritten).
+        Output file (replaced atomically: written to a temporary file in the
+        same folder, then renamed, so an interrupted write leaves any previous
+        file untouched and no partial file).
     cube : array_like, shape ``[frame, chirp, channel, sample]``
         Samples in ADC counts, channel order tx major, rx minor. Values are
         rounded to the nearest integer; a round trip is exact for integer-valued
@@ -470,6 +472,7 @@ def write_dca1000(path: str | os.PathLike, cube, fmt: Dca1000Format) -> Path:
         if fmt.complex:
             lanes[..., 1, :r] = np.moveaxis(im, -2, -1)
         out = lanes
-    path = Path(path)
-    np.ascontiguousarray(out, dtype=np.int32).astype(_INT16).tofile(path)
-    return path
+    from raysim.storage import atomic_write
+
+    words = np.ascontiguousarray(out, dtype=np.int32).astype(_INT16)
+    return atomic_write(path, lambda tmp: words.tofile(tmp))

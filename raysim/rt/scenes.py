@@ -28,6 +28,16 @@ above 10-40 GHz, so the ground gets custom materials, :data:`DRY_SOIL` and
 Sionna models every surface as a slab of the given thickness; the ground slabs
 are thick and lossy enough (attenuation > 40 Np/m) that their reflection
 equals the half-space Fresnel coefficient.
+
+Checks before loading
+---------------------
+:func:`load_scene` runs :func:`check_scene_file` before Mitsuba parses a file,
+so a bad scene fails with a :class:`ValueError` naming the file instead of a
+Mitsuba error: every ``ply``/``obj`` mesh must exist, be readable, have faces,
+finite vertices, face indices inside the vertex list and no edge shared by
+more than two faces (non-manifold). Open surfaces (a ground sheet, a facade)
+are accepted: Sionna models each surface as a slab, so meshes need not be
+watertight. Every ITU material must be defined at the carrier frequency.
 """
 
 from __future__ import annotations
@@ -335,6 +345,172 @@ class RadarScene:
         return np.asarray(v_world, dtype=float) @ ENU_FROM_NED.T
 
 
+# ---------------------------------------------------------------------- scene checks
+#: Mitsuba shape plugins whose ``filename`` is a mesh that :func:`check_scene_file` reads.
+MESH_SHAPE_TYPES = ("ply", "obj")
+
+
+def _scene_xml(path: Path):
+    """Parsed XML root of a scene file, with its ``<default>`` parameters."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError) as exc:
+        raise ValueError(f"scene file {str(path)!r} is not readable Mitsuba XML: {exc}") from None
+    defaults = {d.get("name"): d.get("value", "") for d in root.iter("default")}
+    return root, defaults
+
+
+def _substitute(value: str, defaults: dict) -> str:
+    for name, v in defaults.items():
+        value = value.replace(f"${name}", v)
+    return value
+
+
+def check_mesh(path: str | os.PathLike, *, scene_file: str | os.PathLike | None = None) -> int:
+    """Check one mesh file before Mitsuba loads it.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.ply`` or ``.obj`` mesh.
+    scene_file : path-like, optional
+        XML file that references the mesh (named in the error messages).
+
+    Returns
+    -------
+    int
+        Number of triangles.
+
+    Raises
+    ------
+    ValueError
+        If the file is missing or unreadable, has no faces, has non-finite
+        vertices, face indices beyond its vertex list, or edges shared by more
+        than two faces (non-manifold). The message names the mesh file.
+    """
+    import trimesh
+
+    path = Path(path)
+    where = f" (referenced by {str(scene_file)!r})" if scene_file is not None else ""
+    if not path.is_file():
+        raise ValueError(f"mesh file {str(path)!r}{where} does not exist")
+    try:
+        mesh = trimesh.load(path, force="mesh", process=False)
+    except Exception as exc:  # trimesh raises many types for a bad file
+        raise ValueError(f"mesh file {str(path)!r}{where} is not a readable mesh: "
+                         f"{type(exc).__name__}: {exc}") from None
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    faces = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
+    if faces.shape[0] == 0:
+        raise ValueError(f"{path.name}: no faces; mesh file {str(path)!r}{where} has "
+                         f"{vertices.shape[0]} vertices and 0 faces, expected at least one "
+                         f"triangle (remove the shape or fix the export)")
+    bad = ~np.all(np.isfinite(vertices), axis=1)
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"{path.name}: {int(bad.sum())} of {vertices.shape[0]} vertices are not "
+                         f"finite (first: vertex {first} = {vertices[first].tolist()}) in mesh "
+                         f"file {str(path)!r}{where}; expected finite coordinates in metres")
+    if faces.min() < 0 or faces.max() >= vertices.shape[0]:
+        raise ValueError(f"{path.name}: face indices span [{int(faces.min())}, "
+                         f"{int(faces.max())}] in mesh file {str(path)!r}{where}, expected "
+                         f"[0, {vertices.shape[0] - 1}] ({vertices.shape[0]} vertices)")
+    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    keys, counts = np.unique(edges[:, 0] * vertices.shape[0] + edges[:, 1], return_counts=True)
+    over = counts > 2
+    if over.any():
+        k = int(keys[np.argmax(over)])
+        edge = (k // vertices.shape[0], k % vertices.shape[0])
+        raise ValueError(f"{path.name}: non-manifold mesh, {int(over.sum())} edge(s) shared by "
+                         f"more than two faces (first: vertices {edge}, {int(counts.max())} "
+                         f"faces) in mesh file {str(path)!r}{where}; expected each edge in at "
+                         f"most two faces (split the mesh into separate shapes)")
+    return int(faces.shape[0])
+
+
+def _itu_types(root, defaults: dict) -> list[tuple[str, str]]:
+    """``(bsdf id, ITU type)`` of every ``itu-radio-material`` in the scene XML."""
+    out = []
+    for bsdf in root.iter("bsdf"):
+        if bsdf.get("type") != "itu-radio-material":
+            continue
+        for child in bsdf.findall("string"):
+            if child.get("name") == "type":
+                out.append((bsdf.get("id", "?"), _substitute(child.get("value", ""), defaults)))
+    return out
+
+
+def itu_materials_at(frequency: float) -> list[str]:
+    """Sionna's ITU-R P.2040 material types defined at ``frequency`` [Hz]."""
+    from sionna.rt.radio_materials.itu import ITU_MATERIALS_PROPERTIES
+
+    f_ghz = float(frequency) / 1e9
+    return [name for name, ranges in ITU_MATERIALS_PROPERTIES.items()
+            if any(lo <= f_ghz <= hi for lo, hi in ranges)]
+
+
+def _check_itu_materials(path: Path, root, defaults: dict, frequency: float) -> None:
+    from sionna.rt.radio_materials.itu import ITU_MATERIALS_PROPERTIES
+
+    defined = itu_materials_at(frequency)
+    for bsdf_id, itu in _itu_types(root, defaults):
+        if "$" in itu:
+            continue  # left to Mitsuba: a parameter without a default
+        if itu not in ITU_MATERIALS_PROPERTIES:
+            raise ValueError(
+                f"scene file {str(path)!r}: material {bsdf_id!r} has unknown ITU type {itu!r}; "
+                f"expected one of {', '.join(ITU_MATERIALS_PROPERTIES)}")
+        if itu not in defined:
+            ranges = ", ".join(f"{lo:g}-{hi:g} GHz" for lo, hi in ITU_MATERIALS_PROPERTIES[itu])
+            raise ValueError(
+                f"scene file {str(path)!r}: ITU material {itu!r} (bsdf {bsdf_id!r}) is not "
+                f"defined at the carrier frequency {frequency / 1e9:g} GHz (defined at "
+                f"{ranges}); ITU materials defined at {frequency / 1e9:g} GHz: "
+                f"{', '.join(defined) or 'none'}. For ground use a custom radio-material "
+                f"(relative_permittivity, conductivity), e.g. raysim.rt.scenes.DRY_SOIL")
+
+
+def check_scene_file(path: str | os.PathLike, *, frequency: float | None = None) -> int:
+    """Check a Mitsuba XML scene and its meshes before Mitsuba loads them.
+
+    Parameters
+    ----------
+    path : path-like
+        Scene XML; mesh ``filename`` values are relative to its folder.
+    frequency : float, optional
+        Carrier frequency [Hz]; when given, every ITU material must be
+        defined at it (imports Sionna RT).
+
+    Returns
+    -------
+    int
+        Number of triangles of all checked meshes.
+
+    Raises
+    ------
+    ValueError
+        Unreadable XML, a bad mesh (see :func:`check_mesh`) or an ITU material
+        undefined at ``frequency``; the message names the file.
+    """
+    path = Path(path)
+    root, defaults = _scene_xml(path)
+    total = 0
+    for shape in root.iter("shape"):
+        if shape.get("type") not in MESH_SHAPE_TYPES:
+            continue
+        for child in shape.findall("string"):
+            if child.get("name") != "filename":
+                continue
+            name = _substitute(child.get("value", ""), defaults)
+            if "$" not in name:
+                total += check_mesh(path.parent / name, scene_file=path)
+    if frequency is not None:
+        _check_itu_materials(path, root, defaults, float(frequency))
+    return total
+
+
 def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *,
                frequency: float = 77e9, hover_altitude: float | None = None,
                targets: list[TargetSpec] | None = None, extra_targets=(),
@@ -364,22 +540,33 @@ def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *
     Raises
     ------
     ValueError
-        Unknown scene name, missing scene file (run ``python scenes/generate.py``)
-        or a non-positive hover altitude.
+        Unknown scene name, missing scene file (run ``python scenes/generate.py``),
+        a non-positive frequency or hover altitude, a bad mesh or an ITU material
+        undefined at ``frequency`` (see :func:`check_scene_file`).
     """
     from .backend import sionna_rt
 
     desc = get_scene(scene)
     if not desc.path.exists():
         raise ValueError(f"scene file {desc.path} is missing; run `python scenes/generate.py`")
+    try:
+        f_hz = float(frequency)
+    except (TypeError, ValueError):
+        f_hz = math.nan
+    if not (math.isfinite(f_hz) and f_hz > 0):
+        raise ValueError(f"frequency must be a positive carrier frequency in Hz, got "
+                         f"{frequency!r}")
+    check_scene_file(desc.path)  # meshes first: no Sionna import for a broken file
     meta = desc.metadata()
     altitude = float(meta.get("hover_altitude", 15.0) if hover_altitude is None
                      else hover_altitude)
     if not math.isfinite(altitude) or altitude <= 0:
         raise ValueError(f"hover_altitude must be a positive height in metres, got {altitude!r}")
     rt = sionna_rt()
+    root, defaults = _scene_xml(desc.path)
+    _check_itu_materials(desc.path, root, defaults, f_hz)
     sc = rt.load_scene(str(desc.path), merge_shapes=False)
-    sc.frequency = float(frequency)
+    sc.frequency = f_hz
     placed = RadarScene(desc, sc, altitude, [])
     if targets is None:
         targets = []
