@@ -18,6 +18,11 @@ Modules
     :func:`beam_projection` (the engine) and its result :class:`BeamCube`.
 ``geometry``
     Direction and angle-grid helpers.
+``guards``
+    Checks of the compensation's assumptions: IMU gaps (``ValueError``),
+    hover window, levelling, small-angle tilt, published rotation phase
+    (short strings in the ``warnings`` of :class:`PlatformMotion` and
+    :class:`BeamCube`).
 
 Axis names: ``chirp, channel, sample`` for IF data, ``range, doppler,
 azimuth, elevation`` for processed data (CONVENTIONS.md).
@@ -25,6 +30,7 @@ azimuth, elevation`` for processed data (CONVENTIONS.md).
 
 from .exact import rigid_body_projection
 from .geometry import az_el, direction, grid_directions
+from .guards import CompensationWarning, tilt_residual
 from .paper import (
     PAPER_STEPS,
     paper_chain,
@@ -39,8 +45,8 @@ from .strapdown import STANDARD_GRAVITY, PlatformMotion, integrate_imu, static_m
 __version__ = "0.1.0"
 
 __all__ = [
-    "BeamCube", "PAPER_STEPS", "PlatformMotion", "STANDARD_GRAVITY", "az_el",
-    "beam_projection", "direction", "grid_directions", "integrate_imu", "paper_chain",
+    "BeamCube", "CompensationWarning", "PAPER_STEPS", "PlatformMotion", "STANDARD_GRAVITY",
+    "az_el", "beam_projection", "direction", "grid_directions", "integrate_imu", "paper_chain",
     "range_change", "rigid_body_projection", "slow_time_correction", "static_motion",
-    "tilt_correction", "yaw_projection",
+    "tilt_correction", "tilt_residual", "yaw_projection",
 ]

@@ -63,6 +63,7 @@ def rigid_body_projection(rc, element_positions, motion: PlatformMotion, *, wave
         ``data [chirp, range, azimuth, elevation]``; a static scatterer at a
         grid direction and gate has a constant slow-time sequence, so its
         Doppler spectrum peaks at 0 with the stationary mainlobe width.
+        ``warnings`` are those of ``motion``.
 
     Examples
     --------
@@ -89,7 +90,8 @@ def rigid_body_projection(rc, element_positions, motion: PlatformMotion, *, wave
         return beam_projection(rc, element_positions, chirp_time=motion.time,
                                attitude=motion.attitude,
                                displacement=motion.radar_displacement, grid_shape=grid_shape,
-                               method=method, weights=weights, **common)
+                               method=method, weights=weights,
+                               **common).with_warnings(motion.warnings)
     x = np.asarray(rc)
     p = np.asarray(element_positions, dtype=float)
     slot = np.asarray(channel_slot)
@@ -121,4 +123,4 @@ def rigid_body_projection(rc, element_positions, motion: PlatformMotion, *, wave
             share)
     chirp_time = motion.time[::n_slot]
     return BeamCube(out.astype(np.complex64, copy=False), chirp_time, part.range, part.azimuth,
-                    part.elevation, part.wavelength)
+                    part.elevation, part.wavelength, motion.warnings)

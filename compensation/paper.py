@@ -25,6 +25,13 @@ Steps (each selectable in :func:`paper_chain`):
     ``W_n = exp(-j 2 pi / lambda P^T u_B)`` with ``u_B = Rz(gamma_n)^T u_G``,
     ``y = W^H X``.
 
+Assumption checks (:mod:`compensation.guards`): :func:`paper_chain` returns
+``"small-angle"`` and ``"paper rotation phase"`` entries in
+``BeamCube.warnings`` when the tilt correction or the published rotation
+phase leaves more than half a beamwidth of angle error or a quarter
+wavelength of range error towards ``direction``; :func:`tilt_correction`
+issues them as :class:`~compensation.guards.CompensationWarning`.
+
 Sign conventions are ours (CONVENTIONS.md): the IF phase grows with range
 (``+4 pi R / lambda``), so every slow-time correction is
 ``exp(-j 4 pi dR_n / lambda)``; the paper writes the propagation phase with
@@ -33,12 +40,14 @@ the opposite sign.
 
 from __future__ import annotations
 
+import warnings as _warnings
 from typing import Literal
 
 import numpy as np
 
 from ._checks import choice, finite_array, positive
 from .geometry import euler_zyx, yaw_matrices
+from .guards import CompensationWarning, merge, rotation_phase_warnings, small_angle_warnings
 from .projection import BeamCube, beam_projection
 from .strapdown import PlatformMotion
 
@@ -157,7 +166,8 @@ def slow_time_correction(cube, motion: PlatformMotion, direction, *, wavelength:
     return x * corr.astype(ctype)[:, None, :]
 
 
-def tilt_correction(cube, element_positions, attitude, *, wavelength: float) -> np.ndarray:
+def tilt_correction(cube, element_positions, attitude, *, wavelength: float,
+                    direction=None) -> np.ndarray:
     """Element-wise spatial phase correction of roll and pitch (small angle, as published).
 
     Parameters
@@ -171,10 +181,21 @@ def tilt_correction(cube, element_positions, attitude, *, wavelength: float) -> 
         Euler angles.
     wavelength : float
         [m]; the mid-chirp wavelength for range-compressed data.
+    direction : array_like, shape ``[3]``, optional
+        Target direction in W. When given, a residual angle error above half
+        the 3 dB beamwidth towards it is reported (see below).
 
     Returns
     -------
     ndarray, same shape as ``cube``
+
+    Warns
+    -----
+    CompensationWarning
+        ``"small-angle: ..."`` when roll or pitch exceeds
+        :data:`~compensation.guards.SMALL_ANGLE_TILT_LIMIT` or the residual
+        towards ``direction`` (:func:`compensation.guards.tilt_residual`)
+        exceeds half the beamwidth.
 
     Notes
     -----
@@ -183,8 +204,18 @@ def tilt_correction(cube, element_positions, attitude, *, wavelength: float) -> 
     ``-2 pi / lambda v . p`` by ``+2 pi / lambda (p_x theta - p_y phi)``; the
     correction multiplies by the conjugate. The published form neglects the
     ``cos(az)`` factor of an off-boresight target and the small-angle error,
-    so a residual bias of order ``theta (1 - cos az)`` remains.
+    so a residual bias of order ``theta (1 - cos az)`` remains: for a pitch
+    ``theta`` and a target at azimuth ``az`` the corrected direction is
+    ``asin(sin(az - theta) + theta)``.
     """
+    x, p, lam, att = _tilt_inputs(cube, element_positions, attitude, wavelength)
+    u = None if direction is None else _unit("direction", direction)
+    for w in small_angle_warnings(att, p, u, wavelength=lam):
+        _warnings.warn(w, CompensationWarning, stacklevel=2)
+    return _apply_tilt(x, p, lam, att)
+
+
+def _tilt_inputs(cube, element_positions, attitude, wavelength):
     x = np.asarray(cube)
     if x.ndim < 2:
         raise ValueError(f"cube must have shape [chirp, channel, ...], got {x.shape}")
@@ -193,6 +224,10 @@ def tilt_correction(cube, element_positions, attitude, *, wavelength: float) -> 
     att = np.asarray(attitude, dtype=float)
     if att.shape != (x.shape[0], 3, 3):
         raise ValueError(f"attitude must have shape [{x.shape[0]}, 3, 3], got {att.shape}")
+    return x, p, lam, att
+
+
+def _apply_tilt(x: np.ndarray, p: np.ndarray, lam: float, att: np.ndarray) -> np.ndarray:
     ypr = euler_zyx(att)
     pitch, roll = ypr[:, 1], ypr[:, 2]
     phase = 2.0 * np.pi / lam * (np.outer(pitch, p[:, 0]) - np.outer(roll, p[:, 1]))
@@ -222,13 +257,15 @@ def yaw_projection(rc, element_positions, motion: PlatformMotion, *, wavelength:
     Returns
     -------
     BeamCube
+        ``warnings`` are those of ``motion``.
     """
     _check_motion(motion, np.shape(rc)[0])
     yaw = motion.euler()[:, 0]
     return beam_projection(rc, element_positions, wavelength=wavelength, range_axis=range_axis,
                            azimuth=azimuth, elevation=elevation, range_gates=range_gates,
                            chirp_time=motion.time, attitude=yaw_matrices(yaw), focus="far",
-                           grid_shape=grid_shape, method=method, weights=weights)
+                           grid_shape=grid_shape, method=method,
+                           weights=weights).with_warnings(motion.warnings)
 
 
 def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
@@ -265,23 +302,40 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
     Returns
     -------
     BeamCube
+        ``warnings``: those of ``motion``, plus ``"small-angle: ..."`` (with
+        ``"tilt"``) when roll or pitch exceeds
+        :data:`~compensation.guards.SMALL_ANGLE_TILT_LIMIT` or the tilt
+        correction leaves an angle error above half the 3 dB beamwidth towards
+        ``direction`` at some chirp, and ``"paper rotation phase: ..."`` (with
+        ``"rotation"`` and ``rotation_phase="paper"``) when the published
+        phase departs from the integrated lever-arm displacement by more than
+        :data:`~compensation.guards.ROTATION_PHASE_LIMIT`.
     """
     x = np.asarray(rc)
     _check_motion(motion, x.shape[0])
     for s in steps:
         choice("steps entry", s, PAPER_STEPS)
+    u = None if direction is None else _unit("direction", direction)
+    found: tuple[str, ...] = ()
     if "tilt" in steps:
-        x = tilt_correction(x, element_positions, motion.attitude, wavelength=wavelength)
+        x, p, lam, att = _tilt_inputs(x, element_positions, motion.attitude, wavelength)
+        found += small_angle_warnings(att, p, u, wavelength=lam)
+        x = _apply_tilt(x, p, lam, att)
     comps = tuple(c for c in ("translation", "rotation") if c in steps)
     if comps:
         x = slow_time_correction(x, motion, direction, wavelength=wavelength, components=comps,
                                  rotation_phase=rotation_phase)
+        if "rotation" in comps and rotation_phase == "paper":
+            found += rotation_phase_warnings(motion, _unit("direction", direction),
+                                             wavelength=float(wavelength))
     if "yaw" in steps:
-        return yaw_projection(x, element_positions, motion, wavelength=wavelength,
-                              range_axis=range_axis, azimuth=azimuth, elevation=elevation,
-                              range_gates=range_gates, grid_shape=grid_shape, method=method,
-                              weights=weights)
-    return beam_projection(x, element_positions, wavelength=wavelength, range_axis=range_axis,
-                           azimuth=azimuth, elevation=elevation, range_gates=range_gates,
-                           chirp_time=motion.time, focus="far", grid_shape=grid_shape,
-                           method=method, weights=weights)
+        beams = yaw_projection(x, element_positions, motion, wavelength=wavelength,
+                               range_axis=range_axis, azimuth=azimuth, elevation=elevation,
+                               range_gates=range_gates, grid_shape=grid_shape, method=method,
+                               weights=weights)
+    else:
+        beams = beam_projection(x, element_positions, wavelength=wavelength,
+                                range_axis=range_axis, azimuth=azimuth, elevation=elevation,
+                                range_gates=range_gates, chirp_time=motion.time, focus="far",
+                                grid_shape=grid_shape, method=method, weights=weights)
+    return beams.with_warnings(merge(motion.warnings, found))

@@ -27,7 +27,7 @@ phase. Only the array aperture is treated in the far field (error
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -69,6 +69,11 @@ class BeamCube:
     wavelength : float
         Wavelength used for the phases [m] (mid-chirp wavelength for
         range-compressed data).
+    warnings : tuple of str
+        Assumptions of the compensation that did not hold, from the motion
+        (``"hover window"``, ``"levelling"``) and the chain
+        (``"small-angle"``, ``"paper rotation phase"``); see
+        :mod:`compensation.guards`. Empty when none.
     """
 
     data: np.ndarray
@@ -77,6 +82,7 @@ class BeamCube:
     azimuth: np.ndarray
     elevation: np.ndarray
     wavelength: float
+    warnings: tuple[str, ...] = ()
 
     dims = ("chirp", "range", "azimuth", "elevation")
 
@@ -86,6 +92,15 @@ class BeamCube:
         if self.data.shape != expected:
             raise ValueError(f"data shape {self.data.shape} does not match the axes "
                              f"[chirp, range, azimuth, elevation] = {expected}")
+        if isinstance(self.warnings, str):
+            raise ValueError(f"warnings must be a sequence of strings, got {self.warnings!r}")
+        object.__setattr__(self, "warnings", tuple(str(w) for w in self.warnings))
+
+    def with_warnings(self, warnings) -> BeamCube:
+        """The same beams with ``warnings`` appended (repeats dropped)."""
+        from .guards import merge
+
+        return replace(self, warnings=merge(self.warnings, warnings))
 
     @property
     def chirp_interval(self) -> float:

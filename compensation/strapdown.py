@@ -10,13 +10,20 @@ specific force ``f_B = R_WB^T (a_W - g_W)``, the gyroscope the body rate
 Two quantities are not observable from an IMU alone and must be supplied:
 
 * the initial attitude (heading in particular), default identity, i.e. the
-  nominal hover attitude at the reference time;
+  nominal hover attitude at the reference time; ``initial_attitude="level"``
+  takes roll and pitch from accelerometer levelling over the hover window
+  (heading stays unobservable and is set to zero);
 * the initial velocity. Either it is ``"given"`` (from the flight controller:
   GNSS, optical flow, visual odometry), or the ``"hover"`` assumption sets it
   so that the velocity averages to zero over a window (the platform holds its
   position). Under the hover assumption a non-zero true mean velocity over the
   window leaves a constant velocity error, which shifts the Doppler of every
   static scatterer by ``2 (dv . u) / lambda`` but does not broaden it.
+
+An IMU record with a gap raises ``ValueError``; a hover window too short to
+observe the initial velocity, or a levelling window over which the platform
+was not at rest on average, is reported in :attr:`PlatformMotion.warnings`
+(:mod:`compensation.guards`).
 """
 
 from __future__ import annotations
@@ -29,6 +36,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
 from ._checks import choice, finite_array, rotation_matrices, strictly_increasing
+from .guards import check_imu_gaps, hover_window_warning, levelling_warning
 
 #: Standard gravity [m/s^2]; ``g_W = (0, 0, +STANDARD_GRAVITY)`` in NED.
 STANDARD_GRAVITY = 9.80665
@@ -54,6 +62,10 @@ class PlatformMotion:
         Body angular rate ``omega_B`` [rad/s].
     lever_arm : ndarray, shape ``[3]``
         Radar phase centre ``r_IR`` in B [m].
+    warnings : tuple of str
+        Assumptions of the integration that did not hold (keys ``"hover
+        window"``, ``"levelling"``; see :mod:`compensation.guards`); empty when
+        none. Carried on to the beams computed from this motion.
     """
 
     time: np.ndarray
@@ -62,6 +74,7 @@ class PlatformMotion:
     velocity: np.ndarray
     angular_rate: np.ndarray
     lever_arm: np.ndarray
+    warnings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         t = finite_array("time", self.time, ndim=1)
@@ -73,6 +86,9 @@ class PlatformMotion:
                                                         shape=(n, 3)))
         object.__setattr__(self, "lever_arm", finite_array("lever_arm", self.lever_arm,
                                                            shape=(3,)))
+        if isinstance(self.warnings, str):
+            raise ValueError(f"warnings must be a sequence of strings, got {self.warnings!r}")
+        object.__setattr__(self, "warnings", tuple(str(w) for w in self.warnings))
 
     dims = ("chirp",)
 
@@ -117,7 +133,8 @@ class PlatformMotion:
     def select(self, index) -> PlatformMotion:
         """Motion at a subset of chirps (any NumPy index along ``chirp``)."""
         return PlatformMotion(self.time[index], self.attitude[index], self.position[index],
-                              self.velocity[index], self.angular_rate[index], self.lever_arm)
+                              self.velocity[index], self.angular_rate[index], self.lever_arm,
+                              self.warnings)
 
 
 def static_motion(time, *, lever_arm=(0.0, 0.0, 0.0)) -> PlatformMotion:
@@ -148,13 +165,15 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
                   initial_attitude=None, initial_position=(0.0, 0.0, 0.0),
                   velocity: Literal["hover", "given"] = "hover", initial_velocity=None,
                   hover_window: tuple[float, float] | None = None,
-                  gravity: float = STANDARD_GRAVITY) -> PlatformMotion:
+                  gravity: float = STANDARD_GRAVITY,
+                  max_gap: float | None = None) -> PlatformMotion:
     """Integrate IMU samples to the body pose at the radar's chirp times.
 
     Parameters
     ----------
     imu_time : array_like, shape ``[sample]``
-        IMU time stamps on the IMU clock [s], strictly increasing, at least 4.
+        IMU time stamps on the IMU clock [s], strictly increasing, at least 4,
+        without gaps (no interval above ``max_gap``).
     gyro : array_like, shape ``[sample, 3]``
         Body angular rate ``omega_B`` [rad/s].
     accel : array_like, shape ``[sample, 3]``
@@ -170,9 +189,12 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     reference_time : float, optional
         Radar-clock time at which the initial conditions hold [s]; default
         the first chirp time.
-    initial_attitude : array_like ``[3, 3]`` or scipy Rotation, optional
+    initial_attitude : array_like ``[3, 3]``, scipy Rotation or "level", optional
         ``R_WB`` at the reference time; default identity (nominal hover
-        attitude).
+        attitude). ``"level"``: roll and pitch from accelerometer levelling
+        over ``hover_window`` (the mean specific force, rotated by the gyro to
+        one epoch, points against gravity when the platform is at rest on
+        average), heading zero (unobservable).
     initial_position : array_like, shape ``[3]``
         Body-origin position in W at the reference time [m]; default the
         hover point.
@@ -184,21 +206,29 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
         Body-origin velocity in W at the reference time [m/s]; required with
         ``velocity="given"``.
     hover_window : (float, float), optional
-        Radar-clock interval [s] of the hover assumption; default the span of
-        the IMU samples.
+        Radar-clock interval [s] of the hover assumption (zero mean velocity,
+        and for ``initial_attitude="level"`` zero mean acceleration); default
+        the span of the IMU samples. A window shorter than 0.5 s or no longer
+        than the frame leaves the initial velocity poorly observable: a
+        ``"hover window: ..."`` entry in ``warnings``.
     gravity : float
         Magnitude of ``g_W`` [m/s^2].
+    max_gap : float, optional
+        Largest tolerated IMU sample interval [s]; default 1.5 times the
+        median interval (:data:`compensation.guards.GAP_FACTOR`).
 
     Returns
     -------
     PlatformMotion
-        Pose, velocity and rates at ``chirp_times``.
+        Pose, velocity and rates at ``chirp_times``; ``warnings`` lists the
+        assumptions that did not hold (hover window, levelling).
 
     Raises
     ------
     ValueError
-        On NaN/inf samples, unsorted times, mismatched shapes, or chirp times
-        (shifted by ``time_offset``) outside the IMU record.
+        On NaN/inf samples, unsorted times, a gap in the IMU record,
+        mismatched shapes, or chirp times (shifted by ``time_offset``)
+        outside the IMU record.
 
     Notes
     -----
@@ -212,6 +242,17 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     velocity and position exactly for that spline. With a sampled rate above
     about 20 times the motion bandwidth the pose errors are well below a
     micrometre for the paper's motions.
+
+    Levelling (``initial_attitude="level"``): with ``R_rel(t)`` the
+    gyro-propagated attitude relative to the first IMU sample, the mean
+    ``f_0 = mean_k R_rel(t_k) f_k`` over the window equals
+    ``R_0^T (mean(a_W) - g_W)``; for a platform at rest on average
+    (``mean(a_W) = 0``) the body-frame down direction at the first sample is
+    ``d = -f_0 / |f_0|``, giving pitch ``asin(-d_x)`` and roll
+    ``atan2(d_y, d_z)``. A mean horizontal acceleration ``a_h`` over the
+    window tilts the result by ``a_h / g`` (an accelerometer bias ``b`` by
+    ``b / g``: 20 mg give 1.1 deg); heading is set to zero at the reference
+    time.
 
     Examples
     --------
@@ -228,6 +269,8 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     strictly_increasing("imu_time", t)
     if t.size < 4:
         raise ValueError(f"imu_time must hold at least 4 samples, got {t.size}")
+    check_imu_gaps(t, None if max_gap is None else float(
+        finite_array("max_gap", max_gap, shape=())))
     w = finite_array("gyro", gyro, shape=(t.size, 3), what="(one row per IMU sample, rad/s)")
     f = finite_array("accel", accel, shape=(t.size, 3),
                      what="(one row per IMU sample, m/s^2)")
@@ -257,8 +300,13 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
                          f"[{span[0] - offset!r}, {span[1] - offset!r}] s (radar clock)")
     t_ref = float(np.clip(t_ref, span[0], span[1]))
 
-    r0 = np.eye(3) if initial_attitude is None else rotation_matrices(
-        "initial_attitude", initial_attitude, 1)[0]
+    level = isinstance(initial_attitude, str)
+    if level:
+        choice("initial_attitude", initial_attitude, ("level",))
+        r0 = None
+    else:
+        r0 = np.eye(3) if initial_attitude is None else rotation_matrices(
+            "initial_attitude", initial_attitude, 1)[0]
     p0 = finite_array("initial_position", initial_position, shape=(3,))
     if velocity == "given":
         if initial_velocity is None:
@@ -282,7 +330,19 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
         part = Rotation.from_rotvec(_magnus_step(rate, t[k], times)).as_matrix()
         return rel[k] @ part
 
-    rebase = r0 @ attitude_at(np.array([t_ref]))[0].T     # R(t) = r0 R_rel(ref)^T R_rel(t)
+    warnings: tuple[str, ...] = ()
+    lo, hi = span if hover_window is None else (
+        float(hover_window[0]) + offset, float(hover_window[1]) + offset)
+    if velocity == "hover" or level:
+        if not (span[0] - tol <= lo < hi <= span[1] + tol):
+            raise ValueError(f"hover_window must be an increasing interval inside the IMU "
+                             f"record, got {hover_window!r}")
+        warnings += hover_window_warning((lo, hi), (tq[0], tq[-1]), float(np.median(np.diff(t))))
+    rel_ref = attitude_at(np.array([t_ref]))[0]
+    if level:
+        r0, found = _level(t, rel, f, (lo, hi), rel_ref, g)
+        warnings += found
+    rebase = r0 @ rel_ref.T                               # R(t) = r0 R_rel(ref)^T R_rel(t)
     att_nodes = rebase @ rel
     att_q = rebase @ attitude_at(tq)
 
@@ -294,13 +354,35 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     pos_int = a_spl.antiderivative(2)          # P(t) = int_{t0}^t V
     v_ref_int = vel_int(t_ref)
     if velocity == "hover":
-        lo, hi = span if hover_window is None else (
-            float(hover_window[0]) + offset, float(hover_window[1]) + offset)
-        if not (span[0] - tol <= lo < hi <= span[1] + tol):
-            raise ValueError(f"hover_window must be an increasing interval inside the IMU "
-                             f"record, got {hover_window!r}")
         v0 = -((pos_int(hi) - pos_int(lo)) / (hi - lo) - v_ref_int)
     dt = (tq - t_ref)[:, None]
     vel = v0 + vel_int(tq) - v_ref_int
     pos = p0 + (v0 - v_ref_int) * dt + pos_int(tq) - pos_int(t_ref)
-    return PlatformMotion(tc, att_q, pos, vel, rate(tq), lever)
+    return PlatformMotion(tc, att_q, pos, vel, rate(tq), lever, warnings)
+
+
+def _level(t: np.ndarray, rel: np.ndarray, f: np.ndarray, window: tuple[float, float],
+           rel_ref: np.ndarray, g: float) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Levelled ``R_WB`` at the reference time (heading zero) and its warnings.
+
+    ``rel [sample, 3, 3]``: attitude relative to the first IMU sample; ``f``:
+    specific force ``[sample, 3]``; ``window``: IMU-clock interval of the
+    average; ``rel_ref``: relative attitude at the reference time.
+    """
+    sel = (t >= window[0] - 1e-12) & (t <= window[1] + 1e-12)
+    if np.count_nonzero(sel) < 2:
+        raise ValueError(f'initial_attitude="level" needs at least 2 IMU samples in the '
+                         f'window [{window[0]!r}, {window[1]!r}] s (IMU clock)')
+    rotated = np.einsum("kij,kj->ki", rel[sel], f[sel])          # R_rel f in the first-sample frame
+    ts = t[sel]
+    dt = np.diff(ts)[:, None]
+    mean_f = (0.5 * dt * (rotated[1:] + rotated[:-1])).sum(axis=0) / (ts[-1] - ts[0])
+    down = -mean_f / np.linalg.norm(mean_f)
+    pitch = np.arcsin(np.clip(-down[0], -1.0, 1.0))
+    roll = np.arctan2(down[1], down[2])
+    first = Rotation.from_euler("ZYX", [0.0, pitch, roll]).as_matrix()
+    at_ref = first @ rel_ref
+    yaw = Rotation.from_matrix(at_ref).as_euler("ZYX")[0]
+    c, s = np.cos(-yaw), np.sin(-yaw)
+    rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return rz @ at_ref, levelling_warning(mean_f, g)

@@ -262,18 +262,25 @@ def _evaluate_compensated(data: _CaseData, motion, chain: str) -> dict:
         return paper_chain(rc, motion=mot, azimuth=az, elevation=el, rotation_phase=rp,
                            direction=data.u_true if u is None else u, weights=weights, **kw)
 
+    found: list[str] = []
+
+    def noted(beams):
+        found.extend(w for w in beams.warnings if w not in found)
+        return beams
+
     sel = slice(ANGLE_CHIRP, ANGLE_CHIRP + 1)
-    ang = _angle(data, run(data.rc_gate[0][sel], frames[0].select(sel), data.az_a,
-                           data.el_a).chirp_power(0)[0])
+    ang = _angle(data, noted(run(data.rc_gate[0][sel], frames[0].select(sel), data.az_a,
+                                 data.el_a)).chirp_power(0)[0])
     u_hat = ang["_u_hat"]          # the paper chain corrects slow time towards its estimate
-    out = _doppler(data, run(data.rc_gate[0], frames[0], [c.target_az], [c.target_el],
-                             u_hat).data[:, 0, 0, 0])
+    out = _doppler(data, noted(run(data.rc_gate[0], frames[0], [c.target_az], [c.target_el],
+                                   u_hat)).data[:, 0, 0, 0])
     out.update(ang)
     acc = 0.0
     for f, mot in enumerate(frames):
-        acc = acc + run(data.rc_gate[f], mot, data.az_m, data.el_m, u_hat,
-                        data.map_weights).coherent_power()[0]
+        acc = acc + noted(run(data.rc_gate[f], mot, data.az_m, data.el_m, u_hat,
+                              data.map_weights)).coherent_power()[0]
     out.update(_accumulated(data, acc))
+    out["warnings"] = found
     return out
 
 
@@ -340,6 +347,10 @@ def _summarise(data: _CaseData, chain: str, runs: list[dict], unc: dict, imu: st
         row[key] = float(vals.mean())
         row[key + "_std"] = float(vals.std(ddof=1)) if vals.size > 1 else 0.0
     row.update(_paper_values(data.case, chain))
+    found: list[str] = []
+    for r in runs:
+        found.extend(w for w in r.get("warnings", ()) if w not in found)
+    row["warnings"] = " | ".join(found)
     return row
 
 
@@ -365,7 +376,9 @@ def run_case(case: PaperCase, *, imu: str = "ideal", seeds=(0,),
     -------
     list of dict
         Rows with the metrics (``*_std`` over seeds), the stationary
-        reference and the paper's values.
+        reference, the paper's values and ``warnings``: the distinct
+        ``BeamCube.warnings`` of the chain over all seeds, joined by ``" | "``
+        (empty when every assumption held).
     """
     settings = ReproductionSettings() if settings is None else settings
     get_preset(imu)

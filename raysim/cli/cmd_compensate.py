@@ -1,6 +1,9 @@
 """``raysim compensate``: motion-compensate a stored IF cube with an IMU log.
 
-Input cube (``.npz``):
+The cube is a frame store written by :mod:`raysim.storage` (a Zarr store
+directory, opened with :func:`raysim.storage.open_store`, or a NetCDF file
+``.nc`` from :func:`raysim.storage.export_netcdf`; one frame, ``--frame``) or
+an ``.npz`` file with these keys:
 
 =====================  =========================  =================================
 key                    shape                      meaning
@@ -18,19 +21,22 @@ key                    shape                      meaning
 
 IMU log (CSV with a header): ``time_s, gyro_x, gyro_y, gyro_z, accel_x,
 accel_y, accel_z`` in s (IMU clock), rad/s and m/s^2 (body frame, specific
-force).
+force). It may be left out when the frame store holds an IMU log
+(``imu_time``, ``imu_gyro``, ``imu_accel``).
 
 Output (``.npz``, written to a temporary file then moved into place):
 ``beams [chirp, range, azimuth, elevation]`` (complex64),
 ``doppler_power [doppler, range, azimuth, elevation]`` (float32), and the axes
 ``chirp_times`` [s], ``range_m``, ``azimuth_deg``, ``elevation_deg``,
-``velocity_mps``.
+``velocity_mps``, and ``warnings`` (the result's assumption warnings, see
+:mod:`compensation.guards`; also printed on stderr).
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import sys
 import tempfile
 
 import numpy as np
@@ -66,12 +72,18 @@ def _span(text: str, name: str, with_step: bool) -> tuple:
 def register(subparsers) -> None:
     """Add the ``compensate`` subcommand."""
     p = subparsers.add_parser(
-        "compensate", help="motion-compensate a stored IF cube (.npz) with an IMU log (CSV)",
+        "compensate", help="motion-compensate a stored IF cube (Zarr store, NetCDF or .npz) "
+        "with an IMU log (CSV)",
         description=__doc__.split("\n\n")[0] + " Runs the exact rigid-body projection "
         "(or the paper's chain) on the selected range cells and angle grid.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("cube", help="input .npz (see `raysim compensate --help` keys)")
-    p.add_argument("imu", help="IMU CSV: time_s,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z")
+    p.add_argument("cube", help="raysim Zarr store, NetCDF file (.nc) or .npz (keys: see "
+                   "`raysim compensate --help`)")
+    p.add_argument("imu", nargs="?", default=None,
+                   help="IMU CSV: time_s,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z "
+                   "(default: the IMU log of the frame store)")
+    p.add_argument("--frame", type=int, default=0,
+                   help="frame of a Zarr / NetCDF store to compensate (position along frame)")
     p.add_argument("--out", required=True, help="output .npz")
     p.add_argument("--range-m", default="0:1e9", metavar="LO:HI", help="range cells [m]")
     p.add_argument("--az-deg", default="-60:60:1", metavar="LO:HI:STEP")
@@ -84,14 +96,51 @@ def register(subparsers) -> None:
     p.add_argument("--initial-velocity", default=None, metavar="VN,VE,VD",
                    help="body velocity in W at the first chirp [m/s] (--velocity given)")
     p.add_argument("--initial-attitude-deg", default="0,0,0", metavar="YAW,PITCH,ROLL",
-                   help="attitude at the first chirp, Z-Y-X Euler angles [deg]")
+                   help="attitude at the first chirp, Z-Y-X Euler angles [deg], or 'level' "
+                   "(roll/pitch from accelerometer levelling over the IMU record, heading 0)")
     p.add_argument("--chain", choices=("exact", "paper"), default="exact")
     p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
                    help="target direction for the paper chain's slow-time correction [deg]")
     p.set_defaults(func=run)
 
 
-def _load_cube(path: str) -> dict:
+def _load_store(path: str, frame: int) -> dict:
+    """Cube keys (as in the ``.npz`` layout) and the IMU log of one frame of a store."""
+    from raysim import storage
+
+    if path.endswith(".nc") and not os.path.isdir(path):
+        ds = storage.read_netcdf(path)
+    else:
+        ds = storage.open_store(path)
+    n = int(ds.sizes.get("frame", 0))
+    if not -n <= frame < n:
+        raise ValueError(f"--frame {frame} is outside the store {path!r}, which holds {n} "
+                         f"frame(s)")
+    fr = storage.frame_from_dataset(ds, frame)
+    cfg = fr.config
+    out = {"data": np.asarray(fr.data), "chirp_times": np.asarray(fr.chirp_times, dtype=float),
+           "element_positions": fr.array.virtual_positions,
+           "carrier_frequency": cfg.carrier_frequency, "bandwidth": cfg.bandwidth,
+           "chirp_duration": cfg.chirp_duration, "sample_rate": cfg.sample_rate,
+           "lever_arm": np.asarray(fr.lever_arm, dtype=float)}
+    if fr.array.grid_shape:
+        out["grid_shape"] = np.asarray(fr.array.grid_shape)
+    if all(k in ds.variables for k in ("imu_time", "imu_gyro", "imu_accel")):
+        out["_imu"] = np.column_stack([np.asarray(ds["imu_time"].values, dtype=float),
+                                       np.asarray(ds["imu_gyro"].values, dtype=float),
+                                       np.asarray(ds["imu_accel"].values, dtype=float)])
+    if not np.iscomplexobj(out["data"]):
+        raise ValueError(f"store {path!r}: if_data must be complex IF samples, got "
+                         f"{out['data'].dtype}")
+    return out
+
+
+def _load_cube(path: str, frame: int = 0) -> dict:
+    if not path.endswith(".npz"):
+        from raysim import storage
+
+        if storage.store_exists(path) or (path.endswith(".nc") and os.path.isfile(path)):
+            return _load_store(path, frame)
     if not os.path.isfile(path):
         raise ValueError(f"cube file {path!r} does not exist")
     with np.load(path) as z:
@@ -129,15 +178,24 @@ def run(args) -> int:
     from compensation.geometry import direction
     from raysim.processing import range_compress
 
-    cube = _load_cube(args.cube)
-    imu = _load_imu(args.imu)
+    cube = _load_cube(args.cube, args.frame)
+    if args.imu is not None:
+        imu = _load_imu(args.imu)
+    elif "_imu" in cube:
+        imu = cube["_imu"]
+    else:
+        raise ValueError(f"{args.cube!r} holds no IMU log; give an IMU CSV after the cube")
     fc, bw = float(cube["carrier_frequency"]), float(cube["bandwidth"])
     tc, fs = float(cube["chirp_duration"]), float(cube["sample_rate"])
     lam = SPEED_OF_LIGHT / (fc + bw / 2)
     lever = (_floats(args.lever_arm, 3, "--lever-arm") if args.lever_arm is not None
              else np.asarray(cube.get("lever_arm", np.zeros(3)), dtype=float))
     grid = tuple(int(v) for v in cube["grid_shape"]) if "grid_shape" in cube else None
-    ypr = np.deg2rad(_floats(args.initial_attitude_deg, 3, "--initial-attitude-deg"))
+    if args.initial_attitude_deg.strip() == "level":
+        attitude = "level"
+    else:
+        ypr = np.deg2rad(_floats(args.initial_attitude_deg, 3, "--initial-attitude-deg"))
+        attitude = Rotation.from_euler("ZYX", ypr).as_matrix()
     kwargs = {}
     if args.velocity == "given":
         if args.initial_velocity is None:
@@ -145,7 +203,7 @@ def run(args) -> int:
         kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
     motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], cube["chirp_times"],
                            lever_arm=lever, time_offset=args.time_offset,
-                           initial_attitude=Rotation.from_euler("ZYX", ypr).as_matrix(),
+                           initial_attitude=attitude,
                            velocity=args.velocity, **kwargs)
     n_samples = cube["data"].shape[-1]
     r_axis = SPEED_OF_LIGHT * np.arange(n_samples) * fs / n_samples / (2.0 * bw / tc)
@@ -178,11 +236,14 @@ def run(args) -> int:
         np.savez(tmp, beams=beams.data, doppler_power=(np.abs(spec) ** 2).astype(np.float32),
                  chirp_times=beams.chirp_time, range_m=beams.range,
                  azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
-                 velocity_mps=beams.velocity())
+                 velocity_mps=beams.velocity(), warnings=np.array(beams.warnings, dtype=str))
         os.replace(tmp, args.out)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+    for w in beams.warnings:
+        print(f"warning: {w}", file=sys.stderr)
     print(f"wrote {args.out}: beams {beams.data.shape} [chirp, range, azimuth, elevation], "
-          f"chain {args.chain}")
+          f"chain {args.chain}" + (f", {len(beams.warnings)} warning(s)" if beams.warnings
+                                   else ""))
     return 0
