@@ -2,9 +2,8 @@
 
 Every case names one bad input, the exception type it must raise and the
 fragments its message must contain (the offending parameter and/or value),
-so a user reading the error knows what to fix. Guard rails that a module
-still lacks are listed at the end as ``xfail`` cases with the reason; they
-turn into plain passes once the module raises (or flags) as described.
+so a user reading the error knows what to fix. Guard rails (the compensation
+flagging its own broken assumptions, damaged stores) are tested at the end.
 
 Atomic writes and interrupted runs are tested at the bottom: nothing
 half-written may stay on disk.
