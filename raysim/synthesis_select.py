@@ -13,7 +13,7 @@ Three ways to evaluate the same stop-and-hop tone sum
     ``2e-7 + 2e-8 sqrt(paths)`` (:func:`tones_error`; 6e-6 at 1e5 paths).
 ``"nufft"``
     :func:`raysim.nufft_synthesis.synthesize_nufft`, one FINUFFT type-1
-    transform per (chirp, channel), ~80 ns per (path, chirp, channel) plus
+    transform per (chirp, channel), ~42 ns per (path, chirp, channel) plus
     ~40 us per (chirp, channel) on one thread; error set by ``eps``.
 
 ``method="auto"`` picks ``"direct"`` when ``eps < 1e-6`` (below what complex64
@@ -47,7 +47,7 @@ METHODS = ("auto", "nufft", "tones", "direct")
 #: Cost-model constants [s], measured on 2 cores (see docs/speed.md).
 COST_DIRECT_PER_TERM = 22e-9
 COST_TONES_PER_TERM = 3.8e-9
-COST_NUFFT_PER_PAIR = 80e-9
+COST_NUFFT_PER_PAIR = 42e-9
 COST_NUFFT_PER_ROW = 40e-6
 #: Tolerance below which only the complex128 direct sum qualifies.
 DIRECT_BELOW_EPS = 1e-6

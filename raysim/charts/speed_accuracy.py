@@ -122,11 +122,15 @@ def measure_nufft_eps(*, quick: bool) -> dict:
     settings = []
     scale = cfg.num_chirps / n_t
     eps_values = (1e-2, 1e-4, 1e-6, 1e-7) if quick else (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
+    best = dict.fromkeys(eps_values, np.inf)
+    for _ in range(max(REPEAT, 1 if quick else 2)):    # interleaved repeats (load drift)
+        for eps in eps_values:
+            t, _ = _cpu(synthesize, timed, None, cfg, method="nufft", eps=eps, threads=1)
+            best[eps] = min(best[eps], t)
     for eps in eps_values:
-        t, _ = _cpu(synthesize, timed, None, cfg, method="nufft", eps=eps, threads=1,
-                    repeat=REPEAT)
         err = _rel(synthesize(acc, None, cfg, method="nufft", eps=eps), ref)
-        settings.append({"setting": f"{eps:.0e}", "s_per_frame": t * scale, "rel_error": err})
+        settings.append({"setting": f"{eps:.0e}", "s_per_frame": best[eps] * scale,
+                         "rel_error": err})
     t_dir, _ = _cpu(synthesize, subset(pd, 1, 8 if quick else 32), None, cfg, method="direct")
     settings.append({"setting": "direct", "s_per_frame": t_dir * cfg.num_chirps * (
         arr.num_channels / (8 if quick else 32)), "rel_error": 0.0, "reference": True})
@@ -235,19 +239,21 @@ def measure_chirp_block(*, quick: bool) -> dict:
     arr = upa(8, 8, wavelength=cfg.wavelength)
     pd = hover_paths(KNOB_PATHS // (10 if quick else 4), cfg, arr, traj, lever, seed=13)
     ref = synthesize(pd, None, cfg, method="direct", chirps=range(2))
-    settings = []
     blocks = (1, 16, 256) if quick else (1, 4, 16, 64, 256)
-    for b in blocks:
-        first = {}
+    first: dict[int, np.ndarray] = {}
+    best = dict.fromkeys(blocks, np.inf)
+    # repeats interleaved over the settings, so load changes hit all of them alike
+    for _ in range(max(REPEAT, 1 if quick else 3)):
+        for b in blocks:
+            def keep(f, n0, block, b=b):
+                if n0 == 0:
+                    first[b] = block[:2].copy()
 
-        def keep(f, n0, block, first=first):
-            if n0 == 0:
-                first["x"] = block[:2].copy()
-
-        t, _ = _cpu(render_stream, lambda f: pd, cfg, keep, chirp_block=b, method="nufft",
-                    eps=1e-6, threads=1, progress=False, repeat=max(REPEAT, 1 if quick else 2))
-        err = _rel(first["x"], ref) if b >= 2 else None
-        settings.append({"setting": str(b), "s_per_frame": t, "rel_error": err})
+            t, _ = _cpu(render_stream, lambda f: pd, cfg, keep, chirp_block=b, method="nufft",
+                        eps=1e-6, threads=1, progress=False)
+            best[b] = min(best[b], t)
+    settings = [{"setting": str(b), "s_per_frame": best[b],
+                 "rel_error": _rel(first[b], ref) if b >= 2 else None} for b in blocks]
     common = max(s["rel_error"] for s in settings if s["rel_error"] is not None)
     for s in settings:
         if s["rel_error"] is None:
