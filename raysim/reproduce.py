@@ -36,7 +36,6 @@ import io
 import json
 import math
 import os
-import tempfile
 import time
 from dataclasses import dataclass, field
 
@@ -52,6 +51,7 @@ from compensation import (
 from . import metrics
 from .cases import PAPER_CASES, PaperCase
 from .echo import direction, simulate_point_targets
+from .files import atomic_savefig, atomic_write_text
 from .imu import get_preset, simulate_imu
 from .motion import stationary
 from .processing import Map, range_compress
@@ -469,25 +469,12 @@ def reproduce(cases=None, *, imu: str = "ideal", seeds: int = 1,
     return result
 
 
-def _atomic_write(path: str, text: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".tmp_", dir=folder)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 def write_results(result: dict, out_dir: str) -> tuple[str, str]:
     """Write ``reproduction.json`` and ``reproduction.csv`` atomically; returns both paths."""
     rows = result["rows"]
     jpath = os.path.join(out_dir, "reproduction.json")
     cpath = os.path.join(out_dir, "reproduction.csv")
-    _atomic_write(jpath, json.dumps(result, indent=2, default=float) + "\n")
+    atomic_write_text(jpath, json.dumps(result, indent=2, default=float) + "\n")
     keys: list[str] = []
     for r in rows:
         keys.extend(k for k in r if k not in keys)
@@ -495,7 +482,7 @@ def write_results(result: dict, out_dir: str) -> tuple[str, str]:
     writer = csv.DictWriter(buf, fieldnames=keys)
     writer.writeheader()
     writer.writerows(rows)
-    _atomic_write(cpath, buf.getvalue())
+    atomic_write_text(cpath, buf.getvalue())
     return jpath, cpath
 
 
@@ -576,11 +563,8 @@ def write_case_figures(data: _CaseData, motion, folder: str, *, imu: str, maps: 
 
     def save(fig, kind):
         path = os.path.join(folder, f"{c.name}_{imu}_{kind}.png")
-        fd, tmp = tempfile.mkstemp(prefix=".tmp_", suffix=".png", dir=folder)
-        os.close(fd)
-        fig.savefig(tmp, dpi=90)
+        atomic_savefig(fig, path, dpi=90)
         plt.close(fig)
-        os.replace(tmp, path)
         paths.append(path)
 
     def db(p):

@@ -49,9 +49,8 @@ import json
 import math
 import os
 import sys
-import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
@@ -59,6 +58,7 @@ import numpy as np
 
 from .arrays import VirtualArray, upa
 from .config import RadarConfig
+from .files import atomic_write
 from .metrics import image_entropy
 from .processing import Map, range_compress
 
@@ -677,25 +677,6 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
 
 
 # --------------------------------------------------------------------- outputs
-def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
-    """Write ``path`` atomically: ``write(tmp)`` in the same folder, then ``os.replace``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp)
-    umask = os.umask(0)
-    os.umask(umask)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o666 & ~umask)                 # mkstemp creates 0600
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
-
-
 def _extent(m: Map):
     x = np.asarray(m.coords[m.dims[1]], dtype=float)
     y = np.asarray(m.coords[m.dims[0]], dtype=float)

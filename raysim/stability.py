@@ -60,7 +60,6 @@ import importlib.util
 import json
 import math
 import os
-import tempfile
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -73,6 +72,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from .arrays import VirtualArray, upa
 from .config import RadarConfig
 from .echo import PointTarget, direction, point_target_delays
+from .files import atomic_write
 from .metrics import doppler_mainlobe_width, image_entropy, map_peak, pseudo_velocity
 from .motion import HoverJitterSpec, Trajectory, hover_jitter, sinusoid
 from .processing import Map
@@ -1121,37 +1121,6 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
 
 
 # --------------------------------------------------------------- outputs
-def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
-    """Write a file atomically: ``write(tmp)`` then rename over ``path``.
-
-    The temporary file lives in the destination directory; if ``write`` raises
-    (or the process is interrupted) it is removed and ``path`` is untouched.
-
-    Parameters
-    ----------
-    path : path-like
-        Final file.
-    write : callable
-        ``write(tmp_path)`` creates the content at ``tmp_path``.
-
-    Returns
-    -------
-    Path
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
-
-
 def _netcdf_engine() -> str:
     """``netcdf4`` (NetCDF-4) when netCDF4 imports, as :func:`raysim.storage.netcdf_engine`.
 

@@ -50,9 +50,8 @@ import itertools
 import json
 import os
 import shutil
-import tempfile
 import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -89,58 +88,8 @@ _RADAR_FIELDS = {  # RadarConfig field -> attribute suffix (unit in the name)
 
 
 # ------------------------------------------------------------------- atomic io
-def _default_mode(path: str) -> None:
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(path, 0o666 & ~umask)
-
-
-def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
-    """Create a file atomically: ``write(tmp)`` fills a temporary file, then rename.
-
-    The temporary file (``.<name>.<random>.tmp``) lives in the destination
-    folder, so :func:`os.replace` is atomic. If ``write`` raises, or the
-    process is interrupted (``KeyboardInterrupt``), the temporary file is
-    removed and an existing ``path`` is left untouched; a reader never sees a
-    half-written file.
-
-    Parameters
-    ----------
-    path : str or path-like
-        Final file; its folder is created if needed.
-    write : callable
-        ``write(tmp_path)`` writes the whole content to ``tmp_path`` (an
-        empty file that already exists).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        _default_mode(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-def atomic_write_bytes(path: str | Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
-    atomic_write(path, lambda tmp: tmp.write_bytes(data))
-
-
-def atomic_write_text(path: str | Path, text: str) -> None:
-    """UTF-8 text version of :func:`atomic_write_bytes`."""
-    atomic_write_bytes(path, text.encode("utf-8"))
+# re-exported: stores, exports and readers use the shared atomic writers
+from .files import atomic_write, atomic_write_bytes, atomic_write_text  # noqa: E402,F401
 
 
 # ------------------------------------------------------------------ attributes
@@ -616,15 +565,8 @@ def export_netcdf(ds: xr.Dataset, path: str | Path) -> None:
         out[name].encoding = {}
     encoding = {name: {"_FillValue": None} for name in out.variables
                 if out[name].dtype.kind in "fc"}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        out.to_netcdf(tmp, engine=_netcdf_engine(), format="NETCDF4", encoding=encoding)
-        _default_mode(tmp)
-        os.replace(tmp, path)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
+    atomic_write(path, lambda tmp: out.to_netcdf(tmp, engine=_netcdf_engine(), format="NETCDF4",
+                                                 encoding=encoding))
 
 
 def read_netcdf(path: str | Path) -> xr.Dataset:

@@ -37,9 +37,10 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import tempfile
 
 import numpy as np
+
+from raysim.files import atomic_write
 
 SPEED_OF_LIGHT = 299_792_458.0
 IMU_COLUMNS = ("time_s", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
@@ -228,19 +229,14 @@ def run(args) -> int:
         beams = paper_chain(rc, cube["element_positions"], motion, direction=direction(*d),
                             **common)
     spec = beams.doppler()
-    folder = os.path.dirname(os.path.abspath(args.out))
-    os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp_", suffix=".npz", dir=folder)
-    os.close(fd)
-    try:
-        np.savez(tmp, beams=beams.data, doppler_power=(np.abs(spec) ** 2).astype(np.float32),
-                 chirp_times=beams.chirp_time, range_m=beams.range,
-                 azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
-                 velocity_mps=beams.velocity(), warnings=np.array(beams.warnings, dtype=str))
-        os.replace(tmp, args.out)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    def write(tmp):
+        with open(tmp, "wb") as fh:  # a file object: np.savez would append ".npz" to a name
+            np.savez(fh, beams=beams.data, doppler_power=(np.abs(spec) ** 2).astype(np.float32),
+                     chirp_times=beams.chirp_time, range_m=beams.range,
+                     azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
+                     velocity_mps=beams.velocity(), warnings=np.array(beams.warnings, dtype=str))
+
+    atomic_write(args.out, write)
     for w in beams.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(f"wrote {args.out}: beams {beams.data.shape} [chirp, range, azimuth, elevation], "
