@@ -67,8 +67,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         Noise seed.
     synthesizer : callable, optional
         IF synthesis ``f(tau, amplitude, config, out=cube)`` (default
-        :func:`raysim.synthesis.synthesize_if`, whose cost is one complex
-        multiply per path, chirp, channel and sample).
+        :func:`raysim.synthesis_select.synthesize`, which picks the tone sum
+        or the NUFFT by path count at ``eps = 1e-6``).
     specular : {"image", "frozen"}
         Re-projection of single-bounce specular paths: exact image method
         (default) or frozen reflection point (see :mod:`raysim.rt.reproject`).

@@ -56,7 +56,7 @@ from ..arrays import VirtualArray
 from ..config import SPEED_OF_LIGHT, RadarConfig
 from ..echo import element_times, element_world_positions
 from ..motion import Trajectory, stationary
-from ..synthesis import synthesize_if
+from ..synthesis_select import synthesize
 from .trace import SPECULAR, PathSet
 
 IF_BAND_MODES = ("cull", "taper", "none")
@@ -285,7 +285,7 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
                      trajectory: Trajectory | None = None, lever_arm=(0.0, 0.0, 0.0), *,
                      out: np.ndarray | None = None, chirps=None, path_chunk: int = 256,
                      synthesizer=None, **options) -> tuple[np.ndarray, int]:
-    """IF cube of frozen paths via :func:`raysim.synthesis.synthesize_if`.
+    """IF cube of frozen paths via :func:`raysim.synthesis_select.synthesize`.
 
     Parameters
     ----------
@@ -299,8 +299,8 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         Paths re-projected at once.
     synthesizer : callable, optional
         ``f(tau, amplitude, config, out=cube)`` adding tones into ``cube``;
-        default :func:`raysim.synthesis.synthesize_if`. Plug a faster one
-        (e.g. a NUFFT) here for many paths.
+        default :func:`raysim.synthesis_select.synthesize` (``method="auto"``,
+        ``eps=1e-6``: tone sum for a few paths, NUFFT beyond).
     **options
         ``frame``, ``t0``, ``if_band``, ``taper``, ``specular`` of :func:`reproject`.
 
@@ -316,7 +316,7 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         out = np.zeros(shape, dtype=np.complex64)
     elif out.shape != shape or out.dtype != np.complex64:
         raise ValueError(f"out must be complex64 of shape {shape}, got {out.dtype} {out.shape}")
-    synth = synthesize_if if synthesizer is None else synthesizer
+    synth = synthesize if synthesizer is None else synthesizer
     if not callable(synth):
         raise ValueError(f"synthesizer must be callable, got {synthesizer!r}")
     dropped = 0
