@@ -17,6 +17,9 @@ as writing the cube. :func:`synthesize_if_direct` is the plain reference.
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 
 from .config import RadarConfig
@@ -56,7 +59,7 @@ def _powers(z: np.ndarray, n: int) -> np.ndarray:
 
 
 def synthesize_if(tau: np.ndarray, amplitude, config: RadarConfig, *, out: np.ndarray | None = None,
-                  chirp_block: int = 2) -> np.ndarray:
+                  chirp_block: int = 2, workers: int | None = None) -> np.ndarray:
     """Sum of IF tones on the ``[chirp, channel, sample]`` grid (stop-and-hop).
 
     Parameters
@@ -71,6 +74,8 @@ def synthesize_if(tau: np.ndarray, amplitude, config: RadarConfig, *, out: np.nd
         Buffer to add into (it is *not* cleared); a new one is made if omitted.
     chirp_block : int
         Chirps processed together (bounds the temporaries).
+    workers : int, optional
+        Threads, each on its own range of chirps (default: all cores).
 
     Returns
     -------
@@ -93,22 +98,34 @@ def synthesize_if(tau: np.ndarray, amplitude, config: RadarConfig, *, out: np.nd
     b = _block_size(k)
     nb = k // b
     view = out.reshape(n_chirp, n_chan, nb, b)
-    scratch = np.empty((min(chirp_block, n_chirp), n_chan, nb, b), dtype=np.complex64)
-    for n0 in range(0, n_chirp, chirp_block):
-        n1 = min(n0 + chirp_block, n_chirp)
-        blk = scratch[: n1 - n0]
-        for p in range(n_path):
-            t = tau[p, n0:n1]                          # [chirp, channel]
-            w = (2 * np.pi / fs) * (mu * t)            # beat phase step per sample [rad]
-            phase0 = 2 * np.pi * (fc * t - 0.5 * mu * t * t)
-            head = _powers(np.exp(1j * w * b), nb)     # z^(i B)
-            head *= (amp[p, n0:n1] * np.exp(1j * phase0))[..., None]
-            tail = _powers(np.exp(1j * w), b)          # z^b
-            target = view[n0:n1] if (fresh and p == 0) else blk
-            np.multiply(head.astype(np.complex64)[..., :, None],
-                        tail.astype(np.complex64)[..., None, :], out=target)
-            if target is blk:
-                view[n0:n1] += blk
+
+    def run(first: int, last: int) -> None:
+        # chirps [first, last): disjoint slices of ``out``, so threads never overlap
+        scratch = np.empty((min(chirp_block, last - first), n_chan, nb, b), dtype=np.complex64)
+        for n0 in range(first, last, chirp_block):
+            n1 = min(n0 + chirp_block, last)
+            blk = scratch[: n1 - n0]
+            for p in range(n_path):
+                t = tau[p, n0:n1]                          # [chirp, channel]
+                w = (2 * np.pi / fs) * (mu * t)            # beat phase step per sample [rad]
+                phase0 = 2 * np.pi * (fc * t - 0.5 * mu * t * t)
+                head = _powers(np.exp(1j * w * b), nb)     # z^(i B)
+                head *= (amp[p, n0:n1] * np.exp(1j * phase0))[..., None]
+                tail = _powers(np.exp(1j * w), b)          # z^b
+                target = view[n0:n1] if (fresh and p == 0) else blk
+                np.multiply(head.astype(np.complex64)[..., :, None],
+                            tail.astype(np.complex64)[..., None, :], out=target)
+                if target is blk:
+                    view[n0:n1] += blk
+
+    workers = max(1, min(int(workers or os.cpu_count() or 1), n_chirp))
+    if workers == 1:
+        run(0, n_chirp)
+    else:
+        # NumPy releases the GIL in its loops: chirp ranges run in parallel
+        edges = np.linspace(0, n_chirp, workers + 1).round().astype(int)
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(run, edges[:-1], edges[1:]))
     return out
 
 
