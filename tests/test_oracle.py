@@ -235,3 +235,18 @@ def test_target_outside_range_window_is_refused(paper_radar, small_upa):
     with pytest.raises(ValueError, match="point-target range"):
         simulate_point_targets(paper_radar.with_(num_chirps=2), small_upa,
                                [PointTarget.at(95.0, 0, 0)])
+
+
+def test_upa_angle_fft_peaks_at_the_direction_cosines(paper_radar, paper_upa):
+    cfg = paper_radar.with_(num_chirps=1)
+    az, el = np.deg2rad(25.0), np.deg2rad(-12.0)
+    frame = simulate_point_targets(cfg, paper_upa, [PointTarget.at(18.0, az, el)])
+    rc = processing.range_compress(frame.data)[0]
+    idx = int(np.argmin(np.abs(cfg.range_axis() - 18.0)))
+    power, ux, uy = processing.upa_angle_fft(rc[:, idx], paper_upa, cfg.center_wavelength,
+                                             n_fft=256)
+    i, j = np.unravel_index(np.argmax(power), power.shape)
+    u = direction(az, el)
+    # one FFT bin in direction cosine is lambda / (n_fft d) = 2 / 256
+    assert abs(ux[i] - u[0]) <= 1.0 / 256 + 1e-12
+    assert abs(uy[j] - u[1]) <= 1.0 / 256 + 1e-12
