@@ -689,51 +689,6 @@ def test_stability_netcdf_interrupted_at_rename(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_imu_csv_write_interrupted_leaves_no_partial_file(tmp_path, monkeypatch):
-    from raysim.io import imu_log
-
-    samples = _imu_samples(np.arange(200) * 1e-3)
-    calls = []
-
-    def interrupted_repr(v):
-        calls.append(1)
-        if len(calls) > 300:
-            raise KeyboardInterrupt
-        return repr(v)
-
-    monkeypatch.setattr(imu_log, "repr", interrupted_repr, raising=False)
-    with pytest.raises(KeyboardInterrupt):
-        imu_log.write_imu_csv(tmp_path / "imu.csv", samples)
-    assert not (tmp_path / "imu.csv").exists()
-
-
-def test_dca1000_write_interrupted_leaves_no_partial_file(tmp_path, monkeypatch):
-    from raysim.io import ti_dca1000
-    from raysim.io.ti_dca1000 import Dca1000Format
-
-    class HalfWritten(np.ndarray):
-        def tofile(self, fid, *a, **k):
-            np.asarray(self).ravel()[: self.size // 2].tofile(fid)
-            raise KeyboardInterrupt
-
-    real = np.ascontiguousarray
-
-    class NumpyProxy:
-        def __getattr__(self, name):
-            return getattr(np, name)
-
-        @staticmethod
-        def ascontiguousarray(a, dtype=None):
-            return real(a, dtype=dtype).view(HalfWritten)
-
-    monkeypatch.setattr(ti_dca1000, "np", NumpyProxy())
-    fmt = Dca1000Format(num_samples=16, slot_interval=60e-6, num_rx=4, num_tx=1, num_loops=4)
-    with pytest.raises(KeyboardInterrupt):
-        ti_dca1000.write_dca1000(tmp_path / "adc.bin", np.ones((2, 4, 4, 16), np.complex64), fmt)
-    assert not (tmp_path / "adc.bin").exists()
-
-
-
 def _interrupt_writers(monkeypatch, which: str) -> None:
     """Make ``which`` writer fail half-way through its file."""
     from raysim.io import imu_log, ti_dca1000
@@ -765,6 +720,22 @@ def _interrupt_writers(monkeypatch, which: str) -> None:
                 return real(a, dtype=dtype).view(HalfWritten)
 
         monkeypatch.setattr(ti_dca1000, "np", NumpyProxy())
+
+
+@pytest.mark.parametrize("which", ["imu", "dca1000"])
+def test_interrupted_writer_leaves_no_partial_file(tmp_path, monkeypatch, which):
+    from raysim.io import imu_log, ti_dca1000
+    from raysim.io.ti_dca1000 import Dca1000Format
+
+    _interrupt_writers(monkeypatch, which)
+    with pytest.raises((KeyboardInterrupt, OSError)):
+        if which == "imu":
+            imu_log.write_imu_csv(tmp_path / "out", _imu_samples(np.arange(200) * 1e-3))
+        else:
+            fmt = Dca1000Format(num_samples=16, slot_interval=60e-6, num_rx=4, num_tx=1,
+                                num_loops=4)
+            ti_dca1000.write_dca1000(tmp_path / "out", np.ones((2, 4, 4, 16), np.complex64), fmt)
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("which", ["imu", "dca1000"])
