@@ -236,6 +236,10 @@ class MonostaticTracer:
         Scale amplitudes by ``sqrt(P_t) G`` (config's power and element gain) so
         that they are IF amplitudes [sqrt(W)]; otherwise leave Sionna's
         isotropic-antenna transfer coefficients (unitless).
+    plan : raysim.rt.budget.TracePlan or None
+        When given, scene geometry is traced on the plan's pruned copy of the
+        scene (triangles outside the range window / FoV removed, see
+        :meth:`for_scene`); ``None`` traces the scene as loaded.
     """
 
     max_depth: int = 1
@@ -250,8 +254,14 @@ class MonostaticTracer:
     seed: int = 42
     diffuse_phase: str = "random"
     link_budget: bool = True
+    plan: object = None
 
     def __post_init__(self) -> None:
+        from .budget import TracePlan
+
+        if self.plan is not None and not isinstance(self.plan, TracePlan):
+            raise ValueError(f"plan must be a TracePlan from plan_trace() or None, "
+                             f"got {type(self.plan)}")
         _check_int("max_depth", self.max_depth, 1)
         _check_int("target_depth", self.target_depth, 1)
         _check_int("samples_per_src", self.samples_per_src, 1)
@@ -267,6 +277,55 @@ class MonostaticTracer:
                              f"got {self.diffuse_phase!r}")
 
     # ------------------------------------------------------------------ public
+    @classmethod
+    def for_scene(cls, scene, config: RadarConfig, array, *, radar_position_w=None,
+                  rays_per_cell: float | None = None, margin: float = 0.5,
+                  **overrides) -> MonostaticTracer:
+        """A tracer sized for ``scene`` by :func:`raysim.rt.budget.plan_trace`.
+
+        The plan sets ``max_depth`` and ``samples_per_src`` and prunes the
+        geometry outside the range window and the field of view (triangle by
+        triangle; shapes with nothing left are removed). ``overrides`` are
+        other tracer parameters and win over the plan; ``fov_half_angle`` and
+        ``max_range`` are also used by the plan. With ``max_depth > 2`` the
+        field-of-view pruning is switched off (see :mod:`raysim.rt.budget`).
+
+        Parameters
+        ----------
+        scene : str, path-like, SceneDescriptor or RadarScene
+            Scene to plan for.
+        config : RadarConfig
+            Waveform (range resolution, wavelength, range window).
+        array : VirtualArray
+            Virtual array (angular resolution).
+        radar_position_w : array_like, shape ``[3]``, optional
+            Radar position of the plan in W [m] (default the hover point).
+        rays_per_cell : float, optional
+            Average rays per resolution cell (default
+            :data:`raysim.rt.budget.DEFAULT_RAYS_PER_CELL`).
+        margin : float
+            Pruning margin for platform motion [m].
+        **overrides
+            :class:`MonostaticTracer` parameters.
+
+        Returns
+        -------
+        MonostaticTracer
+            With ``plan`` set; ``tracer.plan.summary()`` says what was dropped.
+        """
+        from .budget import DEFAULT_RAYS_PER_CELL, plan_trace
+
+        fov = overrides.get("fov_half_angle", cls.fov_half_angle)
+        depth = overrides.get("max_depth")
+        plan = plan_trace(scene, config, array, radar_position_w=radar_position_w,
+                          fov_half_angle=fov, max_range=overrides.get("max_range"),
+                          rays_per_cell=(DEFAULT_RAYS_PER_CELL if rays_per_cell is None
+                                         else rays_per_cell),
+                          margin=margin, prune_fov=depth is None or depth <= 2)
+        options = plan.tracer_options()
+        options.update(overrides)
+        return cls(**options)
+
     def __call__(self, scene: RadarScene, config: RadarConfig,
                  trajectory: Trajectory | None = None, lever_arm=(0.0, 0.0, 0.0), *,
                  time: float = 0.0) -> PathSet:
@@ -303,7 +362,12 @@ class MonostaticTracer:
 
         sets = []
         if self.specular or self.diffuse:
-            sets.append(self._solve_geometry(scene, config, radar_w, r_wb, time))
+            geometry = scene
+            if self.plan is not None:
+                geometry = self.plan.prune(scene)
+                if geometry is not scene:
+                    self._prepare(geometry, config, radar_w, r_wb)
+            sets.append(self._solve_geometry(geometry, config, radar_w, r_wb, time))
         if self.targets and scene.targets:
             sets.append(self._solve_targets(scene, config, radar_w, r_wb, time))
         if not sets:
@@ -311,7 +375,8 @@ class MonostaticTracer:
         return PathSet.concatenate(sets) if len(sets) > 1 else sets[0]._sorted()
 
     # ----------------------------------------------------------------- helpers
-    def _prepare(self, scene: RadarScene, config: RadarConfig, radar_w, r_wb) -> None:
+    def _prepare(self, scene: RadarScene, config: RadarConfig, radar_w, r_wb, *,
+                 targets: bool = True) -> None:
         from .backend import sionna_rt
 
         rt = sionna_rt()
@@ -342,7 +407,8 @@ class MonostaticTracer:
                 dev.orientation = orient
             else:
                 sc.add(cls(name, position=point, orientation=orient))
-        if self.targets and scene.targets and not getattr(scene, "_targets_added", False):
+        if (targets and self.targets and scene.targets
+                and not getattr(scene, "_targets_added", False)):
             _register_cpm()
             from sionna.rt.rcs import ConstantRCS, ScatteringModel, SensingTarget
 
