@@ -52,8 +52,15 @@ import numpy as np
 
 from ..arrays import VirtualArray
 from ..config import RadarConfig
-from .scenes import (ENU_FROM_NED, MESH_SHAPE_TYPES, RadarScene, SceneDescriptor, _scene_xml,
-                     _substitute, get_scene)
+from .scenes import (
+    ENU_FROM_NED,
+    MESH_SHAPE_TYPES,
+    RadarScene,
+    SceneDescriptor,
+    _scene_xml,
+    _substitute,
+    get_scene,
+)
 
 #: Default field-of-view half-angle [rad] (the tracer's default).
 DEFAULT_FOV_HALF_ANGLE = math.radians(70.0)
@@ -232,8 +239,9 @@ class TracePlan:
         """Human-readable account of what is traced, what is dropped and why."""
         deg = math.degrees(self.fov_half_angle)
         lines = [
-            f"trace plan for {self.scene!r}: radar at W {np.round(self.radar_position_w, 3).tolist()} m, "
-            f"range window {self.max_range:.1f} m, FoV half-angle {deg:.1f} deg, margin "
+            f"trace plan for {self.scene!r}: radar at W "
+            f"{np.round(self.radar_position_w, 3).tolist()} m, range window "
+            f"{self.max_range:.1f} m, FoV half-angle {deg:.1f} deg, margin "
             f"{self.margin:g} m",
             f"  kept {self.num_triangles - self.dropped_triangles} of {self.num_triangles} "
             f"triangles; dropped {self.dropped_triangles} ({self.dropped_area:.1f} m^2)",
