@@ -264,7 +264,7 @@ def test_chart_default_on_pareto_front(monkeypatch, tmp_path):
     monkeypatch.setattr(bench, "paper_setup", small_setup)
     monkeypatch.setattr(sa, "REPEAT", 3)
     monkeypatch.setattr(sa, "KNOB_PATHS", 3000)
-    measured = sa.measure_knobs(quick=True, log=lambda m: None)
+    measured = sa.measure_knobs(quick=True, log=lambda m: None, rt=False)
     names = [k["knob"] for k in measured["knobs"]]
     assert names == ["nufft_eps", "motion", "geometry", "chirp_block"]
     for k in measured["knobs"]:

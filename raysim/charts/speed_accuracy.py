@@ -22,8 +22,27 @@ default. Knobs:
     Chirps synthesised per block in :func:`raysim.streaming.render_stream`
     (memory against per-call overhead); same values, so only time differs.
 
-Ray-tracing knobs (samples, depth, re-trace interval) need Sionna RT's LLVM
-backend and a scene; they are not measured here and the result says so.
+Ray-tracing knobs (:func:`measure_rt_knobs`, bundled scene
+:data:`RT_SCENE`, 8 x 8 UPA, seeded hover, NUFFT synthesis; time = trace +
+re-projection + synthesis of one frame of :data:`RT_CHIRPS` chirps):
+
+``rt_samples``
+    Rays shot per trace (``MonostaticTracer.samples_per_src``), reference
+    :data:`RT_REFERENCE_SAMPLES`.
+``rt_depth``
+    Bounces of scene-geometry paths (``max_depth``), reference 3.
+``rt_retrace``
+    Trace once per frame and re-project (``render_scene(retrace_every=None)``)
+    against a fresh trace every K chirps. Reference: trace once, because a
+    re-trace re-samples the diffuse hit points (they move with the radar and
+    get new random phases), so re-tracing is the approximation here, not the
+    exact model.
+
+Their error is that of the channel-averaged range-Doppler power map, not of
+the IF cube: two diffuse samplings are independent speckle realisations, so
+the cube error between any two sample counts is the clutter's share of the
+cube norm whatever the count (see docs/speed.md). Without Sionna RT's LLVM
+backend the three panels are skipped and ``not_measured`` says why.
 
 Dominance uses :data:`TIME_TOLERANCE`: a setting dominates another only if it
 is faster by more than that fraction (timing noise on a shared machine) and
@@ -48,6 +67,23 @@ REFERENCE_ERROR_FLOOR = 1e-9
 #: Defaults of the simulator, per knob.
 DEFAULTS = {"nufft_eps": "1e-06", "motion": "stop-and-hop", "geometry": "spherical",
             "chirp_block": "16"}
+#: Bundled scene of the ray-tracing knobs.
+RT_SCENE = "rough_terrain"
+#: Chirps per ray-traced frame (quick, full).
+RT_CHIRPS = {True: 32, False: 64}
+#: Side of the UPA of the ray-tracing knobs.
+RT_ARRAY = 8
+#: Sample counts of the ``rt_samples`` knob (quick, full); the default is added if missing.
+RT_SAMPLES = {True: (1_000, 10_000, 100_000),
+              False: (1_000, 3_000, 10_000, 30_000, 100_000)}
+#: Highest-fidelity sample count (reference of ``rt_samples``).
+RT_REFERENCE_SAMPLES = 300_000
+#: Depths of the ``rt_depth`` knob (the largest is the reference).
+RT_DEPTHS = (1, 2, 3)
+#: Re-trace intervals K of the ``rt_retrace`` knob (quick, full); ``None`` = trace once.
+RT_RETRACE = {True: (None, 8, 1), False: (None, 16, 4, 1)}
+#: NUFFT tolerance of the ray-traced frames (``scene_report`` settings).
+RT_EPS = 1e-5
 
 
 def pareto_front(times, errors, *, time_tolerance: float = TIME_TOLERANCE) -> np.ndarray:
@@ -95,15 +131,17 @@ def _cpu(fn: Callable, *args, repeat: int = 1, **kwargs):
     return best, out
 
 
-def _knob(name: str, label: str, settings: list[dict], note: str) -> dict:
+def _knob(name: str, label: str, settings: list[dict], note: str, *,
+          default: str | None = None, time_label: str | None = None) -> dict:
     times = [s["s_per_frame"] for s in settings]
     errors = [max(s["rel_error"], REFERENCE_ERROR_FLOOR) for s in settings]
     front = pareto_front(times, errors)
-    default = DEFAULTS[name]
+    default = DEFAULTS[name] if default is None else default
     for s, f in zip(settings, front, strict=True):
         s["pareto"] = bool(f)
         s["default"] = s["setting"] == default
     return {"knob": name, "label": label, "default": default, "note": note,
+            "time_label": time_label or "time per paper frame [CPU s]",
             "default_on_front": bool(any(s["pareto"] for s in settings if s["default"])),
             "settings": settings}
 
@@ -262,18 +300,162 @@ def measure_chirp_block(*, quick: bool) -> dict:
                  "whole 256-chirp frames; blocks give identical samples, error vs direct sum")
 
 
-def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print) -> dict:
-    """Measure every knob; returns ``{"knobs": [...], "not_measured": {...}}``."""
+def rd_power_map(cube: np.ndarray) -> np.ndarray:
+    """Channel-averaged range-Doppler power ``[doppler, range]`` (Hann windows, no shift).
+
+    Parameters
+    ----------
+    cube : ndarray, shape ``[chirp, channel, sample]``
+
+    Returns
+    -------
+    ndarray, shape ``[chirp, sample]``, float64
+    """
+    c = np.asarray(cube, dtype=np.complex128)
+    r = np.fft.fft(c * np.hanning(c.shape[2])[None, None, :], axis=2)
+    d = np.fft.fft(r * np.hanning(c.shape[0])[:, None, None], axis=0)
+    return np.mean(np.abs(d) ** 2, axis=1)
+
+
+def _samples_label(n: int) -> str:
+    m, e = f"{n:.0e}".split("e")
+    return f"{m}e{int(e)}"
+
+
+def rt_defaults() -> dict:
+    """Defaults of the ray-tracing knobs, read from ``MonostaticTracer`` and ``render_scene``."""
+    import dataclasses
+    import inspect
+
+    from ..rt.render import render_scene
+    from ..rt.trace import MonostaticTracer
+
+    f = {x.name: x.default for x in dataclasses.fields(MonostaticTracer)}
+    k = inspect.signature(render_scene).parameters["retrace_every"].default
+    return {"samples_per_src": int(f["samples_per_src"]), "max_depth": int(f["max_depth"]),
+            "retrace_every": k}
+
+
+def measure_rt_knobs(*, quick: bool, log: Callable[[str], None] = print,
+                     threads: int | None = None) -> list[dict]:
+    """Ray-tracing knobs: trace samples, depth, re-trace interval (needs Sionna RT).
+
+    One ray-traced frame of :data:`RT_SCENE` (``RT_CHIRPS[quick]`` chirps,
+    ``RT_ARRAY`` x ``RT_ARRAY`` UPA, 77 GHz paper waveform, seeded hover of
+    ``scene_report``) is rendered per setting with :func:`raysim.rt.render_scene`
+    and NUFFT synthesis (eps :data:`RT_EPS`, one thread); the CPU time covers
+    trace, re-projection and synthesis. Error: relative l2 of
+    :func:`rd_power_map` against the knob's reference.
+
+    Raises
+    ------
+    raysim.rt.backend.BackendError
+        When Sionna RT's LLVM backend cannot run here.
+    """
+    import functools
+
+    from ..arrays import upa
+    from ..config import RadarConfig
+    from ..nufft_synthesis import synthesize_nufft
+    from ..rt import backend
+    from ..rt.render import render_scene
+    from ..rt.scenes import load_scene
+    from ..rt.trace import MonostaticTracer
+    from ..scene_report import hover_trajectory
+
+    backend.configure("cpu", threads=threads)
+    d = rt_defaults()
+    n_c = RT_CHIRPS[bool(quick)]
+    cfg = RadarConfig(num_chirps=n_c, idle_time=180e-6)
+    arr = upa(RT_ARRAY, RT_ARRAY, wavelength=cfg.wavelength)
+    traj = hover_trajectory(7, float(cfg.chirp_times()[0]))
+    lever = (0.0, 0.0, 0.1)
+    scene = load_scene(RT_SCENE, frequency=cfg.carrier_frequency)
+    MonostaticTracer(samples_per_src=1_000)(scene, cfg)          # compile the kernels first
+    synth = functools.partial(synthesize_nufft, eps=RT_EPS, threads=1)
+    cache: dict[tuple, tuple[float, np.ndarray, int]] = {}
+
+    def render(samples: int, depth: int, retrace) -> tuple[float, np.ndarray, int]:
+        key = (samples, depth, retrace)
+        if key not in cache:
+            tracer = MonostaticTracer(samples_per_src=samples, max_depth=depth)
+            t, f = _cpu(render_scene, scene, cfg, arr, traj, lever, tracer=tracer,
+                        retrace_every=retrace, synthesizer=synth, repeat=REPEAT)
+            cache[key] = (t, rd_power_map(f.data), int(f.truth["num_paths"]))
+            log(f"    samples {samples}, depth {depth}, retrace {retrace}: {t:.2f} CPU s, "
+                f"{cache[key][2]} paths")
+        return cache[key]
+
+    def knob(name, label, keys, ref_key, names, default_name, note):
+        ref = render(*ref_key)[1]
+        settings = []
+        for key, setting in zip(keys, names, strict=True):
+            t, rd, n = render(*key)
+            floor = 1e-12 * ref.max()           # dB difference of the clutter floor, too
+            db = 10 * np.log10((rd + floor) / (ref + floor))
+            s = {"setting": setting, "s_per_frame": t, "rel_error": _rel(rd, ref), "paths": n,
+                 "rd_db_rms": float(np.sqrt(np.mean(db ** 2)))}
+            if key == ref_key:
+                s["reference"] = True
+            settings.append(s)
+        return _knob(name, label, settings, note, default=default_name,
+                     time_label=f"time per {n_c}-chirp frame [CPU s]")
+
+    samples = sorted(set(RT_SAMPLES[bool(quick)]) | {d["samples_per_src"],
+                                                     RT_REFERENCE_SAMPLES})
+    setup = (f"{RT_SCENE}, {n_c} chirps x {RT_ARRAY}x{RT_ARRAY} UPA, hover, NUFFT eps "
+             f"{RT_EPS:g}; error of the channel-averaged range-Doppler power map")
+    knobs = [knob("rt_samples", f"trace samples per source ({RT_SCENE})",
+                  [(n, d["max_depth"], d["retrace_every"]) for n in samples],
+                  (RT_REFERENCE_SAMPLES, d["max_depth"], d["retrace_every"]),
+                  [_samples_label(n) for n in samples], _samples_label(d["samples_per_src"]),
+                  f"{setup}; depth {d['max_depth']}, traced once")]
+    depths = sorted(set(RT_DEPTHS) | {d["max_depth"]})
+    knobs.append(knob("rt_depth", f"trace depth max_depth ({RT_SCENE})",
+                      [(d["samples_per_src"], k, d["retrace_every"]) for k in depths],
+                      (d["samples_per_src"], max(depths), d["retrace_every"]),
+                      [str(k) for k in depths], str(d["max_depth"]),
+                      f"{setup}; {d['samples_per_src']} samples, traced once"))
+    intervals = list(dict.fromkeys([d["retrace_every"], *RT_RETRACE[bool(quick)]]))
+    knobs.append(knob("rt_retrace", f"re-trace interval ({RT_SCENE})",
+                      [(d["samples_per_src"], d["max_depth"], k) for k in intervals],
+                      (d["samples_per_src"], d["max_depth"], None),
+                      ["once" if k is None else f"every {k}" for k in intervals],
+                      "once" if d["retrace_every"] is None else f"every {d['retrace_every']}",
+                      f"{setup}; {d['samples_per_src']} samples, depth {d['max_depth']}; "
+                      "reference: trace once (a re-trace re-samples the diffuse hit points)"))
+    return knobs
+
+
+def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print,
+                  rt: bool = True) -> dict:
+    """Measure every knob; returns ``{"knobs": [...], "not_measured": {...}}``.
+
+    ``rt=False`` leaves out the ray-tracing knobs; when Sionna RT's LLVM
+    backend cannot run, they are left out and ``not_measured`` says why.
+    """
     knobs = []
     for fn in (measure_nufft_eps, measure_motion, measure_geometry, measure_chirp_block):
         log(f"  chart knob: {fn.__name__.removeprefix('measure_')}")
         knobs.append(fn(quick=quick))
+    not_measured = {}
+    if rt:
+        from ..rt.backend import BackendError
+
+        log("  chart knobs: rt_samples, rt_depth, rt_retrace")
+        try:
+            knobs.extend(measure_rt_knobs(quick=quick, log=log))
+        except BackendError as err:
+            not_measured["rt_samples_depth_retrace"] = (
+                f"Sionna RT unavailable, ray-tracing panels skipped: {err}")
+            log(f"  {not_measured['rt_samples_depth_retrace']}")
+    else:
+        not_measured["rt_samples_depth_retrace"] = "ray-tracing knobs not requested"
     return {"quick": bool(quick), "time_tolerance": TIME_TOLERANCE, "knobs": knobs,
-            "not_measured": {"trace_samples_depth_retrace": (
-                "ray-tracing knobs need Sionna RT (LLVM backend) and a scene; not part of "
-                "this chart")},
+            "not_measured": not_measured,
             "time_unit": "CPU seconds per 256-chirp paper frame (extrapolated from the "
-                         "chirps timed, see each knob's note)"}
+                         "chirps timed, see each knob's note); ray-tracing knobs: CPU "
+                         "seconds per ray-traced frame (trace + re-projection + synthesis)"}
 
 
 def _decade_limits(values) -> tuple[float, float]:
@@ -296,8 +478,12 @@ def draw_chart(measured: dict, path) -> None:
     from ..bench import atomic_write_png
 
     knobs = measured["knobs"]
-    fig, axes = plt.subplots(1, len(knobs), figsize=(4.2 * len(knobs), 4.0), squeeze=False)
-    for ax, k in zip(axes[0], knobs, strict=True):
+    ncol = min(len(knobs), 4)
+    nrow = -(-len(knobs) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 4.0 * nrow + 0.4), squeeze=False)
+    for ax in axes.flat[len(knobs):]:
+        ax.axis("off")
+    for ax, k in zip(list(axes.flat)[:len(knobs)], knobs, strict=True):
         s = k["settings"]
         t = np.array([x["s_per_frame"] for x in s])
         e = np.array([max(x["rel_error"], REFERENCE_ERROR_FLOOR) for x in s])
@@ -323,13 +509,22 @@ def draw_chart(measured: dict, path) -> None:
         ax.set_ylim(*_decade_limits(e))
         for axis in (ax.xaxis, ax.yaxis):
             axis.set_minor_formatter(NullFormatter())
-        ax.set_xlabel("time per paper frame [CPU s]")
-        ax.set_ylabel("relative error vs highest fidelity")
-        ax.set_title(k["label"], fontsize=9)
+        ax.set_xlabel(k.get("time_label", "time per paper frame [CPU s]"))
+        ax.set_ylabel("relative error of the RD power map" if k["knob"].startswith("rt_")
+                      else "relative error vs highest fidelity")
+        if k["default_on_front"]:
+            ax.set_title(k["label"], fontsize=9)
+        else:
+            ax.set_title(k["label"] + "\ndefault NOT on the Pareto front", fontsize=9,
+                         color="tab:red")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7, loc="best")
     fig.suptitle("raysim speed vs accuracy (reference shown at "
                  f"{REFERENCE_ERROR_FLOOR:g}; 'quick' = {measured.get('quick')})", fontsize=10)
-    fig.tight_layout()
+    notes = [str(v) for v in measured.get("not_measured", {}).values()]
+    if notes:
+        fig.text(0.5, 0.005, "not measured: " + "; ".join(notes), ha="center", va="bottom",
+                 fontsize=8, color="tab:red", wrap=True)
+    fig.tight_layout(rect=(0, 0.04 if notes else 0, 1, 1))
     atomic_write_png(fig, path)
     plt.close(fig)

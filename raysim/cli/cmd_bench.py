@@ -16,7 +16,10 @@ paper frame (256 chirps x 400 channels x 600 samples), the oracle against the
 write + range-FFT floor and a naive NumPy synthesis, compensation + processing
 against the bare FFT chain, the per-frame time split, re-projection, and the
 peak memory of a 1e5-path frame (child process). Slow references are timed on
-a subset and extrapolated linearly; the JSON says which. See docs/speed.md.
+a subset and extrapolated linearly; the JSON says which. The chart adds the
+ray-tracing knobs (trace samples, depth, re-trace interval) on the bundled
+rough_terrain scene when Sionna RT's LLVM backend runs, and notes their absence
+otherwise. See docs/speed.md.
 
 exit status: 0 done, 1 a benchmark failed, 2 invalid options.
 """
