@@ -11,7 +11,7 @@ def test_rt_knobs_measured_and_drawn(warm_kernels, monkeypatch, tmp_path):
     from raysim.charts import speed_accuracy as sa
 
     d = sa.rt_defaults()
-    assert d == {"samples_per_src": 100_000, "max_depth": 1, "retrace_every": None}
+    assert d == {"samples_per_src": 100_000, "max_depth": 3, "retrace_every": None}
     # small frame and sample counts; the default sample count is added by measure_rt_knobs
     monkeypatch.setattr(sa, "RT_CHIRPS", {True: 8, False: 8})
     monkeypatch.setattr(sa, "RT_ARRAY", 2)
