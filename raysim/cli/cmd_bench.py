@@ -40,6 +40,9 @@ def register(subparsers) -> None:
                    help="only measure and draw the chart (needs --chart)")
     p.add_argument("--no-memory", action="store_true",
                    help="skip the child-process memory measurement")
+    p.add_argument("--clock", choices=("cpu", "wall"), default="cpu",
+                   help="time in CPU seconds of this process (default; robust on a shared "
+                   "machine) or in wall seconds (what a user waits on an idle machine)")
     p.set_defaults(func=run)
 
 
@@ -56,6 +59,8 @@ def run(args) -> int:
 
     def log(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
+
+    bench.set_clock(args.clock)
 
     if args.chart_only:
         from raysim.charts.speed_accuracy import draw_chart, measure_knobs
