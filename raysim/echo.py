@@ -24,33 +24,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from compensation.geometry import az_el, direction  # noqa: F401  (one definition of u(az, el))
+
 from .arrays import VirtualArray
 from .config import BOLTZMANN, SPEED_OF_LIGHT, T0_KELVIN, RadarConfig
 from .frame import RadarFrame
 from .motion import Trajectory, stationary
 from .synthesis import synthesize_if, synthesize_if_intrachirp
-
-
-def direction(az: float, el: float) -> np.ndarray:
-    """Unit vector ``u = (cos el sin az, sin el, cos el cos az)`` in frame A.
-
-    Parameters
-    ----------
-    az, el : float or ndarray
-        Azimuth and elevation [rad].
-
-    Returns
-    -------
-    ndarray, shape ``[..., 3]``
-    """
-    az, el = np.asarray(az, dtype=float), np.asarray(el, dtype=float)
-    return np.stack([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)], axis=-1)
-
-
-def az_el(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Azimuth and elevation [rad] of unit vectors ``u`` [..., 3] in frame A."""
-    u = np.asarray(u, dtype=float)
-    return np.arctan2(u[..., 0], u[..., 2]), np.arcsin(np.clip(u[..., 1], -1.0, 1.0))
 
 
 @dataclass(frozen=True)
