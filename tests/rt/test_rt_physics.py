@@ -80,6 +80,7 @@ def test_constant_rcs_target_follows_radar_equation(warm_kernels, rt_radar):
             assert paths.length[i] == pytest.approx(2 * r, abs=1e-5)
             err_db = 20 * np.log10(abs(paths.amplitude[i]) / ref_radar_equation(
                 rt_radar, r, tgt.rcs_dbsm))
+            print(f"{tgt.name}: amplitude vs radar equation {err_db:+.2e} dB")
             assert abs(err_db) < AMPLITUDE_TOL_DB, (tgt.name, err_db)
             assert abs(np.angle(paths.amplitude[i], deg=True)) < PHASE_TOL_DEG
 
@@ -99,6 +100,8 @@ def test_flat_ground_nadir_matches_fresnel(warm_kernels, rt_radar, height):
     ref = ref_ground_echo(rt_radar, height, DRY_SOIL.complex_permittivity(
         rt_radar.carrier_frequency), DRY_SOIL.scattering_coefficient)
     got = paths.amplitude[0]
+    print(f"nadir ground at {height} m vs Fresnel: {20 * np.log10(abs(got) / abs(ref)):+.2e} dB, "
+          f"{np.angle(got / ref, deg=True):+.2e} deg")
     assert abs(20 * np.log10(abs(got) / abs(ref))) < AMPLITUDE_TOL_DB
     assert abs(np.angle(got / ref, deg=True)) < PHASE_TOL_DEG
 
@@ -146,5 +149,9 @@ def test_cross_model_target_vs_point_target_oracle(warm_kernels):
     ang = np.rad2deg(np.arccos(np.clip(
         np.dot([*u1, np.sqrt(1 - u1[0] ** 2 - u1[1] ** 2)],
                [*u0, np.sqrt(1 - u0[0] ** 2 - u0[1] ** 2)]), -1, 1)))
+    print(f"ray-traced vs oracle: cube {20 * np.log10(err):.1f} dB, range "
+          f"{abs(r1 - r0) / config.range_resolution:.1e} bin, Doppler "
+          f"{abs(v1 - v0) / config.velocity_resolution:.1e} bin, angle {ang:.1e} deg, "
+          f"amplitude {20 * np.log10(a1 / a0):+.1e} dB")
     assert ang < ANGLE_TOL_DEG
     assert abs(20 * np.log10(a1 / a0)) < AMPLITUDE_TOL_DB
