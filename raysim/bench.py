@@ -40,13 +40,13 @@ import os
 import platform
 import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from . import files
 from .arrays import upa
 from .config import PAPER_RADAR, SPEED_OF_LIGHT, RadarConfig
 from .nufft_synthesis import PathDelays, default_threads
@@ -489,34 +489,13 @@ def bench_reprojection(*, quick: bool, paths: int | None = None) -> dict:
 
 # --------------------------------------------------------------------------- driver
 def atomic_write_json(path, data: dict) -> None:
-    """Write JSON to ``path`` atomically (temporary file in the same folder, then rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(data, fh, indent=2, default=_json_default)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    """Write benchmark results as JSON atomically (NumPy scalars and arrays allowed)."""
+    files.atomic_write_json(path, data, indent=2, default=_json_default)
 
 
 def atomic_write_png(fig, path) -> None:
-    """Save a matplotlib figure as PNG atomically (temporary file, then rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".png", dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=120, format="png")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    """Save a matplotlib figure as PNG atomically."""
+    files.atomic_savefig(fig, path, dpi=120, format="png")
 
 
 def _json_default(value):
