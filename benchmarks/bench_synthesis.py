@@ -7,8 +7,8 @@ The whole-frame figures with extrapolation and memory are ``raysim bench``.
 import numpy as np
 import pytest
 
-from raysim.bench import hover_paths, paper_setup, subset
-from raysim.synthesis_select import synthesize
+from raysim.studies.bench import hover_paths, paper_setup, subset
+from raysim.synthesis.select import synthesize
 
 CFG, ARR, TRAJ, LEVER = paper_setup()
 

@@ -259,7 +259,7 @@ def rotation_phase_warnings(motion, direction, *, wavelength: float) -> tuple[st
     return (f"paper rotation phase: the lever-arm radial velocity changes by "
             f"{float(np.ptp(v_r)):.3g} m/s over the frame, so v_r(t) t departs from the "
             f"integrated displacement by up to {phase:.3g} rad (limit "
-            f"{ROTATION_PHASE_LIMIT:.3g}); use rotation_phase='displacement'",)
+            f"{ROTATION_PHASE_LIMIT:.3g}); use rotation_phase='integrated'",)
 
 
 def merge(*groups) -> tuple[str, ...]:

@@ -9,8 +9,8 @@ Steps (each selectable in :func:`paper_chain`):
     ``dz u_z``: one formula covers both of the paper's cases).
 ``"rotation"``
     Radial motion of the radar phase centre caused by rotation of the lever
-    arm. ``rotation_phase="displacement"`` (default) uses the integrated
-    displacement ``dR_n = -((R_n - I) r_IR) . u``. ``rotation_phase="paper"``
+    arm. ``rotation_phase="integrated"`` (default) uses the integrated
+    displacement ``dR_n = -((R_n - I) r_IR) . u``. ``rotation_phase="published"``
     uses the published form, the instantaneous radial velocity times the
     elapsed time, ``dR_n = v_r(t_n) (t_n - t_0)`` with
     ``v_r = -(omega_B x r_IR) . u``; it equals the integral only while the
@@ -76,7 +76,7 @@ def _unit(name: str, u) -> np.ndarray:
 
 def range_change(motion: PlatformMotion, direction, *,
                  components=("translation", "rotation"),
-                 rotation_phase: Literal["displacement", "paper"] = "displacement"
+                 rotation_phase: Literal["integrated", "published"] = "integrated"
                  ) -> np.ndarray:
     """Platform-induced range change of a static target, per chirp.
 
@@ -87,7 +87,7 @@ def range_change(motion: PlatformMotion, direction, *,
         Target direction ``u`` in W (unit) at the nominal attitude.
     components : sequence of {"translation", "rotation"}
         Contributions to include.
-    rotation_phase : {"displacement", "paper"}
+    rotation_phase : {"integrated", "published"}
         Integrated lever-arm displacement (default) or the published
         ``v_r(t_n) (t_n - t_0)``.
 
@@ -99,12 +99,12 @@ def range_change(motion: PlatformMotion, direction, *,
     u = _unit("direction", direction)
     for c in components:
         choice("components entry", c, ("translation", "rotation"))
-    choice("rotation_phase", rotation_phase, ("displacement", "paper"))
+    choice("rotation_phase", rotation_phase, ("integrated", "published"))
     dr = np.zeros(motion.num_chirps)
     if "translation" in components:
         dr -= motion.translation_displacement @ u
     if "rotation" in components:
-        if rotation_phase == "displacement":
+        if rotation_phase == "integrated":
             dr -= motion.rotation_displacement @ u
         else:
             v_r = -(np.cross(motion.angular_rate, motion.lever_arm) @ u)
@@ -114,7 +114,7 @@ def range_change(motion: PlatformMotion, direction, *,
 
 def slow_time_correction(cube, motion: PlatformMotion, direction, *, wavelength: float,
                          components=("translation", "rotation"),
-                         rotation_phase: Literal["displacement", "paper"] = "displacement",
+                         rotation_phase: Literal["integrated", "published"] = "integrated",
                          domain: Literal["range", "if"] = "range",
                          carrier_frequency: float | None = None,
                          chirp_rate: float | None = None,
@@ -271,7 +271,7 @@ def yaw_projection(rc, element_positions, motion: PlatformMotion, *, wavelength:
 def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
                 direction, range_axis, azimuth, elevation, range_gates=None,
                 steps=PAPER_STEPS,
-                rotation_phase: Literal["displacement", "paper"] = "displacement",
+                rotation_phase: Literal["integrated", "published"] = "integrated",
                 grid_shape: tuple[int, int] | None = None,
                 method: Literal["auto", "nufft", "lattice", "direct"] = "auto",
                 weights=None) -> BeamCube:
@@ -296,7 +296,7 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
     range_axis, azimuth, elevation, range_gates, grid_shape, method, weights
         See :func:`compensation.projection.beam_projection`.
     steps : sequence of {"tilt", "translation", "rotation", "yaw"}
-    rotation_phase : {"displacement", "paper"}
+    rotation_phase : {"integrated", "published"}
         See :func:`range_change`.
 
     Returns
@@ -307,7 +307,7 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
         :data:`~compensation.guards.SMALL_ANGLE_TILT_LIMIT` or the tilt
         correction leaves an angle error above half the 3 dB beamwidth towards
         ``direction`` at some chirp, and ``"paper rotation phase: ..."`` (with
-        ``"rotation"`` and ``rotation_phase="paper"``) when the published
+        ``"rotation"`` and ``rotation_phase="published"``) when the published
         phase departs from the integrated lever-arm displacement by more than
         :data:`~compensation.guards.ROTATION_PHASE_LIMIT`.
     """
@@ -325,7 +325,7 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
     if comps:
         x = slow_time_correction(x, motion, direction, wavelength=wavelength, components=comps,
                                  rotation_phase=rotation_phase)
-        if "rotation" in comps and rotation_phase == "paper":
+        if "rotation" in comps and rotation_phase == "published":
             found += rotation_phase_warnings(motion, _unit("direction", direction),
                                              wavelength=float(wavelength))
     if "yaw" in steps:

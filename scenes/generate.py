@@ -12,7 +12,7 @@ with Sionna radio materials), ``meshes/*.ply`` (binary PLY, face normals) and
 materials' diffuse settings that the XML format cannot carry).
 
 Scene frame S: east-north-up (ENU), metres, ground surface at ``z = 0``, the
-radar's nominal hover point at ``(0, 0, hover_altitude)``. ``raysim.rt.scenes``
+radar's nominal hover point at ``(0, 0, hover_altitude)``. ``raysim.echoes.rt.scenes``
 maps S to the world frame W (NED, origin at the hover point).
 
 The output is reproducible: geometry is built with trimesh from fixed numbers
@@ -39,7 +39,7 @@ OUT_ROOT = HERE
 SIDECAR_VERSION = 1
 
 sys.path.insert(0, str(HERE.parent))
-from raysim.rt.scenes import ASPHALT, CONCRETE, DRY_SOIL, GLASS, METAL, MaterialSpec  # noqa: E402
+from raysim.echoes.rt.scenes import ASPHALT, CONCRETE, DRY_SOIL, GLASS, METAL, MaterialSpec  # noqa: E402
 
 
 def _grid(nx: int, ny: int, half_x: float, half_y: float, height=None) -> trimesh.Trimesh:

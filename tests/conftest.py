@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raysim.arrays import upa
-from raysim.config import RadarConfig
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
 
 
 @pytest.fixture(scope="session")

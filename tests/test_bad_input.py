@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raysim.arrays import VirtualArray, tdm_mimo, ti_3tx4rx, upa
-from raysim.config import RadarConfig
-from raysim.echo import PointTarget, element_times, simulate_point_targets
-from raysim.motion import HoverJitterSpec, Sinusoid, hover_jitter, sinusoid, stationary
+from raysim.radar.arrays import VirtualArray, tdm_mimo, ti_3tx4rx, upa
+from raysim.radar.config import RadarConfig
+from raysim.echoes.oracle import PointTarget, element_times, simulate_point_targets
+from raysim.platform.motion import HoverJitterSpec, Sinusoid, hover_jitter, sinusoid, stationary
 
 SMALL = RadarConfig(num_chirps=8, sample_rate=2.5e6)        # 150 samples, max range 22.5 m
 ARR = upa(2, 2, wavelength=SMALL.wavelength)
@@ -55,7 +55,7 @@ def _read_imu(tmp: Path, body: str):
 
 
 def _imu_samples(t, gyro=None, accel=None):
-    from raysim.imu import ImuSamples
+    from raysim.platform.imu import ImuSamples
 
     t = np.asarray(t, dtype=float)
     g = np.zeros((t.size, 3)) if gyro is None else gyro
@@ -76,7 +76,7 @@ def _dca_truncated(tmp: Path):
 
 def _damaged_store(tmp: Path, damage: str):
     """A three-frame store whose ``if_data`` chunk of frame 1 is deleted or truncated."""
-    from raysim import storage
+    from raysim.io import storage
 
     fr = simulate_point_targets(SMALL, ARR, [PointTarget.at(10.0, 0.1, 0.0)])
     frames = [__import__("dataclasses").replace(fr, frame_index=i) for i in range(3)]
@@ -96,7 +96,7 @@ _PLY_HEAD = ("ply\nformat ascii 1.0\nelement vertex {nv}\nproperty float x\nprop
 
 def _load_mesh_scene(tmp: Path, name: str, vertices: str, faces: str, **kw):
     """Load a one-shape concrete scene whose mesh ``meshes/<name>`` has the given rows."""
-    from raysim.rt.scenes import load_scene
+    from raysim.echoes.rt.scenes import load_scene
 
     path = _scene_file(tmp, "concrete", name)
     nv, nf = len(vertices.splitlines()), len(faces.splitlines())
@@ -108,7 +108,7 @@ _TRIANGLE = "0 0 0\n1 0 0\n0 1 0\n"
 
 
 def _scenario_data(**radar):
-    from raysim.scenario import scenario_from_case
+    from raysim.io.scenario import scenario_from_case
 
     data = scenario_from_case("rotation_y").model_dump(mode="json", exclude_none=True)
     data["radar"].update(radar)
@@ -116,7 +116,7 @@ def _scenario_data(**radar):
 
 
 def _validate(data):
-    from raysim.scenario import validate_scenario
+    from raysim.io.scenario import validate_scenario
 
     return validate_scenario(data)
 
@@ -157,7 +157,7 @@ def _integrate(t, *, chirps=None, **kw):
 
 
 def _stability_scenario(**kw):
-    from raysim.stability import Scenario
+    from raysim.studies.stability import Scenario
 
     base = dict(config=SMALL, array=ARR, trajectory=stationary(), target_range=10.0)
     base.update(kw)
@@ -226,39 +226,39 @@ CASES = [
         ("band", "(8.0, 0.5)")),
     # ---------------------------------------------------- synthesis / processing
     Bad("synthesis-tau-shape",
-        lambda _: __import__("raysim.synthesis", fromlist=["x"]).synthesize_if(
+        lambda _: __import__("raysim.synthesis.tones", fromlist=["x"]).synthesize_if(
             np.zeros((2, 3)), 1.0, SMALL), ValueError, ("tau", "(2, 3)")),
     Bad("synthesis-tau-nan",
-        lambda _: __import__("raysim.synthesis", fromlist=["x"]).synthesize_if(
+        lambda _: __import__("raysim.synthesis.tones", fromlist=["x"]).synthesize_if(
             np.full((1, 8, 4), math.nan), 1.0, SMALL), ValueError, ("tau", "NaN")),
     Bad("processing-unknown-window",
-        lambda _: __import__("raysim.processing", fromlist=["x"]).window("hammock", 8), ValueError,
+        lambda _: __import__("raysim.processing.maps", fromlist=["x"]).window("hammock", 8), ValueError,
         ("window", "'hammock'")),
     Bad("metrics-short-slow-time",
-        lambda _: __import__("raysim.metrics", fromlist=["x"]).pseudo_velocity(
+        lambda _: __import__("raysim.processing.metrics", fromlist=["x"]).pseudo_velocity(
             np.ones(2), 60e-6, 3.9e-3), ValueError, ("slow_time", ">= 4", "(2,)")),
     Bad("metrics-zero-chirp-interval",
-        lambda _: __import__("raysim.metrics", fromlist=["x"]).pseudo_velocity(
+        lambda _: __import__("raysim.processing.metrics", fromlist=["x"]).pseudo_velocity(
             np.ones(16), 0.0, 3.9e-3), ValueError, ("chirp_interval", "0.0")),
     Bad("metrics-negative-intensity",
-        lambda _: __import__("raysim.metrics", fromlist=["x"]).image_entropy(
+        lambda _: __import__("raysim.processing.metrics", fromlist=["x"]).image_entropy(
             np.array([1.0, -1.0])), ValueError, ("intensity", "non-negative")),
     Bad("unknown-paper-case",
-        lambda _: __import__("raysim.cases", fromlist=["x"]).get_case("roll_x"), ValueError,
+        lambda _: __import__("raysim.studies.cases", fromlist=["x"]).get_case("roll_x"), ValueError,
         ("'roll_x'", "rotation_y")),
     # ---------------------------------------------------------------------- IMU
     Bad("imu-zero-rate",
-        lambda _: __import__("raysim.imu", fromlist=["x"]).simulate_imu(
+        lambda _: __import__("raysim.platform.imu", fromlist=["x"]).simulate_imu(
             stationary(), "ideal", rate=0.0, start=0.0, end=0.1), ValueError, ("rate", "0.0")),
     Bad("imu-negative-rate",
-        lambda _: __import__("raysim.imu", fromlist=["x"]).simulate_imu(
+        lambda _: __import__("raysim.platform.imu", fromlist=["x"]).simulate_imu(
             stationary(), "ideal", rate=-100.0, start=0.0, end=0.1), ValueError,
         ("rate", "-100.0")),
     Bad("imu-unknown-preset",
-        lambda _: __import__("raysim.imu", fromlist=["x"]).get_preset("navigation_grade"),
+        lambda _: __import__("raysim.platform.imu", fromlist=["x"]).get_preset("navigation_grade"),
         ValueError, ("'navigation_grade'", "consumer_mems")),
     Bad("imu-negative-noise",
-        lambda _: __import__("raysim.imu", fromlist=["x"]).SensorErrors(noise_density=-1.0),
+        lambda _: __import__("raysim.platform.imu", fromlist=["x"]).SensorErrors(noise_density=-1.0),
         ValueError, ("noise_density", "-1.0")),
     Bad("imu-unsorted-samples", lambda _: _imu_samples([0.0, 0.002, 0.001]), ValueError,
         ("strictly increasing", "0.001")),
@@ -299,7 +299,7 @@ CASES = [
         lambda _: __import__("raysim.io.ti_dca1000", fromlist=["x"]).Dca1000Format(
             num_samples=16, slot_interval=-1.0), ValueError, ("slot_interval", "-1")),
     Bad("zarr-not-a-store",
-        lambda t: __import__("raysim.storage", fromlist=["x"]).open_store(t / "none.zarr"),
+        lambda t: __import__("raysim.io.storage", fromlist=["x"]).open_store(t / "none.zarr"),
         ValueError, ("none.zarr", "not a Zarr store")),
     Bad("zarr-missing-chunk", lambda t: _damaged_store(t, "delete"), ValueError,
         ("s.zarr", "'if_data'", "frame 1", "c/1/0/0/0")),
@@ -307,7 +307,7 @@ CASES = [
         ("s.zarr", "'if_data'", "frame 1", "Zstd")),
     Bad("stability-netcdf-truncated",
         lambda t: (t / "m.nc").write_bytes(b"CDF\x01\x00\x00")
-        and __import__("raysim.stability", fromlist=["x"]).read_netcdf(t / "m.nc"),
+        and __import__("raysim.studies.stability", fromlist=["x"]).read_netcdf(t / "m.nc"),
         ValueError, ("m.nc", "truncated")),
     # ---------------------------------------------------------- scenario files
     Bad("scenario-negative-sample-rate", lambda _: _validate(_scenario_data(sample_rate_hz=-1)),
@@ -315,17 +315,17 @@ CASES = [
     Bad("scenario-unknown-key", lambda _: _validate(_scenario_data(samplerate=1)), ValueError,
         ("radar.samplerate", "unknown keys")),
     Bad("scenario-missing-file",
-        lambda t: __import__("raysim.scenario", fromlist=["x"]).load_scenario(t / "no.toml"),
+        lambda t: __import__("raysim.io.scenario", fromlist=["x"]).load_scenario(t / "no.toml"),
         ValueError, ("no.toml", "cannot read")),
     # -------------------------------------------------------------- ray tracing
     Bad("rt-unknown-scene",
-        lambda _: __import__("raysim.rt.scenes", fromlist=["x"]).get_scene("moon_base"),
+        lambda _: __import__("raysim.echoes.rt.scenes", fromlist=["x"]).get_scene("moon_base"),
         ValueError, ("'moon_base'", "flat_reflectors")),
     Bad("rt-material-permittivity-below-one",
-        lambda _: __import__("raysim.rt.scenes", fromlist=["x"]).MaterialSpec(
+        lambda _: __import__("raysim.echoes.rt.scenes", fromlist=["x"]).MaterialSpec(
             "foam", relative_permittivity=0.5), ValueError, ("relative_permittivity", "0.5")),
     Bad("rt-material-negative-conductivity",
-        lambda _: __import__("raysim.rt.scenes", fromlist=["x"]).MaterialSpec(
+        lambda _: __import__("raysim.echoes.rt.scenes", fromlist=["x"]).MaterialSpec(
             "foam", conductivity=-1.0), ValueError, ("conductivity", "-1.0")),
     Bad("rt-mesh-nan-vertex",
         lambda t: _load_mesh_scene(t, "nan.ply", "0 0 0\n1 nan 0\n0 1 0\n", "3 0 1 2\n"),
@@ -338,7 +338,7 @@ CASES = [
         lambda t: _load_mesh_scene(t, "oor.ply", _TRIANGLE, "3 0 1 7\n"), ValueError,
         ("oor.ply", "[0, 7]", "[0, 2]")),
     Bad("rt-mesh-missing-file",
-        lambda t: __import__("raysim.rt.scenes", fromlist=["x"]).load_scene(
+        lambda t: __import__("raysim.echoes.rt.scenes", fromlist=["x"]).load_scene(
             _scene_file(t, "concrete", "gone.ply")), ValueError, ("gone.ply", "does not exist")),
     Bad("rt-scene-negative-frequency",
         lambda t: _load_mesh_scene(t, "tri.ply", _TRIANGLE, "3 0 1 2\n", frequency=-77e9),
@@ -387,7 +387,7 @@ CASES = [
     Bad("stability-negative-seed", lambda _: _stability_scenario(seed=-1), ValueError,
         ("seed", "-1")),
     Bad("stability-unknown-map",
-        lambda _: __import__("raysim.stability", fromlist=["x"]).run_map("wind"), ValueError,
+        lambda _: __import__("raysim.studies.stability", fromlist=["x"]).run_map("wind"), ValueError,
         ("'wind'", "rotation_azimuth")),
     Bad("stability-angle-out-of-range",
         lambda _: _stability_scenario(target_az=2.0), ValueError, ("target_az", "2.0")),
@@ -493,7 +493,7 @@ def test_guard_hover_window_too_short_is_reported():
 
 
 def test_guard_zarr_missing_chunk(tmp_path):
-    from raysim import storage
+    from raysim.io import storage
 
     fr = simulate_point_targets(SMALL, ARR, [PointTarget.at(10.0, 0.1, 0.0)])
     storage.write_store(tmp_path / "s.zarr", storage.frames_to_dataset([fr]))
@@ -505,7 +505,7 @@ def test_guard_zarr_missing_chunk(tmp_path):
 
 
 def test_guard_zarr_truncated_chunk(tmp_path):
-    from raysim import storage
+    from raysim.io import storage
 
     fr = simulate_point_targets(SMALL, ARR, [PointTarget.at(10.0, 0.1, 0.0)])
     storage.write_store(tmp_path / "s.zarr", storage.frames_to_dataset([fr]))
@@ -518,7 +518,7 @@ def test_guard_zarr_truncated_chunk(tmp_path):
 
 def test_zarr_all_zero_frame_is_not_a_missing_chunk(tmp_path):
     """A frame equal to the fill value is written out, so the chunk check does not flag it."""
-    from raysim import storage
+    from raysim.io import storage
 
     fr = simulate_point_targets(SMALL, ARR, [PointTarget.at(10.0, 0.1, 0.0)])
     ds = storage.frames_to_dataset([fr])
@@ -531,7 +531,7 @@ def test_zarr_all_zero_frame_is_not_a_missing_chunk(tmp_path):
 # --------------------------------------------------------------- atomic writes
 def test_atomic_write_interrupted_leaves_nothing(tmp_path):
     """A write interrupted half-way leaves neither the file nor a temporary behind."""
-    from raysim.stability import atomic_write
+    from raysim.studies.stability import atomic_write
 
     target = tmp_path / "map.json"
 
@@ -545,7 +545,7 @@ def test_atomic_write_interrupted_leaves_nothing(tmp_path):
 
 
 def test_atomic_write_interrupted_keeps_old_file(tmp_path):
-    from raysim.stability import atomic_write
+    from raysim.studies.stability import atomic_write
 
     target = tmp_path / "map.json"
     target.write_text("old")
@@ -562,7 +562,7 @@ def test_atomic_write_interrupted_keeps_old_file(tmp_path):
 
 def test_interrupted_stability_run_keeps_finished_maps(tmp_path, monkeypatch):
     """An interrupted ``raysim stability`` keeps the maps it finished and resumes from them."""
-    from raysim import stability
+    from raysim.studies import stability
 
     calls = []
     real = stability.run_map
@@ -591,7 +591,7 @@ def test_interrupted_stability_run_keeps_finished_maps(tmp_path, monkeypatch):
 
 
 def _cheap_evaluate(scenario, chains=("none", "paper", "paper_integrated", "exact"), **_):
-    """Stand-in for :func:`raysim.stability.evaluate` (file handling only)."""
+    """Stand-in for :func:`raysim.studies.stability.evaluate` (file handling only)."""
     rec = {"pseudo_velocity": 0.01, "doppler_width_hz": 94.0, "angle_error_deg": 0.1,
            "angle_error_mid_deg": 0.1, "focused_angle_error_deg": 0.1, "entropy": 3.5}
     out = {c: dict(rec) for c in chains}
@@ -620,7 +620,7 @@ _EMPTY_PLY = ("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproper
 def _scene_file(tmp: Path, itu: str, mesh: str) -> Path:
     import shutil
 
-    from raysim.rt.scenes import SCENES
+    from raysim.echoes.rt.scenes import SCENES
 
     (tmp / "meshes").mkdir(exist_ok=True)
     ground = SCENES["flat_reflectors"].path.parent / "meshes" / "ground.ply"
@@ -634,7 +634,7 @@ def _scene_file(tmp: Path, itu: str, mesh: str) -> Path:
 @pytest.fixture
 def rt_cpu():
     """Sionna RT on the CPU variant; skip when it cannot run here."""
-    from raysim.rt import backend
+    from raysim.echoes.rt import backend
 
     try:
         return backend.configure("cpu", threads=2)
@@ -645,7 +645,7 @@ def rt_cpu():
 @pytest.mark.sionna
 def test_rt_material_undefined_at_carrier(tmp_path, rt_cpu):
     """ITU-R P.2040 ground types are defined up to 10 GHz only: loading at 77 GHz must fail."""
-    from raysim.rt.scenes import load_scene
+    from raysim.echoes.rt.scenes import load_scene
 
     with pytest.raises(ValueError, match="very_dry_ground"):
         load_scene(_scene_file(tmp_path, "very_dry_ground", "ground.ply"), frequency=77e9)
@@ -653,7 +653,7 @@ def test_rt_material_undefined_at_carrier(tmp_path, rt_cpu):
 
 @pytest.mark.sionna
 def test_rt_empty_mesh_is_named(tmp_path, rt_cpu):
-    from raysim.rt.scenes import load_scene
+    from raysim.echoes.rt.scenes import load_scene
 
     with pytest.raises(ValueError, match="empty.ply"):
         load_scene(_scene_file(tmp_path, "concrete", "empty.ply"), frequency=77e9)
@@ -661,8 +661,8 @@ def test_rt_empty_mesh_is_named(tmp_path, rt_cpu):
 
 # ----------------------------------------------- interrupted writes of other writers
 def test_storage_atomic_write_interrupted_at_rename(tmp_path, monkeypatch):
-    """raysim.storage writes aside and renames: an interruption leaves no file at all."""
-    from raysim import storage
+    """raysim.io.storage writes aside and renames: an interruption leaves no file at all."""
+    from raysim.io import storage
 
     def boom(*_a, **_k):
         raise KeyboardInterrupt
@@ -676,7 +676,7 @@ def test_storage_atomic_write_interrupted_at_rename(tmp_path, monkeypatch):
 def test_stability_netcdf_interrupted_at_rename(tmp_path, monkeypatch):
     import xarray as xr
 
-    from raysim.stability import write_netcdf
+    from raysim.studies.stability import write_netcdf
 
     ds = xr.Dataset({"fail": (("x",), np.array([True, False]))}, coords={"x": [0.0, 1.0]})
 

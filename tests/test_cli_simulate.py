@@ -29,7 +29,7 @@ def test_stationary_case_json_has_target_range_and_angle(capsys):
     assert code == 0
     res = json.loads(out)
     assert res["reference"] == {"range_m": 15.0, "az_deg": 20.0, "el_deg": 0.0}
-    m = res["chains"]["uncompensated"]
+    m = res["chains"]["none"]
     assert m["range_m"] == pytest.approx(15.0, abs=RANGE_TOL_M)
     assert m["az_deg"] == pytest.approx(20.0, abs=ANGLE_TOL_DEG)
     assert m["el_deg"] == pytest.approx(0.0, abs=ANGLE_TOL_DEG)
@@ -43,18 +43,18 @@ def test_stationary_case_json_has_target_range_and_angle(capsys):
 
 def test_json_from_a_subprocess_is_strict_json():
     out = subprocess.run([sys.executable, "-m", "raysim", "simulate", "--case", "stationary",
-                          "--json", "--chains", "uncompensated", *SMALL],
+                          "--json", "--chains", "none", *SMALL],
                          capture_output=True, text=True, timeout=120, check=True).stdout
     res = json.loads(out, parse_constant=lambda c: pytest.fail(f"non-JSON constant {c}"))
-    assert res["chains"]["uncompensated"]["angle_error_deg"] < ANGLE_TOL_DEG
+    assert res["chains"]["none"]["angle_error_deg"] < ANGLE_TOL_DEG
 
 
 def test_custom_target_and_motion_flags(capsys):
     code, out, _ = run_cli(["simulate", "--target", "12,-10,5", "--motion", "y:0.02:5",
-                            "--chains", "uncompensated", "--json", *SMALL], capsys)
+                            "--chains", "none", "--json", *SMALL], capsys)
     assert code == 0
     res = json.loads(out)
-    m = res["chains"]["uncompensated"]
+    m = res["chains"]["none"]
     assert res["motion"].startswith("y 0.02 m @ 5 Hz")
     assert m["range_m"] == pytest.approx(12.0, abs=0.05)
     assert m["az_deg"] == pytest.approx(-10.0, abs=0.5)
@@ -64,7 +64,7 @@ def test_custom_target_and_motion_flags(capsys):
 
 
 def test_text_table(capsys):
-    code, out, _ = run_cli(["simulate", "--case", "rotation_y", "--chains", "uncompensated",
+    code, out, _ = run_cli(["simulate", "--case", "rotation_y", "--chains", "none",
                             *SMALL], capsys)
     assert code == 0
     assert "pseudo_velocity_mps [m/s]" in out and "paper reports" in out
@@ -101,7 +101,7 @@ def test_render_cli_resumes(tmp_path, capsys):
 
 
 def test_scenes_list_and_describe(capsys):
-    pytest.importorskip("raysim.rt.scenes")
+    pytest.importorskip("raysim.echoes.rt.scenes")
     code, out, _ = run_cli(["scenes", "list", "--json"], capsys)
     assert code == 0
     names = [r["name"] for r in json.loads(out)]
@@ -127,8 +127,8 @@ def test_compensation_chains_restore_the_stationary_doppler(capsys):
                             "--set", "array.nx=4", "--set", "array.ny=4"], capsys)
     assert code == 0
     res = json.loads(out)
-    assert set(res["chains"]) == {"uncompensated", "paper", "exact"} and not res["notes"]
-    unc, paper, exact = (res["chains"][c] for c in ("uncompensated", "paper", "exact"))
+    assert set(res["chains"]) == {"none", "paper", "exact"} and not res["notes"]
+    unc, paper, exact = (res["chains"][c] for c in ("none", "paper", "exact"))
     # pitch 10 deg at 20 Hz moves the target by several degrees and adds a range rate
     assert abs(unc["pseudo_velocity_mps"]) > 0.2 and unc["angle_error_deg"] > 1.0
     for m in (paper, exact):

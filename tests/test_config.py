@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from raysim.config import SPEED_OF_LIGHT, RadarConfig
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
 REL = 1e-12
 

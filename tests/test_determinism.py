@@ -24,10 +24,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from raysim.arrays import upa
-from raysim.config import RadarConfig
-from raysim.echo import PointTarget, simulate_point_targets
-from raysim.motion import hover_jitter
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
+from raysim.echoes.oracle import PointTarget, simulate_point_targets
+from raysim.platform.motion import hover_jitter
 
 #: Largest CPU/GPU difference of a traced path length [m].
 CPU_GPU_LENGTH_TOL = 1e-5
@@ -73,7 +73,7 @@ def test_hover_jitter_is_seeded():
 
 @pytest.mark.parametrize("preset", ["tactical", "consumer_mems"])
 def test_imu_is_bit_identical_per_seed(preset):
-    from raysim.imu import simulate_imu
+    from raysim.platform.imu import simulate_imu
 
     traj = hover_jitter(1)
     kw = dict(rate=1000.0, start=0.0, end=0.5, time_offset=1e-3, clock_drift_ppm=50.0)
@@ -87,7 +87,7 @@ def test_imu_is_bit_identical_per_seed(preset):
 
 
 def test_stability_point_is_bit_identical():
-    from raysim.stability import MAPS, evaluate
+    from raysim.studies.stability import MAPS, evaluate
 
     scn = MAPS["hover_jitter"].build(seed=2, jitter_scale=2.0, init_index=0)
     small = scn.with_(config=RadarConfig(num_chirps=64), array=upa(8, 8, wavelength=CFG.wavelength),
@@ -101,11 +101,11 @@ def test_stability_point_is_bit_identical():
 _TRACE_SCRIPT = textwrap.dedent("""
     import json, sys
     import numpy as np
-    from raysim.rt import backend
+    from raysim.echoes.rt import backend
     backend.configure(sys.argv[1], threads=2)
-    from raysim.config import RadarConfig
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.radar.config import RadarConfig
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
     cfg = RadarConfig(num_chirps=4)
     scene = load_scene("flat_reflectors", frequency=cfg.carrier_frequency)
     tracer = MonostaticTracer(samples_per_src=2000, diffuse=False, seed=3)
@@ -140,7 +140,7 @@ def test_ray_trace_is_bit_identical_on_cpu(tmp_path):
 
 def _cuda_available() -> bool:
     try:
-        from raysim.rt.backend import cuda_available
+        from raysim.echoes.rt.backend import cuda_available
     except ImportError:
         return False
     return cuda_available()

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from raysim.files import atomic_savefig, atomic_write, atomic_write_json, atomic_write_text
+from raysim.io.files import atomic_savefig, atomic_write, atomic_write_json, atomic_write_text
 
 
 def test_written_file_is_complete_and_no_temporary_is_left(tmp_path):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from raysim.imu import (
+from raysim.platform.imu import (
     CONSUMER_MEMS,
     DEG,
     FOOT,
@@ -28,7 +28,7 @@ from raysim.imu import (
     get_preset,
     simulate_imu,
 )
-from raysim.motion import Ramp, Sinusoid, Trajectory, hover_jitter, sinusoid, stationary
+from raysim.platform.motion import Ramp, Sinusoid, Trajectory, hover_jitter, sinusoid, stationary
 
 #: Ideal samples vs closed-form truth [rad/s], [m/s^2] (pure float round-off).
 IDEAL_ATOL = 1e-12

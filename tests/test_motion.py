@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from raysim.motion import (
+from raysim.platform.motion import (
     HoverJitterSpec,
     Ramp,
     Sinusoid,

@@ -1,19 +1,19 @@
 """NUFFT synthesis against the complex128 direct sum, and the automatic method choice.
 
 References are re-derived here in plain NumPy (``ref_tone_sum``) or taken from
-:func:`raysim.synthesis.synthesize_if_direct`; tolerances are named constants.
+:func:`raysim.synthesis.tones.synthesize_if_direct`; tolerances are named constants.
 """
 
 import numpy as np
 import pytest
 
-from raysim.arrays import ti_3tx4rx, upa
-from raysim.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.echo import PointTarget, direction, point_target_delays, simulate_point_targets
-from raysim.motion import sinusoid
-from raysim.nufft_synthesis import PathDelays, element_positions, synthesize_nufft
-from raysim.synthesis import synthesize_if_direct
-from raysim.synthesis_select import choose_method, estimate_seconds, synthesize, tones_error
+from raysim.radar.arrays import ti_3tx4rx, upa
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
+from raysim.echoes.oracle import PointTarget, direction, point_target_delays, simulate_point_targets
+from raysim.platform.motion import sinusoid
+from raysim.synthesis.nufft import PathDelays, element_positions, synthesize_nufft
+from raysim.synthesis.tones import synthesize_if_direct
+from raysim.synthesis.select import choose_method, estimate_seconds, synthesize, tones_error
 
 #: Tolerances the NUFFT must meet (relative l2 error over the cube).
 EPS_VALUES = (1e-3, 1e-4, 1e-5, 1e-6)
@@ -209,8 +209,8 @@ def test_moving_scatterers_tdm_exact(rng):
 
 
 def test_from_pathset_matches_reprojection(rng):
-    trace = pytest.importorskip("raysim.rt.trace")
-    reproject = pytest.importorskip("raysim.rt.reproject")
+    trace = pytest.importorskip("raysim.echoes.rt.trace")
+    reproject = pytest.importorskip("raysim.echoes.rt.reproject")
     cfg = RadarConfig(num_chirps=4, num_tx_slots=3)
     arr = ti_3tx4rx(cfg.wavelength)
     n = 40
@@ -236,7 +236,7 @@ def test_from_pathset_matches_reprojection(rng):
 
 # ---------------------------------------------------------------- speed-accuracy chart
 def test_pareto_front_rules():
-    from raysim.charts.speed_accuracy import pareto_front
+    from raysim.studies.speed_chart import pareto_front
 
     # (time, error): b is dominated by a (faster, as accurate); d is within the time
     # tolerance of a and more accurate (both stay); c is slowest but most accurate; e is
@@ -249,8 +249,8 @@ def test_pareto_front_rules():
 
 def test_chart_default_on_pareto_front(monkeypatch, tmp_path):
     """Every knob measured on a reduced frame; the default must be on its Pareto front."""
-    import raysim.bench as bench
-    from raysim.charts import speed_accuracy as sa
+    import raysim.studies.bench as bench
+    from raysim.studies import speed_chart as sa
 
     full = bench.paper_setup
 

@@ -8,18 +8,19 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from raysim import metrics, processing
-from raysim.arrays import ti_3tx4rx, upa
-from raysim.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.echo import (
+from raysim.processing import metrics
+from raysim.processing import maps as processing
+from raysim.radar.arrays import ti_3tx4rx, upa
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
+from raysim.echoes.oracle import (
     PointTarget,
     direction,
     noise_power,
     point_target_delays,
     simulate_point_targets,
 )
-from raysim.motion import Ramp, Trajectory, constant_velocity, sinusoid
-from raysim.synthesis import synthesize_if, synthesize_if_direct
+from raysim.platform.motion import Ramp, Trajectory, constant_velocity, sinusoid
+from raysim.synthesis.tones import synthesize_if, synthesize_if_direct
 
 #: Tolerances named in the foundation acceptance criteria.
 RANGE_TOL_BINS = 0.5

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raysim.cases import PAPER_CASES, get_case
-from raysim.scenario import (
+from raysim.studies.cases import PAPER_CASES, get_case
+from raysim.io.scenario import (
     dumps_toml,
     load_scenario,
     loads_scenario,
@@ -114,7 +114,7 @@ seed = 4
     # z: sinusoid at phase 90 deg (value 0.05 at t=0) plus jitter (a few cm)
     assert abs(q[0, 2] - 0.05) < 0.1
     assert traj.name.count("+") == 3
-    from raysim.motion import hover_jitter
+    from raysim.platform.motion import hover_jitter
     jit = hover_jitter(4).states(t)[0]
     np.testing.assert_allclose(q[:, 4], case[:, 4] + jit[:, 4], atol=1e-12)
     np.testing.assert_allclose(q[:, 0], 0.1 * t + jit[:, 0], atol=1e-12)
@@ -162,7 +162,7 @@ def test_paper_case_scenarios_and_examples(name):
 def test_every_bundled_scene_has_an_example():
     names = {"flat_reflectors", "parking_lot", "rough_terrain"}
     try:
-        from raysim.rt.scenes import SCENES
+        from raysim.echoes.rt.scenes import SCENES
         names = set(SCENES)
     except ImportError:
         pass

@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from raysim import stability
-from raysim.arrays import upa
-from raysim.config import RadarConfig
-from raysim.echo import simulate_point_targets
-from raysim.motion import sinusoid, stationary
-from raysim.processing import range_compress
-from raysim.stability import (
+from raysim.studies import stability
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
+from raysim.echoes.oracle import simulate_point_targets
+from raysim.platform.motion import sinusoid, stationary
+from raysim.processing.maps import range_compress
+from raysim.studies.stability import (
     MAPS,
     Criteria,
     PoseEstimate,
@@ -89,8 +89,8 @@ def test_stationary_platform_restores_hann_width():
 
 
 # ------------------------------------------------------------ cross-model tier
-@pytest.mark.parametrize("chain, phase", [("paper", "paper"),
-                                          ("paper_integrated", "displacement")])
+@pytest.mark.parametrize("chain, phase", [("paper", "published"),
+                                          ("paper_integrated", "integrated")])
 def test_paper_chains_match_compensation_package(chain, phase):
     comp = pytest.importorskip("compensation")
     cfg, arr = _small()
@@ -160,7 +160,7 @@ def test_paper_tilt_correction_matches_closed_form_bias():
     cfg, arr = _small(n=20)
     rot, az = np.deg2rad(2.0), np.deg2rad(45.0)
     # constant pitch: no Doppler, only the spatial bias
-    from raysim.motion import Ramp, Trajectory
+    from raysim.platform.motion import Ramp, Trajectory
 
     scn = Scenario(cfg, arr, Trajectory((Ramp("pitch", rot),)), 15.0, az)
     res = evaluate(scn, ("paper_integrated",))
@@ -223,7 +223,7 @@ def test_hover_assumption_fails_under_strong_jitter():
 
 # --------------------------------------------------------------- the command
 def _cheap(scenario, chains=stability.CHAINS, **_):
-    """Stand-in for :func:`raysim.stability.evaluate`: pseudo-velocity set by the clock offset."""
+    """Stand-in for :func:`raysim.studies.stability.evaluate`: pseudo-velocity set by the clock offset."""
     pv = 0.5 * scenario.imu_time_offset * 1e3                       # fails above 0.25 ms
     rec = {"pseudo_velocity": pv, "doppler_width_hz": 94.0, "angle_error_deg": 0.1,
            "angle_error_mid_deg": 0.1, "focused_angle_error_deg": 0.1, "entropy": 3.5}

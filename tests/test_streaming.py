@@ -7,12 +7,12 @@ import textwrap
 import numpy as np
 import pytest
 
-from raysim.arrays import upa
-from raysim.config import RadarConfig
-from raysim.echo import PointTarget, simulate_point_targets
-from raysim.motion import sinusoid
-from raysim.nufft_synthesis import PathDelays, synthesize_nufft
-from raysim.streaming import (
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
+from raysim.echoes.oracle import PointTarget, simulate_point_targets
+from raysim.platform.motion import sinusoid
+from raysim.synthesis.nufft import PathDelays, synthesize_nufft
+from raysim.synthesis.streaming import (
     FrameWriter,
     NpyWriter,
     peak_bytes,
@@ -118,11 +118,11 @@ def test_progress_and_peak_memory_in_subprocess():
     blocks)."""
     code = textwrap.dedent("""
         import numpy as np
-        from raysim.arrays import upa
-        from raysim.bench import peak_rss
-        from raysim.config import RadarConfig
-        from raysim.nufft_synthesis import PathDelays
-        from raysim.streaming import render_stream
+        from raysim.radar.arrays import upa
+        from raysim.studies.bench import peak_rss
+        from raysim.radar.config import RadarConfig
+        from raysim.synthesis.nufft import PathDelays
+        from raysim.synthesis.streaming import render_stream
         cfg = RadarConfig(num_chirps=16)
         arr = upa(8, 8, wavelength=cfg.wavelength)
         rng = np.random.default_rng(1)
@@ -143,7 +143,7 @@ def test_progress_and_peak_memory_in_subprocess():
 
 
 def test_bench_cli_validation_and_atomic_json(tmp_path, capsys):
-    from raysim.bench import atomic_write_json
+    from raysim.studies.bench import atomic_write_json
     from raysim.cli import main
 
     assert main(["bench", "--chart-only"]) == 2

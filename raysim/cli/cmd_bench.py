@@ -48,7 +48,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``raysim bench``; returns the exit code."""
-    from raysim import bench
+    from raysim.studies import bench
 
     if args.chart_only and not args.chart:
         raise ValueError("--chart-only needs --chart OUT.png")
@@ -63,7 +63,7 @@ def run(args) -> int:
     bench.set_clock(args.clock)
 
     if args.chart_only:
-        from raysim.charts.speed_accuracy import draw_chart, measure_knobs
+        from raysim.studies.speed_chart import draw_chart, measure_knobs
 
         knobs = measure_knobs(quick=args.quick, log=log)
         draw_chart(knobs, args.chart)

@@ -1,8 +1,8 @@
 """``raysim compensate``: motion-compensate a stored IF cube with an IMU log.
 
-The cube is a frame store written by :mod:`raysim.storage` (a Zarr store
-directory, opened with :func:`raysim.storage.open_store`, or a NetCDF file
-``.nc`` from :func:`raysim.storage.export_netcdf`; one frame, ``--frame``) or
+The cube is a frame store written by :mod:`raysim.io.storage` (a Zarr store
+directory, opened with :func:`raysim.io.storage.open_store`, or a NetCDF file
+``.nc`` from :func:`raysim.io.storage.export_netcdf`; one frame, ``--frame``) or
 an ``.npz`` file with these keys:
 
 =====================  =========================  =================================
@@ -40,7 +40,7 @@ import sys
 
 import numpy as np
 
-from raysim.files import atomic_write
+from raysim.io.files import atomic_write
 
 SPEED_OF_LIGHT = 299_792_458.0
 IMU_COLUMNS = ("time_s", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
@@ -107,7 +107,7 @@ def register(subparsers) -> None:
 
 def _load_store(path: str, frame: int) -> dict:
     """Cube keys (as in the ``.npz`` layout) and the IMU log of one frame of a store."""
-    from raysim import storage
+    from raysim.io import storage
 
     if path.endswith(".nc") and not os.path.isdir(path):
         ds = storage.read_netcdf(path)
@@ -138,7 +138,7 @@ def _load_store(path: str, frame: int) -> dict:
 
 def _load_cube(path: str, frame: int = 0) -> dict:
     if not path.endswith(".npz"):
-        from raysim import storage
+        from raysim.io import storage
 
         if storage.store_exists(path) or (path.endswith(".nc") and os.path.isfile(path)):
             return _load_store(path, frame)
@@ -177,7 +177,7 @@ def run(args) -> int:
 
     from compensation import integrate_imu, paper_chain, rigid_body_projection
     from compensation.geometry import direction
-    from raysim.processing import range_compress
+    from raysim.processing.maps import range_compress
 
     cube = _load_cube(args.cube, args.frame)
     if args.imu is not None:

@@ -39,16 +39,17 @@ def register(subparsers) -> None:
                    help="change a scenario key (with --scenario / --case)")
     p.add_argument("--out", metavar="REPORT.html",
                    help="output file (default: output.report of the scenario or report.html)")
-    p.add_argument("--chains", default="uncompensated,paper,exact",
+    p.add_argument("--chains", default="none,paper,exact",
                    help="comma-separated chains (default: all three)")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Run ``raysim report``; returns the exit code."""
-    from raysim.render import CHAINS, FeatureUnavailable
-    from raysim.report import collect_from_dataset, collect_from_scenario, write_report
-    from raysim.scenario import load_scenario, parse_assignment, scenario_from_case
+    from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.vocabulary import CHAINS
+    from raysim.studies.report import collect_from_dataset, collect_from_scenario, write_report
+    from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
 
     chains = [c.strip() for c in args.chains.split(",") if c.strip()]
     if not chains or any(c not in CHAINS for c in chains):
@@ -61,7 +62,7 @@ def run(args) -> int:
     default_out = "report.html"
     try:
         if args.store:
-            from raysim import storage
+            from raysim.io import storage
 
             path = Path(args.store)
             if storage.store_exists(path):

@@ -42,8 +42,8 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Execute ``raysim reproduce``; returns the exit code."""
-    from raysim.imu import get_preset
-    from raysim.reproduce import ReproductionSettings, format_table, reproduce
+    from raysim.platform.imu import get_preset
+    from raysim.studies.reproduce import ReproductionSettings, format_table, reproduce
 
     get_preset(args.imu)
     seeds = args.seeds if args.seeds is not None else (1 if args.imu == "ideal" else 20)

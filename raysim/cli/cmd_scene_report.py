@@ -40,9 +40,9 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``raysim scene-report``; returns the exit code."""
     from dataclasses import replace
 
-    from raysim.imu import PRESETS
-    from raysim.rt.scenes import SCENES
-    from raysim.scene_report import FULL, QUICK, write_scene_report
+    from raysim.platform.imu import PRESETS
+    from raysim.echoes.rt.scenes import SCENES
+    from raysim.studies.scene_report import FULL, QUICK, write_scene_report
 
     if args.scenes:
         bad = [s for s in args.scenes if s not in SCENES]
@@ -57,8 +57,8 @@ def run(args: argparse.Namespace) -> int:
     if args.bench_reprojection:
         import json
 
-        from raysim.rt import backend
-        from raysim.scene_report import bench_reprojection
+        from raysim.echoes.rt import backend
+        from raysim.studies.scene_report import bench_reprojection
 
         backend.configure("cpu", threads=args.threads)
         print(json.dumps(bench_reprojection(), indent=1))
@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     settings = replace(QUICK if args.quick else FULL, imu=args.imu)
     if args.jitter_seed is not None:
         settings = replace(settings, jitter_seed=args.jitter_seed)
-    from raysim.rt import backend
+    from raysim.echoes.rt import backend
 
     backend.configure("cpu", threads=args.threads)
     summary = write_scene_report(args.out, scenes=args.scenes, settings=settings,

@@ -29,9 +29,9 @@ def register(subparsers) -> None:
 
 def _registry():
     try:
-        from raysim.rt.scenes import SCENES
+        from raysim.echoes.rt.scenes import SCENES
     except ImportError as exc:
-        print(f"raysim scenes: the scene registry (raysim.rt.scenes) is not available: {exc}",
+        print(f"raysim scenes: the scene registry (raysim.echoes.rt.scenes) is not available: {exc}",
               file=sys.stderr)
         return None
     return SCENES

@@ -21,7 +21,7 @@ examples:
   raysim simulate --case rotation_y --json
   raysim simulate --case rotation_y --set radar.num_chirps=64 --set array.nx=8 --set array.ny=8
   raysim simulate --target 15,20,0 --motion pitch:10:20 --motion y:0.05:5
-  raysim simulate --scenario examples/case_yaw.toml --chains uncompensated
+  raysim simulate --scenario examples/case_yaw.toml --chains none
 
 motion flags: AXIS:AMPLITUDE:FREQ_HZ[:PHASE_DEG], amplitude in degrees for
 roll/pitch/yaw and metres for x/y/z; several --motion flags add up.
@@ -55,7 +55,7 @@ def register(subparsers) -> None:
     p.add_argument("--frames", type=int, metavar="N", help="frames to render")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="change a scenario key, e.g. radar.num_chirps=64 (repeatable)")
-    p.add_argument("--chains", default="uncompensated,paper,exact",
+    p.add_argument("--chains", default="none,paper,exact",
                    help="comma-separated chains to evaluate (default: all three)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=run)
@@ -73,7 +73,7 @@ def _floats(text: str, n: tuple[int, ...], flag: str) -> list[float]:
 
 
 def _sinusoid(text: str) -> dict:
-    from raysim.scenario import ANGLE_AXES, TRANSLATION_AXES
+    from raysim.io.scenario import ANGLE_AXES, TRANSLATION_AXES
 
     parts = text.split(":")
     axis = parts[0]
@@ -92,8 +92,8 @@ def _sinusoid(text: str) -> dict:
 
 
 def build_scenario(args):
-    """The :class:`~raysim.scenario.Scenario` described by parsed arguments."""
-    from raysim.scenario import (
+    """The :class:`~raysim.io.scenario.Scenario` described by parsed arguments."""
+    from raysim.io.scenario import (
         load_scenario,
         parse_assignment,
         scenario_from_case,
@@ -132,7 +132,7 @@ def build_scenario(args):
         data.setdefault("imu", {})["preset"] = args.imu
     if args.frames is not None:
         data["frames"] = args.frames
-    from raysim.scenario import set_key
+    from raysim.io.scenario import set_key
 
     for item in args.set:
         key, value = parse_assignment(item)
@@ -152,13 +152,15 @@ def _clean(obj):
 
 def run(args) -> int:
     """Run ``raysim simulate``; returns the exit code."""
-    from raysim.render import CHAINS, METRIC_UNITS, FeatureUnavailable, evaluate
+    from raysim.pipeline.run import evaluate
+    from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.pipeline.analysis import ANALYSIS_METRICS
+    from raysim.vocabulary import metric_unit, parse_chains
 
-    chains = [c.strip() for c in args.chains.split(",") if c.strip()]
-    bad = [c for c in chains if c not in CHAINS]
-    if bad or not chains:
-        raise ValueError(f"--chains: got {args.chains!r}, expected a comma-separated subset of "
-                         f"{','.join(CHAINS)}")
+    try:
+        chains = [s.key for s in parse_chains(args.chains)]
+    except ValueError as exc:
+        raise ValueError(f"--chains: got {args.chains!r}: {exc}") from None
     scenario = build_scenario(args)
     try:
         result = evaluate(scenario, chains=chains)
@@ -168,7 +170,7 @@ def run(args) -> int:
     ref = result["reference"]
     paper = {}
     if scenario.motion.case is not None:
-        from raysim.cases import get_case
+        from raysim.studies.cases import get_case
 
         paper = get_case(scenario.motion.case).paper
     out = {
@@ -180,8 +182,9 @@ def run(args) -> int:
                   "num_samples": scenario.radar_config().num_samples,
                   "num_channels": scenario.virtual_array().num_channels,
                   "frames": scenario.frames},
-        "units": METRIC_UNITS,
+        "units": {m: metric_unit(m) for m in ANALYSIS_METRICS},
         "chains": result["chains"],
+        "warnings": result["warnings"],
         "paper": paper,
         "notes": result["notes"],
     }
@@ -198,7 +201,7 @@ def run(args) -> int:
     names = list(result["chains"])
     print()
     print(f"{'metric':<24}" + "".join(f"{n:>16}" for n in names))
-    for key, unit in METRIC_UNITS.items():
+    for key, unit in ((m, metric_unit(m)) for m in ANALYSIS_METRICS):
         row = f"{key + ' [' + unit + ']':<24}"
         for n in names:
             v = result["chains"][n][key]

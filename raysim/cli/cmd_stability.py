@@ -30,7 +30,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``raysim stability``; returns the exit code."""
-    from raysim.stability import MAPS, write_stability
+    from raysim.studies.stability import MAPS, write_stability
 
     if args.maps:
         bad = [m for m in args.maps if m not in MAPS]

@@ -46,7 +46,7 @@ def register(subparsers) -> None:
                    help="fixed change to the base scenario (repeatable)")
     p.add_argument("--seeds", default="0", metavar="VALUES",
                    help="seeds, e.g. 0,1,2 or range(8) (default: 0)")
-    p.add_argument("--chains", default="uncompensated,paper,exact",
+    p.add_argument("--chains", default="none,paper,exact",
                    help="comma-separated chains (default: all three)")
     p.add_argument("--out", required=True, metavar="DIR", help="result folder")
     p.add_argument("--scheduler", metavar="ADDRESS",
@@ -63,9 +63,10 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``raysim sweep``; returns the exit code."""
-    from raysim.render import CHAINS, FeatureUnavailable
-    from raysim.scenario import load_scenario, parse_assignment, scenario_from_case
-    from raysim.sweep import SweepSpec, parse_values, run_sweep
+    from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.vocabulary import CHAINS
+    from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
+    from raysim.studies.sweep import SweepSpec, parse_values, run_sweep
 
     if bool(args.scenario) == bool(args.case):
         raise ValueError("give exactly one base: SCENARIO.toml or --case NAME")

@@ -34,7 +34,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from raysim.imu import DEG, MILLI_G, STANDARD_GRAVITY, ImuSamples
+from raysim.platform.imu import DEG, MILLI_G, STANDARD_GRAVITY, ImuSamples
 
 __all__ = ["TIME_UNITS", "GYRO_UNITS", "ACCEL_UNITS", "read_imu_csv", "write_imu_csv"]
 
@@ -211,7 +211,7 @@ def write_imu_csv(path: str | os.PathLike, samples: ImuSamples, *, time_unit: st
     if comment is None:
         comment = (f"raysim IMU log; source: {samples.source or 'unknown'}; body frame FRD; "
                    f"accel is specific force")
-    from raysim.storage import atomic_write
+    from raysim.io.storage import atomic_write
 
     def write(tmp: Path) -> None:
         with tmp.open("w", newline="") as fh:

@@ -161,7 +161,7 @@ class Dca1000Format:
     @classmethod
     def from_radar_config(cls, config, num_rx: int, *, layout: str = "2lane",
                           t0: float = 0.0, adc_bits: int = 16) -> Dca1000Format:
-        """Format matching a :class:`raysim.config.RadarConfig`.
+        """Format matching a :class:`raysim.radar.config.RadarConfig`.
 
         ``num_samples``, ``num_tx`` (``num_tx_slots``), ``num_loops``
         (``num_chirps``), ``slot_interval``, ``frame_period`` and ``complex``
@@ -472,7 +472,7 @@ def write_dca1000(path: str | os.PathLike, cube, fmt: Dca1000Format) -> Path:
         if fmt.complex:
             lanes[..., 1, :r] = np.moveaxis(im, -2, -1)
         out = lanes
-    from raysim.storage import atomic_write
+    from raysim.io.storage import atomic_write
 
     words = np.ascontiguousarray(out, dtype=np.int32).astype(_INT16)
     return atomic_write(path, lambda tmp: words.tofile(tmp))

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from raysim.arrays import upa
+from raysim.radar.arrays import upa
 from raysim.cli import main
-from raysim.config import RadarConfig
-from raysim.echo import PointTarget, simulate_point_targets
-from raysim.imu import simulate_imu
-from raysim.motion import sinusoid
+from raysim.radar.config import RadarConfig
+from raysim.echoes.oracle import PointTarget, simulate_point_targets
+from raysim.platform.imu import simulate_imu
+from raysim.platform.motion import sinusoid
 
 
 def test_compensate_cube_and_imu_csv(tmp_path):
@@ -54,7 +54,7 @@ def test_compensate_reports_bad_files(tmp_path, capsys):
 
 
 def _store_frame(cfg, arr, traj, lever):
-    from raysim import storage
+    from raysim.io import storage
 
     tgt = PointTarget.at(12.0, np.deg2rad(15), 0.0, radar_origin=lever)
     frame = simulate_point_targets(cfg, arr, [tgt], traj, lever_arm=lever)
@@ -74,7 +74,7 @@ def _check_beams(out):
 
 
 def test_compensate_zarr_store_with_its_imu_log(tmp_path, capsys):
-    from raysim import storage
+    from raysim.io import storage
 
     cfg = RadarConfig(num_chirps=64, sample_rate=2.5e6)
     arr = upa(6, 6, wavelength=cfg.wavelength)
@@ -97,7 +97,7 @@ def test_compensate_zarr_store_with_its_imu_log(tmp_path, capsys):
 
 
 def test_compensate_netcdf_store(tmp_path):
-    from raysim import storage
+    from raysim.io import storage
 
     cfg = RadarConfig(num_chirps=64, sample_rate=2.5e6)
     arr = upa(6, 6, wavelength=cfg.wavelength)

@@ -208,17 +208,17 @@ def test_paper_rotation_phase_flag(freq, n, flagged):
     rc = np.ones((n, 4, 1), np.complex64)
     kw = dict(wavelength=LAM, direction=direction(np.deg2rad(20.0), 0.0), range_axis=[10.0],
               azimuth=[0.35], elevation=[0.0], steps=("translation", "rotation"))
-    beams = paper_chain(rc, _upa(2), m, rotation_phase="paper", **kw)
+    beams = paper_chain(rc, _upa(2), m, rotation_phase="published", **kw)
     assert [w.split(":")[0] for w in beams.warnings] == (["paper rotation phase"] if flagged
                                                           else [])
     if flagged:
         assert f"limit {ROTATION_PHASE_LIMIT:.3g}" in beams.warnings[0]
-    assert paper_chain(rc, _upa(2), m, rotation_phase="displacement", **kw).warnings == ()
+    assert paper_chain(rc, _upa(2), m, rotation_phase="integrated", **kw).warnings == ()
 
 
 def test_normal_paper_case_has_no_warnings():
-    from raysim.cases import PAPER_CASES
-    from raysim.reproduce import ReproductionSettings, run_case
+    from raysim.studies.cases import PAPER_CASES
+    from raysim.studies.reproduce import ReproductionSettings, run_case
 
     rows = {r["chain"]: r for r in run_case(PAPER_CASES["rotation_y"], imu="ideal",
                                             settings=ReproductionSettings.quick(),

@@ -12,8 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from raysim.cases import PAPER_CASES
-from raysim.reproduce import ReproductionSettings, run_case
+from raysim.studies.cases import PAPER_CASES
+from raysim.studies.reproduce import ReproductionSettings, run_case
 
 #: Residual pseudo-velocity bound [Doppler bins].
 PV_TOL_BINS = 0.05

@@ -19,8 +19,8 @@ from compensation import (
     yaw_projection,
 )
 from compensation.strapdown import PlatformMotion
-from raysim.arrays import upa
-from raysim.processing import beamform
+from raysim.radar.arrays import upa
+from raysim.processing.maps import beamform
 
 LAM = 3.8685e-3
 #: complex64 round-off bound relative to the peak.
@@ -115,7 +115,7 @@ def test_rotation_phase_paper_vs_displacement():
                             [0.0, 0.0, 0.1])
     u = direction(np.deg2rad(20), 0.0)
     disp = range_change(motion, u)
-    paper = range_change(motion, u, rotation_phase="paper")
+    paper = range_change(motion, u, rotation_phase="published")
     np.testing.assert_allclose(disp, -(rot @ [0, 0, 0.1] - [0, 0, 0.1]) @ u, atol=1e-15)
     np.testing.assert_allclose(disp[1:8], paper[1:8], rtol=0.02)         # early: same
     assert np.abs(disp - paper).max() > 1e-3                              # later: not

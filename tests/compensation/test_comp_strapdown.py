@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from compensation import STANDARD_GRAVITY, integrate_imu
-from raysim.imu import simulate_imu
-from raysim.motion import Trajectory, hover_jitter, sinusoid
+from raysim.platform.imu import simulate_imu
+from raysim.platform.motion import Trajectory, hover_jitter, sinusoid
 
 #: Attitude error bound with an ideal 1 kHz IMU [rad] (matrix entries).
 ATTITUDE_TOL = 2e-6

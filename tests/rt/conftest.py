@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from raysim.arrays import upa
-from raysim.config import RadarConfig
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
 
 #: Dr.Jit threads used by the tests (the CI machine has 2 cores).
 RT_TEST_THREADS = 2
@@ -14,7 +14,7 @@ RT_TEST_THREADS = 2
 @pytest.fixture(scope="session")
 def rt_backend():
     """Configure Sionna RT on the CPU (LLVM) variant; skip when it cannot run here."""
-    from raysim.rt import backend
+    from raysim.echoes.rt import backend
 
     try:
         return backend.configure("cpu", threads=RT_TEST_THREADS)
@@ -30,8 +30,8 @@ def warm_kernels(rt_backend):
     empty cache, 0.04 s with a warm one); warming up front keeps per-test
     timings meaningful.
     """
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     cfg = RadarConfig(num_chirps=4)
     scene = load_scene("flat_reflectors", frequency=cfg.carrier_frequency)

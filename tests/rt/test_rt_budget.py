@@ -9,9 +9,9 @@ import time
 import numpy as np
 import pytest
 
-from raysim.arrays import upa
-from raysim.config import RadarConfig
-from raysim.rt.budget import MAX_SAMPLES, MIN_SAMPLES, plan_trace
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
+from raysim.echoes.rt.budget import MAX_SAMPLES, MIN_SAMPLES, plan_trace
 
 CFG = RadarConfig(num_chirps=8)
 ARR = upa(4, 4, wavelength=CFG.wavelength)
@@ -34,7 +34,7 @@ def _scene_with_extras(tmp_path):
     """flat_reflectors plus a box 150 m away and a sheet above the radar."""
     import trimesh
 
-    from raysim.rt.scenes import FLAT_REFLECTORS
+    from raysim.echoes.rt.scenes import FLAT_REFLECTORS
 
     src = FLAT_REFLECTORS.path.parent
     shutil.copytree(src / "meshes", tmp_path / "meshes")
@@ -102,7 +102,7 @@ def test_bad_input_is_named(kw, match):
 
 
 def _targets(ps):
-    from raysim.rt.trace import SENSING
+    from raysim.echoes.rt.trace import SENSING
 
     m = (ps.kind & SENSING) != 0
     return ps.length[m], np.abs(ps.amplitude[m])
@@ -110,8 +110,8 @@ def _targets(ps):
 
 @pytest.mark.sionna
 def test_planned_trace_keeps_reflector_returns_with_fewer_rays(warm_kernels, tmp_path):
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     scene = load_scene("flat_reflectors", frequency=CFG.carrier_frequency)
     planned = MonostaticTracer.for_scene(scene, CFG, ARR)
@@ -138,8 +138,8 @@ def test_planned_trace_keeps_reflector_returns_with_fewer_rays(warm_kernels, tmp
 
 @pytest.mark.sionna
 def test_pruned_scene_drops_far_shape(warm_kernels, tmp_path):
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     path = _scene_with_extras(tmp_path)
     scene = load_scene(path, frequency=CFG.carrier_frequency, hover_altitude=15.0,

@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raysim import metrics, processing
-from raysim.arrays import upa
-from raysim.config import RadarConfig
-from raysim.motion import hover_jitter, stationary
+from raysim.processing import metrics
+from raysim.processing import maps as processing
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
+from raysim.platform.motion import hover_jitter, stationary
 
 pytestmark = pytest.mark.sionna
 
@@ -33,15 +34,15 @@ def _leakage_db(data: np.ndarray) -> float:
 
 @pytest.fixture(scope="module")
 def clutter_scene(warm_kernels):
-    from raysim.rt.scenes import load_scene
+    from raysim.echoes.rt.scenes import load_scene
 
     return load_scene("rough_terrain")
 
 
 def test_stationary_clutter_has_zero_doppler_ridge(clutter_scene):
     """Stationary radar over rough terrain: no Doppler spread; hovering: visible spread."""
-    from raysim.rt.render import render_scene
-    from raysim.rt.trace import DIFFUSE, MonostaticTracer
+    from raysim.echoes.rt.render import render_scene
+    from raysim.echoes.rt.trace import DIFFUSE, MonostaticTracer
 
     config = RadarConfig(num_chirps=32)
     array = upa(4, 4, wavelength=config.wavelength)
@@ -67,7 +68,7 @@ def test_stationary_clutter_has_zero_doppler_ridge(clutter_scene):
 
 def test_trace_is_deterministic_and_sorted(clutter_scene):
     """Equal traces give equal arrays; paths come sorted by length."""
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     config = RadarConfig(num_chirps=4)
     tracer = MonostaticTracer(samples_per_src=5_000)
@@ -91,8 +92,8 @@ def test_diffuse_clutter_has_no_polarisation_azimuth_pattern(warm_kernels):
     raw co-polarised entry falls off as ``cos(2 az)`` (a four-fold pattern,
     several dB down at 45 deg). The tracer's ``||H||_F / sqrt(2)`` must not.
     """
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import DIFFUSE, MonostaticTracer
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import DIFFUSE, MonostaticTracer
 
     scene = load_scene("flat_reflectors", include_targets=False)
     p = MonostaticTracer(samples_per_src=20_000, specular=False, targets=False,

@@ -1,7 +1,7 @@
 """The ``compensation`` package, unchanged, on ray-traced frames.
 
 A hovering radar over the ``flat_reflectors`` scene is rendered by the ray
-tracer (:func:`raysim.rt.render.render_scene`); the IF cube, the virtual
+tracer (:func:`raysim.echoes.rt.render.render_scene`); the IF cube, the virtual
 element positions and the chirp times go, as plain arrays, through
 ``compensation.integrate_imu`` (ideal IMU), ``compensation.rigid_body_projection``
 and ``compensation.paper_chain``. For every corner reflector the compensated
@@ -14,10 +14,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raysim import metrics, processing
-from raysim.arrays import upa
-from raysim.config import RadarConfig
-from raysim.motion import hover_jitter, sinusoid, stationary
+from raysim.processing import metrics
+from raysim.processing import maps as processing
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
+from raysim.platform.motion import hover_jitter, sinusoid, stationary
 
 pytestmark = pytest.mark.sionna
 
@@ -38,10 +39,10 @@ LEVER = np.array([0.0, 0.0, 0.10])
 def hover_frames(warm_kernels):
     """Stationary and hovering ray-traced frames of the reflectors, plus the IMU pose."""
     from compensation import integrate_imu
-    from raysim.imu import simulate_imu
-    from raysim.rt.render import render_scene
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.platform.imu import simulate_imu
+    from raysim.echoes.rt.render import render_scene
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     config = RadarConfig(num_chirps=64, idle_time=940e-6)           # 64 ms frame
     array = upa(8, 8, wavelength=config.wavelength)

@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raysim import processing
-from raysim.arrays import upa
-from raysim.config import RadarConfig
-from raysim.echo import PointTarget, simulate_point_targets
-from raysim.motion import Trajectory, hover_jitter, sinusoid
+from raysim.processing import maps as processing
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
+from raysim.echoes.oracle import PointTarget, simulate_point_targets
+from raysim.platform.motion import Trajectory, hover_jitter, sinusoid
 
 pytestmark = pytest.mark.sionna
 
@@ -22,7 +22,7 @@ pytestmark = pytest.mark.sionna
 AMPLITUDE_TOL_DB = 0.5
 #: Phase tolerance of the specular ground return [deg].
 PHASE_TOL_DEG = 2.0
-#: Cross-model tolerances against ``raysim.echo`` (brief of the ray tracer).
+#: Cross-model tolerances against ``raysim.echoes.oracle`` (brief of the ray tracer).
 RANGE_TOL_BINS = 0.1
 ANGLE_TOL_DEG = 0.1
 DOPPLER_TOL_BINS = 0.1
@@ -63,8 +63,8 @@ def ref_ground_echo(config: RadarConfig, height: float, eps: complex,
 
 def test_constant_rcs_target_follows_radar_equation(warm_kernels, rt_radar):
     """Every reflector of ``flat_reflectors`` (0-25 m off nadir) within 0.5 dB, phase 0."""
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import SENSING, MonostaticTracer
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import SENSING, MonostaticTracer
 
     scene = load_scene("flat_reflectors")
     # a tilted radar (roll 8 deg, yaw 30 deg) must not change the co-polarised amplitude
@@ -88,8 +88,8 @@ def test_constant_rcs_target_follows_radar_equation(warm_kernels, rt_radar):
 @pytest.mark.parametrize("height", [10.0, 20.0])
 def test_flat_ground_nadir_matches_fresnel(warm_kernels, rt_radar, height):
     """Specular nadir return vs image theory with the half-space Fresnel coefficient."""
-    from raysim.rt.scenes import DRY_SOIL, load_scene
-    from raysim.rt.trace import SPECULAR, MonostaticTracer
+    from raysim.echoes.rt.scenes import DRY_SOIL, load_scene
+    from raysim.echoes.rt.trace import SPECULAR, MonostaticTracer
 
     scene = load_scene("flat_reflectors", hover_altitude=height, include_targets=False)
     paths = MonostaticTracer(diffuse=False, targets=False)(scene, rt_radar)
@@ -119,14 +119,14 @@ def _peak_metrics(frame, array, config):
 
 
 def test_cross_model_target_vs_point_target_oracle(warm_kernels):
-    """A ray-traced constant-RCS target reproduces ``raysim.echo`` under hover jitter.
+    """A ray-traced constant-RCS target reproduces ``raysim.echoes.oracle`` under hover jitter.
 
     One moving reflector, a 4 x 4 UPA, 32 chirps: the whole cube agrees to
     -40 dB, and the peaks to 0.1 range bin, 0.1 deg, 0.1 Doppler bin and 0.5 dB.
     """
-    from raysim.rt.render import render_scene
-    from raysim.rt.scenes import TargetSpec, load_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.render import render_scene
+    from raysim.echoes.rt.scenes import TargetSpec, load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     config = RadarConfig(num_chirps=32)
     array = upa(4, 4, wavelength=config.wavelength)

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raysim.arrays import upa
-from raysim.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.motion import Trajectory, constant_velocity, hover_jitter, sinusoid
-from raysim.synthesis import synthesize_if_direct
+from raysim.radar.arrays import upa
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
+from raysim.platform.motion import Trajectory, constant_velocity, hover_jitter, sinusoid
+from raysim.synthesis.tones import synthesize_if_direct
 
 #: Re-projected vs re-traced IF cube, fixed scattering points, re-traced geometry [dB].
 RETRACE_CUBE_TOL_DB = -50.0
@@ -21,7 +21,7 @@ RETRACE_PHASE_TOL_DEG = 1.0
 
 def _pathset(first, last, length, amplitude=None, velocity=None, radar=(0.0, 0.0, 0.0)):
     """A hand-made PathSet (no Sionna needed)."""
-    from raysim.rt.trace import PathSet
+    from raysim.echoes.rt.trace import PathSet
 
     first = np.atleast_2d(np.asarray(first, float))
     n = first.shape[0]
@@ -47,8 +47,8 @@ def ref_point_lengths(points, times_xtx_xrx, velocity=None):
 
 def test_reprojection_is_exact_for_point_scatterers():
     """L' equals the exact geometry for frozen points, with motion, lever arm, TDM and velocity."""
-    from raysim.arrays import ti_3tx4rx
-    from raysim.rt.reproject import element_positions, path_lengths
+    from raysim.radar.arrays import ti_3tx4rx
+    from raysim.echoes.rt.reproject import element_positions, path_lengths
 
     config = RadarConfig(num_chirps=6, num_tx_slots=3)
     array = ti_3tx4rx(config.wavelength)
@@ -70,7 +70,7 @@ def test_reprojection_is_exact_for_point_scatterers():
 
 def test_if_band_cull_and_taper():
     """Paths whose beat frequency leaves [0, f_s) are culled or tapered, never aliased."""
-    from raysim.rt.reproject import if_band_weight, reproject
+    from raysim.echoes.rt.reproject import if_band_weight, reproject
 
     config = RadarConfig(num_chirps=16)
     array = upa(2, 2, wavelength=config.wavelength)
@@ -103,9 +103,9 @@ def test_reprojection_matches_retracing(warm_kernels):
     (float32; phase error < 1 deg, cube error < -45 dB, both bounded by float32
     rounding inside Sionna).
     """
-    from raysim.rt.reproject import element_positions, path_lengths
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.reproject import element_positions, path_lengths
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     config = RadarConfig(num_chirps=4, chirp_duration=60e-6)
     array = upa(4, 4, wavelength=config.wavelength)
@@ -148,8 +148,8 @@ def test_reprojection_matches_retracing(warm_kernels):
 @pytest.mark.sionna
 def test_render_retrace_every(warm_kernels):
     """``retrace_every=K`` traces ceil(N / K) times and keeps the frame shape."""
-    from raysim.rt.render import render_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.render import render_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     config = RadarConfig(num_chirps=6)
     array = upa(2, 2, wavelength=config.wavelength)

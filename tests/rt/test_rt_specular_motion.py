@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from raysim.arrays import upa
-from raysim.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.motion import Trajectory, constant_velocity, hover_jitter, sinusoid
+from raysim.radar.arrays import upa
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
+from raysim.platform.motion import Trajectory, constant_velocity, hover_jitter, sinusoid
 
 #: Image-method length vs closed form, hand-made traces [m] (float64 rounding of ~30 m).
 IMAGE_LENGTH_TOL_M = 1e-12
@@ -31,7 +31,7 @@ H = 15.0
 
 def _specular_pathset(vertex, radar_tx, radar_rx=None):
     """A hand-made single-bounce specular PathSet traced from ``radar_tx``/``radar_rx``."""
-    from raysim.rt.trace import SPECULAR, PathSet
+    from raysim.echoes.rt.trace import SPECULAR, PathSet
 
     v = np.atleast_2d(np.asarray(vertex, float))
     tx = np.asarray(radar_tx, float)
@@ -51,7 +51,7 @@ def ref_image_length(x_tx, x_rx, point, normal):
 
 
 def _geometry(motion, lever, config=None, array=None):
-    from raysim.rt.reproject import element_positions
+    from raysim.echoes.rt.reproject import element_positions
 
     config = RadarConfig(num_chirps=16) if config is None else config
     array = upa(4, 4, wavelength=config.wavelength) if array is None else array
@@ -60,7 +60,7 @@ def _geometry(motion, lever, config=None, array=None):
 
 def test_image_method_is_exact_over_flat_ground():
     """Translated and tilted platform: L' = 2 (h - z_m) for every chirp and channel."""
-    from raysim.rt.reproject import path_lengths
+    from raysim.echoes.rt.reproject import path_lengths
 
     lever = np.array([0.05, -0.02, 0.10])
     # 10 cm/s drift plus 3 deg roll at 2 Hz plus hover jitter: cm-scale element motion
@@ -78,7 +78,7 @@ def test_image_method_is_exact_over_flat_ground():
     assert disp > 0.01
     assert err < IMAGE_LENGTH_TOL_M
     # the delay form used by the synthesiser
-    from raysim.rt.reproject import reproject
+    from raysim.echoes.rt.reproject import reproject
 
     r = reproject(paths, RadarConfig(num_chirps=16), upa(4, 4, wavelength=RadarConfig(
         num_chirps=16).wavelength), motion, lever)
@@ -87,8 +87,8 @@ def test_image_method_is_exact_over_flat_ground():
 
 def test_image_method_is_exact_for_a_sloped_bistatic_facet():
     """Sloped facet, tx and rx apart (TDM MIMO), platform rotating: image-method closed form."""
-    from raysim.arrays import ti_3tx4rx
-    from raysim.rt.reproject import path_lengths, specular_normals
+    from raysim.radar.arrays import ti_3tx4rx
+    from raysim.echoes.rt.reproject import path_lengths, specular_normals
 
     normal = np.array([0.3, -0.2, -1.0])             # facet faces up (towards -Z, the radar)
     normal /= np.linalg.norm(normal)
@@ -112,7 +112,7 @@ def test_image_method_is_exact_for_a_sloped_bistatic_facet():
 
 def test_frozen_vertex_error_is_second_order():
     """Frozen reflection point: error 2 (sqrt(h'^2 + d^2) - h') ~ d^2 / h', quantified."""
-    from raysim.rt.reproject import path_lengths
+    from raysim.echoes.rt.reproject import path_lengths
 
     paths = _specular_pathset([0.0, 0.0, H], [0.0, 0.0, 0.0])
     d = np.array([0.0, 0.01, 0.03, 0.05, 0.10])      # horizontal displacement [m]
@@ -134,7 +134,7 @@ def test_frozen_vertex_error_is_second_order():
                       for di, e, p in zip(d, err, phase_deg, strict=True)))
     assert phase_deg[3] > 10.0                       # 5 cm: clearly not negligible
     # other interaction types keep the frozen-vertex formula
-    from raysim.rt.trace import DIFFUSE
+    from raysim.echoes.rt.trace import DIFFUSE
 
     diffuse = _specular_pathset([0.0, 0.0, H], [0.0, 0.0, 0.0])
     object.__setattr__(diffuse, "kind", np.array([DIFFUSE], np.uint32))
@@ -147,9 +147,9 @@ def test_frozen_vertex_error_is_second_order():
 @pytest.mark.sionna
 def test_sionna_ground_return_is_exact_under_motion(warm_kernels):
     """Traced flat-ground specular path, re-projected to a moving, tilted array."""
-    from raysim.rt.reproject import path_lengths, single_bounce_specular
-    from raysim.rt.scenes import load_scene
-    from raysim.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.reproject import path_lengths, single_bounce_specular
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
 
     scene = load_scene("flat_reflectors", include_targets=False)
     lever = np.array([0.0, 0.0, 0.1])
@@ -173,7 +173,7 @@ def test_sionna_ground_return_is_exact_under_motion(warm_kernels):
 
 def test_rotation_only_moves_elements_not_the_image():
     """Pure rotation about the phase centre: the image distance follows each element's height."""
-    from raysim.rt.reproject import path_lengths
+    from raysim.echoes.rt.reproject import path_lengths
 
     paths = _specular_pathset([0.0, 0.0, H], [0.0, 0.0, 0.0])
     rot = Rotation.from_euler("ZYX", [0.3, 0.05, -0.04]).as_matrix()

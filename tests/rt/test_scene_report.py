@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from raysim import scene_report as sr
+from raysim.studies import scene_report as sr
 
 pytestmark = pytest.mark.sionna
 
@@ -28,7 +28,7 @@ SETTINGS = sr.QUICK
 @pytest.fixture(scope="module")
 def results(warm_kernels):
     """Every bundled scene, all four chains (QUICK settings)."""
-    from raysim.rt.scenes import SCENES
+    from raysim.echoes.rt.scenes import SCENES
 
     return {name: sr.evaluate_scene(name, SETTINGS, progress=False) for name in SCENES}
 

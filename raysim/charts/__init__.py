@@ -1,1 +1,0 @@
-"""Charts drawn from measured results (one PNG per chart module)."""

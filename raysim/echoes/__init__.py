@@ -1,0 +1,1 @@
+"""Echo sources: the exact point-target oracle and ray-traced scenes."""

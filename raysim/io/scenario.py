@@ -1,0 +1,763 @@
+"""Scenario files: one TOML file describes a whole simulation run.
+
+A scenario fixes the radar waveform, the antenna array, the scene (point
+targets, a bundled ray-tracing scene or a mesh file), the platform motion, the
+radar lever arm, the IMU, the number of frames, the seeds and the outputs.
+Files are parsed with :mod:`tomllib` and validated with pydantic models that
+forbid unknown keys. Every validation problem is reported in one
+:class:`ValueError` whose lines name the key path, the value and what was
+expected, e.g. ``radar.sample_rate_hz: got -1, expected > 0``.
+
+File units follow CONVENTIONS.md: SI with the unit in the key name
+(``sample_rate_hz``, ``range_m``), angles in degrees (``az_deg``,
+``amplitude_deg``). :meth:`Scenario.radar_config`, :meth:`Scenario.trajectory`
+and friends convert to the SI / radian objects of the library.
+
+Example
+-------
+.. code-block:: toml
+
+    name = "pitch wobble"
+    frames = 1
+    seed = 0
+
+    [radar]
+    num_chirps = 64
+
+    [array]
+    kind = "upa"
+    nx = 8
+    ny = 8
+
+    [[scene.targets]]
+    range_m = 15.0
+    az_deg = 20.0
+    el_deg = 0.0
+
+    [[motion.sinusoids]]
+    axis = "pitch"
+    amplitude_deg = 10.0
+    frequency_hz = 20.0
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import re
+import tomllib
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+__all__ = [
+    "RadarSection", "ArraySection", "TargetSpec", "SceneSection", "SinusoidSpec",
+    "HoverJitterSection", "MotionSection", "SensorErrorsSection", "ImuSection",
+    "OutputSection", "Scenario", "load_scenario", "loads_scenario", "validate_scenario",
+    "scenario_from_case", "set_key", "get_key", "dumps_toml", "format_validation_error",
+    "ANGLE_AXES", "TRANSLATION_AXES", "parse_value", "parse_assignment",
+]
+
+#: Motion axes whose amplitudes are angles (given in degrees in files).
+ANGLE_AXES = ("roll", "pitch", "yaw")
+#: Motion axes whose amplitudes are lengths (given in metres in files).
+TRANSLATION_AXES = ("x", "y", "z")
+
+Vec3 = tuple[float, float, float]
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+# ----------------------------------------------------------------------- radar
+class RadarSection(_Section):
+    """``[radar]``: FMCW waveform (defaults: the paper's Table 2).
+
+    See :class:`raysim.radar.config.RadarConfig` for the meaning of every field; the
+    file keys carry their unit.
+    """
+
+    carrier_frequency_hz: float = Field(77e9, gt=0)
+    bandwidth_hz: float = Field(1e9, gt=0)
+    chirp_duration_s: float = Field(60e-6, gt=0)
+    idle_time_s: float = Field(0.0, ge=0)
+    sample_rate_hz: float = Field(10e6, gt=0)
+    num_chirps: int = Field(256, ge=4)
+    complex_sampling: bool = True
+    tx_power_dbm: float = 12.0
+    antenna_gain_dbi: float = 10.0
+    noise_figure_db: float = 12.0
+    frame_period_s: float | None = Field(None, gt=0)
+
+
+# ----------------------------------------------------------------------- array
+class ArraySection(_Section):
+    """``[array]``: antenna layout in the radar frame A.
+
+    ``kind = "upa"``: virtual ``nx x ny`` UPA (x major, y minor), spacing
+    ``spacing_m`` (default half a carrier wavelength).
+    ``kind = "ti_3tx4rx"``: TI-style 3 Tx x 4 Rx TDM MIMO (12 channels).
+    ``kind = "custom"``: TDM MIMO from ``tx_positions_m`` and ``rx_positions_m``
+    (lists of ``[x, y, z]`` in metres, frame A), fired tx 0 first.
+    """
+
+    kind: Literal["upa", "ti_3tx4rx", "custom"] = "upa"
+    nx: int = Field(20, ge=1, le=256)
+    ny: int = Field(20, ge=1, le=256)
+    spacing_m: float | None = Field(None, gt=0)
+    tx_positions_m: list[Vec3] | None = None
+    rx_positions_m: list[Vec3] | None = None
+
+    @model_validator(mode="after")
+    def _custom_needs_positions(self) -> ArraySection:
+        if self.kind == "custom":
+            if not self.tx_positions_m or not self.rx_positions_m:
+                raise ValueError("kind 'custom' needs tx_positions_m and rx_positions_m "
+                                 "(lists of [x, y, z] in metres)")
+        elif self.tx_positions_m is not None or self.rx_positions_m is not None:
+            raise ValueError(f"tx_positions_m / rx_positions_m only apply to kind 'custom', "
+                             f"not {self.kind!r}")
+        return self
+
+
+# ----------------------------------------------------------------------- scene
+class TargetSpec(_Section):
+    """One point target, placed from the nominal radar phase centre.
+
+    ``range_m`` [m], direction ``az_deg`` / ``el_deg`` [deg] (CONVENTIONS.md),
+    ``rcs_dbsm`` [dBsm], constant world (NED) velocity ``velocity_mps`` [m/s].
+    """
+
+    range_m: float = Field(gt=0)
+    az_deg: float = Field(0.0, ge=-90, le=90)
+    el_deg: float = Field(0.0, ge=-90, le=90)
+    rcs_dbsm: float = 10.0
+    velocity_mps: Vec3 = (0.0, 0.0, 0.0)
+
+
+class SceneSection(_Section):
+    """``[scene]``: what the radar sees.
+
+    ``kind = "points"`` with ``[[scene.targets]]``; ``kind = "bundled"`` with
+    ``name`` one of ``raysim.echoes.rt.scenes.SCENES``; ``kind = "mesh"`` with
+    ``path`` to a Mitsuba XML scene or a mesh file (relative paths are taken
+    from the scenario file's folder). ``kind`` may be omitted: it is inferred
+    from which key is given.
+    """
+
+    kind: Literal["points", "bundled", "mesh"] | None = None
+    targets: list[TargetSpec] = Field(default_factory=list)
+    name: str | None = None
+    path: str | None = None
+    max_depth: int = Field(3, ge=0, le=10)
+
+    @model_validator(mode="after")
+    def _infer_kind(self) -> SceneSection:
+        given = {"points": bool(self.targets), "bundled": self.name is not None,
+                 "mesh": self.path is not None}
+        kind = self.kind
+        if kind is None:
+            chosen = [k for k, v in given.items() if v]
+            if len(chosen) > 1:
+                raise ValueError(f"give only one of targets / name / path, got {chosen}")
+            kind = chosen[0] if chosen else "points"
+            object.__setattr__(self, "kind", kind)
+        if kind == "points" and not self.targets:
+            raise ValueError("kind 'points' needs at least one [[scene.targets]] entry")
+        if kind == "bundled" and not self.name:
+            raise ValueError("kind 'bundled' needs name (see `raysim scenes list`)")
+        if kind == "mesh" and not self.path:
+            raise ValueError("kind 'mesh' needs path (a Mitsuba XML or mesh file)")
+        return self
+
+
+# ---------------------------------------------------------------------- motion
+class SinusoidSpec(_Section):
+    """One sinusoid ``A sin(2 pi f t + phase)`` on one motion axis.
+
+    ``amplitude_m`` for ``x, y, z`` (NED body-origin position [m]),
+    ``amplitude_deg`` for ``roll, pitch, yaw`` [deg]; ``frequency_hz`` [Hz];
+    ``phase_deg`` [deg].
+    """
+
+    axis: Literal["x", "y", "z", "roll", "pitch", "yaw"]
+    amplitude_m: float | None = None
+    amplitude_deg: float | None = None
+    frequency_hz: float = Field(ge=0)
+    phase_deg: float = 0.0
+
+    @model_validator(mode="after")
+    def _amplitude_unit(self) -> SinusoidSpec:
+        if self.axis in ANGLE_AXES:
+            if self.amplitude_m is not None or self.amplitude_deg is None:
+                raise ValueError(f"axis {self.axis!r} is an angle: give amplitude_deg "
+                                 f"(not amplitude_m)")
+        elif self.amplitude_deg is not None or self.amplitude_m is None:
+            raise ValueError(f"axis {self.axis!r} is a translation: give amplitude_m "
+                             f"(not amplitude_deg)")
+        return self
+
+    @property
+    def amplitude_si(self) -> float:
+        """Amplitude in SI: metres or radians."""
+        if self.axis in ANGLE_AXES:
+            return math.radians(self.amplitude_deg)
+        return float(self.amplitude_m)
+
+
+class HoverJitterSection(_Section):
+    """``[motion.hover_jitter]``: seeded stochastic hover jitter.
+
+    ``seed`` defaults to the scenario ``seed``; ``scale`` multiplies every
+    amplitude of :class:`raysim.platform.motion.HoverJitterSpec` (1 = typical small
+    multirotor, 0 = none).
+    """
+
+    seed: int | None = Field(None, ge=0)
+    scale: float = Field(1.0, ge=0)
+
+
+class MotionSection(_Section):
+    """``[motion]``: platform motion, the sum of every part given.
+
+    ``case``: the motion of a paper case (``raysim.studies.cases.PAPER_CASES``);
+    ``[[motion.sinusoids]]``: extra sinusoids; ``velocity_mps``: constant world
+    velocity [m/s]; ``[motion.hover_jitter]``: stochastic jitter. Nothing given
+    means a stationary platform.
+    """
+
+    case: str | None = None
+    sinusoids: list[SinusoidSpec] = Field(default_factory=list)
+    velocity_mps: Vec3 | None = None
+    hover_jitter: HoverJitterSection | None = None
+
+    @field_validator("case")
+    @classmethod
+    def _known_case(cls, v: str | None) -> str | None:
+        if v is not None:
+            from raysim.studies.cases import PAPER_CASES
+
+            if v not in PAPER_CASES:
+                raise ValueError(f"a paper case name, one of {sorted(PAPER_CASES)}")
+        return v
+
+
+# ------------------------------------------------------------------------- imu
+class SensorErrorsSection(_Section):
+    """One sensor triad of a custom IMU, SI units (see :class:`raysim.platform.imu.SensorErrors`).
+
+    Gyroscope values in rad/s based units, accelerometer values in m/s^2 based
+    units; ``full_scale`` may be omitted for no saturation.
+    """
+
+    noise_density: float = Field(0.0, ge=0)
+    bias_sigma: float = Field(0.0, ge=0)
+    bias_instability: float = Field(0.0, ge=0)
+    bias_correlation_time: float = Field(100.0, gt=0)
+    bias_random_walk: float = Field(0.0, ge=0)
+    scale_factor_sigma: float = Field(0.0, ge=0)
+    misalignment_sigma: float = Field(0.0, ge=0)
+    resolution: float = Field(0.0, ge=0)
+    full_scale: float | None = Field(None, gt=0)
+
+
+class ImuSection(_Section):
+    """``[imu]``: strapdown IMU sampling the truth motion.
+
+    ``preset`` one of ``ideal``, ``tactical``, ``consumer_mems``
+    (:data:`raysim.platform.imu.PRESETS`), or ``preset = "custom"`` with ``[imu.gyro]``
+    and ``[imu.accel]`` tables. ``rate_hz`` is the output rate, ``seed`` the
+    error draw (default: scenario ``seed + 1``), ``time_offset_s`` and
+    ``clock_drift_ppm`` the IMU clock errors.
+    """
+
+    preset: Literal["ideal", "tactical", "consumer_mems", "custom"] = "ideal"
+    rate_hz: float = Field(1000.0, gt=0)
+    seed: int | None = Field(None, ge=0)
+    time_offset_s: float = 0.0
+    clock_drift_ppm: float = Field(0.0, gt=-1e5, lt=1e5)
+    gyro: SensorErrorsSection | None = None
+    accel: SensorErrorsSection | None = None
+
+    @model_validator(mode="after")
+    def _custom_tables(self) -> ImuSection:
+        if self.preset != "custom" and (self.gyro is not None or self.accel is not None):
+            raise ValueError(f"[imu.gyro] / [imu.accel] only apply to preset 'custom', "
+                             f"not {self.preset!r}")
+        return self
+
+
+# ---------------------------------------------------------------------- output
+class OutputSection(_Section):
+    """``[output]``: where ``raysim render`` writes (relative to the working folder).
+
+    ``store``: Zarr store (directory); ``netcdf``: optional NetCDF export;
+    ``report``: optional HTML report.
+    """
+
+    store: str | None = None
+    netcdf: str | None = None
+    report: str | None = None
+
+
+# -------------------------------------------------------------------- scenario
+class Scenario(_Section):
+    """A complete, validated simulation run.
+
+    Attributes
+    ----------
+    name, description : str
+    frames : int
+        Frames rendered back to back (frame ``f`` starts at
+        ``f * frame_interval``).
+    seed : int
+        Master seed: thermal noise of frame ``f`` uses ``seed + f``; the hover
+        jitter and the IMU default to seeds derived from it.
+    noise : bool
+        Add thermal receiver noise.
+    intra_chirp : bool
+        Evaluate the geometry at every sample instead of stop-and-hop.
+    lever_arm_m : tuple of float
+        Radar phase centre in the body frame B [m].
+    radar, array, scene, motion, imu, output : sections
+    """
+
+    name: str = "scenario"
+    description: str = ""
+    frames: int = Field(1, ge=1, le=100_000)
+    seed: int = Field(0, ge=0)
+    noise: bool = False
+    intra_chirp: bool = False
+    lever_arm_m: Vec3 = (0.0, 0.0, 0.10)
+    radar: RadarSection = Field(default_factory=RadarSection)
+    array: ArraySection = Field(default_factory=ArraySection)
+    scene: SceneSection
+    motion: MotionSection = Field(default_factory=MotionSection)
+    imu: ImuSection = Field(default_factory=ImuSection)
+    output: OutputSection = Field(default_factory=OutputSection)
+
+    @model_validator(mode="after")
+    def _radar_consistent(self) -> Scenario:
+        # RadarConfig's own cross-field checks (bandwidth < carrier, >= 2 samples, ...)
+        try:
+            self.radar_config()
+        except ValueError as exc:
+            raise ValueError(f"inconsistent radar: {exc}") from None
+        return self
+
+    # ---------------------------------------------------------- conversions
+    def radar_config(self):
+        """The :class:`~raysim.radar.config.RadarConfig` (SI), TDM slots from the array."""
+        from raysim.radar.config import RadarConfig
+
+        r = self.radar
+        slots = {"upa": 1, "ti_3tx4rx": 3,
+                 "custom": len(self.array.tx_positions_m or [0])}[self.array.kind]
+        return RadarConfig(
+            carrier_frequency=r.carrier_frequency_hz, bandwidth=r.bandwidth_hz,
+            chirp_duration=r.chirp_duration_s, idle_time=r.idle_time_s,
+            sample_rate=r.sample_rate_hz, num_chirps=r.num_chirps, num_frames=self.frames,
+            complex_sampling=r.complex_sampling, tx_power_dbm=r.tx_power_dbm,
+            antenna_gain_dbi=r.antenna_gain_dbi, noise_figure_db=r.noise_figure_db,
+            frame_period=r.frame_period_s, num_tx_slots=slots)
+
+    def virtual_array(self):
+        """The :class:`~raysim.radar.arrays.VirtualArray` (positions in metres, frame A)."""
+        from raysim.radar.arrays import tdm_mimo, ti_3tx4rx, upa
+
+        a = self.array
+        lam = self.radar_config().wavelength
+        if a.kind == "upa":
+            return upa(a.nx, a.ny, a.spacing_m, wavelength=lam)
+        if a.kind == "ti_3tx4rx":
+            return ti_3tx4rx(lam)
+        return tdm_mimo(np.asarray(a.tx_positions_m), np.asarray(a.rx_positions_m),
+                        name="custom TDM MIMO")
+
+    @property
+    def lever_arm(self) -> np.ndarray:
+        """Radar phase centre in B, shape ``[3]`` [m]."""
+        return np.asarray(self.lever_arm_m, dtype=float)
+
+    def trajectory(self):
+        """Platform motion as a :class:`~raysim.platform.motion.Trajectory` (SI, radians)."""
+        from raysim.studies.cases import get_case
+        from raysim.platform.motion import (
+            HoverJitterSpec,
+            Sinusoid,
+            Trajectory,
+            constant_velocity,
+            hover_jitter,
+            stationary,
+        )
+
+        m = self.motion
+        parts: list[Trajectory] = []
+        if m.case is not None:
+            parts.append(get_case(m.case).trajectory)
+        if m.sinusoids:
+            comps = tuple(Sinusoid(s.axis, s.amplitude_si, s.frequency_hz,
+                                   math.radians(s.phase_deg)) for s in m.sinusoids)
+            parts.append(Trajectory(comps, name=", ".join(
+                f"{s.axis} {s.amplitude_deg if s.axis in ANGLE_AXES else s.amplitude_m:g}"
+                f"{' deg' if s.axis in ANGLE_AXES else ' m'} @ {s.frequency_hz:g} Hz"
+                for s in m.sinusoids)))
+        if m.velocity_mps is not None:
+            parts.append(constant_velocity(np.asarray(m.velocity_mps)))
+        if m.hover_jitter is not None and m.hover_jitter.scale > 0:
+            k = m.hover_jitter.scale
+            d = HoverJitterSpec()
+            spec = HoverJitterSpec(
+                attitude_rms=tuple(k * v for v in d.attitude_rms),
+                position_rms=tuple(k * v for v in d.position_rms),
+                vibration_rms=k * d.vibration_rms)
+            seed = self.seed if m.hover_jitter.seed is None else m.hover_jitter.seed
+            parts.append(hover_jitter(seed, spec))
+        if not parts:
+            return stationary()
+        traj = parts[0]
+        for p in parts[1:]:
+            traj = traj + p
+        return traj
+
+    def point_targets(self) -> list:
+        """:class:`~raysim.echoes.oracle.PointTarget` list (empty unless ``scene.kind == "points"``)."""
+        from raysim.echoes.oracle import PointTarget
+
+        return [PointTarget.at(t.range_m, math.radians(t.az_deg), math.radians(t.el_deg),
+                               velocity=t.velocity_mps, rcs_dbsm=t.rcs_dbsm,
+                               radar_origin=self.lever_arm)
+                for t in self.scene.targets]
+
+    def imu_spec(self):
+        """The :class:`raysim.platform.imu.ImuSpec` (requires :mod:`raysim.platform.imu`)."""
+        from raysim.platform.imu import ImuSpec, SensorErrors, get_preset
+
+        if self.imu.preset != "custom":
+            return get_preset(self.imu.preset)
+
+        def errors(s: SensorErrorsSection | None) -> SensorErrors:
+            if s is None:
+                return SensorErrors()
+            d = s.model_dump()
+            d["full_scale"] = math.inf if d["full_scale"] is None else d["full_scale"]
+            return SensorErrors(**d)
+
+        return ImuSpec("custom", errors(self.imu.gyro), errors(self.imu.accel),
+                       source="scenario file")
+
+    @property
+    def imu_seed(self) -> int:
+        """Seed of the IMU error draws (``imu.seed`` or ``seed + 1``)."""
+        return self.seed + 1 if self.imu.seed is None else self.imu.seed
+
+    def time_span(self) -> tuple[float, float]:
+        """Truth-time interval ``[start, end]`` [s] covered by all frames' chirps."""
+        cfg = self.radar_config()
+        end = (self.frames - 1) * cfg.frame_interval + cfg.frame_duration
+        return 0.0, float(end)
+
+    # ------------------------------------------------------------- helpers
+    def to_dict(self) -> dict:
+        """Plain-data form (JSON / TOML safe; ``None`` values dropped)."""
+        return _drop_none(self.model_dump(mode="json"))
+
+    def to_json(self) -> str:
+        """Canonical JSON (sorted keys), used to key stores and sweep points."""
+        return json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"))
+
+    def to_toml(self) -> str:
+        """TOML text that :func:`loads_scenario` reads back to an equal scenario."""
+        return dumps_toml(self.to_dict())
+
+    def with_values(self, changes: dict[str, Any]) -> Scenario:
+        """Copy with key paths changed, validated again.
+
+        Parameters
+        ----------
+        changes : dict
+            Key path (``"radar.num_chirps"``, ``"scene.targets.0.range_m"``) -> value.
+        """
+        data = self.model_dump(mode="json")
+        for path, value in changes.items():
+            set_key(data, path, value)
+        return validate_scenario(data)
+
+
+def _drop_none(obj):
+    if isinstance(obj, dict):
+        return {k: _drop_none(v) for k, v in obj.items() if v is not None}
+    if isinstance(obj, list):
+        return [_drop_none(v) for v in obj]
+    return obj
+
+
+# ------------------------------------------------------------------ key paths
+def _split(path: str) -> list[str]:
+    if not isinstance(path, str) or not re.fullmatch(r"[A-Za-z0-9_]+(\.[A-Za-z0-9_]+)*", path):
+        raise ValueError(f"key path must look like 'section.key' or 'section.list.0.key', "
+                         f"got {path!r}")
+    return path.split(".")
+
+
+def get_key(data: dict, path: str) -> Any:
+    """Value at a dotted key path in nested dicts / lists (list items by index)."""
+    cur: Any = data
+    for part in _split(path):
+        if isinstance(cur, list):
+            if not part.isdigit() or int(part) >= len(cur):
+                raise ValueError(f"{path}: list index {part!r} out of range "
+                                 f"(list has {len(cur)} items)")
+            cur = cur[int(part)]
+        elif isinstance(cur, dict) and part in cur:
+            cur = cur[part]
+        else:
+            raise ValueError(f"{path}: no key {part!r}")
+    return cur
+
+
+def set_key(data: dict, path: str, value: Any) -> None:
+    """Set a dotted key path in nested dicts / lists in place, creating tables."""
+    parts = _split(path)
+    cur: Any = data
+    for i, part in enumerate(parts[:-1]):
+        nxt_is_index = parts[i + 1].isdigit()
+        if isinstance(cur, list):
+            if not part.isdigit() or int(part) >= len(cur):
+                raise ValueError(f"{path}: list index {part!r} out of range "
+                                 f"(list has {len(cur)} items)")
+            cur = cur[int(part)]
+            continue
+        if cur.get(part) is None:
+            cur[part] = [] if nxt_is_index else {}
+        cur = cur[part]
+    last = parts[-1]
+    if isinstance(cur, list):
+        if not last.isdigit() or int(last) > len(cur):
+            raise ValueError(f"{path}: list index {last!r} out of range "
+                             f"(list has {len(cur)} items)")
+        if int(last) == len(cur):
+            cur.append(value)
+        else:
+            cur[int(last)] = value
+    else:
+        cur[last] = value
+
+
+# ------------------------------------------------------------------- errors
+def _num(v: Any) -> str:
+    return f"{v:g}" if isinstance(v, (int, float)) else str(v)
+
+
+def _expected(err: dict) -> str:
+    t, ctx = err.get("type", ""), err.get("ctx") or {}
+    simple = {
+        "greater_than": lambda: f"> {_num(ctx.get('gt'))}",
+        "greater_than_equal": lambda: f">= {_num(ctx.get('ge'))}",
+        "less_than": lambda: f"< {_num(ctx.get('lt'))}",
+        "less_than_equal": lambda: f"<= {_num(ctx.get('le'))}",
+        "missing": lambda: "a value (required key is missing)",
+        "extra_forbidden": lambda: "no such key (unknown keys are not allowed)",
+        "literal_error": lambda: f"one of {ctx.get('expected')}",
+        "int_type": lambda: "an integer",
+        "int_parsing": lambda: "an integer",
+        "int_from_float": lambda: "an integer",
+        "float_type": lambda: "a number",
+        "float_parsing": lambda: "a number",
+        "finite_number": lambda: "a finite number",
+        "bool_type": lambda: "true or false",
+        "bool_parsing": lambda: "true or false",
+        "string_type": lambda: "a string",
+        "list_type": lambda: "a list",
+        "tuple_type": lambda: "a list of 3 numbers",
+        "too_long": lambda: f"at most {ctx.get('max_length')} items",
+        "too_short": lambda: f"at least {ctx.get('min_length')} items",
+        "model_type": lambda: "a table",
+        "dict_type": lambda: "a table",
+    }
+    if t in simple:
+        return simple[t]()
+    msg = str(err.get("msg", "valid value"))
+    return msg.removeprefix("Value error, ")
+
+
+def _fmt_value(v: Any) -> str:
+    if isinstance(v, dict):
+        return "a table"
+    text = json.dumps(v) if isinstance(v, (list, str, bool)) or v is None else repr(v)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def format_validation_error(exc: ValidationError, source: str = "scenario") -> ValueError:
+    """Turn a pydantic error into a ValueError listing ``key.path: got V, expected E``."""
+    lines = []
+    for err in exc.errors():
+        loc = ".".join(str(p) for p in err.get("loc", ())) or "(top level)"
+        if err.get("type") == "value_error" and isinstance(err.get("input"), dict):
+            lines.append(f"{loc}: {_expected(err)}")
+        elif err.get("type") == "missing":
+            lines.append(f"{loc}: missing, expected {_expected(err)}")
+        else:
+            lines.append(f"{loc}: got {_fmt_value(err.get('input'))}, expected {_expected(err)}")
+    n = len(lines)
+    head = f"{source}: {n} invalid value{'s' if n > 1 else ''}:\n  "
+    return ValueError(head + "\n  ".join(lines))
+
+
+# ------------------------------------------------------------------ loading
+def validate_scenario(data: dict, source: str = "scenario") -> Scenario:
+    """Validate plain data (as parsed from TOML) into a :class:`Scenario`.
+
+    Raises
+    ------
+    ValueError
+        Listing every offending key path with its value and what was expected.
+    """
+    if not isinstance(data, dict):
+        raise ValueError(f"{source}: expected a table of keys, got {type(data).__name__}")
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as exc:
+        raise format_validation_error(exc, source) from None
+
+
+def loads_scenario(text: str, source: str = "scenario", base_dir: Path | None = None
+                   ) -> Scenario:
+    """Parse and validate TOML text; relative ``scene.path`` is taken from ``base_dir``."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{source}: not valid TOML: {exc}") from None
+    if base_dir is not None and isinstance(data.get("scene"), dict):
+        p = data["scene"].get("path")
+        if isinstance(p, str) and not Path(p).is_absolute():
+            data["scene"]["path"] = str((Path(base_dir) / p).resolve())
+    return validate_scenario(data, source)
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario TOML file.
+
+    Raises
+    ------
+    ValueError
+        File missing or unreadable, invalid TOML, or invalid values (each
+        offending key path named with its value and what was expected).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ValueError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
+    return loads_scenario(text, source=str(path), base_dir=path.parent)
+
+
+def scenario_from_case(name: str, **overrides: Any) -> Scenario:
+    """The scenario of a paper case (radar, 20 x 20 UPA, target, motion, frames).
+
+    Parameters
+    ----------
+    name : str
+        Key of :data:`raysim.studies.cases.PAPER_CASES`.
+    **overrides
+        Key paths with ``__`` for dots are not accepted; use
+        :meth:`Scenario.with_values` for changes.
+    """
+    from raysim.studies.cases import get_case
+
+    if overrides:
+        raise ValueError(f"scenario_from_case takes no overrides, got {sorted(overrides)}; "
+                         f"use Scenario.with_values")
+    case = get_case(name)
+    cfg = case.config
+    data = {
+        "name": case.name,
+        "description": case.description,
+        "frames": int(case.num_frames),
+        "lever_arm_m": [float(v) for v in case.lever_arm],
+        "radar": {"carrier_frequency_hz": cfg.carrier_frequency, "bandwidth_hz": cfg.bandwidth,
+                  "chirp_duration_s": cfg.chirp_duration, "idle_time_s": cfg.idle_time,
+                  "sample_rate_hz": cfg.sample_rate, "num_chirps": cfg.num_chirps},
+        "array": {"kind": "upa", "nx": 20, "ny": 20},
+        "scene": {"kind": "points", "targets": [{
+            "range_m": case.target_range, "az_deg": round(math.degrees(case.target_az), 9),
+            "el_deg": round(math.degrees(case.target_el), 9), "rcs_dbsm": 10.0}]},
+        "motion": {"case": case.name},
+        "imu": {"preset": "ideal"},
+    }
+    return validate_scenario(copy.deepcopy(data), source=f"paper case {name!r}")
+
+
+# --------------------------------------------------------------------- TOML
+def _toml_scalar(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        if math.isnan(v):
+            return "nan"
+        text = repr(v)
+        if "e" not in text and abs(v) >= 1e5:
+            for digits in range(1, 18):  # shortest exact exponent form: 77e9 -> 7.7e+10
+                short = f"{v:.{digits}e}"
+                if float(short) == v:
+                    return short
+        return text
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_scalar(x) for x in v) + "]"
+    raise ValueError(f"cannot write {type(v).__name__} {v!r} to TOML")
+
+
+def dumps_toml(data: dict, _prefix: str = "") -> str:
+    """Write nested dicts / lists of scalars as TOML (tables and arrays of tables)."""
+    lines: list[str] = []
+    tables: list[tuple[str, dict]] = []
+    arrays: list[tuple[str, list]] = []
+    for k, v in data.items():
+        if isinstance(v, dict):
+            tables.append((k, v))
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            arrays.append((k, v))
+        else:
+            lines.append(f"{k} = {_toml_scalar(v)}")
+    out = "\n".join(lines)
+    for k, v in tables:
+        name = f"{_prefix}{k}"
+        body = dumps_toml(v, name + ".")
+        only_subtables = v and all(isinstance(x, dict) or (isinstance(x, list) and x and all(
+            isinstance(y, dict) for y in x)) for x in v.values())
+        out += ("\n\n" + body) if only_subtables else (f"\n\n[{name}]\n" + body)
+    for k, items in arrays:
+        name = f"{_prefix}{k}"
+        for item in items:
+            out += f"\n\n[[{name}]]\n" + dumps_toml(item, name + ".")
+    return out.strip("\n") + ("\n" if not _prefix else "")
+
+
+# ------------------------------------------------------------ command line
+def parse_value(text: str) -> Any:
+    """A command-line value read as a TOML value (``3``, ``1e-3``, ``true``, ``[1, 2]``),
+    else as a plain string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def parse_assignment(text: str) -> tuple[str, Any]:
+    """Split ``key.path=value`` into the key path and the parsed value."""
+    if "=" not in text:
+        raise ValueError(f"expected KEY=VALUE such as radar.num_chirps=64, got {text!r}")
+    key, value = text.split("=", 1)
+    key = key.strip()
+    _split(key)
+    return key, parse_value(value.strip())

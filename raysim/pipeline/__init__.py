@@ -1,0 +1,20 @@
+"""The one run path from a scenario to products.
+
+::
+
+    scenario ─▶ sources ─▶ IF frames ─▶ sensors ─▶ IMU log ─▶ estimate ─▶ motion
+                                │                                         │
+                                └────────────▶ chains ◀───────────────────┘
+                                                 │
+                                          analysis: maps, metrics
+
+* :mod:`~raysim.pipeline.sources`: echo source (point-target oracle or a
+  ray-traced scene) -> :class:`~raysim.synthesis.frame.RadarFrame`.
+* :mod:`~raysim.pipeline.sensors`: the scenario's IMU log.
+* :mod:`~raysim.pipeline.estimate`: IMU samples -> platform pose per chirp.
+* :mod:`~raysim.pipeline.chains`: ``none`` / ``paper`` / ``exact`` beams.
+* :mod:`~raysim.pipeline.analysis`: maps and metrics through one chain.
+* :mod:`~raysim.pipeline.run`: the stages composed (``render``, ``evaluate``).
+
+Every command and study is a composition of these stages.
+"""

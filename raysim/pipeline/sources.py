@@ -1,0 +1,185 @@
+"""Echo sources: a scenario's frames from the point-target oracle or a ray-traced scene.
+
+Stage 1 of the run path (see :mod:`raysim.pipeline`): scenario -> IF frames
+``[chirp, channel, sample]``. :func:`frame_source` loads a scene once and
+returns ``f -> RadarFrame``; :class:`LazyFrames` renders frames on access.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from raysim.io.scenario import Scenario
+from raysim.synthesis.frame import RadarFrame
+
+__all__ = ["FeatureUnavailable", "Reference", "frame_source", "reference_target", "LazyFrames",
+           "render_frames"]
+
+
+class FeatureUnavailable(RuntimeError):
+    """A part of the simulator that this run needs is not installed or not working."""
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Truth direction and range of the reference target, from the nominal radar pose.
+
+    Attributes
+    ----------
+    range_m : float
+        Range [m].
+    az_deg, el_deg : float
+        Direction in frame A at the nominal attitude [deg].
+    """
+
+    range_m: float
+    az_deg: float
+    el_deg: float
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Unit vector in A, shape ``[3]``."""
+        from raysim.echoes.oracle import direction
+
+        return direction(math.radians(self.az_deg), math.radians(self.el_deg))
+
+
+
+# ------------------------------------------------------------------- sources
+def _rt_scene(scenario: Scenario):
+    try:
+        from raysim.echoes.rt.render import render_scene
+        from raysim.echoes.rt.scenes import load_scene
+        from raysim.echoes.rt.trace import MonostaticTracer
+    except ImportError as exc:
+        raise FeatureUnavailable(
+            f"scene kind {scenario.scene.kind!r} needs the ray tracer (raysim.echoes.rt with Sionna "
+            f"RT): {exc}") from None
+    target = scenario.scene.name if scenario.scene.kind == "bundled" else scenario.scene.path
+    if scenario.scene.kind == "mesh" and not str(target).endswith(".xml"):
+        raise ValueError(f"scene.path: got {target!r}, expected a Mitsuba .xml scene file "
+                         f"(convert other meshes with scenes/generate.py as a model)")
+    cfg = scenario.radar_config()
+    try:
+        scene = load_scene(target, frequency=cfg.carrier_frequency)
+    except ValueError:
+        raise
+    except Exception as exc:  # backend failures (no LLVM, no GPU) are not bad input
+        raise FeatureUnavailable(f"cannot load scene {target!r} with Sionna RT: "
+                                 f"{type(exc).__name__}: {exc}") from None
+    tracer = MonostaticTracer(max_depth=max(1, scenario.scene.max_depth), seed=scenario.seed)
+    return scene, tracer, render_scene
+
+
+def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFrame]:
+    """A callable that renders frame ``f`` of the scenario.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    trajectory : Trajectory, optional
+        Re-use an already built motion (default: ``scenario.trajectory()``).
+
+    Returns
+    -------
+    callable
+        ``source(f) -> RadarFrame`` with ``data`` ``[chirp, channel, sample]``;
+        the callable carries ``source.reference`` (a :class:`Reference` or None).
+
+    Raises
+    ------
+    FeatureUnavailable
+        For a ray-traced scene when Sionna RT cannot be used here.
+    """
+    from raysim.echoes.oracle import simulate_point_targets
+
+    cfg = scenario.radar_config()
+    arr = scenario.virtual_array()
+    traj = scenario.trajectory() if trajectory is None else trajectory
+    lever = scenario.lever_arm
+    if scenario.scene.kind == "points":
+        targets = scenario.point_targets()
+
+        def source(f: int) -> RadarFrame:
+            return simulate_point_targets(cfg, arr, targets, traj, lever_arm=lever, frame=f,
+                                          intra_chirp=scenario.intra_chirp,
+                                          noise=scenario.noise, seed=scenario.seed + f)
+
+        source.reference = reference_target(scenario)
+        return source
+
+    scene, tracer, render_scene = _rt_scene(scenario)
+
+    def rt_source(f: int) -> RadarFrame:
+        return render_scene(scene, cfg, arr, traj, lever, tracer=tracer, frame=f,
+                            noise=scenario.noise, seed=scenario.seed + f)
+
+    rt_source.reference = reference_target(scenario, scene)
+    return rt_source
+
+
+def reference_target(scenario: Scenario, rt_scene=None) -> Reference | None:
+    """Range and direction of the first target seen from the nominal radar pose.
+
+    Point scenes: the first ``[[scene.targets]]`` entry. Ray-traced scenes: the
+    first discrete target of the loaded scene (None when it has none).
+    """
+    if scenario.scene.kind == "points":
+        t = scenario.scene.targets[0]
+        return Reference(t.range_m, t.az_deg, t.el_deg)
+    targets = getattr(rt_scene, "targets", None) or []
+    if not targets:
+        return None
+    from raysim.echoes.oracle import az_el
+
+    d = np.asarray(targets[0].position, dtype=float) - scenario.lever_arm
+    r = float(np.linalg.norm(d))
+    az, el = az_el(d / r)
+    return Reference(r, float(np.degrees(az)), float(np.degrees(el)))
+
+
+class LazyFrames(Sequence):
+    """The frames of a scenario, rendered when accessed (frame 0 is kept).
+
+    Analyses of many large frames (the paper's yaw case: 20 frames of 490 MB)
+    then hold about two frames in memory instead of all of them, at the price
+    of rendering a frame again for every pass over the sequence.
+    """
+
+    def __init__(self, source: Callable[[int], RadarFrame], num_frames: int):
+        self._source = source
+        self._n = int(num_frames)
+        self._first: RadarFrame | None = None
+        self.reference = getattr(source, "reference", None)
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, f):
+        if isinstance(f, slice):
+            return [self[i] for i in range(self._n)[f]]
+        f = int(f) + (self._n if int(f) < 0 else 0)
+        if not 0 <= f < self._n:
+            raise IndexError(f"frame {f} out of range (0..{self._n - 1})")
+        if f == 0:
+            if self._first is None:
+                self._first = self._source(0)
+            return self._first
+        return self._source(f)
+
+    def chirp_times(self) -> np.ndarray:
+        """Chirp start times of all frames, frame after frame, shape ``[frame * chirp]`` [s]."""
+        cfg = self[0].config
+        return np.concatenate([cfg.chirp_times(f) for f in range(self._n)])
+
+
+def render_frames(scenario: Scenario, trajectory=None) -> list[RadarFrame]:
+    """All frames of a scenario in memory (``[chirp, channel, sample]`` each)."""
+    source = frame_source(scenario, trajectory)
+    return [source(f) for f in range(scenario.frames)]
+
+

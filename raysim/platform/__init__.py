@@ -1,0 +1,1 @@
+"""The drone: 6-DoF body motion and the IMU that measures it."""

@@ -1,0 +1,1 @@
+"""Radar description: FMCW waveform and configuration, antenna arrays."""

@@ -1,0 +1,420 @@
+"""Parameter sweeps on Dask, resumable point by point.
+
+A sweep varies any scenario key path (``radar.num_chirps``,
+``motion.sinusoids.0.amplitude_deg``, ``imu.preset`` ...) over a list of
+values, takes the Cartesian product of all varied keys and repeats every
+combination for each seed (the scenario's top-level ``seed``). Every point is
+one Dask task that renders the scenario in memory and measures it with
+:func:`raysim.pipeline.run.evaluate`.
+
+Resumability: a point is identified by a hash of the base scenario, its
+values and its seed. Each finished point is written atomically to
+``<out>/points/<hash>.json`` (by the worker, and again by the client if the
+worker's file system is not shared); a rerun skips every point whose file
+exists, so an interrupted sweep only computes what is missing. The gathered
+results are one :class:`xarray.Dataset` with one dimension per varied key
+(named by its key path), ``seed`` and ``chain``, one variable per metric
+(NaN where a point is missing or failed), written to ``<out>/sweep.nc``.
+
+Scheduler: a :class:`distributed.LocalCluster` by default (in-process threads,
+``processes=False``, which suits a 2-core machine), or any scheduler address
+(``tcp://host:8786``) of a real cluster whose workers can import raysim.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import re
+import time
+import traceback
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from raysim.pipeline.analysis import ANALYSIS_METRICS
+from raysim.vocabulary import CHAINS, metric_unit
+from raysim.io.scenario import Scenario, parse_value, validate_scenario
+
+__all__ = ["SweepSpec", "SweepPoint", "SweepResult", "parse_values", "sweep_points",
+           "point_key", "run_sweep", "gather_results", "load_point"]
+
+
+def parse_values(text: str) -> list:
+    """Values of a swept key from the command line.
+
+    Accepted forms: ``1,2,4`` (comma list), ``[1, 2, 4]`` (TOML list),
+    ``range(START, STOP[, STEP])`` (integers, STOP excluded),
+    ``linspace(START, STOP, NUM)`` (floats, STOP included),
+    ``logspace(START_EXP, STOP_EXP, NUM)`` (base 10).
+
+    Raises
+    ------
+    ValueError
+        For an empty list or a malformed range.
+    """
+    text = text.strip()
+    m = re.fullmatch(r"(range|linspace|logspace)\((.*)\)", text)
+    if m:
+        fn, args = m.group(1), [a.strip() for a in m.group(2).split(",")]
+        try:
+            nums = [float(a) for a in args]
+        except ValueError:
+            raise ValueError(f"{text!r}: arguments of {fn}() must be numbers") from None
+        if fn == "range":
+            if not 1 <= len(nums) <= 3 or any(n != int(n) for n in nums):
+                raise ValueError(f"{text!r}: range() takes 1 to 3 integers")
+            vals = list(range(*[int(n) for n in nums]))
+        else:
+            if len(nums) != 3 or nums[2] != int(nums[2]) or nums[2] < 1:
+                raise ValueError(f"{text!r}: {fn}(START, STOP, NUM) needs an integer NUM >= 1")
+            gen = np.linspace if fn == "linspace" else np.logspace
+            vals = [float(v) for v in gen(nums[0], nums[1], int(nums[2]))]
+    elif text.startswith("["):
+        vals = parse_value(text)
+        if not isinstance(vals, list):
+            raise ValueError(f"{text!r}: not a valid TOML list")
+    else:
+        vals = [parse_value(v.strip()) for v in text.split(",") if v.strip()]
+    if not vals:
+        raise ValueError(f"{text!r}: no values")
+    return vals
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """What to sweep.
+
+    Attributes
+    ----------
+    base : Scenario
+        Scenario every point starts from.
+    parameters : dict
+        Key path -> list of values (order kept; becomes a dimension).
+    seeds : tuple of int
+        Values of the scenario ``seed`` each combination is run with.
+    chains : tuple of str
+        Processing chains measured (see :data:`raysim.vocabulary.CHAINS`).
+    """
+
+    base: Scenario
+    parameters: dict = field(default_factory=dict)
+    seeds: tuple = (0,)
+    chains: tuple = ("none",)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.base, Scenario):
+            raise ValueError(f"base must be a Scenario, got {type(self.base).__name__}")
+        params = {}
+        for k, vals in dict(self.parameters).items():
+            vals = list(vals)
+            if not vals:
+                raise ValueError(f"parameter {k!r}: empty list of values")
+            if k == "seed":
+                raise ValueError("sweep the seed with --seeds (SweepSpec seeds=...), "
+                                 "not as a parameter")
+            params[k] = vals
+        object.__setattr__(self, "parameters", params)
+        seeds = tuple(int(s) for s in self.seeds)
+        if not seeds or any(s < 0 for s in seeds):
+            raise ValueError(f"seeds must be a non-empty list of integers >= 0, got {self.seeds}")
+        object.__setattr__(self, "seeds", seeds)
+        chains = tuple(self.chains)
+        bad = [c for c in chains if c not in CHAINS]
+        if bad or not chains:
+            raise ValueError(f"chains: got {list(chains)}, expected names from {list(CHAINS)}")
+        object.__setattr__(self, "chains", chains)
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One task: the values of the varied keys, the seed and the point's hash key."""
+
+    index: tuple
+    values: dict
+    seed: int
+    key: str
+
+
+def point_key(base: Scenario, values: dict, seed: int, chains: Sequence[str]) -> str:
+    """Hash (16 hex digits) identifying a point: base scenario, values, seed, chains."""
+    base_d = base.to_dict()
+    base_d.pop("output", None)
+    blob = json.dumps({"base": base_d, "values": values, "seed": int(seed),
+                       "chains": list(chains)}, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def sweep_points(spec: SweepSpec) -> list[SweepPoint]:
+    """Every point of the sweep, each validated (bad key paths / values raise here)."""
+    names = list(spec.parameters)
+    grids = [range(len(spec.parameters[n])) for n in names]
+    points = []
+    for idx in itertools.product(*grids):
+        values = {n: spec.parameters[n][i] for n, i in zip(names, idx, strict=True)}
+        for si, seed in enumerate(spec.seeds):
+            _scenario_of(spec.base, values, seed)  # validate now, not in a worker
+            points.append(SweepPoint(idx + (si,), values, seed,
+                                     point_key(spec.base, values, seed, spec.chains)))
+    return points
+
+
+def _scenario_of(base: Scenario, values: dict, seed: int) -> Scenario:
+    try:
+        return base.with_values({**values, "seed": int(seed)})
+    except ValueError as exc:
+        raise ValueError(f"sweep point {values} seed {seed}: {exc}") from None
+
+
+# ------------------------------------------------------------------ tasks
+def _point_metrics(scenario: Scenario, chains: Sequence[str]) -> dict:
+    """Metrics of one point (chain -> metric -> value) and notes."""
+    from raysim.pipeline.run import evaluate
+
+    res = evaluate(scenario, chains=chains)
+    return {"chains": res["chains"], "notes": res["notes"]}
+
+
+def _point_path(out_dir: Path, key: str) -> Path:
+    return Path(out_dir) / "points" / f"{key}.json"
+
+
+def _jsonable(obj):
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
+
+
+def _run_point(base_json: str, values: dict, seed: int, chains: list, key: str,
+               out_dir: str) -> dict:
+    """Dask task: evaluate one point and persist it atomically. Never raises."""
+    from raysim.io.storage import atomic_write_text
+
+    t0 = time.perf_counter()
+    try:
+        scenario = _scenario_of(validate_scenario(json.loads(base_json)), values, seed)
+        res = _point_metrics(scenario, chains)
+    except Exception as exc:  # reported to the client, point left missing
+        return {"key": key, "values": values, "seed": seed,
+                "error": f"{type(exc).__name__}: {exc}",
+                "traceback": traceback.format_exc(limit=5)}
+    record = _jsonable({"key": key, "values": values, "seed": seed, "chains": res["chains"],
+                        "notes": res["notes"], "elapsed_s": time.perf_counter() - t0})
+    try:
+        atomic_write_text(_point_path(Path(out_dir), key), json.dumps(record, indent=1))
+    except OSError:
+        pass  # not a shared file system: the client writes it
+    return record
+
+
+def load_point(out_dir: str | Path, key: str) -> dict | None:
+    """The stored record of a finished point, or None."""
+    p = _point_path(Path(out_dir), key)
+    if not p.is_file():
+        return None
+    try:
+        return json.loads(p.read_text())
+    except (OSError, json.JSONDecodeError):
+        return None  # unreadable: computed again
+
+
+# ---------------------------------------------------------------- results
+@dataclass
+class SweepResult:
+    """Outcome of :func:`run_sweep`.
+
+    Attributes
+    ----------
+    dataset : xarray.Dataset
+        Metrics with dims ``(*parameters, seed, chain)``.
+    computed : list of str
+        Keys of the points computed by this call.
+    skipped : list of str
+        Keys found finished on disk.
+    failed : dict
+        Key -> error message of points that raised.
+    path : str
+        ``sweep.nc`` written (empty if nothing was written).
+    """
+
+    dataset: Any
+    computed: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
+    failed: dict = field(default_factory=dict)
+    path: str = ""
+
+
+def _coord(values: list):
+    if all(isinstance(v, bool) for v in values):
+        return np.array(values, dtype=bool)
+    if all(isinstance(v, int) and not isinstance(v, bool) for v in values):
+        return np.array(values, dtype=np.int64)
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return np.array(values, dtype=float)
+    return np.array([json.dumps(v) if not isinstance(v, str) else v for v in values],
+                    dtype=object)
+
+
+def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint] | None = None):
+    """Assemble the stored point records into one Dataset (NaN where missing)."""
+    import xarray as xr
+
+    points = sweep_points(spec) if points is None else points
+    names = list(spec.parameters)
+    shape = tuple(len(spec.parameters[n]) for n in names) + (len(spec.seeds), len(spec.chains))
+    arrays = {m: np.full(shape, np.nan) for m in ANALYSIS_METRICS}
+    done = np.zeros(shape[:-1], dtype=bool)
+    for p in points:
+        rec = load_point(out_dir, p.key)
+        if rec is None:
+            continue
+        done[p.index] = True
+        for ci, chain in enumerate(spec.chains):
+            metrics = (rec.get("chains") or {}).get(chain) or {}
+            for m in ANALYSIS_METRICS:
+                v = metrics.get(m)
+                if v is not None:
+                    arrays[m][p.index + (ci,)] = float(v)
+    dims = tuple(names) + ("seed", "chain")
+    coords = {n: (n, _coord(spec.parameters[n])) for n in names}
+    coords["seed"] = ("seed", np.array(spec.seeds, dtype=np.int64))
+    coords["chain"] = ("chain", np.array(spec.chains, dtype=object))
+    data = {m: (dims, arrays[m], {"units": metric_unit(m)}) for m in ANALYSIS_METRICS}
+    data["point_done"] = (dims[:-1], done, {"long_name": "point finished and stored"})
+    base = spec.base.to_dict()
+    base.pop("output", None)
+    return xr.Dataset(data, coords=coords, attrs={
+        "scenario_json": json.dumps(base, sort_keys=True), "scenario_name": spec.base.name,
+        "parameters": json.dumps(names), "points_total": len(points),
+        "points_done": int(done.sum())})
+
+
+def _write_manifest(spec: SweepSpec, out_dir: Path) -> None:
+    from raysim.io.storage import atomic_write_text
+
+    base = spec.base.to_dict()
+    base.pop("output", None)
+    atomic_write_text(out_dir / "sweep.json", json.dumps(_jsonable({
+        "base": base, "parameters": spec.parameters, "seeds": list(spec.seeds),
+        "chains": list(spec.chains)}), indent=1))
+
+
+def _client(scheduler: str | None, n_workers: int, threads_per_worker: int, processes: bool):
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError as exc:
+        from raysim.pipeline.sources import FeatureUnavailable
+
+        raise FeatureUnavailable(f"sweeps need dask.distributed: {exc}") from None
+    if scheduler:
+        return Client(scheduler), None
+    cluster = LocalCluster(n_workers=n_workers, threads_per_worker=threads_per_worker,
+                           processes=processes, dashboard_address=":0")
+    return Client(cluster), cluster
+
+
+def run_sweep(spec: SweepSpec, out_dir: str | Path, *, scheduler: str | None = None,
+              n_workers: int = 1, threads_per_worker: int = 2, processes: bool = False,
+              limit: int | None = None, progress: bool = False,
+              client=None) -> SweepResult:
+    """Run (or resume) a sweep on Dask and gather its results.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+    out_dir : path
+        Folder of the point records, the manifest and ``sweep.nc``.
+    scheduler : str, optional
+        Address of a running Dask scheduler; default starts a LocalCluster.
+    n_workers, threads_per_worker, processes
+        LocalCluster layout (default: one in-process worker with 2 threads).
+    limit : int, optional
+        Compute at most this many missing points (the rest stay missing).
+    progress : bool
+        Print a tqdm progress bar on stderr.
+    client : distributed.Client, optional
+        Use this client instead of creating one.
+
+    Returns
+    -------
+    SweepResult
+    """
+    out_dir = Path(out_dir)
+    (out_dir / "points").mkdir(parents=True, exist_ok=True)
+    points = sweep_points(spec)
+    _write_manifest(spec, out_dir)
+    todo = [p for p in points if load_point(out_dir, p.key) is None]
+    result = SweepResult(None, skipped=[p.key for p in points if p not in todo])
+    if limit is not None:
+        todo = todo[: max(0, int(limit))]
+    if todo:
+        from raysim.io.storage import atomic_write_text
+
+        own = client is None
+        cluster = None
+        if own:
+            client, cluster = _client(scheduler, n_workers, threads_per_worker, processes)
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(points), initial=len(result.skipped), unit="point",
+                       desc="sweep")
+        base_json = spec.base.model_dump_json()
+        try:
+            from distributed import as_completed
+
+            futures = [client.submit(_run_point, base_json, p.values, p.seed,
+                                     list(spec.chains), p.key, str(out_dir),
+                                     key=f"raysim-point-{p.key}-{time.time_ns()}", pure=False)
+                       for p in todo]
+            try:
+                for fut in as_completed(futures):
+                    rec = fut.result()
+                    if "error" in rec:
+                        result.failed[rec["key"]] = rec["error"]
+                    else:
+                        path = _point_path(out_dir, rec["key"])
+                        if not path.is_file():
+                            atomic_write_text(path, json.dumps(rec, indent=1))
+                        result.computed.append(rec["key"])
+                    if bar is not None:
+                        bar.update(1)
+            except BaseException:
+                client.cancel(futures)
+                raise
+        finally:
+            if bar is not None:
+                bar.close()
+            if own:
+                client.close()
+                if cluster is not None:
+                    cluster.close()
+    result.dataset = gather_results(spec, out_dir, points)
+    nc = out_dir / "sweep.nc"
+    _export(result.dataset, nc)
+    result.path = str(nc)
+    return result
+
+
+def _export(ds, path: Path) -> None:
+    from raysim.io.storage import export_netcdf
+
+    out = ds.copy()
+    out["chain"] = out["chain"].astype(str)
+    for name in list(out.coords):
+        if out[name].dtype == object:
+            out[name] = out[name].astype(str)
+    out["point_done"] = out["point_done"].astype(np.int8)
+    export_netcdf(out, path)

@@ -1,0 +1,1 @@
+"""From echo paths (delays, amplitudes) to IF frames ``[chirp, channel, sample]``."""

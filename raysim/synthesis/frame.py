@@ -1,0 +1,75 @@
+"""`RadarFrame`: one IF frame with the axes and truth needed to interpret it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from raysim.radar.arrays import VirtualArray
+from raysim.radar.config import RadarConfig
+
+
+@dataclass(frozen=True, eq=False)
+class RadarFrame:
+    """An IF data cube and everything needed to process it.
+
+    Attributes
+    ----------
+    data : ndarray, shape ``[chirp, channel, sample]``, complex64
+        Dechirped IF samples [sqrt(W)].
+    config : RadarConfig
+        Waveform that produced it.
+    array : VirtualArray
+        Channel layout (channel order as documented by the array).
+    chirp_times : ndarray, shape ``[chirp]``
+        Start time of each chirp (slot 0 of a TDM loop) [s].
+    lever_arm : ndarray, shape ``[3]``
+        Radar phase centre in the body frame B [m].
+    frame_index : int
+        Index of the frame within a render.
+    truth : dict
+        Free-form ground truth (targets, motion name, ...), for reports.
+    """
+
+    data: np.ndarray
+    config: RadarConfig
+    array: VirtualArray
+    chirp_times: np.ndarray
+    lever_arm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    frame_index: int = 0
+    truth: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        expected = (self.config.num_chirps, self.array.num_channels, self.config.num_samples)
+        if self.data.shape != expected:
+            raise ValueError(
+                f"data shape {self.data.shape} does not match [chirp, channel, sample] = {expected}"
+            )
+        if np.shape(self.chirp_times) != (self.config.num_chirps,):
+            raise ValueError(
+                f"chirp_times must have shape ({self.config.num_chirps},), "
+                f"got {np.shape(self.chirp_times)}"
+            )
+
+    dims = ("chirp", "channel", "sample")
+
+    @property
+    def fast_time(self) -> np.ndarray:
+        """Sample times within a chirp, shape ``[sample]`` [s]."""
+        return self.config.fast_time()
+
+    @property
+    def range_axis(self) -> np.ndarray:
+        """Range of each unpadded range bin, shape ``[range]`` [m]."""
+        return self.config.range_axis()
+
+    @property
+    def velocity_axis(self) -> np.ndarray:
+        """Range rate of each fft-shifted Doppler bin, shape ``[doppler]`` [m/s]."""
+        return self.config.velocity_axis()
+
+    @property
+    def doppler_axis(self) -> np.ndarray:
+        """Doppler frequency of each fft-shifted bin, shape ``[doppler]`` [Hz]."""
+        return self.config.doppler_axis()

@@ -1,0 +1,179 @@
+"""One name and one definition for every chain, map, axis and metric.
+
+Every command, JSON file, table and figure of raysim takes its names from
+here; nothing else defines them. ``docs/conventions.md`` gives the maths.
+
+Chains
+------
+``none``
+    No compensation: a conventional beamformer on the recorded data.
+``paper``
+    The published joint spatial-temporal chain (slow-time phase per chirp,
+    element-wise tilt phase, chirp-wise yaw beam projection). Its rotation
+    phase is an option: ``integrated`` (the lever-arm displacement, default)
+    or ``published`` (the paper's ``v_r(nT) nT``). The variant with the
+    published phase is written ``paper:published``.
+``exact``
+    Rigid-body projection with all six degrees of freedom per chirp.
+
+A *stationary* result (the same scene with the platform at rest) is a
+reference, not a chain: it is reported under ``reference``.
+
+Maps
+----
+``rd`` range-Doppler, ``ra`` range-azimuth, ``re`` range-elevation, ``ae``
+azimuth-elevation (keys lower case, titles upper case). :data:`MAPS` gives a
+map's dimensions in array order; :data:`FIGURE_AXES` which one is x and which
+y in every figure: azimuth is on x wherever a map has it, range on y.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = [
+    "CHAINS", "ROTATION_PHASES", "ChainSpec", "parse_chain", "parse_chains", "chain_label",
+    "MAPS", "FIGURE_AXES", "MAP_TITLES", "AXIS_LABELS", "AXIS_UNITS", "METRICS", "metric_unit",
+    "REFERENCE",
+]
+
+#: The compensation chains, in the order every table and figure shows them.
+CHAINS = ("none", "paper", "exact")
+
+#: Rotation-phase forms of the ``paper`` chain (first is the default).
+ROTATION_PHASES = ("integrated", "published")
+
+#: Key of the stationary-platform reference in results (not a chain).
+REFERENCE = "stationary"
+
+
+@dataclass(frozen=True)
+class ChainSpec:
+    """A chain and its options.
+
+    Attributes
+    ----------
+    name : {"none", "paper", "exact"}
+    rotation_phase : {"integrated", "published"}
+        Rotation phase of the ``paper`` chain (ignored by the others).
+    """
+
+    name: str
+    rotation_phase: str = "integrated"
+
+    def __post_init__(self) -> None:
+        if self.name not in CHAINS:
+            raise ValueError(f"chain: got {self.name!r}, expected one of {list(CHAINS)} "
+                             f"(the paper chain with the published rotation phase is "
+                             f"'paper:published')")
+        if self.rotation_phase not in ROTATION_PHASES:
+            raise ValueError(f"rotation_phase: got {self.rotation_phase!r}, expected one of "
+                             f"{list(ROTATION_PHASES)}")
+
+    @property
+    def key(self) -> str:
+        """The name used in results: ``none``, ``paper``, ``paper:published`` or ``exact``."""
+        if self.name == "paper" and self.rotation_phase != ROTATION_PHASES[0]:
+            return f"paper:{self.rotation_phase}"
+        return self.name
+
+    @property
+    def compensated(self) -> bool:
+        """True for the chains that need the platform motion."""
+        return self.name != "none"
+
+    def __str__(self) -> str:
+        return self.key
+
+
+def parse_chain(text: str | ChainSpec) -> ChainSpec:
+    """``"paper:published"`` -> ``ChainSpec("paper", "published")``; errors name the value."""
+    if isinstance(text, ChainSpec):
+        return text
+    if not isinstance(text, str):
+        raise ValueError(f"chain: got {text!r}, expected a name from {list(CHAINS)}")
+    name, _, option = text.strip().partition(":")
+    if option and name != "paper":
+        raise ValueError(f"chain: got {text!r}; only the paper chain takes an option "
+                         f"(paper:published)")
+    return ChainSpec(name, option or ROTATION_PHASES[0])
+
+
+def parse_chains(items) -> tuple[ChainSpec, ...]:
+    """A comma list (``"none,paper,exact"``) or a sequence of names -> chain specs."""
+    if isinstance(items, str):
+        items = [s for s in items.split(",") if s.strip()]
+    specs = tuple(parse_chain(s) for s in items)
+    if not specs:
+        raise ValueError(f"chains: got {items!r}, expected at least one of {list(CHAINS)}")
+    keys = [s.key for s in specs]
+    if len(set(keys)) != len(keys):
+        raise ValueError(f"chains: got {keys}, each chain may appear once")
+    return specs
+
+
+def chain_label(key: str) -> str:
+    """Human label of a chain key for tables and legends."""
+    return {"none": "none (uncompensated)", "paper": "paper",
+            "paper:published": "paper, published rotation phase", "exact": "exact",
+            REFERENCE: "stationary platform"}.get(key, key)
+
+
+#: Map name -> dimensions of its :class:`~raysim.processing.maps.Map` in array order.
+MAPS = {
+    "rd": ("range", "doppler"),
+    "ra": ("range", "azimuth"),
+    "re": ("range", "elevation"),
+    "ae": ("azimuth", "elevation"),
+}
+
+#: Map name -> (x axis, y axis) of its figures.
+FIGURE_AXES = {"rd": ("doppler", "range"), "ra": ("azimuth", "range"),
+               "re": ("elevation", "range"), "ae": ("azimuth", "elevation")}
+
+#: Map name -> title of its figures.
+MAP_TITLES = {"rd": "RD (range-Doppler)", "ra": "RA (range-azimuth)",
+              "re": "RE (range-elevation)", "ae": "AE (azimuth-elevation)"}
+
+#: Axis name -> unit of its coordinate as shown (angles in degrees, Doppler as range rate).
+AXIS_UNITS = {"range": "m", "doppler": "m/s", "azimuth": "deg", "elevation": "deg",
+              "chirp": "", "channel": "", "sample": "", "frame": ""}
+
+#: Axis name -> label of a figure axis.
+AXIS_LABELS = {"range": "range [m]", "doppler": "range rate [m/s]",
+               "azimuth": "azimuth [deg]", "elevation": "elevation [deg]"}
+
+#: Metric name -> (unit, definition). Every result that reports one of these
+#: quantities uses exactly this name; ``docs/conventions.md`` has the maths.
+METRICS = {
+    "range_m": ("m", "range of the target peak (parabola on the dB range profile)"),
+    "az_deg": ("deg", "azimuth of the interpolated peak of the single-chirp angle map"),
+    "el_deg": ("deg", "elevation of the interpolated peak of the single-chirp angle map"),
+    "angle_error_deg": ("deg", "angle between the interpolated peak of the single-chirp "
+                               "angle map (chirp N/2, the paper's chirp 128) and the truth"),
+    "angle_error_worst_deg": ("deg", "largest single-chirp angle error over chirps spread "
+                                     "over the frame and its extreme attitudes"),
+    "map_az_deg": ("deg", "azimuth of the interpolated peak of the accumulated AE map"),
+    "map_el_deg": ("deg", "elevation of the interpolated peak of the accumulated AE map"),
+    "map_angle_error_deg": ("deg", "angle between the peak of the accumulated AE map and "
+                                   "the truth"),
+    "pseudo_velocity_mps": ("m/s", "range rate at the Doppler-spectrum peak of a static "
+                                   "target (Hann, 16x zero padding)"),
+    "pseudo_velocity_bins": ("bins", "pseudo-velocity in Doppler velocity bins"),
+    "doppler_width_hz": ("Hz", "-3 dB width of that Doppler power spectrum"),
+    "doppler_width_bins": ("bins", "Doppler width in Doppler bins 1 / (N T_rep)"),
+    "entropy_ae_nats": ("nats", "image entropy of the accumulated AE map"),
+    "entropy_rd_nats": ("nats", "image entropy of the RD map"),
+    "entropy_ra_nats": ("nats", "image entropy of the RA map"),
+    "peak_power_db": ("dB(W)", "received power at the target's range peak"),
+}
+
+
+def metric_unit(name: str) -> str:
+    """Unit of a metric; errors name the metric and the known ones."""
+    if name.endswith("_std") and name[:-4] in METRICS:
+        name = name[:-4]
+    try:
+        return METRICS[name][0]
+    except KeyError:
+        raise ValueError(f"metric: got {name!r}, expected one of {sorted(METRICS)}") from None
