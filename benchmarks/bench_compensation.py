@@ -27,10 +27,10 @@ import time
 import numpy as np
 
 from compensation import integrate_imu, rigid_body_projection
-from raysim.studies.cases import get_case
 from raysim.echoes.oracle import simulate_point_targets
 from raysim.platform.imu import simulate_imu
 from raysim.processing.maps import az_el_grid, doppler_fft, range_compress, steering_matrix
+from raysim.studies.cases import get_case
 
 
 def _best(fn, repeat: int) -> tuple[float, object]:

@@ -7,7 +7,7 @@ The whole-frame figures with extrapolation and memory are ``raysim bench``.
 import numpy as np
 import pytest
 
-from raysim.studies.bench import hover_paths, paper_setup, subset
+from raysim.studies.workloads import hover_paths, paper_setup, subset
 from raysim.synthesis.select import synthesize
 
 CFG, ARR, TRAJ, LEVER = paper_setup()

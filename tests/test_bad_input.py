@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raysim.radar.arrays import VirtualArray, tdm_mimo, ti_3tx4rx, upa
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import PointTarget, element_times, simulate_point_targets
 from raysim.platform.motion import HoverJitterSpec, Sinusoid, hover_jitter, sinusoid, stationary
+from raysim.radar.arrays import VirtualArray, tdm_mimo, ti_3tx4rx, upa
+from raysim.radar.config import RadarConfig
 
 SMALL = RadarConfig(num_chirps=8, sample_rate=2.5e6)        # 150 samples, max range 22.5 m
 ARR = upa(2, 2, wavelength=SMALL.wavelength)
@@ -232,7 +232,8 @@ CASES = [
         lambda _: __import__("raysim.synthesis.tones", fromlist=["x"]).synthesize_if(
             np.full((1, 8, 4), math.nan), 1.0, SMALL), ValueError, ("tau", "NaN")),
     Bad("processing-unknown-window",
-        lambda _: __import__("raysim.processing.maps", fromlist=["x"]).window("hammock", 8), ValueError,
+        lambda _: __import__("raysim.processing.windows", fromlist=["x"]).window("hammock", 8),
+        ValueError,
         ("window", "'hammock'")),
     Bad("metrics-short-slow-time",
         lambda _: __import__("raysim.processing.metrics", fromlist=["x"]).pseudo_velocity(
@@ -258,7 +259,8 @@ CASES = [
         lambda _: __import__("raysim.platform.imu", fromlist=["x"]).get_preset("navigation_grade"),
         ValueError, ("'navigation_grade'", "consumer_mems")),
     Bad("imu-negative-noise",
-        lambda _: __import__("raysim.platform.imu", fromlist=["x"]).SensorErrors(noise_density=-1.0),
+        lambda _: __import__("raysim.platform.imu",
+                             fromlist=["x"]).SensorErrors(noise_density=-1.0),
         ValueError, ("noise_density", "-1.0")),
     Bad("imu-unsorted-samples", lambda _: _imu_samples([0.0, 0.002, 0.001]), ValueError,
         ("strictly increasing", "0.001")),
@@ -387,7 +389,8 @@ CASES = [
     Bad("stability-negative-seed", lambda _: _stability_scenario(seed=-1), ValueError,
         ("seed", "-1")),
     Bad("stability-unknown-map",
-        lambda _: __import__("raysim.studies.stability", fromlist=["x"]).run_map("wind"), ValueError,
+        lambda _: __import__("raysim.studies.stability", fromlist=["x"]).run_map("wind"),
+        ValueError,
         ("'wind'", "rotation_azimuth")),
     Bad("stability-angle-out-of-range",
         lambda _: _stability_scenario(target_az=2.0), ValueError, ("target_az", "2.0")),

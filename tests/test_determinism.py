@@ -24,10 +24,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from raysim.radar.arrays import upa
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import PointTarget, simulate_point_targets
 from raysim.platform.motion import hover_jitter
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
 
 #: Largest CPU/GPU difference of a traced path length [m].
 CPU_GPU_LENGTH_TOL = 1e-5

@@ -9,8 +9,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from raysim.radar.config import RadarConfig
-from raysim.platform.imu import DEG, STANDARD_GRAVITY, ImuSamples, simulate_imu
 from raysim.io import (
     Dca1000Format,
     parse_dca1000,
@@ -19,7 +17,9 @@ from raysim.io import (
     write_dca1000,
     write_imu_csv,
 )
+from raysim.platform.imu import DEG, STANDARD_GRAVITY, ImuSamples, simulate_imu
 from raysim.platform.motion import hover_jitter
+from raysim.radar.config import RadarConfig
 
 #: Unit conversions on a CSV round trip (relative, a few ulp).
 UNIT_RTOL = 1e-14

@@ -7,13 +7,13 @@ References are re-derived here in plain NumPy (``ref_tone_sum``) or taken from
 import numpy as np
 import pytest
 
-from raysim.radar.arrays import ti_3tx4rx, upa
-from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.echoes.oracle import PointTarget, direction, point_target_delays, simulate_point_targets
 from raysim.platform.motion import sinusoid
+from raysim.radar.arrays import ti_3tx4rx, upa
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.synthesis.nufft import PathDelays, element_positions, synthesize_nufft
-from raysim.synthesis.tones import synthesize_if_direct
 from raysim.synthesis.select import choose_method, estimate_seconds, synthesize, tones_error
+from raysim.synthesis.tones import synthesize_if_direct
 
 #: Tolerances the NUFFT must meet (relative l2 error over the cube).
 EPS_VALUES = (1e-3, 1e-4, 1e-5, 1e-6)
@@ -249,10 +249,10 @@ def test_pareto_front_rules():
 
 def test_chart_default_on_pareto_front(monkeypatch, tmp_path):
     """Every knob measured on a reduced frame; the default must be on its Pareto front."""
-    import raysim.studies.bench as bench
     from raysim.studies import speed_chart as sa
+    from raysim.studies import workloads
 
-    full = bench.paper_setup
+    full = workloads.paper_setup
 
     def small_setup(num_chirps=16):
         cfg, _, traj, lever = full(16)
@@ -261,7 +261,7 @@ def test_chart_default_on_pareto_front(monkeypatch, tmp_path):
     # enough paths per (chirp, channel) row that per-path work, not call overhead, sets
     # the time (as on the paper frame)
 
-    monkeypatch.setattr(bench, "paper_setup", small_setup)
+    monkeypatch.setattr(workloads, "paper_setup", small_setup)
     monkeypatch.setattr(sa, "REPEAT", 3)
     monkeypatch.setattr(sa, "KNOB_PATHS", 3000)
     measured = sa.measure_knobs(quick=True, log=lambda m: None, rt=False)

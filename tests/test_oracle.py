@@ -8,10 +8,6 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from raysim.processing import metrics
-from raysim.processing import maps as processing
-from raysim.radar.arrays import ti_3tx4rx, upa
-from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.echoes.oracle import (
     PointTarget,
     direction,
@@ -20,6 +16,10 @@ from raysim.echoes.oracle import (
     simulate_point_targets,
 )
 from raysim.platform.motion import Ramp, Trajectory, constant_velocity, sinusoid
+from raysim.processing import maps as processing
+from raysim.processing import metrics
+from raysim.radar.arrays import ti_3tx4rx, upa
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.synthesis.tones import synthesize_if, synthesize_if_direct
 
 #: Tolerances named in the foundation acceptance criteria.

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from raysim.cli import main
+from raysim.io.scenario import scenario_from_case
 from raysim.pipeline.run import render
 from raysim.studies.report import collect_from_scenario, software_versions, write_report
-from raysim.io.scenario import scenario_from_case
 
 SMALL = {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4,
          "radar.chirp_duration_s": 12.8e-6}

@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raysim.studies.cases import PAPER_CASES, get_case
 from raysim.io.scenario import (
     dumps_toml,
     load_scenario,
@@ -19,6 +18,7 @@ from raysim.io.scenario import (
     set_key,
     validate_scenario,
 )
+from raysim.studies.cases import PAPER_CASES, get_case
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from raysim.studies import stability
-from raysim.radar.arrays import upa
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import simulate_point_targets
 from raysim.platform.motion import sinusoid, stationary
 from raysim.processing.maps import range_compress
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
+from raysim.studies import stability
 from raysim.studies.stability import (
     MAPS,
     Criteria,
@@ -223,7 +223,7 @@ def test_hover_assumption_fails_under_strong_jitter():
 
 # --------------------------------------------------------------- the command
 def _cheap(scenario, chains=stability.CHAINS, **_):
-    """Stand-in for :func:`raysim.studies.stability.evaluate`: pseudo-velocity set by the clock offset."""
+    """Stand-in for ``stability.evaluate``: pseudo-velocity set by the clock offset."""
     pv = 0.5 * scenario.imu_time_offset * 1e3                       # fails above 0.25 ms
     rec = {"pseudo_velocity": pv, "doppler_width_hz": 94.0, "angle_error_deg": 0.1,
            "angle_error_mid_deg": 0.1, "focused_angle_error_deg": 0.1, "entropy": 3.5}

@@ -7,10 +7,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from raysim.radar.arrays import upa
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import PointTarget, simulate_point_targets
 from raysim.platform.motion import sinusoid
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
 from raysim.synthesis.nufft import PathDelays, synthesize_nufft
 from raysim.synthesis.streaming import (
     FrameWriter,
@@ -143,8 +143,8 @@ def test_progress_and_peak_memory_in_subprocess():
 
 
 def test_bench_cli_validation_and_atomic_json(tmp_path, capsys):
-    from raysim.studies.bench import atomic_write_json
     from raysim.cli import main
+    from raysim.studies.bench import atomic_write_json
 
     assert main(["bench", "--chart-only"]) == 2
     assert "--chart-only needs --chart" in capsys.readouterr().err

@@ -63,15 +63,16 @@ def run(args) -> int:
     bench.set_clock(args.clock)
 
     if args.chart_only:
+        result = {"schema": bench.SCHEMA, "quick": args.quick, "machine": bench.machine_info()}
+    else:
+        result = bench.run(quick=args.quick, memory=not args.no_memory, log=log)
+    if args.chart:
         from raysim.studies.speed_chart import draw_chart, measure_knobs
 
+        log("speed-versus-accuracy chart")
         knobs = measure_knobs(quick=args.quick, log=log)
         draw_chart(knobs, args.chart)
-        result = {"schema": bench.SCHEMA, "quick": args.quick, "machine": bench.machine_info(),
-                  "chart": {"png": args.chart, "knobs": knobs}}
-    else:
-        result = bench.run(quick=args.quick, memory=not args.no_memory, chart=args.chart,
-                           log=log)
+        result["chart"] = {"png": args.chart, "knobs": knobs}
     if args.out:
         bench.atomic_write_json(args.out, result)
         log(f"results written to {args.out}")

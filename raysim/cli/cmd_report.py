@@ -46,10 +46,10 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``raysim report``; returns the exit code."""
-    from raysim.pipeline.sources import FeatureUnavailable
-    from raysim.vocabulary import CHAINS
-    from raysim.studies.report import collect_from_dataset, collect_from_scenario, write_report
     from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
+    from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.studies.report import collect_from_dataset, collect_from_scenario, write_report
+    from raysim.vocabulary import CHAINS
 
     chains = [c.strip() for c in args.chains.split(",") if c.strip()]
     if not chains or any(c not in CHAINS for c in chains):

@@ -40,8 +40,8 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``raysim scene-report``; returns the exit code."""
     from dataclasses import replace
 
-    from raysim.platform.imu import PRESETS
     from raysim.echoes.rt.scenes import SCENES
+    from raysim.platform.imu import PRESETS
     from raysim.studies.scene_report import FULL, QUICK, write_scene_report
 
     if args.scenes:

@@ -31,7 +31,8 @@ def _registry():
     try:
         from raysim.echoes.rt.scenes import SCENES
     except ImportError as exc:
-        print(f"raysim scenes: the scene registry (raysim.echoes.rt.scenes) is not available: {exc}",
+        print(f"raysim scenes: the scene registry (raysim.echoes.rt.scenes) is not "
+              f"available: {exc}",
               file=sys.stderr)
         return None
     return SCENES

@@ -152,9 +152,9 @@ def _clean(obj):
 
 def run(args) -> int:
     """Run ``raysim simulate``; returns the exit code."""
+    from raysim.pipeline.analysis import ANALYSIS_METRICS
     from raysim.pipeline.run import evaluate
     from raysim.pipeline.sources import FeatureUnavailable
-    from raysim.pipeline.analysis import ANALYSIS_METRICS
     from raysim.vocabulary import metric_unit, parse_chains
 
     try:

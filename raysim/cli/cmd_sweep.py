@@ -63,10 +63,10 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``raysim sweep``; returns the exit code."""
-    from raysim.pipeline.sources import FeatureUnavailable
-    from raysim.vocabulary import CHAINS
     from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
+    from raysim.pipeline.sources import FeatureUnavailable
     from raysim.studies.sweep import SweepSpec, parse_values, run_sweep
+    from raysim.vocabulary import CHAINS
 
     if bool(args.scenario) == bool(args.case):
         raise ValueError("give exactly one base: SCENARIO.toml or --case NAME")

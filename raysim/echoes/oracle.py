@@ -25,11 +25,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from compensation.geometry import az_el, direction  # noqa: F401  (one definition of u(az, el))
-
+from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import BOLTZMANN, SPEED_OF_LIGHT, T0_KELVIN, RadarConfig
 from raysim.synthesis.frame import RadarFrame
-from raysim.platform.motion import Trajectory, stationary
 from raysim.synthesis.tones import synthesize_if, synthesize_if_intrachirp
 
 

@@ -385,7 +385,6 @@ class Scenario(_Section):
 
     def trajectory(self):
         """Platform motion as a :class:`~raysim.platform.motion.Trajectory` (SI, radians)."""
-        from raysim.studies.cases import get_case
         from raysim.platform.motion import (
             HoverJitterSpec,
             Sinusoid,
@@ -394,6 +393,7 @@ class Scenario(_Section):
             hover_jitter,
             stationary,
         )
+        from raysim.studies.cases import get_case
 
         m = self.motion
         parts: list[Trajectory] = []
@@ -425,7 +425,7 @@ class Scenario(_Section):
         return traj
 
     def point_targets(self) -> list:
-        """:class:`~raysim.echoes.oracle.PointTarget` list (empty unless ``scene.kind == "points"``)."""
+        """Point targets (:class:`~raysim.echoes.oracle.PointTarget`); empty unless ``points``."""
         from raysim.echoes.oracle import PointTarget
 
         return [PointTarget.at(t.range_m, math.radians(t.az_deg), math.radians(t.el_deg),

@@ -144,7 +144,8 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
                 if f == 0 or not storage.store_exists(store):
                     imu = imu_log(scenario, traj)
                     if imu is None:
-                        summary.notes.append("raysim.platform.imu is not available: no IMU log stored")
+                        summary.notes.append("raysim.platform.imu is not available: "
+                                             "no IMU log stored")
                     ds = storage.frames_to_dataset([fr], traj, imu=imu,
                                                    attrs=_store_attrs(scenario, source.reference))
                     storage.write_store(store, ds, overwrite=True)

@@ -57,7 +57,8 @@ def _rt_scene(scenario: Scenario):
         from raysim.echoes.rt.trace import MonostaticTracer
     except ImportError as exc:
         raise FeatureUnavailable(
-            f"scene kind {scenario.scene.kind!r} needs the ray tracer (raysim.echoes.rt with Sionna "
+            f"scene kind {scenario.scene.kind!r} needs the ray tracer (raysim.echoes.rt with "
+            f"Sionna "
             f"RT): {exc}") from None
     target = scenario.scene.name if scenario.scene.kind == "bundled" else scenario.scene.path
     if scenario.scene.kind == "mesh" and not str(target).endswith(".xml"):

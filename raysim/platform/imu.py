@@ -581,7 +581,8 @@ class Imu:
             ``accel [sample, 3]`` and the realised errors in ``truth``.
         """
         if not hasattr(trajectory, "angular_rate") or not hasattr(trajectory, "acceleration"):
-            raise ValueError(f"trajectory must be a raysim.platform.motion.Trajectory, got {trajectory!r}")
+            raise ValueError(f"trajectory must be a raysim.platform.motion.Trajectory, "
+                             f"got {trajectory!r}")
         if isinstance(seed, np.random.Generator):
             children = seed.spawn(len(_STREAMS))
             seed_value = None

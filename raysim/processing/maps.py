@@ -18,23 +18,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.fft
-from scipy.signal import get_window
 
+from raysim.processing.windows import window
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
 
 #: Worker threads for scipy.fft (the machine has 2 cores).
 FFT_WORKERS = -1
-
-
-def window(name: str | None, n: int) -> np.ndarray:
-    """Periodic (DFT-even) window of length ``n``; ``None`` or ``"rect"`` gives ones."""
-    if name is None or name in ("rect", "boxcar", "none"):
-        return np.ones(n)
-    try:
-        return get_window(name, n, fftbins=True)
-    except ValueError as exc:
-        raise ValueError(f"window {name!r} is not a scipy.signal window name: {exc}") from None
 
 
 @dataclass(frozen=True, eq=False)

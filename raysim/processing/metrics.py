@@ -12,9 +12,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from raysim.processing.maps import Map, window
+from raysim.processing.windows import window
+
+if TYPE_CHECKING:
+    from raysim.processing.maps import Map
 
 #: Slow-time zero-padding factor of the Doppler metrics.
 DOPPLER_PAD = 16

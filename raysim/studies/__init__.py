@@ -1,1 +1,4 @@
-"""Studies composed from the pipeline: paper reproduction, stability maps, scene reports, sweeps, benchmarks, reports."""
+"""Studies composed from the pipeline.
+
+Paper reproduction, stability maps, scene reports, sweeps, benchmarks, reports.
+"""

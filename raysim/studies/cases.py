@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from raysim.radar.arrays import VirtualArray, upa
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import PointTarget
 from raysim.platform.motion import Trajectory, sinusoid, stationary
+from raysim.radar.arrays import VirtualArray, upa
+from raysim.radar.config import RadarConfig
 
 #: Radar phase centre in the body frame [m]: 10 cm below the IMU (FRD, +Z down).
 DEFAULT_LEVER_ARM = np.array([0.0, 0.0, 0.10])

@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.synthesis.frame import RadarFrame
-from raysim.pipeline.sources import Reference
 from raysim.pipeline.analysis import ANALYSIS_METRICS
+from raysim.pipeline.sources import Reference
+from raysim.synthesis.frame import RadarFrame
 from raysim.vocabulary import CHAINS, metric_unit
 
 __all__ = ["ReportData", "collect_from_scenario", "collect_from_dataset", "build_report",
@@ -100,9 +100,9 @@ def _paper_values(scenario) -> dict:
 def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = "") -> ReportData:
     """Frames of a stored Dataset (Zarr / NetCDF), measured through every chain its IMU log
     and scenario allow."""
+    from raysim.io.storage import dataset_to_frames, scenario_of
     from raysim.pipeline.analysis import analyse
     from raysim.pipeline.run import evaluate
-    from raysim.io.storage import dataset_to_frames, scenario_of
 
     frames = dataset_to_frames(ds)
     scenario = scenario_of(ds)

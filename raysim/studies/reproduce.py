@@ -47,14 +47,13 @@ from compensation import (
     paper_chain,
     rigid_body_projection,
 )
-
-from raysim.processing import metrics
-from raysim.studies.cases import PAPER_CASES, PaperCase
 from raysim.echoes.oracle import direction, simulate_point_targets
 from raysim.io.files import atomic_savefig, atomic_write_text
 from raysim.platform.imu import get_preset, simulate_imu
 from raysim.platform.motion import stationary
+from raysim.processing import metrics
 from raysim.processing.maps import Map, range_compress
+from raysim.studies.cases import PAPER_CASES, PaperCase
 
 #: Chains evaluated for every case, in table order.
 CHAINS = ("uncompensated", "paper", "paper_vrt", "exact")
@@ -253,7 +252,7 @@ def _evaluate_compensated(data: _CaseData, motion, chain: str) -> dict:
     c = data.case
     n = data.config.num_chirps
     frames = [motion.select(slice(f * n, (f + 1) * n)) for f in range(data.rc_gate.shape[0])]
-    rp = "paper" if chain == "paper_vrt" else "displacement"
+    rp = "published" if chain == "paper_vrt" else "integrated"
 
     def run(rc, mot, az, el, u=None, weights=None):
         if chain == "exact":
@@ -537,7 +536,7 @@ def _chain_beams(data: _CaseData, motion, chain: str, rc, az, el, u_hat=None):
         return beam_projection(rc, chirp_time=motion.time, **kw)
     if chain == "exact":
         return rigid_body_projection(rc, motion=motion, **kw)
-    rp = "paper" if chain == "paper_vrt" else "displacement"
+    rp = "published" if chain == "paper_vrt" else "integrated"
     return paper_chain(rc, motion=motion, direction=data.u_true if u_hat is None else u_hat,
                        rotation_phase=rp, **kw)
 

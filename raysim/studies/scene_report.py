@@ -56,11 +56,11 @@ from pathlib import Path
 
 import numpy as np
 
+from raysim.io.files import atomic_write
+from raysim.processing.maps import Map, range_compress
+from raysim.processing.metrics import image_entropy
 from raysim.radar.arrays import VirtualArray, upa
 from raysim.radar.config import RadarConfig
-from raysim.io.files import atomic_write
-from raysim.processing.metrics import image_entropy
-from raysim.processing.maps import Map, range_compress
 
 #: The chains compared in the report, in display order.
 CHAINS = ("stationary", "uncompensated", "paper", "exact")
@@ -381,7 +381,6 @@ def platform_motion(trajectory, chirp_times: np.ndarray, settings: ReportSetting
         integrated from the IMU.
     """
     from compensation import integrate_imu
-
     from raysim.platform.imu import simulate_imu
 
     t = np.asarray(chirp_times, dtype=float)
@@ -417,11 +416,11 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
         complex64 [sqrt(W)]; ``"paths"`` (:class:`raysim.echoes.rt.trace.PathSet`),
         ``"scene"`` (:class:`raysim.echoes.rt.scenes.RadarScene`), ``"seconds"``.
     """
-    from raysim.platform.motion import stationary
-    from raysim.synthesis.nufft import synthesize_nufft
     from raysim.echoes.rt.reproject import synthesize_paths
     from raysim.echoes.rt.scenes import load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.platform.motion import stationary
+    from raysim.synthesis.nufft import synthesize_nufft
 
     config = settings.radar()
     array = settings.array()
@@ -629,7 +628,6 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
     SceneResult
     """
     from compensation import static_motion
-
     from raysim.echoes.rt.scenes import SCENES
 
     if scene not in SCENES:
@@ -901,10 +899,10 @@ def bench_reprojection(scene: str = "rough_terrain", *, num_chirps: int = 16,
         phase centre), ``ratio_all_channels`` (``channels`` traces / one
         per-channel re-projection), ``num_paths``, ``channels`` and the settings.
     """
-    from raysim.platform.motion import hover_jitter
     from raysim.echoes.rt.reproject import element_positions, path_lengths
     from raysim.echoes.rt.scenes import load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.platform.motion import hover_jitter
 
     for name, v in (("num_chirps", num_chirps), ("array_size", array_size),
                     ("samples_per_src", samples_per_src), ("repeat", repeat)):

@@ -148,7 +148,7 @@ def _knob(name: str, label: str, settings: list[dict], note: str, *,
 
 def measure_nufft_eps(*, quick: bool) -> dict:
     """NUFFT tolerance against the direct sum (2,000 hover paths)."""
-    from raysim.studies.bench import hover_paths, paper_setup, subset
+    from raysim.studies.workloads import hover_paths, paper_setup, subset
     from raysim.synthesis.select import synthesize
 
     cfg, arr, traj, lever = paper_setup()
@@ -178,9 +178,9 @@ def measure_nufft_eps(*, quick: bool) -> dict:
 
 def measure_motion(*, quick: bool) -> dict:
     """Stop-and-hop against intra-chirp motion (one target, pitch 10 deg at 20 Hz)."""
-    from raysim.studies.bench import paper_setup
-    from raysim.studies.cases import get_case
     from raysim.echoes.oracle import simulate_point_targets
+    from raysim.studies.cases import get_case
+    from raysim.studies.workloads import paper_setup
 
     case = get_case("rotation_y")
     n_c = 8 if quick else 32
@@ -229,7 +229,7 @@ def plane_wave_delays(paths, chirp: int) -> np.ndarray:
 
 def measure_geometry(*, quick: bool) -> dict:
     """Plane-wave against exact spherical element delays (2,000 near ground paths)."""
-    from raysim.studies.bench import paper_setup
+    from raysim.studies.workloads import paper_setup
     from raysim.synthesis.nufft import PathDelays, synthesize_nufft
 
     cfg, arr, traj, lever = paper_setup()
@@ -269,9 +269,9 @@ def measure_geometry(*, quick: bool) -> dict:
 def measure_chirp_block(*, quick: bool) -> dict:
     """Chirp block size of the streaming renderer (500 paths, 8 x 8 array, 256 chirps)."""
     from raysim.radar.arrays import upa
-    from raysim.studies.bench import hover_paths, paper_setup
-    from raysim.synthesis.streaming import render_stream
+    from raysim.studies.workloads import hover_paths, paper_setup
     from raysim.synthesis.select import synthesize
+    from raysim.synthesis.streaming import render_stream
 
     cfg, _, traj, lever = paper_setup()
     arr = upa(8, 8, wavelength=cfg.wavelength)
@@ -354,14 +354,14 @@ def measure_rt_knobs(*, quick: bool, log: Callable[[str], None] = print,
     """
     import functools
 
-    from raysim.radar.arrays import upa
-    from raysim.radar.config import RadarConfig
-    from raysim.synthesis.nufft import synthesize_nufft
     from raysim.echoes.rt import backend
     from raysim.echoes.rt.render import render_scene
     from raysim.echoes.rt.scenes import load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.radar.arrays import upa
+    from raysim.radar.config import RadarConfig
     from raysim.studies.scene_report import hover_trajectory
+    from raysim.synthesis.nufft import synthesize_nufft
 
     backend.configure("cpu", threads=threads)
     d = rt_defaults()
@@ -475,7 +475,7 @@ def draw_chart(measured: dict, path) -> None:
     import matplotlib.pyplot as plt
     from matplotlib.ticker import NullFormatter
 
-    from raysim.studies.bench import atomic_write_png
+    from raysim.io.files import atomic_savefig
 
     knobs = measured["knobs"]
     ncol = min(len(knobs), 4)
@@ -526,5 +526,5 @@ def draw_chart(measured: dict, path) -> None:
         fig.text(0.5, 0.005, "not measured: " + "; ".join(notes), ha="center", va="bottom",
                  fontsize=8, color="tab:red", wrap=True)
     fig.tight_layout(rect=(0, 0.04 if notes else 0, 1, 1))
-    atomic_write_png(fig, path)
+    atomic_savefig(fig, path, dpi=120, format="png")
     plt.close(fig)

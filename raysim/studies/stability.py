@@ -69,13 +69,18 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from raysim.radar.arrays import VirtualArray, upa
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import PointTarget, direction, point_target_delays
 from raysim.io.files import atomic_write
-from raysim.processing.metrics import doppler_mainlobe_width, image_entropy, map_peak, pseudo_velocity
 from raysim.platform.motion import HoverJitterSpec, Trajectory, hover_jitter, sinusoid
 from raysim.processing.maps import Map
+from raysim.processing.metrics import (
+    doppler_mainlobe_width,
+    image_entropy,
+    map_peak,
+    pseudo_velocity,
+)
+from raysim.radar.arrays import VirtualArray, upa
+from raysim.radar.config import RadarConfig
 
 __all__ = [
     "CHAINS", "ANGLE_CHIRPS", "GRAVITY", "Scenario", "Criteria", "PoseEstimate", "MapSpec",

@@ -37,9 +37,9 @@ from typing import Any
 
 import numpy as np
 
+from raysim.io.scenario import Scenario, parse_value, validate_scenario
 from raysim.pipeline.analysis import ANALYSIS_METRICS
 from raysim.vocabulary import CHAINS, metric_unit
-from raysim.io.scenario import Scenario, parse_value, validate_scenario
 
 __all__ = ["SweepSpec", "SweepPoint", "SweepResult", "parse_values", "sweep_points",
            "point_key", "run_sweep", "gather_results", "load_point"]

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from raysim.radar.arrays import upa
 from raysim.cli import main
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import PointTarget, simulate_point_targets
 from raysim.platform.imu import simulate_imu
 from raysim.platform.motion import sinusoid
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
 
 
 def test_compensate_cube_and_imu_csv(tmp_path):

@@ -19,8 +19,8 @@ from compensation import (
     yaw_projection,
 )
 from compensation.strapdown import PlatformMotion
-from raysim.radar.arrays import upa
 from raysim.processing.maps import beamform
+from raysim.radar.arrays import upa
 
 LAM = 3.8685e-3
 #: complex64 round-off bound relative to the peak.

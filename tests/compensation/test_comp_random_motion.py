@@ -7,13 +7,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from compensation import beam_projection, integrate_imu, rigid_body_projection
-from raysim.processing import metrics
-from raysim.radar.arrays import upa
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import PointTarget, simulate_point_targets
 from raysim.platform.imu import simulate_imu
 from raysim.platform.motion import Sinusoid, Trajectory
+from raysim.processing import metrics
 from raysim.processing.maps import Map, range_compress
+from raysim.radar.arrays import upa
+from raysim.radar.config import RadarConfig
 
 PV_TOL_BINS = 0.05
 WIDTH_RTOL = 0.02
@@ -106,9 +106,9 @@ def test_constant_velocity_doppler_closed_form_and_removal():
 
 def test_tdm_slots_use_their_own_transmit_instants():
     """TI-style 3Tx x 4Rx TDM array: each slot's pose at its own transmit time."""
-    from raysim.radar.arrays import ti_3tx4rx
     from raysim.echoes.oracle import element_times
     from raysim.platform.motion import sinusoid
+    from raysim.radar.arrays import ti_3tx4rx
 
     cfg = RadarConfig(num_chirps=64, sample_rate=2.5e6, num_tx_slots=3)
     arr = ti_3tx4rx(cfg.wavelength)

@@ -9,9 +9,9 @@ import time
 import numpy as np
 import pytest
 
+from raysim.echoes.rt.budget import MAX_SAMPLES, MIN_SAMPLES, plan_trace
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
-from raysim.echoes.rt.budget import MAX_SAMPLES, MIN_SAMPLES, plan_trace
 
 CFG = RadarConfig(num_chirps=8)
 ARR = upa(4, 4, wavelength=CFG.wavelength)

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raysim.processing import metrics
+from raysim.platform.motion import hover_jitter, stationary
 from raysim.processing import maps as processing
+from raysim.processing import metrics
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
-from raysim.platform.motion import hover_jitter, stationary
 
 pytestmark = pytest.mark.sionna
 

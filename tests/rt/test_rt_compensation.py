@@ -14,11 +14,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raysim.processing import metrics
+from raysim.platform.motion import hover_jitter, sinusoid, stationary
 from raysim.processing import maps as processing
+from raysim.processing import metrics
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
-from raysim.platform.motion import hover_jitter, sinusoid, stationary
 
 pytestmark = pytest.mark.sionna
 
@@ -39,10 +39,10 @@ LEVER = np.array([0.0, 0.0, 0.10])
 def hover_frames(warm_kernels):
     """Stationary and hovering ray-traced frames of the reflectors, plus the IMU pose."""
     from compensation import integrate_imu
-    from raysim.platform.imu import simulate_imu
     from raysim.echoes.rt.render import render_scene
     from raysim.echoes.rt.scenes import load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.platform.imu import simulate_imu
 
     config = RadarConfig(num_chirps=64, idle_time=940e-6)           # 64 ms frame
     array = upa(8, 8, wavelength=config.wavelength)

@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from raysim.echoes.oracle import PointTarget, simulate_point_targets
+from raysim.platform.motion import Trajectory, hover_jitter, sinusoid
 from raysim.processing import maps as processing
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
-from raysim.echoes.oracle import PointTarget, simulate_point_targets
-from raysim.platform.motion import Trajectory, hover_jitter, sinusoid
 
 pytestmark = pytest.mark.sionna
 

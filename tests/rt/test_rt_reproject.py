@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from raysim.platform.motion import Trajectory, constant_velocity, hover_jitter, sinusoid
 from raysim.radar.arrays import upa
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.platform.motion import Trajectory, constant_velocity, hover_jitter, sinusoid
 from raysim.synthesis.tones import synthesize_if_direct
 
 #: Re-projected vs re-traced IF cube, fixed scattering points, re-traced geometry [dB].
@@ -47,8 +47,8 @@ def ref_point_lengths(points, times_xtx_xrx, velocity=None):
 
 def test_reprojection_is_exact_for_point_scatterers():
     """L' equals the exact geometry for frozen points, with motion, lever arm, TDM and velocity."""
-    from raysim.radar.arrays import ti_3tx4rx
     from raysim.echoes.rt.reproject import element_positions, path_lengths
+    from raysim.radar.arrays import ti_3tx4rx
 
     config = RadarConfig(num_chirps=6, num_tx_slots=3)
     array = ti_3tx4rx(config.wavelength)

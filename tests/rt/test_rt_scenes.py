@@ -132,9 +132,9 @@ def test_gpu_variant_traces_like_cpu():
             "import json, numpy as np; print(json.dumps(np.abs(p.amplitude).tolist()))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=ROOT, check=True)
-    from raysim.radar.config import RadarConfig
     from raysim.echoes.rt.scenes import load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.radar.config import RadarConfig
 
     cpu = MonostaticTracer(specular=False, diffuse=False)(load_scene("flat_reflectors"),
                                                            RadarConfig())

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from raysim.platform.motion import Trajectory, constant_velocity, hover_jitter, sinusoid
 from raysim.radar.arrays import upa
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.platform.motion import Trajectory, constant_velocity, hover_jitter, sinusoid
 
 #: Image-method length vs closed form, hand-made traces [m] (float64 rounding of ~30 m).
 IMAGE_LENGTH_TOL_M = 1e-12
@@ -87,8 +87,8 @@ def test_image_method_is_exact_over_flat_ground():
 
 def test_image_method_is_exact_for_a_sloped_bistatic_facet():
     """Sloped facet, tx and rx apart (TDM MIMO), platform rotating: image-method closed form."""
-    from raysim.radar.arrays import ti_3tx4rx
     from raysim.echoes.rt.reproject import path_lengths, specular_normals
+    from raysim.radar.arrays import ti_3tx4rx
 
     normal = np.array([0.3, -0.2, -1.0])             # facet faces up (towards -Z, the radar)
     normal /= np.linalg.norm(normal)

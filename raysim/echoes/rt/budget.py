@@ -50,8 +50,6 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.radar.arrays import VirtualArray
-from raysim.radar.config import RadarConfig
 from raysim.echoes.rt.scenes import (
     ENU_FROM_NED,
     MESH_SHAPE_TYPES,
@@ -61,6 +59,8 @@ from raysim.echoes.rt.scenes import (
     _substitute,
     get_scene,
 )
+from raysim.radar.arrays import VirtualArray
+from raysim.radar.config import RadarConfig
 
 #: Default field-of-view half-angle [rad] (the tracer's default).
 DEFAULT_FOV_HALF_ANGLE = math.radians(70.0)

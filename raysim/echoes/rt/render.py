@@ -6,14 +6,14 @@ import os
 
 import numpy as np
 
-from raysim.radar.arrays import VirtualArray
-from raysim.radar.config import RadarConfig
 from raysim.echoes.oracle import noise_power
-from raysim.synthesis.frame import RadarFrame
-from raysim.platform.motion import Trajectory, stationary
 from raysim.echoes.rt.reproject import IF_BAND_MODES, SPECULAR_MODES, synthesize_paths
 from raysim.echoes.rt.scenes import RadarScene, SceneDescriptor, load_scene
 from raysim.echoes.rt.trace import MonostaticTracer, PathSet
+from raysim.platform.motion import Trajectory, stationary
+from raysim.radar.arrays import VirtualArray
+from raysim.radar.config import RadarConfig
+from raysim.synthesis.frame import RadarFrame
 
 
 def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config: RadarConfig,

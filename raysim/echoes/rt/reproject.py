@@ -52,12 +52,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from raysim.echoes.oracle import element_times, element_world_positions
+from raysim.echoes.rt.trace import SPECULAR, PathSet
+from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.echoes.oracle import element_times, element_world_positions
-from raysim.platform.motion import Trajectory, stationary
 from raysim.synthesis.select import synthesize
-from raysim.echoes.rt.trace import SPECULAR, PathSet
 
 IF_BAND_MODES = ("cull", "taper", "none")
 #: Re-projection of single-bounce specular paths: image method or frozen vertex.

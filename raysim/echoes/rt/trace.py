@@ -47,9 +47,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.platform.motion import Trajectory, stationary
 from raysim.echoes.rt.scenes import ENU_FROM_NED, RadarScene
+from raysim.platform.motion import Trajectory, stationary
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
 #: Sionna interaction-type bits (``sionna.rt.constants.InteractionType``).
 SPECULAR, DIFFUSE, REFRACTION, DIFFRACTION, SENSING = 1, 2, 4, 8, 16
