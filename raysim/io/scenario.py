@@ -45,13 +45,21 @@ from __future__ import annotations
 import copy
 import json
 import math
-import re
 import tomllib
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from raysim.io.scenario_keys import (
+    dumps_toml,
+    format_validation_error,
+    get_key,
+    parse_assignment,
+    parse_value,
+    set_key,
+)
 
 __all__ = [
     "RadarSection", "ArraySection", "TargetSpec", "SceneSection", "SinusoidSpec",
@@ -496,118 +504,6 @@ def _drop_none(obj):
     return obj
 
 
-# ------------------------------------------------------------------ key paths
-def _split(path: str) -> list[str]:
-    if not isinstance(path, str) or not re.fullmatch(r"[A-Za-z0-9_]+(\.[A-Za-z0-9_]+)*", path):
-        raise ValueError(f"key path must look like 'section.key' or 'section.list.0.key', "
-                         f"got {path!r}")
-    return path.split(".")
-
-
-def get_key(data: dict, path: str) -> Any:
-    """Value at a dotted key path in nested dicts / lists (list items by index)."""
-    cur: Any = data
-    for part in _split(path):
-        if isinstance(cur, list):
-            if not part.isdigit() or int(part) >= len(cur):
-                raise ValueError(f"{path}: list index {part!r} out of range "
-                                 f"(list has {len(cur)} items)")
-            cur = cur[int(part)]
-        elif isinstance(cur, dict) and part in cur:
-            cur = cur[part]
-        else:
-            raise ValueError(f"{path}: no key {part!r}")
-    return cur
-
-
-def set_key(data: dict, path: str, value: Any) -> None:
-    """Set a dotted key path in nested dicts / lists in place, creating tables."""
-    parts = _split(path)
-    cur: Any = data
-    for i, part in enumerate(parts[:-1]):
-        nxt_is_index = parts[i + 1].isdigit()
-        if isinstance(cur, list):
-            if not part.isdigit() or int(part) >= len(cur):
-                raise ValueError(f"{path}: list index {part!r} out of range "
-                                 f"(list has {len(cur)} items)")
-            cur = cur[int(part)]
-            continue
-        if cur.get(part) is None:
-            cur[part] = [] if nxt_is_index else {}
-        cur = cur[part]
-    last = parts[-1]
-    if isinstance(cur, list):
-        if not last.isdigit() or int(last) > len(cur):
-            raise ValueError(f"{path}: list index {last!r} out of range "
-                             f"(list has {len(cur)} items)")
-        if int(last) == len(cur):
-            cur.append(value)
-        else:
-            cur[int(last)] = value
-    else:
-        cur[last] = value
-
-
-# ------------------------------------------------------------------- errors
-def _num(v: Any) -> str:
-    return f"{v:g}" if isinstance(v, (int, float)) else str(v)
-
-
-def _expected(err: dict) -> str:
-    t, ctx = err.get("type", ""), err.get("ctx") or {}
-    simple = {
-        "greater_than": lambda: f"> {_num(ctx.get('gt'))}",
-        "greater_than_equal": lambda: f">= {_num(ctx.get('ge'))}",
-        "less_than": lambda: f"< {_num(ctx.get('lt'))}",
-        "less_than_equal": lambda: f"<= {_num(ctx.get('le'))}",
-        "missing": lambda: "a value (required key is missing)",
-        "extra_forbidden": lambda: "no such key (unknown keys are not allowed)",
-        "literal_error": lambda: f"one of {ctx.get('expected')}",
-        "int_type": lambda: "an integer",
-        "int_parsing": lambda: "an integer",
-        "int_from_float": lambda: "an integer",
-        "float_type": lambda: "a number",
-        "float_parsing": lambda: "a number",
-        "finite_number": lambda: "a finite number",
-        "bool_type": lambda: "true or false",
-        "bool_parsing": lambda: "true or false",
-        "string_type": lambda: "a string",
-        "list_type": lambda: "a list",
-        "tuple_type": lambda: "a list of 3 numbers",
-        "too_long": lambda: f"at most {ctx.get('max_length')} items",
-        "too_short": lambda: f"at least {ctx.get('min_length')} items",
-        "model_type": lambda: "a table",
-        "dict_type": lambda: "a table",
-    }
-    if t in simple:
-        return simple[t]()
-    msg = str(err.get("msg", "valid value"))
-    return msg.removeprefix("Value error, ")
-
-
-def _fmt_value(v: Any) -> str:
-    if isinstance(v, dict):
-        return "a table"
-    text = json.dumps(v) if isinstance(v, (list, str, bool)) or v is None else repr(v)
-    return text if len(text) <= 80 else text[:77] + "..."
-
-
-def format_validation_error(exc: ValidationError, source: str = "scenario") -> ValueError:
-    """Turn a pydantic error into a ValueError listing ``key.path: got V, expected E``."""
-    lines = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err.get("loc", ())) or "(top level)"
-        if err.get("type") == "value_error" and isinstance(err.get("input"), dict):
-            lines.append(f"{loc}: {_expected(err)}")
-        elif err.get("type") == "missing":
-            lines.append(f"{loc}: missing, expected {_expected(err)}")
-        else:
-            lines.append(f"{loc}: got {_fmt_value(err.get('input'))}, expected {_expected(err)}")
-    n = len(lines)
-    head = f"{source}: {n} invalid value{'s' if n > 1 else ''}:\n  "
-    return ValueError(head + "\n  ".join(lines))
-
-
 # ------------------------------------------------------------------ loading
 def validate_scenario(data: dict, source: str = "scenario") -> Scenario:
     """Validate plain data (as parsed from TOML) into a :class:`Scenario`.
@@ -692,72 +588,3 @@ def scenario_from_case(name: str, **overrides: Any) -> Scenario:
     return validate_scenario(copy.deepcopy(data), source=f"paper case {name!r}")
 
 
-# --------------------------------------------------------------------- TOML
-def _toml_scalar(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        if math.isnan(v):
-            return "nan"
-        text = repr(v)
-        if "e" not in text and abs(v) >= 1e5:
-            for digits in range(1, 18):  # shortest exact exponent form: 77e9 -> 7.7e+10
-                short = f"{v:.{digits}e}"
-                if float(short) == v:
-                    return short
-        return text
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_scalar(x) for x in v) + "]"
-    raise ValueError(f"cannot write {type(v).__name__} {v!r} to TOML")
-
-
-def dumps_toml(data: dict, _prefix: str = "") -> str:
-    """Write nested dicts / lists of scalars as TOML (tables and arrays of tables)."""
-    lines: list[str] = []
-    tables: list[tuple[str, dict]] = []
-    arrays: list[tuple[str, list]] = []
-    for k, v in data.items():
-        if isinstance(v, dict):
-            tables.append((k, v))
-        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
-            arrays.append((k, v))
-        else:
-            lines.append(f"{k} = {_toml_scalar(v)}")
-    out = "\n".join(lines)
-    for k, v in tables:
-        name = f"{_prefix}{k}"
-        body = dumps_toml(v, name + ".")
-        only_subtables = v and all(isinstance(x, dict) or (isinstance(x, list) and x and all(
-            isinstance(y, dict) for y in x)) for x in v.values())
-        out += ("\n\n" + body) if only_subtables else (f"\n\n[{name}]\n" + body)
-    for k, items in arrays:
-        name = f"{_prefix}{k}"
-        for item in items:
-            out += f"\n\n[[{name}]]\n" + dumps_toml(item, name + ".")
-    return out.strip("\n") + ("\n" if not _prefix else "")
-
-
-# ------------------------------------------------------------ command line
-def parse_value(text: str) -> Any:
-    """A command-line value read as a TOML value (``3``, ``1e-3``, ``true``, ``[1, 2]``),
-    else as a plain string."""
-    try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
-        return text
-
-
-def parse_assignment(text: str) -> tuple[str, Any]:
-    """Split ``key.path=value`` into the key path and the parsed value."""
-    if "=" not in text:
-        raise ValueError(f"expected KEY=VALUE such as radar.num_chirps=64, got {text!r}")
-    key, value = text.split("=", 1)
-    key = key.strip()
-    _split(key)
-    return key, parse_value(value.strip())

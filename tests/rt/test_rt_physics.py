@@ -125,14 +125,14 @@ def test_cross_model_target_vs_point_target_oracle(warm_kernels):
     -40 dB, and the peaks to 0.1 range bin, 0.1 deg, 0.1 Doppler bin and 0.5 dB.
     """
     from raysim.echoes.rt.render import render_scene
-    from raysim.echoes.rt.scenes import TargetSpec, load_scene
+    from raysim.echoes.rt.scenes import SceneTarget, load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
 
     config = RadarConfig(num_chirps=32)
     array = upa(4, 4, wavelength=config.wavelength)
     motion = hover_jitter(3)
     lever = np.array([0.05, -0.02, 0.08])
-    tgt = TargetSpec("mover", position=np.array([6.0, -4.0, 14.0]), rcs_dbsm=5.0,
+    tgt = SceneTarget("mover", position=np.array([6.0, -4.0, 14.0]), rcs_dbsm=5.0,
                      velocity=np.array([0.4, 0.3, 0.0]))
     scene = load_scene("flat_reflectors", targets=[tgt])
     rt_frame = render_scene(scene, config, array, motion, lever,

@@ -185,7 +185,7 @@ MATERIALS = {m.name: m for m in (DRY_SOIL, ASPHALT, METAL, CONCRETE, GLASS)}
 
 # ----------------------------------------------------------------------------- targets
 @dataclass(frozen=True)
-class TargetSpec:
+class SceneTarget:
     """A constant-RCS point scatterer (Sionna ``ConstantRCSSensingTarget``-like).
 
     Attributes
@@ -313,14 +313,14 @@ class RadarScene:
     hover_altitude : float
         Height of the world origin (nominal hover point) above the scene's
         ``z = 0`` [m].
-    targets : list of TargetSpec
+    targets : list of SceneTarget
         Constant-RCS targets, positions and velocities in W.
     """
 
     descriptor: SceneDescriptor
     sionna_scene: object
     hover_altitude: float
-    targets: list[TargetSpec]
+    targets: list[SceneTarget]
 
     @property
     def name(self) -> str:
@@ -513,7 +513,7 @@ def check_scene_file(path: str | os.PathLike, *, frequency: float | None = None)
 
 def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *,
                frequency: float = 77e9, hover_altitude: float | None = None,
-               targets: list[TargetSpec] | None = None, extra_targets=(),
+               targets: list[SceneTarget] | None = None, extra_targets=(),
                include_targets: bool = True) -> RadarScene:
     """Load a scene for tracing.
 
@@ -526,9 +526,9 @@ def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *
     hover_altitude : float, optional
         Nominal radar height above ground [m]; default from the sidecar (15 m
         when there is none).
-    targets : list of TargetSpec, optional
+    targets : list of SceneTarget, optional
         Replace the sidecar's targets (positions in W).
-    extra_targets : sequence of TargetSpec
+    extra_targets : sequence of SceneTarget
         Added to the sidecar's (or ``targets``) list.
     include_targets : bool
         Drop all discrete targets when False.
@@ -571,7 +571,7 @@ def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *
     if targets is None:
         targets = []
         for t in meta.get("targets", []):
-            targets.append(TargetSpec(
+            targets.append(SceneTarget(
                 t["name"], placed.to_world(np.asarray(t["position"], dtype=float)),
                 float(t["rcs_dbsm"]),
                 np.asarray(t.get("velocity", [0.0, 0.0, 0.0]), dtype=float) @ ENU_FROM_NED.T,

@@ -1,0 +1,157 @@
+"""Layout rules of docs/architecture.md: an import DAG, one definition per name, small modules."""
+
+from __future__ import annotations
+
+import ast
+from collections import defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("raysim", "compensation")
+#: Largest module [lines] (docs/architecture.md: a module over this is two).
+MAX_MODULE_LINES = 700
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for pkg in PACKAGES:
+        for path in (ROOT / pkg).rglob("*.py"):
+            parts = path.relative_to(ROOT).with_suffix("").parts
+            name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+            out[name] = path
+    return out
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    t = node.test
+    return (isinstance(t, ast.Name) and t.id == "TYPE_CHECKING") or (
+        isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING")
+
+
+def _imports(path: Path, name: str, modules: dict) -> set[str]:
+    """Project modules imported anywhere in a module (functions too), TYPE_CHECKING aside."""
+    tree = ast.parse(path.read_text(), str(path))
+    is_pkg = path.name == "__init__.py"
+    found: set[str] = set()
+
+    def resolve(mod: str | None, level: int) -> str:
+        if level == 0:
+            return mod or ""
+        base = name.split(".")
+        base = base if is_pkg else base[:-1]
+        base = base[: len(base) - (level - 1)]
+        return ".".join(base + ([mod] if mod else []))
+
+    def visit(node):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.If) and _is_type_checking(child):
+                for sub in child.orelse:
+                    visit(sub)
+                continue
+            if isinstance(child, ast.Import):
+                for a in child.names:
+                    found.add(a.name)
+            elif isinstance(child, ast.ImportFrom):
+                base = resolve(child.module, child.level)
+                found.add(base)
+                for a in child.names:
+                    found.add(f"{base}.{a.name}")
+            visit(child)
+
+    visit(tree)
+    # keep the deepest project module each import names (a.b.c -> a.b.c if a module, else a.b)
+    out = set()
+    for imp in found:
+        while imp and imp not in modules:
+            imp = imp.rpartition(".")[0]
+        if imp and imp != name:
+            out.add(imp)
+    return out
+
+
+def _graph() -> dict[str, set[str]]:
+    modules = _modules()
+    graph = {name: _imports(path, name, modules) for name, path in modules.items()}
+    # a package's __init__ is imported with any of its modules: it may re-export them,
+    # so edges into a package are not edges out of its modules (no cycle through parents)
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+    counter = [0]
+
+    def strong(v: str) -> None:
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            strong(v)
+    return out
+
+
+def test_reference_cycle_is_found():
+    """The checker itself finds a two-module cycle and ignores a DAG."""
+    assert _cycles({"a": {"b"}, "b": {"a"}, "c": {"a"}}) == [["a", "b"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_import_cycles():
+    """Module imports (top level and inside functions) form a DAG."""
+    graph = _graph()
+    # package __init__ modules only re-export; drop edges from a package to its own modules
+    for name in list(graph):
+        graph[name] = {m for m in graph[name] if not m.startswith(name + ".")}
+    assert _cycles(graph) == []
+
+
+def test_compensation_never_imports_raysim():
+    graph = _graph()
+    bad = {m: sorted(i for i in imps if i.startswith("raysim"))
+           for m, imps in graph.items() if m.startswith("compensation")}
+    assert {m: i for m, i in bad.items() if i} == {}
+
+
+def test_no_public_class_defined_twice():
+    where = defaultdict(list)
+    for name, path in _modules().items():
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
+                where[node.name].append(name)
+    assert {k: v for k, v in where.items() if len(v) > 1} == {}
+
+
+def test_modules_are_small():
+    sizes = {name: len(path.read_text().splitlines()) for name, path in _modules().items()}
+    assert {k: v for k, v in sizes.items() if v > MAX_MODULE_LINES} == {}
+
+
+def test_stage_packages_exist():
+    """The folders show the data flow (docs/architecture.md)."""
+    for stage in ("radar", "platform", "echoes", "synthesis", "processing", "io", "pipeline",
+                  "studies", "cli"):
+        assert (ROOT / "raysim" / stage / "__init__.py").is_file(), stage
