@@ -410,10 +410,7 @@ class Scenario(_Section):
         if m.sinusoids:
             comps = tuple(Sinusoid(s.axis, s.amplitude_si, s.frequency_hz,
                                    math.radians(s.phase_deg)) for s in m.sinusoids)
-            parts.append(Trajectory(comps, name=", ".join(
-                f"{s.axis} {s.amplitude_deg if s.axis in ANGLE_AXES else s.amplitude_m:g}"
-                f"{' deg' if s.axis in ANGLE_AXES else ' m'} @ {s.frequency_hz:g} Hz"
-                for s in m.sinusoids)))
+            parts.append(Trajectory(comps, name=", ".join(c.label for c in comps)))
         if m.velocity_mps is not None:
             parts.append(constant_velocity(np.asarray(m.velocity_mps)))
         if m.hover_jitter is not None and m.hover_jitter.scale > 0:
