@@ -166,6 +166,8 @@ METRICS = {
     "entropy_rd_nats": ("nats", "image entropy of the RD map"),
     "entropy_ra_nats": ("nats", "image entropy of the RA map"),
     "peak_power_db": ("dB(W)", "received power at the target's range peak"),
+    "ridge_leakage_db": ("dB", "RD-map power outside the zero-Doppler ridge (Doppler bins "
+                               "-1..+1) relative to the map's total"),
 }
 
 
