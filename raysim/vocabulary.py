@@ -162,7 +162,9 @@ METRICS = {
     "pseudo_velocity_bins": ("bins", "pseudo-velocity in Doppler velocity bins"),
     "doppler_width_hz": ("Hz", "-3 dB width of that Doppler power spectrum"),
     "doppler_width_bins": ("bins", "Doppler width in Doppler bins 1 / (N T_rep)"),
-    "entropy_ae_nats": ("nats", "image entropy of the accumulated AE map"),
+    "entropy_ae_nats": ("nats", "image entropy of the accumulated AE map: beams summed "
+                                "coherently over each frame's chirps (zero-Doppler beam), "
+                                "power summed over frames"),
     "entropy_rd_nats": ("nats", "image entropy of the RD map"),
     "entropy_ra_nats": ("nats", "image entropy of the RA map"),
     "peak_power_db": ("dB(W)", "received power at the target's range peak"),
