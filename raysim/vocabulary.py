@@ -166,6 +166,10 @@ METRICS = {
     "entropy_rd_nats": ("nats", "image entropy of the RD map"),
     "entropy_ra_nats": ("nats", "image entropy of the RA map"),
     "peak_power_db": ("dB(W)", "received power at the target's range peak"),
+    "width_improvement_pct": ("%", "Doppler width reduction against chain none: "
+                                   "100 (w_none - w) / w_none"),
+    "width_vs_stationary": ("1", "Doppler width over that of the stationary reference"),
+    "entropy_vs_stationary": ("nats", "entropy_ae_nats minus that of the stationary reference"),
 }
 
 
