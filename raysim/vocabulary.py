@@ -170,6 +170,10 @@ METRICS = {
     "peak_power_db": ("dB(W)", "received power at the target's range peak"),
     "ridge_leakage_db": ("dB", "RD-map power outside the zero-Doppler ridge (Doppler bins "
                                "-1..+1) relative to the map's total"),
+    "width_improvement_pct": ("%", "Doppler width reduction against chain none: "
+                                   "100 (w_none - w) / w_none"),
+    "width_vs_stationary": ("1", "Doppler width over that of the stationary reference"),
+    "entropy_vs_stationary": ("nats", "entropy_ae_nats minus that of the stationary reference"),
 }
 
 

@@ -200,7 +200,7 @@ def run(args) -> int:
     if scenario.motion.case is not None:
         from raysim.studies.cases import get_case
 
-        paper = get_case(scenario.motion.case).paper
+        paper = get_case(scenario.motion.case)["paper"]
     out = {
         "scenario": scenario.name,
         "motion": scenario.trajectory().name,
@@ -237,7 +237,9 @@ def run(args) -> int:
             row += f"{v:>16.4f}" if math.isfinite(v) else f"{'-':>16}"
         print(row)
     if paper:
-        print("\npaper reports: " + ", ".join(f"{k}={v}" for k, v in paper.items()))
+        print("\npaper reports: " + "; ".join(
+            f"{chain}: " + ", ".join(f"{k}={v}" for k, v in vals.items())
+            for chain, vals in paper.items()))
     for note in result["notes"]:
         print(f"note: {note}")
     return 0

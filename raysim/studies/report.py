@@ -112,9 +112,9 @@ def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
 def _paper_values(scenario) -> dict:
     if scenario is None or scenario.motion.case is None:
         return {}
-    from raysim.studies.cases import get_case
+    from raysim.studies.cases import paper_values
 
-    return dict(get_case(scenario.motion.case).paper)
+    return paper_values(scenario.motion.case)
 
 
 def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = "") -> ReportData:
