@@ -404,16 +404,16 @@ class Scenario(_Section):
         )
         from raysim.studies.cases import get_case
 
-        def sines(specs: list[SinusoidSpec], prefix: str = "") -> Trajectory:
+        def sines(specs: list[SinusoidSpec]) -> Trajectory:
             comps = tuple(Sinusoid(s.axis, s.amplitude_si, s.frequency_hz,
                                    math.radians(s.phase_deg)) for s in specs)
-            return Trajectory(comps, name=prefix + ", ".join(c.label for c in comps))
+            return Trajectory(comps, name=", ".join(c.label for c in comps))
 
         m = self.motion
         parts: list[Trajectory] = []
         if m.case is not None:
             case = MotionSection.model_validate(get_case(m.case)["scenario"].get("motion", {}))
-            parts.append(sines(case.sinusoids, f"paper case {m.case}: ") if case.sinusoids
+            parts.append(sines(case.sinusoids) if case.sinusoids
                          else stationary())
         if m.sinusoids:
             parts.append(sines(m.sinusoids))
