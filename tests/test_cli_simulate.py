@@ -38,7 +38,7 @@ def test_stationary_case_json_has_target_range_and_angle(capsys):
     assert m["az_deg"] == pytest.approx(20.0, abs=ANGLE_TOL_DEG)
     assert m["el_deg"] == pytest.approx(0.0, abs=ANGLE_TOL_DEG)
     assert m["pseudo_velocity_mps"] == pytest.approx(0.0, abs=1e-9)
-    # stationary Hann mainlobe: about 1.44 Doppler bins (CONVENTIONS.md)
+    # stationary Hann mainlobe: about 1.44 Doppler bins (docs/conventions.md)
     assert m["doppler_width_bins"] == pytest.approx(1.44, abs=0.01)
     assert m["entropy_ae_nats"] > 0 and m["entropy_rd_nats"] > 0
     assert res["radar"] == {"num_chirps": 32, "num_samples": 128, "num_channels": 16,

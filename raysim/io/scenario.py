@@ -8,7 +8,7 @@ forbid unknown keys. Every validation problem is reported in one
 :class:`ValueError` whose lines name the key path, the value and what was
 expected, e.g. ``radar.sample_rate_hz: got -1, expected > 0``.
 
-File units follow CONVENTIONS.md: SI with the unit in the key name
+File units follow docs/conventions.md: SI with the unit in the key name
 (``sample_rate_hz``, ``range_m``), angles in degrees (``az_deg``,
 ``amplitude_deg``). :meth:`Scenario.radar_config`, :meth:`Scenario.trajectory`
 and friends convert to the SI / radian objects of the library.
@@ -136,7 +136,7 @@ class ArraySection(_Section):
 class TargetSpec(_Section):
     """One point target, placed from the nominal radar phase centre.
 
-    ``range_m`` [m], direction ``az_deg`` / ``el_deg`` [deg] (CONVENTIONS.md),
+    ``range_m`` [m], direction ``az_deg`` / ``el_deg`` [deg] (docs/conventions.md),
     ``rcs_dbsm`` [dBsm], constant world (NED) velocity ``velocity_mps`` [m/s].
     """
 

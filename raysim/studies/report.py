@@ -14,7 +14,7 @@ mailed or archived. The file is written atomically.
 
 Map conventions: power in dB relative to each map's maximum, clipped at
 :data:`DYNAMIC_RANGE_DB` below it; range [m], range rate [m/s] (positive
-receding), angles [deg] (CONVENTIONS.md).
+receding), angles [deg] (docs/conventions.md).
 """
 
 from __future__ import annotations
