@@ -3,7 +3,10 @@
 ``simulate --json``, ``report``, ``sweep`` and ``render`` run on the same small
 scenario; every chain key and metric name they write must come from
 :mod:`raysim.vocabulary`, and the same quantity must carry the same name (and,
-where two commands compute it for the same scenario, the same value).
+where two commands compute it for the same scenario, the same value). The
+studies too: ``reproduce`` rows and the stability metrics use the same names,
+and ``simulate`` and ``reproduce`` give the same single-chirp angle on the
+same paper case.
 """
 
 from __future__ import annotations
@@ -195,3 +198,56 @@ def test_motion_label_is_the_same_everywhere(outputs):
 def test_report_maps_are_titled_by_the_vocabulary(outputs):
     for name in MAPS:
         assert f"{MAP_TITLES[name]} maps" in outputs["report"]
+
+
+# ------------------------------------------------- the studies speak it too
+#: Columns of a reproduction row that describe the run rather than measure it.
+REPRODUCE_DESCRIPTORS = {"case", "chain", "imu", "seeds", "num_chirps", "frames",
+                         "velocity_bin_mps", "doppler_bin_hz", "warnings"}
+#: Largest difference of one metric between ``simulate`` and ``reproduce`` on the same
+#: case: both extract the range gate in float32, by a matrix product and an FFT.
+SAME_METRIC_TOL_DEG = 1e-5
+
+
+def _metric_name(key: str) -> str:
+    for prefix in ("stationary_", "paper_"):
+        if key.startswith(prefix) and key[len(prefix):] in METRICS:
+            return key[len(prefix):]
+    return key[:-4] if key.endswith("_std") else key
+
+
+@pytest.fixture(scope="module")
+def reproduction(tmp_path_factory):
+    out = tmp_path_factory.mktemp("repro")
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["reproduce", "--quick", "--cases", "rotation_y", "--chains", ALL_CHAINS,
+                     "--no-figures", "--out", str(out)]) == 0
+    return json.loads((out / "reproduction.json").read_text())
+
+
+def test_reproduce_rows_use_the_vocabulary(reproduction):
+    rows = reproduction["rows"]
+    assert [r["chain"] for r in rows] == ALL_CHAINS.split(",")
+    for row in rows:
+        for key in row:
+            if key not in REPRODUCE_DESCRIPTORS:
+                assert _metric_name(key) in METRICS, key
+
+
+def test_simulate_and_reproduce_agree_on_the_same_case(reproduction, capsys):
+    """The paper case rotation_y at the reproduction's quick size through ``simulate``."""
+    code = main(["simulate", "--case", "rotation_y", "--json", "--chains", ALL_CHAINS,
+                 "--set", "radar.sample_rate_hz=2.5e6"])
+    assert code == 0
+    sim = json.loads(capsys.readouterr().out)
+    for row in reproduction["rows"]:
+        got = sim["chains"][row["chain"]]
+        for m in ("angle_error_deg", "az_deg", "el_deg"):
+            assert got[m] == pytest.approx(row[m], abs=SAME_METRIC_TOL_DEG), (row["chain"], m)
+
+
+def test_stability_names_are_the_vocabulary():
+    from raysim.studies import stability
+
+    assert set(stability.STABILITY_METRICS) <= set(METRICS)
+    assert all(_valid_chain_key(c) for c in stability.MAP_CHAINS)
