@@ -4,6 +4,7 @@
 #define KERNEL_HAVE_AVX2 1
 #endif
 #define KERNEL_NS avx2
+#define KERNEL_VBYTES 32
 #include "kernel_impl.h"
 namespace kernel {
 bool avx2_compiled() {

@@ -23,6 +23,7 @@ namespace KERNEL_NS {
 
 constexpr int CHUNK = 512;   // paths per chunk (geometry of 512 paths ~ 50 KB)
 constexpr int GROUP = 16;    // rows per work item
+constexpr int MAX_DEGREE = 31;  // largest kernel polynomial degree
 
 // sin and cos of 2 pi r for r in [-1/8, 1/8] (Taylor to degree 13/12, error < 1e-11)
 static inline void sincos_2pi_small(double r, double& s, double& c) {
@@ -54,8 +55,8 @@ static void chunk_row(const kernel::Params& P, int64_t p0, int64_t p1, int64_t b
     const double A = P.A, half_mu = P.half_mu, beat = P.beat, inv_c = P.inv_c;
     const double nf = (double)P.nf, half_w = 0.5 * (double)P.w;
     const double off = (double)(P.nf / 2 + WP);
-    alignas(64) double cr[CHUNK], ci[CHUNK], sv[CHUNK];
-    alignas(64) int32_t qv[CHUNK];
+    alignas(64) double cr[CHUNK + 8], ci[CHUNK + 8], sv[CHUNK + 8];
+    alignas(64) int32_t qv[CHUNK + 8];
     const int64_t n = p1 - p0;
     // stage 1: geometry, phase reduction, sin/cos, grid position (vectorisable)
     for (int64_t j = 0; j < n; ++j) {
@@ -96,21 +97,46 @@ static void chunk_row(const kernel::Params& P, int64_t p0, int64_t p1, int64_t b
         sv[j] = 2.0 * (l0 - u) - 1.0;                          // s = 2 t - 1 in [-1, 1)
         qv[j] = (int32_t)(l0 + off);
     }
-    // stage 2: kernel taps by Horner in G, spread onto the padded grid
-    for (int64_t j = 0; j < n; ++j) {
-        const G s = (G)sv[j];
-        alignas(64) G ker[WP];
-        for (int i = 0; i < WP; ++i) ker[i] = coef[(int64_t)P.deg * WP + i];
-        for (int d = P.deg - 1; d >= 0; --d)
-            for (int i = 0; i < WP; ++i) ker[i] = ker[i] * s + coef[(int64_t)d * WP + i];
-        const G re = (G)cr[j], im = (G)ci[j];
-        alignas(64) G cc[2 * WP], kk[2 * WP];
-        for (int i = 0; i < WP; ++i) {
-            cc[2 * i] = re; cc[2 * i + 1] = im;
-            kk[2 * i] = ker[i]; kk[2 * i + 1] = ker[i];
+    // stage 2: kernel taps by Horner on one vector of WP taps (GCC vector extension:
+    // AVX2 registers in the AVX2 copy, SSE pairs in the portable copy), then add
+    // re * taps and im * taps into the split real / imaginary padded grids
+    // NV native vectors of VL lanes hold the WP taps
+    constexpr int VL = KERNEL_VBYTES / (int)sizeof(G);
+    constexpr int NV = WP / VL;
+    typedef G V __attribute__((vector_size(KERNEL_VBYTES)));
+    const int deg = (int)P.deg;            // <= MAX_DEGREE (checked by the caller)
+    V C[MAX_DEGREE + 1][NV];
+    for (int d = 0; d <= deg; ++d) std::memcpy(&C[d][0], coef + (int64_t)d * WP, sizeof(V) * NV);
+    G* gre = pad;
+    G* gim = pad + (P.nf + 2 * WP + 2);
+    // U paths at a time: U independent Horner chains hide the FMA latency
+    constexpr int U = 4;
+    for (int64_t j = n; j < ((n + U - 1) / U) * U; ++j) {  // pad the chunk tail
+        sv[j] = 0.0; cr[j] = 0.0; ci[j] = 0.0; qv[j] = qv[0];
+    }
+    for (int64_t j0 = 0; j0 < n; j0 += U) {
+        V ker[U][NV];
+        G s[U];
+        for (int u = 0; u < U; ++u) {
+            s[u] = (G)sv[j0 + u];
+            for (int v = 0; v < NV; ++v) ker[u][v] = C[deg][v];
         }
-        G* g = pad + 2 * (int64_t)qv[j];
-        for (int i = 0; i < 2 * WP; ++i) g[i] += cc[i] * kk[i];
+        for (int d = deg - 1; d >= 0; --d)
+            for (int u = 0; u < U; ++u)
+                for (int v = 0; v < NV; ++v) ker[u][v] = ker[u][v] * s[u] + C[d][v];
+        for (int u = 0; u < U; ++u) {
+            const int64_t q = qv[j0 + u];
+            const G re = (G)cr[j0 + u], im = (G)ci[j0 + u];
+            for (int v = 0; v < NV; ++v) {
+                V a, c;
+                std::memcpy(&a, gre + q + v * VL, sizeof(V));
+                std::memcpy(&c, gim + q + v * VL, sizeof(V));
+                a += ker[u][v] * re;
+                c += ker[u][v] * im;
+                std::memcpy(gre + q + v * VL, &a, sizeof(V));
+                std::memcpy(gim + q + v * VL, &c, sizeof(V));
+            }
+        }
     }
 }
 
@@ -119,7 +145,7 @@ static void run_item(const kernel::Params& P, int64_t b, int64_t m0, int64_t m1,
                      const G* coef, std::vector<G>& pads) {
     const int64_t npad = P.nf + 2 * WP + 2;
     const int64_t rows = m1 - m0;
-    std::memset(pads.data(), 0, sizeof(G) * 2 * npad * rows);
+    std::memset(pads.data(), 0, sizeof(G) * 2 * npad * rows);  // [row][re | im][npad]
     const int64_t n0 = P.n_twin, n1 = n0 + P.n_static, n2 = n1 + P.n_moving;
     for (int64_t c0 = 0; c0 < n2; c0 += CHUNK) {
         const int64_t c1 = std::min(c0 + CHUNK, n2);
@@ -144,8 +170,8 @@ static void run_item(const kernel::Params& P, int64_t b, int64_t m0, int64_t m1,
         for (int64_t j = 0; j < npad; ++j) {
             int64_t t = (j - off) % P.nf;
             if (t < 0) t += P.nf;
-            out[2 * t] += pad[2 * j];
-            out[2 * t + 1] += pad[2 * j + 1];
+            out[2 * t] += pad[j];
+            out[2 * t + 1] += pad[npad + j];
         }
     }
 }
