@@ -43,7 +43,7 @@ from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.synthesis.nufft import check_chirps, check_eps, default_threads
 from raysim.synthesis.paths import PathDelays
 
-__all__ = ["available", "isa", "KernelDesign", "design", "kernel_error", "synthesize_kernel",
+__all__ = ["available", "isa", "KernelDesign", "kernel_error", "synthesize_kernel",
            "render_rows", "KERNEL_MIN_EPS"]
 
 try:  # the compiled extension is optional: FINUFFT is the fallback
