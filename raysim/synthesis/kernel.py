@@ -203,8 +203,10 @@ def _classes(src: PathDelays) -> tuple[np.ndarray, int, int, int]:
     n = src.num_paths
     moving = np.zeros(n, bool) if src.velocity is None else np.any(src.velocity != 0, axis=1)
     if src.rx_positions is None:
-        same = src.first_vertex == src.last_vertex
-        twin = same.reshape(n, -1).all(axis=1) & ~moving
+        f, v = src.first_vertex, src.last_vertex
+        if f.ndim != v.ndim:                       # [path, 3] against [path, chirp, 3]
+            f, v = (a[:, None, :] if a.ndim == 2 else a for a in (f, v))
+        twin = (f == v).reshape(n, -1).all(axis=1) & ~moving
     else:
         twin = np.zeros(n, bool)
     static = ~twin & ~moving
@@ -276,13 +278,18 @@ def render_rows(src: PathDelays, config: RadarConfig, design: KernelDesign,
     zeros = np.zeros((1, 1))
     vel = [np.ascontiguousarray(src.velocity[order, i]) for i in range(3)] \
         if src.velocity is not None else [zeros] * 3
+    fv, lv = src.first_vertex, src.last_vertex
+    per_chirp = fv.ndim == 3 or lv.ndim == 3
+    if per_chirp:                                  # one stride for both vertex sets
+        fv, lv = (np.broadcast_to(v[:, None, :], (v.shape[0], src.num_chirps, 3))
+                  if v.ndim == 2 else v for v in (fv, lv))
     modes = (np.arange(k) - h) % nf
     deconv = design.deconv.astype(np.float32 if gdtype == np.complex64 else np.float64)
     for b0 in range(0, chirp_list.size, block):
         cb = chirp_list[b0:b0 + block]
         nb = cb.size
-        first = _soa(src.first_vertex, order, cb)
-        last = _soa(src.last_vertex, order, cb)
+        first = _soa(fv, order, cb)
+        last = _soa(lv, order, cb)
         length = _per_chirp(src.interior_length, order, cb)
         amp = _per_chirp(src.amplitude, order, cb)
         ar, ai = np.ascontiguousarray(amp.real), np.ascontiguousarray(amp.imag)
@@ -293,7 +300,6 @@ def render_rows(src: PathDelays, config: RadarConfig, design: KernelDesign,
         if n_moving and src.element_times is None:  # pragma: no cover - PathDelays forbids it
             raise ValueError("moving paths need element_times")
         grid = np.zeros((nb, n_chan, nf), dtype=gdtype)
-        per_chirp = src.first_vertex.ndim == 3
         ints = np.array([n_twin, n_static, n_moving, n_chan, nb, nf, w, coef.shape[0] - 1,
                          threads, int(design.double_grid),
                          src.num_paths if per_chirp else 0,
