@@ -2,6 +2,10 @@
 
 :func:`run` measures, in one process (plus one child process for memory):
 
+``synthesis_1e5``
+    The fused kernel with slow-time decimation against FINUFFT for 1e5 hover
+    paths on the paper frame, same threads (1) and clock, errors against the
+    complex128 direct sum (:func:`bench_synthesis_1e5`).
 ``synthesis``
     NUFFT against the direct sum (complex128 reference) and the tone sum
     (complex64) for 10, 1e3, 1e4, 1e5 paths on the paper frame (256 chirps x
