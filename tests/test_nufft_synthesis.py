@@ -143,12 +143,18 @@ def test_synthesize_methods_agree_on_pathdelays(short_radar, rng):
 
 
 def test_auto_choice():
+    from raysim.synthesis import kernel
+
     assert choose_method(1, 256, 400, 600, 1e-5) == "tones"
-    assert choose_method(100_000, 256, 400, 600, 1e-5) == "nufft"
+    # arrays of delays (no geometry): the fused kernel does not apply
+    assert choose_method(100_000, 256, 400, 600, 1e-5, compact=False) == "nufft"
+    # compact paths: the fused kernel where it is built, else FINUFFT
+    assert choose_method(100_000, 256, 400, 600, 1e-5) == (
+        "kernel" if kernel.available() else "nufft")
     assert choose_method(1000, 256, 400, 600, 1e-7) == "direct"
     # complex64 accumulation: many tones cannot reach 1e-6 whatever they cost
     assert tones_error(100_000) > 1e-6 > tones_error(10)
-    assert choose_method(100_000, 1, 1, 600, 1e-6) == "nufft"
+    assert choose_method(100_000, 1, 1, 600, 1e-6, compact=False) == "nufft"
     assert estimate_seconds("nufft", 1e5, 256, 400, 600, 1e-5) * 50 < estimate_seconds(
         "direct", 1e5, 256, 400, 600)
 

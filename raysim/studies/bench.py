@@ -2,6 +2,10 @@
 
 :func:`run` measures, in one process (plus one child process for memory):
 
+``synthesis_1e5``
+    The fused kernel with slow-time decimation against FINUFFT for 1e5 hover
+    paths on the paper frame, same threads (1) and clock, errors against the
+    complex128 direct sum (:func:`bench_synthesis_1e5`).
 ``synthesis``
     NUFFT against the direct sum (complex128 reference) and the tone sum
     (complex64) for 10, 1e3, 1e4, 1e5 paths on the paper frame (256 chirps x
@@ -164,6 +168,118 @@ def bench_synthesis(*, quick: bool, counts=PATH_COUNTS, eps_values=None,
             f"s/frame (x{best['speedup_vs_direct']:.0f}) | tones "
             f"{row['tones_s_per_frame']:9.1f} s/frame (x{best['speedup_vs_tones']:.1f})")
     return rows
+
+
+# --------------------------------------------------------------------------- kernel
+def bench_synthesis_1e5(*, quick: bool, paths: int = 100_000, eps: float = 1e-5,
+                        threads: int = 1, log: Callable[[str], None] = print) -> dict:
+    """Fused kernel (+ slow-time decimation) against FINUFFT, 1e5 paths, paper frame.
+
+    Same process, same ``threads`` for both (default 1, CPU clock: robust on a
+    shared machine). FINUFFT (``method="nufft"``, includes NumPy geometry and
+    strengths) is timed on 1 chirp x ``nu_ch`` channels; the kernel
+    (``method="kernel"``, includes geometry, spreading, FFT, deconvolution) on
+    ``k_chirps`` chirps x 400 channels; both extrapolated linearly per row.
+    The decimated frame costs ``exact chirps x kernel per chirp`` plus the
+    slow-time interpolation, timed on the whole frame for 4 channels and
+    scaled by 100. Errors against the complex128 direct sum: the kernel on all
+    paths x 1 chirp x ``acc_ch`` channels; the decimated frame on
+    ``dec_paths`` paths x 256 chirps x 2 channels.
+    """
+    from raysim.synthesis import kernel
+    from raysim.synthesis.decimate import interpolate, plan_decimation
+    from raysim.synthesis.select import DECIMATION_EPS_SHARE, synthesize
+
+    if not kernel.available():
+        return {"status": "kernel extension not built; FINUFFT only"}
+    cfg, arr, traj, lever = paper_setup()
+    n_ch, k, n_chirp = arr.num_channels, cfg.num_samples, cfg.num_chirps
+    pd = hover_paths(paths, cfg, arr, traj, lever, seed=1)
+    nu_ch = 40 if quick else 100
+    k_chirps = 1 if quick else 4
+    # warm-up (imports, FFTW plans, first pages) before either is timed
+    synthesize(subset(pd, 1, 2), None, cfg, method="nufft", eps=eps, threads=threads)
+    synthesize(subset(pd, 1, 2), None, cfg, method="kernel", eps=eps, threads=threads)
+    t_nu, _ = _timed(synthesize, subset(pd, 1, nu_ch), None, cfg, method="nufft", eps=eps,
+                     threads=threads)
+    nufft_frame = t_nu * n_chirp * n_ch / nu_ch
+    t_k, _ = _timed(synthesize, pd, None, cfg, method="kernel", eps=eps, threads=threads,
+                    chirps=range(k_chirps))
+    kernel_frame = t_k * n_chirp / k_chirps
+    plan = plan_decimation(pd, cfg, n_chirp, DECIMATION_EPS_SHARE * eps)
+    rows = np.zeros((n_chirp, 4, k), np.complex64)
+    t_int, _ = _timed(interpolate, rows, plan)
+    interp_frame = t_int * n_ch / 4
+    dec_frame = kernel_frame * plan.exact.size / n_chirp + interp_frame
+    # accuracy
+    acc_ch = 2 if quick else 8
+    acc = subset(pd, 1, acc_ch)
+    ref = synthesize(acc, None, cfg, method="direct")
+    err_kernel = _rel(synthesize(acc, None, cfg, method="kernel", eps=eps), ref)
+    err_nufft = _rel(synthesize(acc, None, cfg, method="nufft", eps=eps), ref)
+    dec_paths = 500 if quick else 5_000
+    small = subset(pd.select(np.arange(paths) < dec_paths), n_chirp, 2)
+    ref_d = synthesize(small, None, cfg, method="direct")
+    err_dec = _rel(synthesize(small, None, cfg, method="kernel", eps=eps, decimate="auto"), ref_d)
+    # FINUFFT's upsampling factor: 2.0 (default) against 1.25 on the same rows
+    upsamp = _finufft_upsampfac(pd, cfg, eps, rows=8 if quick else 40)
+    out = {
+        "paths": paths, "eps": eps, "threads": threads,
+        "clock": "cpu" if TIMER is time.process_time else "wall",
+        "frame": [n_chirp, n_ch, k], "isa": kernel.isa(),
+        "finufft_s_per_frame": nufft_frame,
+        "kernel_s_per_frame": kernel_frame,
+        "kernel_decimated_s_per_frame": dec_frame,
+        "decimation": {"factor": plan.factor, "exact_chirps": int(plan.exact.size),
+                       "doppler_bound_cycles_per_chirp": plan.doppler, "reason": plan.reason,
+                       "interpolation_s_per_frame": interp_frame},
+        "speedup_vs_finufft": nufft_frame / dec_frame,
+        "speedup_vs_finufft_no_decimation": nufft_frame / kernel_frame,
+        "relative_error": max(err_kernel, err_dec),
+        "relative_error_parts": {"kernel_all_paths": err_kernel, "decimated_frame": err_dec,
+                                 "finufft_all_paths": err_nufft},
+        "finufft_upsampfac": upsamp,
+        "timed_on": {"finufft": {"chirps": 1, "channels": nu_ch},
+                     "kernel": {"chirps": k_chirps, "channels": n_ch},
+                     "interpolation": {"chirps": n_chirp, "channels": 4}},
+        "accuracy_checked_on": {"kernel": {"paths": paths, "chirps": 1, "channels": acc_ch},
+                                "decimated": {"paths": dec_paths, "chirps": n_chirp,
+                                              "channels": 2}},
+        "baseline": ("FINUFFT per (chirp, channel) row (raysim.synthesis.nufft, NumPy geometry "
+                     "and strengths included), same threads, same clock, same process"),
+        "loadavg": list(os.getloadavg()),
+    }
+    log(f"  1e5 paths, {threads} thread(s), {out['clock']} clock: FINUFFT "
+        f"{nufft_frame:.0f} s/frame, kernel {kernel_frame:.0f} s, kernel+decimation "
+        f"(D={plan.factor}) {dec_frame:.0f} s: x{out['speedup_vs_finufft']:.1f} at error "
+        f"{out['relative_error']:.1e}")
+    return out
+
+
+def _finufft_upsampfac(pd: PathDelays, cfg: RadarConfig, eps: float, rows: int) -> dict:
+    """FINUFFT time per row with ``upsampfac`` 2.0 and 1.25 on the same points."""
+    import finufft
+
+    from raysim.synthesis.nufft import _strengths
+
+    tau = pd.delays(0, slice(0, rows))
+    x, c = _strengths(tau, pd.amplitudes(0)[None, :], cfg, eps < 1e-6)
+    buf = np.empty(cfg.num_samples, np.complex128)
+    res = {}
+    for up in (2.0, 1.25):
+        plan = finufft.Plan(1, (cfg.num_samples,), n_trans=1, eps=0.5 * eps, isign=1,
+                            dtype="complex128", nthreads=1, spread_sort=0, modeord=0,
+                            upsampfac=up)
+
+        def go(plan=plan):
+            for i in range(rows):
+                plan.setpts(x[i])
+                plan.execute(c[i], out=buf)
+
+        res[f"s_per_row_upsampfac_{up}"] = _clock(go, repeat=2) / rows
+    res["ratio_2_over_1.25"] = res["s_per_row_upsampfac_2.0"] / res["s_per_row_upsampfac_1.25"]
+    res["paths_per_row"] = pd.num_paths
+    return res
 
 
 # --------------------------------------------------------------------------- memory
@@ -487,6 +603,8 @@ def run(*, quick: bool = False, memory: bool = True,
         result["memory"] = bench_memory(quick=quick)
     else:
         result["memory"] = "skipped (--no-memory)"
+    log("synthesis_1e5: fused kernel + decimation vs FINUFFT (1e5 paths, paper frame)")
+    result["synthesis_1e5"] = bench_synthesis_1e5(quick=quick, log=log)
     log("synthesis: NUFFT vs direct sum vs tone sum (paper frame 256 x 400 x 600)")
     result["synthesis"] = bench_synthesis(quick=quick, log=log)
     log("oracle vs floor and naive NumPy")

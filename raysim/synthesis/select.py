@@ -16,11 +16,25 @@ Three ways to evaluate the same stop-and-hop tone sum
     transform per (chirp, channel), ~42 ns per (path, chirp, channel) plus
     ~40 us per (chirp, channel) on one thread; error set by ``eps``.
 
+``"kernel"``
+    :func:`raysim.synthesis.kernel.synthesize_kernel`, the fused exact kernel
+    (compiled extension; :class:`PathDelays` input only): ~20 ns per (path,
+    chirp, channel) on one thread at ``eps = 1e-5``; error model
+    :func:`raysim.synthesis.kernel.kernel_error`.
+
 ``method="auto"`` picks ``"direct"`` when ``eps < 1e-6`` (below what complex64
-output carries) and otherwise the cheaper of ``"tones"`` (only where
-:func:`tones_error` is below ``eps``) and ``"nufft"`` by the cost model
-:func:`estimate_seconds`; the tone sum wins for a handful of paths, the NUFFT
-from about 20 paths per frame on the paper radar.
+output carries) and otherwise the cheapest of ``"tones"`` (only where
+:func:`tones_error` is below ``eps``), ``"kernel"`` (only for a
+:class:`PathDelays`, when the extension is built and its modelled error is
+below ``eps``) and ``"nufft"`` by the cost model :func:`estimate_seconds`; the
+tone sum wins for a handful of paths, the kernel (else the NUFFT) from about
+20 paths per frame on the paper radar. Without the extension ``auto`` falls
+back to FINUFFT.
+
+``decimate`` (``"auto"`` or an integer) computes exact rows on every D-th chirp
+only and interpolates the others along slow time
+(:mod:`raysim.synthesis.decimate`); it applies to ``"kernel"`` and
+``"nufft"`` and is refused (every chirp exact) where its assumptions fail.
 """
 
 from __future__ import annotations
@@ -30,6 +44,7 @@ from typing import Literal
 import numpy as np
 
 from raysim.radar.config import RadarConfig
+from raysim.synthesis.kernel import KERNEL_MIN_EPS
 from raysim.synthesis.nufft import (
     MIN_EPS,
     PathDelays,
@@ -41,14 +56,19 @@ from raysim.synthesis.nufft import (
 )
 from raysim.synthesis.tones import synthesize_if, synthesize_if_direct
 
-Method = Literal["auto", "nufft", "tones", "direct"]
-METHODS = ("auto", "nufft", "tones", "direct")
+Method = Literal["auto", "nufft", "tones", "direct", "kernel"]
+METHODS = ("auto", "nufft", "tones", "direct", "kernel")
 
 #: Cost-model constants [s], measured on 2 cores (see docs/speed.md).
 COST_DIRECT_PER_TERM = 22e-9
 COST_TONES_PER_TERM = 3.8e-9
 COST_NUFFT_PER_PAIR = 42e-9
 COST_NUFFT_PER_ROW = 40e-6
+#: Fused kernel, one thread, at width 7 (eps = 1e-5) [s per (path, row)] and per row (FFT).
+COST_KERNEL_PER_PAIR = 20e-9
+COST_KERNEL_PER_ROW = 15e-6
+#: Share of ``eps`` given to slow-time interpolation when decimating.
+DECIMATION_EPS_SHARE = 0.1
 #: Tolerance below which only the complex128 direct sum qualifies.
 DIRECT_BELOW_EPS = 1e-6
 
@@ -69,7 +89,7 @@ def estimate_seconds(method: str, num_paths: int, num_chirps: int, num_channels:
 
     Parameters
     ----------
-    method : {"direct", "tones", "nufft"}
+    method : {"direct", "tones", "nufft", "kernel"}
     num_paths, num_chirps, num_channels, num_samples : int
         Extent of the work ``[path, chirp, channel, sample]``.
     eps : float
@@ -85,24 +105,50 @@ def estimate_seconds(method: str, num_paths: int, num_chirps: int, num_channels:
         rows = float(num_chirps) * num_channels
         return rows * (COST_NUFFT_PER_ROW * (num_samples / 600.0)
                        + COST_NUFFT_PER_PAIR * (0.45 + 0.55 * width / 7.3) * num_paths)
-    raise ValueError(f"method must be one of ('direct', 'tones', 'nufft'), got {method!r}")
+    if method == "kernel":
+        from raysim.synthesis.kernel import kernel_error
+
+        width = kernel_error(num_paths, max(eps, KERNEL_MIN_EPS), num_samples)[1].width
+        rows = float(num_chirps) * num_channels
+        return rows * (COST_KERNEL_PER_ROW * (num_samples / 600.0)
+                       + COST_KERNEL_PER_PAIR * (0.5 + 0.5 * width / 7.0) * num_paths)
+    raise ValueError("method must be one of ('direct', 'tones', 'nufft', 'kernel'), "
+                     f"got {method!r}")
+
+
+def kernel_qualifies(num_paths: int, num_samples: int, eps: float) -> bool:
+    """Whether the fused kernel is built and its modelled error is below ``eps``."""
+    from raysim.synthesis import kernel
+
+    return (kernel.available() and eps >= KERNEL_MIN_EPS
+            and kernel.kernel_error(num_paths, eps, num_samples)[0] <= eps)
 
 
 def choose_method(num_paths: int, num_chirps: int, num_channels: int, num_samples: int,
-                  eps: float = 1e-6) -> str:
+                  eps: float = 1e-6, *, compact: bool = True) -> str:
     """The method ``method="auto"`` uses for this problem size and tolerance.
+
+    Parameters
+    ----------
+    num_paths, num_chirps, num_channels, num_samples : int
+    eps : float
+    compact : bool
+        The paths are a :class:`PathDelays` (the kernel needs their geometry).
 
     Returns
     -------
     str
-        ``"direct"`` if ``eps < 1e-6``, else the cheaper of ``"tones"`` and
-        ``"nufft"`` by :func:`estimate_seconds` (tones only where
-        :func:`tones_error` is below ``eps``).
+        ``"direct"`` if ``eps < 1e-6``, else the cheapest of ``"tones"``,
+        ``"kernel"`` and ``"nufft"`` by :func:`estimate_seconds` (tones only
+        where :func:`tones_error` is below ``eps``; the kernel only when
+        :func:`kernel_qualifies`).
     """
     eps = check_eps(eps, floor=np.finfo(float).eps)
     if eps < DIRECT_BELOW_EPS:
         return "direct"
     candidates = ("tones", "nufft") if tones_error(num_paths) <= eps else ("nufft",)
+    if compact and kernel_qualifies(num_paths, num_samples, eps):
+        candidates += ("kernel",)
     cost = {m: estimate_seconds(m, num_paths, num_chirps, num_channels, num_samples, eps)
             for m in candidates}
     return min(cost, key=cost.get)
@@ -110,7 +156,8 @@ def choose_method(num_paths: int, num_chirps: int, num_channels: int, num_sample
 
 def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
                eps: float = 1e-6, out: np.ndarray | None = None,
-               chirps: range | None = None, threads: int | None = None) -> np.ndarray:
+               chirps: range | None = None, threads: int | None = None,
+               decimate: str | int = 1) -> np.ndarray:
     """IF samples of many paths on the ``[chirp, channel, sample]`` grid.
 
     Parameters
@@ -123,7 +170,7 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         Complex IF amplitudes [sqrt(W)] without the propagation phase;
         ``None`` with a ``PathDelays``.
     config : RadarConfig
-    method : {"auto", "nufft", "tones", "direct"}
+    method : {"auto", "nufft", "tones", "direct", "kernel"}
         See the module docstring.
     eps : float
         Requested relative l2 error of the result. ``"nufft"`` needs
@@ -133,7 +180,13 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     chirps : range, optional
         Chirps to render (default all).
     threads : int, optional
-        Threads for the NUFFT (default: usable CPUs).
+        Threads for the NUFFT and the kernel (default: usable CPUs).
+    decimate : "auto" or int, default 1
+        Slow-time decimation factor for ``"kernel"`` and ``"nufft"``
+        (:func:`raysim.synthesis.decimate.plan_decimation`, with
+        ``DECIMATION_EPS_SHARE`` of ``eps``; the row method gets the rest).
+        ``1`` renders every chirp exactly; refused (every chirp exact) where
+        its assumptions fail.
 
     Returns
     -------
@@ -152,19 +205,54 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     eps = check_eps(eps, floor=np.finfo(float).eps)
+    if not (decimate == "auto" or (isinstance(decimate, (int, np.integer))
+                                   and not isinstance(decimate, bool) and decimate >= 1)):
+        raise ValueError(f"decimate must be 'auto' or an integer >= 1, got {decimate!r}")
     src = as_source(tau, amplitude)
     n_chirp = src.num_chirps
     chirps = check_chirps(chirps, n_chirp)
     if method == "auto":
         method = choose_method(src.num_paths, len(chirps), src.num_channels,
-                               config.num_samples, eps)
-    if method in ("nufft", "tones") and eps < MIN_EPS:
+                               config.num_samples, eps, compact=isinstance(src, PathDelays))
+    if method == "kernel" and not isinstance(src, PathDelays):
+        raise ValueError("method 'kernel' needs a PathDelays (it computes the delays from the "
+                         "geometry); use method='nufft' for arrays of delays")
+    if method == "kernel" and not kernel_qualifies(src.num_paths, config.num_samples,
+                                                   max(eps, KERNEL_MIN_EPS)):
+        raise ValueError(f"method 'kernel' is not available here (extension not built) or "
+                         f"cannot reach eps={eps!r}; use method='nufft' or 'direct'")
+    if method in ("nufft", "tones", "kernel") and eps < MIN_EPS:
         raise ValueError(f"eps={eps!r} is below the complex64 floor {MIN_EPS:g} of "
                          f"method {method!r}; use method='direct'")
     if method == "tones" and eps < tones_error(src.num_paths):
         raise ValueError(f"eps={eps!r} is below the {tones_error(src.num_paths):.1e} that "
                          f"method 'tones' reaches with {src.num_paths} paths (complex64 "
                          f"accumulation); use method='nufft' or 'direct'")
+    if method in ("nufft", "kernel") and decimate != 1:
+        from raysim.synthesis.decimate import interpolate, plan_decimation
+
+        plan = plan_decimation(src, config, len(chirps), DECIMATION_EPS_SHARE * eps, decimate)
+        if plan.factor > 1:
+            rows_eps = (1.0 - DECIMATION_EPS_SHARE) * eps
+            shape = (len(chirps), src.num_channels, config.num_samples)
+            if out is not None and (out.shape != shape or out.dtype != np.complex64):
+                raise ValueError(f"out must be complex64 of shape {shape}, "
+                                 f"got {out.dtype} {out.shape}")
+            rows = np.zeros(shape, dtype=np.complex64)
+            exact = np.zeros((plan.exact.size,) + shape[1:], dtype=np.complex64)
+            _render_chirps(src, config, method, rows_eps, chirps.start + plan.exact, exact,
+                           threads)
+            rows[plan.exact] = exact
+            del exact
+            interpolate(rows, plan)
+            if out is None:
+                return rows
+            out += rows
+            return out
+    if method == "kernel":
+        from raysim.synthesis.kernel import synthesize_kernel
+
+        return synthesize_kernel(src, config, eps=eps, out=out, chirps=chirps, threads=threads)
     if method == "nufft":
         return synthesize_nufft(src if isinstance(src, PathDelays) else src.tau,
                                 None if isinstance(src, PathDelays) else src.amp,
@@ -191,3 +279,24 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         else:
             row += synthesize_if_direct(tau_b, amp_b, config)
     return out
+
+
+def _render_chirps(src, config: RadarConfig, method: str, eps: float, chirp_list: np.ndarray,
+                   rows: np.ndarray, threads: int | None) -> None:
+    """Render the chirps ``chirp_list`` (increasing) into ``rows[i]`` (complex64, added)."""
+    if method == "kernel":
+        from raysim.synthesis.kernel import kernel_error, render_rows
+
+        design = kernel_error(src.num_paths, eps, config.num_samples)[1]
+        render_rows(src, config, design, chirp_list, rows, threads=threads)
+        return
+    i = 0
+    while i < chirp_list.size:                     # FINUFFT: one call per run of chirps
+        j = i
+        while j + 1 < chirp_list.size and chirp_list[j + 1] == chirp_list[j] + 1:
+            j += 1
+        run = range(int(chirp_list[i]), int(chirp_list[j]) + 1)
+        synthesize_nufft(src if isinstance(src, PathDelays) else src.tau,
+                         None if isinstance(src, PathDelays) else src.amp, config, eps=eps,
+                         out=rows[i:j + 1], chirps=run, threads=threads)
+        i = j + 1

@@ -158,7 +158,8 @@ def render_stream(source: Callable[[int], object], config: RadarConfig, writer: 
                 raise ValueError(f"source gave {wrapped.num_chirps} chirps for frame {f}, "
                                  f"config.num_chirps is {n_chirp}")
             m = method if method != "auto" else choose_method(
-                wrapped.num_paths, n_chirp, wrapped.num_channels, config.num_samples, eps)
+                wrapped.num_paths, n_chirp, wrapped.num_channels, config.num_samples, eps,
+                compact=isinstance(wrapped, PathDelays))
             used_method = used_method or m
             dtype = np.complex128 if m == "direct" else np.complex64
             shape = (chirp_block, wrapped.num_channels, config.num_samples)

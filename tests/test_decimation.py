@@ -1,0 +1,106 @@
+"""Slow-time decimation: error against the complex128 direct sum, and refusals."""
+
+import numpy as np
+import pytest
+
+from raysim.radar.arrays import ti_3tx4rx
+from raysim.radar.config import RadarConfig
+from raysim.studies.workloads import hover_paths, paper_setup, subset
+from raysim.synthesis import kernel
+from raysim.synthesis.decimate import (
+    MIN_CHIRPS,
+    doppler_bound,
+    interpolation_error,
+    plan_decimation,
+)
+from raysim.synthesis.nufft import PathDelays
+from raysim.synthesis.select import synthesize
+
+
+def rel_err(x, ref):
+    return float(np.linalg.norm(x - ref) / np.linalg.norm(ref))
+
+
+@pytest.fixture(scope="module")
+def hover():
+    """300 hover paths (5 % moving) on the paper radar, 256 chirps x 4 channels."""
+    cfg, arr, traj, lever = paper_setup()
+    pd = subset(hover_paths(300, cfg, arr, traj, lever, seed=7), 256, 4)
+    return cfg, pd, synthesize(pd, None, cfg, method="direct")
+
+
+@pytest.mark.parametrize("method", ["nufft", "kernel"])
+@pytest.mark.parametrize("eps", (1e-4, 1e-5))
+def test_decimation_error_below_tolerance(hover, method, eps):
+    if method == "kernel" and not kernel.available():
+        pytest.skip("kernel extension not built")
+    cfg, pd, ref = hover
+    plan = plan_decimation(pd, cfg, 256, 0.1 * eps)
+    assert plan.factor >= 2, plan.reason
+    assert plan.exact.size + plan.missing.size == 256
+    got = synthesize(pd, None, cfg, method=method, eps=eps, decimate="auto")
+    assert rel_err(got, ref) < eps
+    # interpolated chirps alone, against their own norm
+    miss = plan.missing
+    assert rel_err(got[miss], ref[miss]) < eps
+
+
+def test_decimation_tdm_moving_scatterers():
+    """TDM 3Tx x 4Rx with moving scatterers (velocity form), chirps range and out."""
+    cfg = RadarConfig(num_chirps=160, num_tx_slots=3)
+    arr = ti_3tx4rx(cfg.wavelength)
+    rng = np.random.default_rng(4)
+    n = 60
+    first = rng.uniform(-10, 10, (n, 3)) + [0, 0, 25]
+    last = first + rng.normal(0, 2, (n, 3)) * (rng.random((n, 1)) < 0.5)
+    vel = rng.normal(0, 0.3, (n, 3))                   # walking-speed clutter [m/s]
+    amp = rng.normal(size=n) + 1j * rng.normal(size=n)
+    pd = PathDelays.for_array(first, last, np.zeros(n), amp, cfg, arr, velocity=vel)
+    chirps = range(10, 150)
+    ref = synthesize(pd, None, cfg, method="direct", chirps=chirps)
+    assert plan_decimation(pd, cfg, len(chirps), 1e-6).factor >= 2
+    out = np.zeros((len(chirps), arr.num_channels, cfg.num_samples), np.complex64)
+    method = "kernel" if kernel.available() else "nufft"
+    got = synthesize(pd, None, cfg, method=method, eps=1e-5, decimate="auto", chirps=chirps,
+                     out=out)
+    assert got is out
+    assert rel_err(got, ref) < 1e-5
+
+
+def test_refusals(hover):
+    cfg, pd, _ = hover
+    # too few chirps
+    assert plan_decimation(pd, cfg, MIN_CHIRPS - 1, 1e-6).factor == 1
+    assert "few chirps" in plan_decimation(pd, cfg, MIN_CHIRPS - 1, 1e-6).reason
+    # amplitudes varying over chirps
+    amp = np.broadcast_to(pd.amplitude[:, None], (pd.num_paths, 256)).copy()
+    varying = PathDelays(pd.first_vertex, pd.last_vertex, pd.interior_length, amp,
+                         pd.tx_positions, pd.rx_positions, pd.velocity, pd.element_times)
+    plan = plan_decimation(varying, cfg, 256, 1e-6)
+    assert plan.factor == 1 and "amplitude" in plan.reason
+    # Doppler band too wide: fast scatterers (40 m/s)
+    fast = PathDelays(pd.first_vertex, pd.last_vertex, pd.interior_length, pd.amplitude,
+                      pd.tx_positions, pd.rx_positions, np.full((pd.num_paths, 3), 25.0),
+                      pd.element_times)
+    assert doppler_bound(fast, cfg) > 0.25
+    plan = plan_decimation(fast, cfg, 256, 1e-6)
+    assert plan.factor == 1 and "too wide" in plan.reason
+    # refused decimation renders every chirp exactly
+    direct = synthesize(fast, None, cfg, method="direct", chirps=range(0, 2))
+    sub = subset(fast, 2, 4)
+    got = synthesize(sub, None, cfg, method="nufft", eps=1e-5, decimate="auto")
+    assert rel_err(got, direct) < 1e-5
+    # an explicit factor beyond the band is refused, not applied
+    assert plan_decimation(pd, cfg, 256, 1e-6, 40).factor == 1
+    assert plan_decimation(pd, cfg, 256, 1e-6, 1).reason == "decimate=1"
+
+
+def test_error_model_and_bad_input(hover):
+    cfg, pd, _ = hover
+    assert interpolation_error(0.1, 2) < interpolation_error(0.1, 4) < 1e-3
+    assert interpolation_error(0.3, 2) == np.inf
+    for bad in (0, -1, 1.5, "x", True):
+        with pytest.raises(ValueError, match="decimate"):
+            plan_decimation(pd, cfg, 256, 1e-6, bad)
+        with pytest.raises(ValueError, match="decimate"):
+            synthesize(pd, None, cfg, method="nufft", decimate=bad)
