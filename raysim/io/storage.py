@@ -50,6 +50,7 @@ import itertools
 import json
 import os
 import shutil
+import time
 import uuid
 from collections.abc import Sequence
 from pathlib import Path
@@ -57,6 +58,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from raysim.io.store_guard import check_replaceable, remove_store
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
 from raysim.synthesis.frame import RadarFrame
@@ -317,6 +319,7 @@ def write_store(path: str | Path, ds: xr.Dataset, *, overwrite: bool = False) ->
     path = Path(path)
     if path.exists() and not overwrite:
         raise ValueError(f"store {str(path)!r} already exists (overwrite to replace it)")
+    check_replaceable(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.parent / f".{path.name}.{uuid.uuid4().hex[:8]}.tmp"
     ds = ds.copy()
@@ -325,7 +328,7 @@ def write_store(path: str | Path, ds: xr.Dataset, *, overwrite: bool = False) ->
         ds.to_zarr(tmp, mode="w", consolidated=False, encoding=_zarr_encoding(ds),
                    write_empty_chunks=True)
         if path.exists():
-            shutil.rmtree(path) if path.is_dir() else path.unlink()
+            remove_store(path)
         os.replace(tmp, path)
     finally:
         if tmp.exists():
@@ -354,6 +357,9 @@ def frames_complete(path: str | Path) -> int:
 
 def repair_store(path: str | Path) -> int:
     """Cut arrays back to ``frames_complete`` frames after an interrupted append.
+
+    Only a writer calls this, holding :func:`raysim.io.store_guard.writer_lock`;
+    readers never modify a store.
 
     Returns
     -------
@@ -406,15 +412,14 @@ def _frame_span(arr, chunk: int, n: int) -> str:
 
 
 def _check_chunks_present(path: Path, group, n_done: int) -> None:
-    """Raise ValueError for a missing chunk file of a floating-point variable.
+    """Raise ValueError for a missing chunk file of a numeric variable.
 
-    The writers here keep every chunk (``write_empty_chunks=True``) and the
-    real-valued variables have the fill value NaN, so a missing float or
-    complex chunk is damage. Integer variables are not checked: Zarr's
-    default leaves out chunks equal to their fill value 0 (frame index 0).
+    The writers here keep every chunk (``write_empty_chunks=True``), also one
+    equal to the fill value, so a missing chunk of any numeric variable is
+    damage: a deleted ``tx_slot`` chunk would otherwise read as slot 0.
     """
     for name, arr in group.arrays():
-        if arr.dtype.kind not in "fc" or arr.size == 0:
+        if arr.dtype.kind not in "fciub" or arr.size == 0:
             continue
         dims = tuple(getattr(arr.metadata, "dimension_names", None)
                      or arr.attrs.get("_ARRAY_DIMENSIONS", ()))
@@ -474,11 +479,11 @@ def _bad_chunks(group, name: str, n: int) -> str:
 def open_store(path: str | Path, *, load: bool = True) -> xr.Dataset:
     """Open a Zarr frame store, restricted to its complete frames.
 
-    A frame left half-written by an interrupted append (arrays longer than
-    ``frames_complete``) is cut off first (see :func:`repair_store`). The
-    chunk files of the floating-point variables (``if_data`` ...) must all be
-    present for the complete frames: a deleted chunk would otherwise read
-    back silently as the fill value.
+    A frame half-written by a running or interrupted append (arrays longer
+    than ``frames_complete``) is left out; the store is never modified (only
+    its writer repairs it, see :func:`repair_store`). The chunk files of the
+    numeric variables must all be present for the complete frames: a deleted
+    chunk would otherwise read back silently as the fill value.
 
     Parameters
     ----------
@@ -498,18 +503,52 @@ def open_store(path: str | Path, *, load: bool = True) -> xr.Dataset:
     if not store_exists(path):
         raise ValueError(f"{str(path)!r} is not a Zarr store (no zarr.json / .zgroup found)")
     path = Path(path)
-    g = zarr.open_group(str(path), mode="r")
-    n_done = int(g.attrs.get("frames_complete", -1))
-    if n_done >= 0 and any(a.shape[0] != n_done for _, a in _frame_arrays(g)):
-        repair_store(path)  # half-appended frame of an interrupted render: drop it
-        g = zarr.open_group(str(path), mode="r")
-    _check_chunks_present(path, g, n_done)
+    for attempt in range(OPEN_RETRIES):
+        try:
+            g = zarr.open_group(str(path), mode="r")
+            n_done = int(g.attrs.get("frames_complete", -1))
+            _check_chunks_present(path, g, n_done)
+            ds = _open_complete(path, g, n_done, load)
+            break
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            if attempt == OPEN_RETRIES - 1:        # metadata caught mid-write by a writer
+                raise ValueError(f"Zarr store {str(path)!r}: its metadata cannot be read "
+                                 f"(being rewritten by a writer, or damaged); expected JSON "
+                                 f"metadata") from None
+            time.sleep(0.2)
+    return _load_checked(path, ds, g) if load else ds
+
+
+#: Attempts to read a store's metadata while a writer may be rewriting it.
+OPEN_RETRIES = 5
+
+
+def _open_complete(path: Path, group, n_done: int, load: bool) -> xr.Dataset:
+    """The store's first ``n_done`` frames, without writing to it.
+
+    A writer appends one variable after the other, so while it works (or
+    after it was killed) per-frame arrays can be longer than
+    ``frames_complete``. Variables of equal length are opened together and cut
+    to the complete frames, then merged.
+    """
     # load: read through zarr directly (no dask graph); else lazy, dask-backed
-    ds = xr.open_zarr(str(path), consolidated=False, **({"chunks": None} if load else {}))
+    kw = {"chunks": None} if load else {}
+    lengths = {name: int(a.shape[0]) for name, a in _frame_arrays(group)}
+    if n_done < 0 or set(lengths.values()) <= {n_done}:
+        ds = xr.open_zarr(str(path), consolidated=False, **kw)
+    else:
+        parts, coords = [], set()
+        for size in sorted(set(lengths.values())):
+            drop = [name for name, n in lengths.items() if n != size]
+            part = xr.open_zarr(str(path), consolidated=False, drop_variables=drop, **kw)
+            coords |= {c for c in part.coords if c not in part.indexes}
+            parts.append(part.isel(frame=slice(0, n_done)).reset_coords())
+        ds = xr.merge(parts, compat="override", join="outer", combine_attrs="override")
+        ds = ds.set_coords(sorted(c for c in coords if c in ds.variables))
     n = int(ds.attrs.get("frames_complete", ds.sizes.get("frame", 0)))
     if ds.sizes.get("frame", 0) != n:
         ds = ds.isel(frame=slice(0, n))
-    return _load_checked(path, ds, g) if load else ds
+    return ds
 
 
 # ---------------------------------------------------------------------- netcdf

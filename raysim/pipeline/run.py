@@ -106,31 +106,47 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
         The store holds frames of a different scenario (and ``overwrite`` is False).
     """
     from raysim.io import storage
+    from raysim.io.store_guard import check_replaceable, remove_debris, writer_lock
 
     store = Path(store)
     traj = scenario.trajectory()
-    done = 0
-    if store.exists() and not overwrite:
-        if not storage.store_exists(store):
-            raise ValueError(f"{str(store)!r} exists and is not a Zarr store; choose another "
-                             f"--out or pass --overwrite")
-        import zarr
+    if store.exists():
+        check_replaceable(store, "--out")      # never touch what raysim did not write
+    summary = RenderSummary(str(store), scenario.frames, 0, 0)
+    with writer_lock(store):
+        removed = remove_debris(store)
+        if removed:
+            summary.notes.append(f"removed {len(removed)} leftover file(s) of an interrupted "
+                                 f"writer of {str(store)!r}")
+        done = 0
+        if store.exists() and not overwrite and storage.store_exists(store):
+            import zarr
 
-        attrs = dict(zarr.open_group(str(store), mode="r").attrs)
-        if attrs.get("scenario_json") != _scenario_key(scenario):
-            raise ValueError(f"store {str(store)!r} holds frames of a different scenario "
-                             f"({attrs.get('scenario_name')!r}); pass --overwrite to replace "
-                             f"it or choose another --out")
-        done = storage.repair_store(store)
-    elif store.exists() and overwrite:
-        import shutil
+            attrs = dict(zarr.open_group(str(store), mode="r").attrs)
+            if attrs.get("scenario_json") != _scenario_key(scenario):
+                raise ValueError(f"store {str(store)!r} holds frames of a different scenario "
+                                 f"({attrs.get('scenario_name')!r}); pass --overwrite to "
+                                 f"replace it or choose another --out")
+            done = storage.repair_store(store)
+        elif store.exists() and overwrite:
+            from raysim.io.store_guard import remove_store
 
-        shutil.rmtree(store) if store.is_dir() else store.unlink()
+            remove_store(store)
+        summary.frames_resumed = done
+        _render_frames(scenario, store, traj, done, max_frames, progress, summary)
+    if export_netcdf is not None and storage.frames_complete(store) == scenario.frames:
+        storage.export_netcdf(storage.open_store(store), export_netcdf)
+    return summary
+
+
+def _render_frames(scenario: Scenario, store: Path, traj, done: int, max_frames, progress: bool,
+                   summary: RenderSummary) -> None:
+    """Frames ``done ..`` of a scenario appended to a store (the caller holds its lock)."""
+    from raysim.io import storage
 
     todo = list(range(done, scenario.frames))
     if max_frames is not None:
         todo = todo[: max(0, int(max_frames))]
-    summary = RenderSummary(str(store), scenario.frames, 0, done)
     if todo:
         source = frame_source(scenario, traj)
         bar = None
@@ -157,9 +173,6 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
         finally:
             if bar is not None:
                 bar.close()
-    if export_netcdf is not None and storage.frames_complete(store) == scenario.frames:
-        storage.export_netcdf(storage.open_store(store), export_netcdf)
-    return summary
 
 
 def render_dataset(scenario: Scenario) -> object:
