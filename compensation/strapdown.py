@@ -35,7 +35,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
-from ._checks import choice, finite_array, rotation_matrices, strictly_increasing
+from ._checks import choice, finite_array, positive, rotation_matrices, strictly_increasing
 from .guards import check_imu_gaps, hover_window_warning, levelling_warning
 
 #: Standard gravity [m/s^2]; ``g_W = (0, 0, +STANDARD_GRAVITY)`` in NED.
@@ -160,6 +160,39 @@ def _magnus_step(rate: CubicSpline, t0: np.ndarray, t1: np.ndarray) -> np.ndarra
         w1, w2)
 
 
+#: Absolute tolerance [s] of the IMU record's coverage of the chirps: above float64
+#: rounding of epoch-clock seconds (2.4e-7 s at 1.7e9 s), far below an IMU interval.
+COVERAGE_TOLERANCE = 1e-6
+#: Largest plausible angular rate [rad/s]: the full scale of the widest common MEMS
+#: gyroscopes, 2000 deg/s (a larger value is a rate in deg/s).
+GYRO_FULL_SCALE = np.deg2rad(2000.0)
+#: Smallest accepted ratio of the mean specific-force magnitude to gravity over a
+#: record: a flying, hovering or resting platform holds itself up against gravity
+#: (ratio near 1 or above, under vibration); an accelerometer in g gives about 0.1.
+MIN_SPECIFIC_FORCE_RATIO = 0.3
+
+
+def check_imu_units(gyro: np.ndarray, accel: np.ndarray, gravity: float) -> None:
+    """Refuse IMU samples whose magnitudes betray other units (deg/s, g).
+
+    Raises
+    ------
+    ValueError
+        ``max |gyro|`` above :data:`GYRO_FULL_SCALE`, or the mean ``|accel|``
+        below :data:`MIN_SPECIFIC_FORCE_RATIO` times ``gravity``.
+    """
+    peak = float(np.max(np.linalg.norm(gyro, axis=1)))
+    if peak > GYRO_FULL_SCALE:
+        raise ValueError(f"gyro peaks at {peak:.4g} rad/s, beyond any gyroscope's full scale "
+                         f"({GYRO_FULL_SCALE:.4g} rad/s = 2000 deg/s); expected rad/s "
+                         f"(deg/s given? multiply by pi/180)")
+    mean = float(np.mean(np.linalg.norm(accel, axis=1)))
+    if mean < MIN_SPECIFIC_FORCE_RATIO * gravity:
+        raise ValueError(f"accel has a mean magnitude of {mean:.4g} m/s^2 over the record; "
+                         f"expected about gravity ({gravity:.4g} m/s^2) for a platform that "
+                         f"flies, hovers or rests (in g? multiply by 9.80665)")
+
+
 def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.0),
                   time_offset: float = 0.0, reference_time: float | None = None,
                   initial_attitude=None, initial_position=(0.0, 0.0, 0.0),
@@ -282,11 +315,12 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     lever = finite_array("lever_arm", lever_arm, shape=(3,))
     offset = float(finite_array("time_offset", time_offset, shape=()))
     choice("velocity", velocity, ("hover", "given"))
-    g = float(finite_array("gravity", gravity, shape=()))
+    g = positive("gravity", gravity)
+    check_imu_units(w, f, g)
 
     tq = tc + offset
     span = (t[0], t[-1])
-    tol = 1e-9 * max(1.0, abs(t[-1]))
+    tol = COVERAGE_TOLERANCE
     if tq[0] < span[0] - tol or tq[-1] > span[1] + tol:
         raise ValueError(
             f"chirp_times + time_offset span [{tq[0]!r}, {tq[-1]!r}] s (IMU clock) but "
