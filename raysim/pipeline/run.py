@@ -112,6 +112,7 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
     traj = scenario.trajectory()
     if store.exists():
         check_replaceable(store, "--out")      # never touch what raysim did not write
+    announce_store_size(scenario, store, progress=progress)
     summary = RenderSummary(str(store), scenario.frames, 0, 0)
     with writer_lock(store):
         removed = remove_debris(store)
@@ -137,6 +138,43 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
     if export_netcdf is not None and storage.frames_complete(store) == scenario.frames:
         storage.export_netcdf(storage.open_store(store), export_netcdf)
     return summary
+
+
+def announce_store_size(scenario: Scenario, store: Path, *, progress: bool = False) -> int:
+    """Estimate a render's store size; refuse it if the disk lacks room, announce it if large.
+
+    The size is the IF cubes (complex64) plus the per-chirp pose; compression
+    does not shrink noisy IF data. Printed on stderr when ``progress`` is set
+    or the size exceeds :data:`raysim.resources.LARGE_OUTPUT_BYTES`.
+
+    Returns
+    -------
+    int
+        Estimated store size [bytes].
+    """
+    import shutil
+    import sys
+
+    from raysim.resources import LARGE_OUTPUT_BYTES, cube_bytes, format_bytes
+
+    cfg = scenario.radar_config()
+    shape = (cfg.num_chirps, scenario.virtual_array().num_channels, cfg.num_samples)
+    per_frame = cube_bytes(*shape) + cfg.num_chirps * 7 * 8
+    total = per_frame * scenario.frames
+    parent = store.resolve().parent
+    while not parent.exists():
+        parent = parent.parent
+    free = shutil.disk_usage(parent).free
+    if total > free:
+        raise ValueError(f"store {str(store)!r} would take about {format_bytes(total)} "
+                         f"({scenario.frames} frames of {list(shape)} complex64), "
+                         f"{format_bytes(free)} are free on its disk; expected a render that "
+                         f"fits: reduce frames, radar.num_chirps or the array")
+    if progress or total > LARGE_OUTPUT_BYTES:
+        print(f"render: {scenario.frames} frame(s) of {list(shape)} complex64, "
+              f"{format_bytes(per_frame)} each, about {format_bytes(total)} in {str(store)!r}",
+              file=sys.stderr, flush=True)
+    return total
 
 
 def _render_frames(scenario: Scenario, store: Path, traj, done: int, max_frames, progress: bool,
