@@ -28,9 +28,9 @@ import numpy as np
 
 from compensation import integrate_imu, rigid_body_projection
 from raysim.echoes.oracle import simulate_point_targets
+from raysim.io.scenario import scenario_from_case
 from raysim.platform.imu import simulate_imu
 from raysim.processing.maps import az_el_grid, doppler_fft, range_compress, steering_matrix
-from raysim.studies.cases import get_case
 
 
 def _best(fn, repeat: int) -> tuple[float, object]:
@@ -51,21 +51,24 @@ def main(argv=None) -> dict:
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args(argv)
 
-    case = get_case(args.case)
-    cfg, arr = case.config, case.array()
-    frame = simulate_point_targets(cfg, arr, [case.target()], case.trajectory,
+    case = scenario_from_case(args.case)
+    cfg, arr, traj = case.radar_config(), case.virtual_array(), case.trajectory()
+    frame = simulate_point_targets(cfg, arr, case.point_targets(), traj,
                                    lever_arm=case.lever_arm)
+    tgt = case.scene.targets[0]
+    target_range, target_az, target_el = (tgt.range_m, np.deg2rad(tgt.az_deg),
+                                          np.deg2rad(tgt.el_deg))
     cube = frame.data
     tc = frame.chirp_times
-    imu = simulate_imu(case.trajectory, "ideal", rate=1000.0, start=tc[0] - 0.02,
+    imu = simulate_imu(traj, "ideal", rate=1000.0, start=tc[0] - 0.02,
                        end=tc[-1] + 0.02).to_arrays()
     lam = cfg.center_wavelength
     r_axis = cfg.range_axis()
-    g0 = int(np.argmin(np.abs(r_axis - case.target_range)))
+    g0 = int(np.argmin(np.abs(r_axis - target_range)))
     gates = np.arange(g0 - args.gates // 2, g0 - args.gates // 2 + args.gates)
     n = int(round(args.grid_half_width_deg / args.grid_step_deg))
     off = np.deg2rad(np.arange(-n, n + 1) * args.grid_step_deg)
-    az, el = case.target_az + off, case.target_el + off
+    az, el = target_az + off, target_el + off
     steer = steering_matrix(arr, lam, az_el_grid(az, el)).conj().T.astype(np.complex64)
 
     def front_end():
@@ -82,7 +85,7 @@ def main(argv=None) -> dict:
     def compensated():
         rc, spec, rd = front_end()
         motion = integrate_imu(*imu, tc, lever_arm=case.lever_arm, velocity="given",
-                               initial_velocity=case.trajectory.velocity([tc[0]])[0])
+                               initial_velocity=traj.velocity([tc[0]])[0])
         beams = rigid_body_projection(rc, arr.virtual_positions, motion, wavelength=lam,
                                       range_axis=r_axis, azimuth=az, elevation=el,
                                       range_gates=gates, grid_shape=arr.grid_shape)
@@ -92,7 +95,7 @@ def main(argv=None) -> dict:
 
     def projection_only(rc=rc_fixed):
         motion = integrate_imu(*imu, tc, lever_arm=case.lever_arm, velocity="given",
-                               initial_velocity=case.trajectory.velocity([tc[0]])[0])
+                               initial_velocity=traj.velocity([tc[0]])[0])
         return rigid_body_projection(rc, arr.virtual_positions, motion, wavelength=lam,
                                      range_axis=r_axis, azimuth=az, elevation=el,
                                      range_gates=gates, grid_shape=arr.grid_shape).doppler()

@@ -25,7 +25,7 @@ Modules
     :class:`BeamCube`).
 
 Axis names: ``chirp, channel, sample`` for IF data, ``range, doppler,
-azimuth, elevation`` for processed data (CONVENTIONS.md).
+azimuth, elevation`` for processed data (docs/conventions.md).
 """
 
 from .exact import rigid_body_projection

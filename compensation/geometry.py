@@ -1,4 +1,4 @@
-"""Directions, angle grids and small rotation helpers (frames of CONVENTIONS.md).
+"""Directions, angle grids and small rotation helpers (frames of docs/conventions.md).
 
 Azimuth ``az`` is measured from boresight (+Z) towards +X, elevation ``el``
 towards +Y: ``u = (cos el sin az, sin el, cos el cos az)``. At the nominal

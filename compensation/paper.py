@@ -32,7 +32,7 @@ phase leaves more than half a beamwidth of angle error or a quarter
 wavelength of range error towards ``direction``; :func:`tilt_correction`
 issues them as :class:`~compensation.guards.CompensationWarning`.
 
-Sign conventions are ours (CONVENTIONS.md): the IF phase grows with range
+Sign conventions are ours (docs/conventions.md): the IF phase grows with range
 (``+4 pi R / lambda``), so every slow-time correction is
 ``exp(-j 4 pi dR_n / lambda)``; the paper writes the propagation phase with
 the opposite sign.

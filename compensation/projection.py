@@ -9,7 +9,7 @@ One engine serves three beamformers:
   lever arm included), focused on each range gate, so the slow-time motion
   phase is removed together with the array-manifold change.
 
-Signal model (CONVENTIONS.md). A static scatterer at world point
+Signal model (docs/conventions.md). A static scatterer at world point
 ``P = R u_G`` (``R`` the gate range, ``u_G`` a grid direction, both from the
 nominal radar phase centre) seen from a radar whose phase centre is displaced
 by ``d_n`` and whose attitude is ``R_n`` gives, after range compression at the

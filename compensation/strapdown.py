@@ -1,6 +1,6 @@
 """Strapdown integration of gyroscope and accelerometer samples to the radar's pose.
 
-Frames and symbols follow CONVENTIONS.md: world W is north-east-down with
+Frames and symbols follow docs/conventions.md: world W is north-east-down with
 gravity ``g_W = (0, 0, +g)``, body B is forward-right-down with the IMU at its
 origin, the radar phase centre sits at the lever arm ``r_IR`` in B, and the
 attitude ``R_WB`` maps body vectors to world. The accelerometer measures the

@@ -162,10 +162,18 @@ METRICS = {
     "pseudo_velocity_bins": ("bins", "pseudo-velocity in Doppler velocity bins"),
     "doppler_width_hz": ("Hz", "-3 dB width of that Doppler power spectrum"),
     "doppler_width_bins": ("bins", "Doppler width in Doppler bins 1 / (N T_rep)"),
-    "entropy_ae_nats": ("nats", "image entropy of the accumulated AE map"),
+    "entropy_ae_nats": ("nats", "image entropy of the accumulated AE map: beams summed "
+                                "coherently over each frame's chirps (zero-Doppler beam), "
+                                "power summed over frames"),
     "entropy_rd_nats": ("nats", "image entropy of the RD map"),
     "entropy_ra_nats": ("nats", "image entropy of the RA map"),
     "peak_power_db": ("dB(W)", "received power at the target's range peak"),
+    "ridge_leakage_db": ("dB", "RD-map power outside the zero-Doppler ridge (Doppler bins "
+                               "-1..+1) relative to the map's total"),
+    "width_improvement_pct": ("%", "Doppler width reduction against chain none: "
+                                   "100 (w_none - w) / w_none"),
+    "width_vs_stationary": ("1", "Doppler width over that of the stationary reference"),
+    "entropy_vs_stationary": ("nats", "entropy_ae_nats minus that of the stationary reference"),
 }
 
 

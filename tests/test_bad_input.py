@@ -156,12 +156,12 @@ def _integrate(t, *, chirps=None, **kw):
     return integrate_imu(t, gyro, accel, chirps, **kw)
 
 
-def _stability_scenario(**kw):
-    from raysim.studies.stability import Scenario
+def _stability_point(**kw):
+    from raysim.studies.stability import StabilityPoint
 
-    base = dict(config=SMALL, array=ARR, trajectory=stationary(), target_range=10.0)
+    base = dict(config=SMALL, array=ARR, trajectory=stationary(), target_range_m=10.0)
     base.update(kw)
-    return Scenario(**base)
+    return StabilityPoint(**base)
 
 
 T_IMU = np.arange(0.0, 0.05, 1e-3)
@@ -378,22 +378,31 @@ CASES = [
             __import__("compensation", fromlist=["x"]).static_motion(np.arange(8) * 60e-6),
             [0.0, 0.0, 2.0]), ValueError, ("direction", "unit")),
     # ---------------------------------------------------------------- stability
-    Bad("stability-target-beyond-range", lambda _: _stability_scenario(target_range=40.0),
-        ValueError, ("target_range", "40.000")),
-    Bad("stability-zero-imu-rate", lambda _: _stability_scenario(imu_rate=0.0), ValueError,
-        ("imu_rate", "0.0")),
-    Bad("stability-unknown-init", lambda _: _stability_scenario(init="gnss"), ValueError,
+    Bad("stability-target-beyond-range", lambda _: _stability_point(target_range_m=40.0),
+        ValueError, ("target_range_m", "40.000")),
+    Bad("stability-zero-imu-rate", lambda _: _stability_point(imu_rate_hz=0.0), ValueError,
+        ("imu_rate_hz", "0.0")),
+    Bad("stability-unknown-init", lambda _: _stability_point(init="gnss"), ValueError,
         ("init", "'gnss'")),
-    Bad("stability-unknown-imu-preset", lambda _: _stability_scenario(imu_spec="nav_grade"),
+    Bad("stability-unknown-imu-preset", lambda _: _stability_point(imu_spec="nav_grade"),
         ValueError, ("'nav_grade'", "tactical")),
-    Bad("stability-negative-seed", lambda _: _stability_scenario(seed=-1), ValueError,
+    Bad("stability-negative-seed", lambda _: _stability_point(seed=-1), ValueError,
         ("seed", "-1")),
     Bad("stability-unknown-map",
         lambda _: __import__("raysim.studies.stability", fromlist=["x"]).run_map("wind"),
         ValueError,
         ("'wind'", "rotation_azimuth")),
     Bad("stability-angle-out-of-range",
-        lambda _: _stability_scenario(target_az=2.0), ValueError, ("target_az", "2.0")),
+        lambda _: _stability_point(target_az_deg=115.0), ValueError,
+        ("target_az_deg", "115.0")),
+    Bad("stability-unknown-chain",
+        lambda _: __import__("raysim.studies.stability", fromlist=["x"]).run_map(
+            "clock", chains=("none", "paper_integrated")), ValueError,
+        ("'paper_integrated'", "paper:published")),
+    Bad("stability-point-from-mesh-scenario",
+        lambda _: __import__("raysim.studies.stability", fromlist=["x"]).StabilityPoint
+        .from_scenario(_validate(dict(scene={"kind": "bundled", "name": "parking_lot"}))),
+        ValueError, ("scenario.scene", "'bundled'", "one target")),
     # ---------------------------------------------------------------------- CLI
     Bad("cli-stability-unknown-map",
         lambda t: _cli(["stability", "--out", t / "o", "--maps", "wind"]), CliError,
@@ -566,9 +575,10 @@ def test_atomic_write_interrupted_keeps_old_file(tmp_path):
 def test_interrupted_stability_run_keeps_finished_maps(tmp_path, monkeypatch):
     """An interrupted ``raysim stability`` keeps the maps it finished and resumes from them."""
     from raysim.studies import stability
+    from raysim.studies.stability import runner
 
     calls = []
-    real = stability.run_map
+    real = runner.run_map
 
     def fake_run_map(name, **kw):
         calls.append(name)
@@ -577,9 +587,9 @@ def test_interrupted_stability_run_keeps_finished_maps(tmp_path, monkeypatch):
         return real(name, **kw)
 
     small = {k: stability.MAPS[k] for k in ("lever_arm", "clock")}
-    monkeypatch.setattr(stability, "MAPS", small)
-    monkeypatch.setattr(stability, "run_map", fake_run_map)
-    monkeypatch.setattr(stability, "evaluate", _cheap_evaluate)
+    monkeypatch.setattr(runner, "MAPS", small)
+    monkeypatch.setattr(runner, "run_map", fake_run_map)
+    monkeypatch.setattr(runner, "evaluate", _cheap_evaluate)
     with pytest.raises(KeyboardInterrupt):
         stability.write_stability(tmp_path, quick=True, progress=False, executor="serial")
     names = sorted(p.name for p in tmp_path.iterdir())
@@ -588,15 +598,16 @@ def test_interrupted_stability_run_keeps_finished_maps(tmp_path, monkeypatch):
     for rec in (tmp_path / "points").rglob("*.json"):
         json.loads(rec.read_text())                                        # complete records
     calls.clear()
-    monkeypatch.setattr(stability, "run_map", real)
+    monkeypatch.setattr(runner, "run_map", real)
     stability.write_stability(tmp_path, quick=True, progress=False, executor="serial")
     assert (tmp_path / "clock.nc").exists() and (tmp_path / "summary.json").exists()
 
 
-def _cheap_evaluate(scenario, chains=("none", "paper", "paper_integrated", "exact"), **_):
+def _cheap_evaluate(point, chains=("none", "paper", "paper:published", "exact"), **_):
     """Stand-in for :func:`raysim.studies.stability.evaluate` (file handling only)."""
-    rec = {"pseudo_velocity": 0.01, "doppler_width_hz": 94.0, "angle_error_deg": 0.1,
-           "angle_error_mid_deg": 0.1, "focused_angle_error_deg": 0.1, "entropy": 3.5}
+    rec = {"pseudo_velocity_mps": 0.01, "pseudo_velocity_bins": 0.08,
+           "doppler_width_hz": 94.0, "angle_error_worst_deg": 0.1, "angle_error_deg": 0.1,
+           "map_angle_error_deg": 0.1, "entropy_ae_nats": 3.5}
     out = {c: dict(rec) for c in chains}
     out["warnings"] = []
     out["strapdown"] = "stub"

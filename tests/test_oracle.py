@@ -1,4 +1,4 @@
-"""Point-target oracle against closed forms (CONVENTIONS.md signal model, radar equation).
+"""Point-target oracle against closed forms (docs/conventions.md signal model, radar equation).
 
 Every expected value here is computed from geometry and textbook formulas, not
 from the code under test.

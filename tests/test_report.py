@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import html
 import os
 import re
 import shutil
@@ -15,6 +16,7 @@ from raysim.cli import main
 from raysim.io.scenario import scenario_from_case
 from raysim.pipeline.run import render
 from raysim.studies.report import collect_from_scenario, software_versions, write_report
+from raysim.vocabulary import MAP_TITLES
 
 SMALL = {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4,
          "radar.chirp_duration_s": 12.8e-6}
@@ -39,10 +41,10 @@ def test_report_is_self_contained_and_complete(report_html):
     assert len(pngs) == 5
     for p in pngs:
         assert base64.b64decode(p)[:8] == b"\x89PNG\r\n\x1a\n"
-    for needle in ("Range-azimuth", "Range-elevation", "Range-Doppler", "Doppler cuts",
+    for needle in (*(f"{t} maps" for t in MAP_TITLES.values()), "Doppler cuts",
                    "pseudo_velocity_mps", "entropy_ae_nats", "Values reported in the paper",
                    "Run parameters", "Software versions", "sionna-rt", "mitsuba", "drjit",
-                   "numpy", "none"):
+                   "numpy", "none", "Warnings", "Motion: pitch 10 deg @ 20 Hz"):
         assert needle in text, needle
 
 
@@ -56,11 +58,50 @@ def test_report_cli_from_store_and_errors(tmp_path, capsys):
     s = scenario_from_case("stationary").with_values(SMALL)
     render(s, tmp_path / "s.zarr")
     assert main(["report", str(tmp_path / "s.zarr"), "--out", str(tmp_path / "s.html")]) == 0
-    assert "Range-Doppler" in (tmp_path / "s.html").read_text()
+    assert f"{MAP_TITLES['rd']} maps" in (tmp_path / "s.html").read_text()
     capsys.readouterr()
     assert main(["report", str(tmp_path / "nothing"), "--out", str(tmp_path / "x.html")]) == 2
     assert "expected a Zarr store" in capsys.readouterr().err
     assert main(["report", "--case", "stationary", str(tmp_path / "s.zarr")]) == 2
+
+
+TILTED = """\
+name = "tilted"
+[radar]
+num_chirps = 32
+chirp_duration_s = 12.8e-6
+[array]
+nx = 4
+ny = 4
+[[scene.targets]]
+range_m = 15.0
+az_deg = 50.0
+[[motion.sinusoids]]
+axis = "pitch"
+amplitude_deg = 30.0
+frequency_hz = 20.0
+phase_deg = 90.0
+"""
+
+
+def test_report_lists_the_guard_warnings(tmp_path, capsys):
+    """Pitch 30 deg with the target at azimuth 50 deg: the paper chain's small-angle
+    warnings (compensation.guards) appear in the report and on stderr."""
+    pytest.importorskip("compensation")
+    (tmp_path / "t.toml").write_text(TILTED)
+    assert main(["report", "--scenario", str(tmp_path / "t.toml"), "--chains",
+                 "none,paper:published", "--out", str(tmp_path / "t.html")]) == 0
+    err = capsys.readouterr().err
+    text = (tmp_path / "t.html").read_text()
+    section = text[text.index("<h2 id='warnings'>"):text.index("<h2>Metrics</h2>")]
+    items = re.findall(r"<li class='note'><b>([^<]+)</b>: ([^<]+)</li>", section)
+    assert items and {c for c, _ in items} == {"paper:published"}
+    assert all(w.startswith("small-angle: ") for _, w in items)
+    for chain, w in items:
+        assert f"warning: {chain}: {html.unescape(w)}" in err
+    assert "<th>paper:published</th>" in text and "Motion: pitch 30 deg @ 20 Hz" in text
+    assert main(["report", "--case", "stationary", "--chains", "uncompensated"]) == 2
+    assert "--chains: got 'uncompensated'" in capsys.readouterr().err
 
 
 def _chromium() -> str | None:

@@ -18,7 +18,7 @@ from raysim.io.scenario import (
     set_key,
     validate_scenario,
 )
-from raysim.studies.cases import PAPER_CASES, get_case
+from raysim.studies.cases import DEFAULT_LEVER_ARM, PAPER_CASES, get_case
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -110,7 +110,7 @@ seed = 4
     traj = s.trajectory()
     t = np.array([0.0, 0.01, 0.02])
     q, _, _ = traj.states(t)
-    case = get_case("rotation_y").trajectory.states(t)[0]
+    case = scenario_from_case("rotation_y").trajectory().states(t)[0]
     # z: sinusoid at phase 90 deg (value 0.05 at t=0) plus jitter (a few cm)
     assert abs(q[0, 2] - 0.05) < 0.1
     assert traj.name.count("+") == 3
@@ -147,13 +147,43 @@ noise_density = 1e-4
     assert math.degrees(math.atan2(d[0], d[2])) == pytest.approx(20.0)
 
 
+#: The paper's cases: chirps, frames, target (range [m], az [deg], el [deg]), motion
+#: (axis, amplitude [deg or m], frequency [Hz]) or None.
+CASES = {
+    "stationary": (256, 1, (15.0, 20.0, 0.0), None),
+    "rotation_y": (256, 1, (15.0, 20.0, 0.0), ("pitch", np.deg2rad(10.0), 20.0)),
+    "yaw": (256, 20, (18.0, 25.0, 25.0), ("yaw", np.deg2rad(20.0), 10.0)),
+    "translation_y": (512, 1, (15.0, 10.0, 35.0), ("y", 0.05, 5.0)),
+    "translation_z": (512, 1, (15.0, 10.0, 10.0), ("z", 0.05, 5.0)),
+}
+
+
 @pytest.mark.parametrize("name", sorted(PAPER_CASES))
 def test_paper_case_scenarios_and_examples(name):
+    from raysim.echoes.oracle import PointTarget
+    from raysim.platform.motion import sinusoid, stationary
+    from raysim.radar.config import RadarConfig
+
+    assert sorted(PAPER_CASES) == sorted(CASES)
+    chirps, frames, (r, az, el), motion = CASES[name]
     s = scenario_from_case(name)
     case = get_case(name)
-    assert s.radar_config() == case.config.with_(num_frames=case.num_frames)
-    assert s.frames == case.num_frames
-    assert s.point_targets()[0].position == pytest.approx(case.target().position)
+    assert s.name == name and s.description == case["description"]
+    assert s.radar_config() == RadarConfig(num_chirps=chirps, num_frames=frames)
+    assert s.frames == frames and s.virtual_array().grid_shape == (20, 20)
+    np.testing.assert_array_equal(s.lever_arm, DEFAULT_LEVER_ARM)
+    want = PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=DEFAULT_LEVER_ARM)
+    np.testing.assert_array_equal(s.point_targets()[0].position, want.position)
+    t = np.linspace(0.0, 0.05, 7)
+    truth = stationary() if motion is None else sinusoid(*motion)
+    for got, exp in zip(s.trajectory().states(t), truth.states(t), strict=True):
+        np.testing.assert_array_equal(got, exp)
+    # the case description is plain data: the scenario keys validate on their own
+    assert validate_scenario(case["scenario"]).radar_config() == s.radar_config()
+    assert set(case["paper"]) <= {"none", "paper"}
+    from raysim.vocabulary import METRICS
+
+    assert all(m in METRICS for vals in case["paper"].values() for m in vals)
     ex = load_scenario(EXAMPLES / f"case_{name}.toml")
     assert ex.radar_config() == s.radar_config()
     assert ex.motion.case == name and ex.scene.targets == s.scene.targets

@@ -111,3 +111,48 @@ def test_sweep_cli_default_local_cluster(tmp_path, capsys):
     assert "2/2 points done (1 computed now, 1 from before, 0 failed)" in out
     assert main(["sweep", "--case", "stationary", "--param", "radar.nope=1",
                  "--out", str(tmp_path)]) == 2
+
+
+TILTED = """\
+name = "tilted"
+[radar]
+num_chirps = 32
+chirp_duration_s = 12.8e-6
+[array]
+nx = 4
+ny = 4
+[[scene.targets]]
+range_m = 15.0
+az_deg = 50.0
+[[motion.sinusoids]]
+axis = "pitch"
+amplitude_deg = 30.0
+frequency_hz = 20.0
+phase_deg = 90.0
+"""
+
+
+def test_sweep_stores_and_summarises_guard_warnings(tmp_path, capsys):
+    """Pitch 30 deg with the target at azimuth 50 deg: the paper chain's small-angle
+    warnings (compensation.guards) are kept in the point record and the dataset and
+    summarised on stderr; the none chain has none."""
+    pytest.importorskip("compensation")
+    (tmp_path / "t.toml").write_text(TILTED)
+    out = tmp_path / "sw"
+    assert main(["sweep", str(tmp_path / "t.toml"), "--chains", "none,paper",
+                 "--param", "scene.targets.0.az_deg=50", "--no-progress",
+                 "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    (record,) = [json.loads(p.read_text()) for p in (out / "points").glob("*.json")]
+    assert record["warnings"]["none"] == []
+    paper = record["warnings"]["paper"]
+    assert paper and all(w.startswith("small-angle: ") for w in paper)
+    import xarray as xr
+
+    with xr.open_dataset(out / "sweep.nc") as ds:
+        assert ds["warnings"].dims == ("scene.targets.0.az_deg", "seed", "chain")
+        assert str(ds["warnings"].sel(chain="paper").values.ravel()[0]).split("\n") == paper
+        assert str(ds["warnings"].sel(chain="none").values.ravel()[0]) == ""
+        assert sweep_mod.warning_summary(ds) == [
+            f"paper: small-angle at 1/1 points (e.g. {paper[0]})"]
+    assert f"warning: paper: small-angle at 1/1 points (e.g. {paper[0]})" in err

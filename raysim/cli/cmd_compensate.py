@@ -28,8 +28,15 @@ Output (``.npz``, written to a temporary file then moved into place):
 ``beams [chirp, range, azimuth, elevation]`` (complex64),
 ``doppler_power [doppler, range, azimuth, elevation]`` (float32), and the axes
 ``chirp_times`` [s], ``range_m``, ``azimuth_deg``, ``elevation_deg``,
-``velocity_mps``, and ``warnings`` (the result's assumption warnings, see
-:mod:`compensation.guards`; also printed on stderr).
+``velocity_mps``, ``chain`` (the chain key) and ``warnings`` (the result's
+assumption warnings, see :mod:`compensation.guards`; also printed on stderr as
+``warning: <chain>: <text>``).
+
+Chains (``--chain``, names of :mod:`raysim.vocabulary`, turned into beams by
+:func:`raysim.pipeline.chains.project`): ``exact`` (rigid-body projection,
+default), ``paper`` (the published chain; ``paper:published`` with the
+paper's rotation phase ``v_r(nT) nT``) and ``none`` (conventional beamformer,
+no IMU log needed).
 """
 
 from __future__ import annotations
@@ -41,6 +48,28 @@ import sys
 import numpy as np
 
 from raysim.io.files import atomic_write
+from raysim.vocabulary import CHAINS, ChainSpec, parse_chain
+
+EPILOG = """\
+examples:
+  raysim compensate rotation_y.zarr --out beams.npz             # IMU log of the store
+  raysim compensate rotation_y.zarr --frame 2 --range-m 14:16 --az-deg 10:30:0.5 \\
+      --el-deg -10:10:0.5 --out beams.npz
+  raysim compensate cube.npz imu.csv --velocity given --initial-velocity 0,0,0 \\
+      --lever-arm 0,0,0.1 --out beams.npz
+  raysim compensate rotation_y.zarr --chain paper --direction-deg 20,0 --out paper.npz
+  raysim compensate rotation_y.zarr --chain paper:published --direction-deg 20,0 \\
+      --out published.npz
+  raysim compensate rotation_y.zarr --chain none --out none.npz  # no compensation
+
+chains: exact (rigid-body projection), paper (the published chain, needs
+--direction-deg; paper:published with the paper's rotation phase), none
+(conventional beamformer; the IMU log is not used). Guard warnings go to
+stderr as "warning: CHAIN: TEXT" and into the "warnings" array of the output.
+
+exit status: 0 written, 2 invalid input (the message names the flag or file
+and the value).
+"""
 
 SPEED_OF_LIGHT = 299_792_458.0
 IMU_COLUMNS = ("time_s", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
@@ -70,6 +99,26 @@ def _span(text: str, name: str, with_step: bool) -> tuple:
     return vals
 
 
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter,
+                     argparse.RawDescriptionHelpFormatter):
+    """Defaults in the option help, the epilog's examples as written."""
+
+
+def _chain(text: str) -> ChainSpec:
+    """``--chain`` value -> :class:`~raysim.vocabulary.ChainSpec`.
+
+    Raises
+    ------
+    ValueError
+        Naming the value and the accepted names.
+    """
+    try:
+        return parse_chain(text)
+    except ValueError as exc:
+        hint = " (the uncompensated chain is called 'none')" if text == "uncompensated" else ""
+        raise ValueError(f"--chain: {exc}{hint}") from None
+
+
 def register(subparsers) -> None:
     """Add the ``compensate`` subcommand."""
     p = subparsers.add_parser(
@@ -77,7 +126,7 @@ def register(subparsers) -> None:
         "with an IMU log (CSV)",
         description=__doc__.split("\n\n")[0] + " Runs the exact rigid-body projection "
         "(or the paper's chain) on the selected range cells and angle grid.",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        epilog=EPILOG, formatter_class=_HelpFormatter)
     p.add_argument("cube", help="raysim Zarr store, NetCDF file (.nc) or .npz (keys: see "
                    "`raysim compensate --help`)")
     p.add_argument("imu", nargs="?", default=None,
@@ -99,7 +148,8 @@ def register(subparsers) -> None:
     p.add_argument("--initial-attitude-deg", default="0,0,0", metavar="YAW,PITCH,ROLL",
                    help="attitude at the first chirp, Z-Y-X Euler angles [deg], or 'level' "
                    "(roll/pitch from accelerometer levelling over the IMU record, heading 0)")
-    p.add_argument("--chain", choices=("exact", "paper"), default="exact")
+    p.add_argument("--chain", default="exact", metavar="CHAIN",
+                   help=f"one of {', '.join(CHAINS)} or paper:published")
     p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
                    help="target direction for the paper chain's slow-time correction [deg]")
     p.set_defaults(func=run)
@@ -173,39 +223,50 @@ def _load_imu(path: str) -> np.ndarray:
 
 def run(args) -> int:
     """Execute ``raysim compensate``; returns the exit code."""
+    from dataclasses import replace
+
     from scipy.spatial.transform import Rotation
 
-    from compensation import integrate_imu, paper_chain, rigid_body_projection
+    from compensation import integrate_imu
     from compensation.geometry import direction
+    from raysim.pipeline.chains import project
     from raysim.processing.maps import range_compress
 
+    spec = _chain(args.chain)
     cube = _load_cube(args.cube, args.frame)
-    if args.imu is not None:
-        imu = _load_imu(args.imu)
-    elif "_imu" in cube:
-        imu = cube["_imu"]
-    else:
-        raise ValueError(f"{args.cube!r} holds no IMU log; give an IMU CSV after the cube")
     fc, bw = float(cube["carrier_frequency"]), float(cube["bandwidth"])
     tc, fs = float(cube["chirp_duration"]), float(cube["sample_rate"])
     lam = SPEED_OF_LIGHT / (fc + bw / 2)
-    lever = (_floats(args.lever_arm, 3, "--lever-arm") if args.lever_arm is not None
-             else np.asarray(cube.get("lever_arm", np.zeros(3)), dtype=float))
     grid = tuple(int(v) for v in cube["grid_shape"]) if "grid_shape" in cube else None
-    if args.initial_attitude_deg.strip() == "level":
-        attitude = "level"
-    else:
-        ypr = np.deg2rad(_floats(args.initial_attitude_deg, 3, "--initial-attitude-deg"))
-        attitude = Rotation.from_euler("ZYX", ypr).as_matrix()
-    kwargs = {}
-    if args.velocity == "given":
-        if args.initial_velocity is None:
-            raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
-        kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
-    motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], cube["chirp_times"],
-                           lever_arm=lever, time_offset=args.time_offset,
-                           initial_attitude=attitude,
-                           velocity=args.velocity, **kwargs)
+    u = None
+    if spec.name == "paper":
+        if args.direction_deg is None:
+            raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target "
+                             f"direction)")
+        u = direction(*np.deg2rad(_floats(args.direction_deg, 2, "--direction-deg")))
+    motion = None
+    if spec.compensated:
+        if args.imu is not None:
+            imu = _load_imu(args.imu)
+        elif "_imu" in cube:
+            imu = cube["_imu"]
+        else:
+            raise ValueError(f"{args.cube!r} holds no IMU log; give an IMU CSV after the cube")
+        lever = (_floats(args.lever_arm, 3, "--lever-arm") if args.lever_arm is not None
+                 else np.asarray(cube.get("lever_arm", np.zeros(3)), dtype=float))
+        if args.initial_attitude_deg.strip() == "level":
+            attitude = "level"
+        else:
+            ypr = np.deg2rad(_floats(args.initial_attitude_deg, 3, "--initial-attitude-deg"))
+            attitude = Rotation.from_euler("ZYX", ypr).as_matrix()
+        kwargs = {}
+        if args.velocity == "given":
+            if args.initial_velocity is None:
+                raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
+            kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
+        motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], cube["chirp_times"],
+                               lever_arm=lever, time_offset=args.time_offset,
+                               initial_attitude=attitude, velocity=args.velocity, **kwargs)
     n_samples = cube["data"].shape[-1]
     r_axis = SPEED_OF_LIGHT * np.arange(n_samples) * fs / n_samples / (2.0 * bw / tc)
     r_lo, r_hi = _span(args.range_m, "--range-m", False)
@@ -218,28 +279,26 @@ def run(args) -> int:
     az = np.deg2rad(np.arange(a0, a1 + 1e-9, da))
     el = np.deg2rad(np.arange(e0, e1 + 1e-9, de))
     rc = range_compress(cube["data"])
-    common = dict(wavelength=lam, range_axis=r_axis, azimuth=az, elevation=el,
-                  range_gates=gates, grid_shape=grid)
-    if args.chain == "exact":
-        beams = rigid_body_projection(rc, cube["element_positions"], motion, **common)
-    else:
-        if args.direction_deg is None:
-            raise ValueError("--chain paper needs --direction-deg AZ,EL (target direction)")
-        d = np.deg2rad(_floats(args.direction_deg, 2, "--direction-deg"))
-        beams = paper_chain(rc, cube["element_positions"], motion, direction=direction(*d),
-                            **common)
-    spec = beams.doppler()
+    beams = project(spec, rc, cube["element_positions"], wavelength=lam, range_axis=r_axis,
+                    azimuth=az, elevation=el, motion=motion, direction=u, grid_shape=grid,
+                    range_gates=gates)
+    if motion is None:   # the conventional beamformer carries chirp indices, not times
+        beams = replace(beams, chirp_time=np.asarray(cube["chirp_times"], dtype=float))
+    doppler = beams.doppler()
+
     def write(tmp):
         with open(tmp, "wb") as fh:  # a file object: np.savez would append ".npz" to a name
-            np.savez(fh, beams=beams.data, doppler_power=(np.abs(spec) ** 2).astype(np.float32),
+            np.savez(fh, beams=beams.data,
+                     doppler_power=(np.abs(doppler) ** 2).astype(np.float32),
                      chirp_times=beams.chirp_time, range_m=beams.range,
                      azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
-                     velocity_mps=beams.velocity(), warnings=np.array(beams.warnings, dtype=str))
+                     velocity_mps=beams.velocity(), chain=np.array(spec.key),
+                     warnings=np.array(beams.warnings, dtype=str))
 
     atomic_write(args.out, write)
     for w in beams.warnings:
-        print(f"warning: {w}", file=sys.stderr)
+        print(f"warning: {spec.key}: {w}", file=sys.stderr)
     print(f"wrote {args.out}: beams {beams.data.shape} [chirp, range, azimuth, elevation], "
-          f"chain {args.chain}" + (f", {len(beams.warnings)} warning(s)" if beams.warnings
-                                   else ""))
+          f"chain {spec.key}" + (f", {len(beams.warnings)} warning(s)" if beams.warnings
+                                 else ""))
     return 0

@@ -2,10 +2,14 @@
 
 The scenario comes from a paper case (``--case``), a scenario file
 (``--scenario``) or flags (``--target``, ``--motion``, ``--jitter``); ``--set``
-changes any scenario key. The frames are rendered in memory, processed
-without compensation and, when the ``compensation`` package provides them,
-with the paper and the exact chains; the metrics of CONVENTIONS.md are
-printed as a table or, with ``--json``, as one JSON object.
+changes any scenario key. The frames are rendered in memory and processed
+through the chains of :mod:`raysim.vocabulary` (``none``, ``paper``,
+``paper:published``, ``exact``; the compensated ones when the
+``compensation`` package provides them); the metrics of
+:data:`raysim.vocabulary.METRICS` are printed as a table or, with ``--json``,
+as one JSON object. The compensation's guard warnings are printed on stderr
+(``warning: <chain>: <text>``) and, with ``--json``, listed per chain under
+``warnings``.
 """
 
 from __future__ import annotations
@@ -15,6 +19,8 @@ import json
 import math
 import sys
 
+from raysim.vocabulary import CHAINS
+
 EPILOG = """\
 examples:
   raysim simulate --case stationary
@@ -22,6 +28,12 @@ examples:
   raysim simulate --case rotation_y --set radar.num_chirps=64 --set array.nx=8 --set array.ny=8
   raysim simulate --target 15,20,0 --motion pitch:10:20 --motion y:0.05:5
   raysim simulate --scenario examples/case_yaw.toml --chains none
+  raysim simulate --case rotation_y --chains none,paper,paper:published,exact
+
+chains: none (no compensation), paper (the published chain; paper:published
+with the paper's rotation phase v_r(nT) nT), exact (rigid-body projection).
+Guard warnings of a chain go to stderr as "warning: CHAIN: TEXT" (and into
+the "warnings" object of --json).
 
 motion flags: AXIS:AMPLITUDE:FREQ_HZ[:PHASE_DEG], amplitude in degrees for
 roll/pitch/yaw and metres for x/y/z; several --motion flags add up.
@@ -36,8 +48,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "simulate", help="simulate point targets under a motion and print metrics",
         description="Simulate point targets seen from a moving drone and print range, "
-        "azimuth/elevation, pseudo-velocity, Doppler mainlobe width and entropies for "
-        "the uncompensated data and the compensation chains.",
+        "azimuth/elevation, pseudo-velocity, Doppler mainlobe width and entropies through "
+        "each chain (none, paper, exact).",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     src = p.add_mutually_exclusive_group()
     src.add_argument("--case", metavar="NAME",
@@ -55,8 +67,9 @@ def register(subparsers) -> None:
     p.add_argument("--frames", type=int, metavar="N", help="frames to render")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="change a scenario key, e.g. radar.num_chirps=64 (repeatable)")
-    p.add_argument("--chains", default="none,paper,exact",
-                   help="comma-separated chains to evaluate (default: all three)")
+    p.add_argument("--chains", default=",".join(CHAINS),
+                   help="comma-separated chains to evaluate: none, paper, paper:published, "
+                   "exact (default: %(default)s)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=run)
 
@@ -150,6 +163,21 @@ def _clean(obj):
     return obj
 
 
+def print_warnings(warnings: dict, file=None) -> int:
+    """Print ``warning: <chain>: <text>`` for every guard warning; returns their number.
+
+    ``warnings`` maps a chain key to its warning strings (``evaluate``'s
+    ``result["warnings"]``); lines go to ``file`` (default stderr).
+    """
+    file = sys.stderr if file is None else file
+    n = 0
+    for chain, texts in warnings.items():
+        for text in texts:
+            print(f"warning: {chain}: {text}", file=file)
+            n += 1
+    return n
+
+
 def run(args) -> int:
     """Run ``raysim simulate``; returns the exit code."""
     from raysim.pipeline.analysis import ANALYSIS_METRICS
@@ -172,7 +200,7 @@ def run(args) -> int:
     if scenario.motion.case is not None:
         from raysim.studies.cases import get_case
 
-        paper = get_case(scenario.motion.case).paper
+        paper = get_case(scenario.motion.case)["paper"]
     out = {
         "scenario": scenario.name,
         "motion": scenario.trajectory().name,
@@ -188,6 +216,7 @@ def run(args) -> int:
         "paper": paper,
         "notes": result["notes"],
     }
+    print_warnings(result["warnings"])
     if args.json:
         print(json.dumps(_clean(out), indent=2, sort_keys=False))
         return 0
@@ -208,7 +237,9 @@ def run(args) -> int:
             row += f"{v:>16.4f}" if math.isfinite(v) else f"{'-':>16}"
         print(row)
     if paper:
-        print("\npaper reports: " + ", ".join(f"{k}={v}" for k, v in paper.items()))
+        print("\npaper reports: " + "; ".join(
+            f"{chain}: " + ", ".join(f"{k}={v}" for k, v in vals.items())
+            for chain, vals in paper.items()))
     for note in result["notes"]:
         print(f"note: {note}")
     return 0

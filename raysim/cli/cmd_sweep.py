@@ -6,6 +6,8 @@ import argparse
 import math
 import sys
 
+from raysim.vocabulary import CHAINS
+
 EPILOG = """\
 examples:
   raysim sweep --case rotation_y --param motion.sinusoids.0.amplitude_deg=linspace(0,10,6) \\
@@ -24,11 +26,18 @@ swept as motion.sinusoids.0.* only if the scenario lists it under
 
 Finished points are stored one file each under OUT/points/; re-running the
 same command computes only the missing points. Results: OUT/sweep.nc (one
-variable per metric, dims: each swept key, seed, chain).
+variable per metric of raysim.vocabulary.METRICS, dims: each swept key, seed,
+chain; the compensation's guard warnings of every point and chain in the
+variable "warnings", summarised on stderr as "warning: CHAIN: KIND at N/M
+points (e.g. TEXT)"). Chains: none, paper, paper:published, exact.
 
 exit status: 0 all points done, 1 some points failed or the scheduler is
 unavailable (finished points are kept), 2 invalid input, 130 interrupted.
 """
+
+
+#: Metrics (names of :data:`raysim.vocabulary.METRICS`) printed as means after a sweep.
+SUMMARY_METRICS = ("pseudo_velocity_mps", "doppler_width_hz", "angle_error_deg")
 
 
 def register(subparsers) -> None:
@@ -46,8 +55,9 @@ def register(subparsers) -> None:
                    help="fixed change to the base scenario (repeatable)")
     p.add_argument("--seeds", default="0", metavar="VALUES",
                    help="seeds, e.g. 0,1,2 or range(8) (default: 0)")
-    p.add_argument("--chains", default="none,paper,exact",
-                   help="comma-separated chains (default: all three)")
+    p.add_argument("--chains", default=",".join(CHAINS),
+                   help="comma-separated chains: none, paper, paper:published, exact "
+                   "(default: %(default)s)")
     p.add_argument("--out", required=True, metavar="DIR", help="result folder")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="Dask scheduler address (default: a local in-process cluster)")
@@ -65,8 +75,8 @@ def run(args) -> int:
     """Run ``raysim sweep``; returns the exit code."""
     from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
     from raysim.pipeline.sources import FeatureUnavailable
-    from raysim.studies.sweep import SweepSpec, parse_values, run_sweep
-    from raysim.vocabulary import CHAINS
+    from raysim.studies.sweep import SweepSpec, parse_values, run_sweep, warning_summary
+    from raysim.vocabulary import metric_unit, parse_chains
 
     if bool(args.scenario) == bool(args.case):
         raise ValueError("give exactly one base: SCENARIO.toml or --case NAME")
@@ -91,9 +101,10 @@ def run(args) -> int:
         raise ValueError(f"--seeds: {exc}") from None
     if not all(isinstance(s, int) and s >= 0 for s in seeds):
         raise ValueError(f"--seeds: got {args.seeds!r}, expected integers >= 0")
-    chains = tuple(c.strip() for c in args.chains.split(",") if c.strip())
-    if not chains or any(c not in CHAINS for c in chains):
-        raise ValueError(f"--chains: got {args.chains!r}, expected a subset of {','.join(CHAINS)}")
+    try:
+        chains = tuple(s.key for s in parse_chains(args.chains))
+    except ValueError as exc:
+        raise ValueError(f"--chains: got {args.chains!r}: {exc}") from None
     spec = SweepSpec(base, params, tuple(seeds), chains)
     try:
         res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,
@@ -114,10 +125,11 @@ def run(args) -> int:
         print(f"failed point {key}: {err}", file=sys.stderr)
     for chain in spec.chains:
         sub = ds.sel(chain=chain)
-        vals = [f"{m}={float(sub[m].mean()):.4g}" for m in
-                ("pseudo_velocity_mps", "doppler_width_hz", "angle_error_deg")
-                if not math.isnan(float(sub[m].mean(skipna=True)))]
+        vals = [f"{m}={float(sub[m].mean()):.4g} {metric_unit(m)}" for m in
+                SUMMARY_METRICS if not math.isnan(float(sub[m].mean(skipna=True)))]
         if vals:
             print(f"  {chain} (mean over points): {', '.join(vals)}")
+    for line in warning_summary(ds):
+        print(f"warning: {line}", file=sys.stderr)
     print(f"results: {res.path}")
     return 1 if res.failed or int(ds.attrs["points_done"]) < total and args.limit is None else 0

@@ -2,7 +2,7 @@
 
 For each chirp ``n`` and virtual channel ``m`` the transmit and receive phase
 centres are placed at their world positions
-``x(t) = T(t) + R_WB(t) (r_IR + p)`` (CONVENTIONS.md) and the two-way delay is
+``x(t) = T(t) + R_WB(t) (r_IR + p)`` (docs/conventions.md) and the two-way delay is
 the exact bistatic geometry ``tau = (|P - x_tx| + |P - x_rx|) / c``. The IF
 phase is ``2 pi (f_c tau + mu tau t - mu tau^2 / 2)``.
 

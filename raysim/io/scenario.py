@@ -8,7 +8,7 @@ forbid unknown keys. Every validation problem is reported in one
 :class:`ValueError` whose lines name the key path, the value and what was
 expected, e.g. ``radar.sample_rate_hz: got -1, expected > 0``.
 
-File units follow CONVENTIONS.md: SI with the unit in the key name
+File units follow docs/conventions.md: SI with the unit in the key name
 (``sample_rate_hz``, ``range_m``), angles in degrees (``az_deg``,
 ``amplitude_deg``). :meth:`Scenario.radar_config`, :meth:`Scenario.trajectory`
 and friends convert to the SI / radian objects of the library.
@@ -136,7 +136,7 @@ class ArraySection(_Section):
 class TargetSpec(_Section):
     """One point target, placed from the nominal radar phase centre.
 
-    ``range_m`` [m], direction ``az_deg`` / ``el_deg`` [deg] (CONVENTIONS.md),
+    ``range_m`` [m], direction ``az_deg`` / ``el_deg`` [deg] (docs/conventions.md),
     ``rcs_dbsm`` [dBsm], constant world (NED) velocity ``velocity_mps`` [m/s].
     """
 
@@ -232,7 +232,8 @@ class HoverJitterSection(_Section):
 class MotionSection(_Section):
     """``[motion]``: platform motion, the sum of every part given.
 
-    ``case``: the motion of a paper case (``raysim.studies.cases.PAPER_CASES``);
+    ``case``: the motion of a paper case (the ``motion`` keys of
+    ``raysim.studies.cases.PAPER_CASES[case]["scenario"]``);
     ``[[motion.sinusoids]]``: extra sinusoids; ``velocity_mps``: constant world
     velocity [m/s]; ``[motion.hover_jitter]``: stochastic jitter. Nothing given
     means a stationary platform.
@@ -403,17 +404,19 @@ class Scenario(_Section):
         )
         from raysim.studies.cases import get_case
 
+        def sines(specs: list[SinusoidSpec]) -> Trajectory:
+            comps = tuple(Sinusoid(s.axis, s.amplitude_si, s.frequency_hz,
+                                   math.radians(s.phase_deg)) for s in specs)
+            return Trajectory(comps, name=", ".join(c.label for c in comps))
+
         m = self.motion
         parts: list[Trajectory] = []
         if m.case is not None:
-            parts.append(get_case(m.case).trajectory)
+            case = MotionSection.model_validate(get_case(m.case)["scenario"].get("motion", {}))
+            parts.append(sines(case.sinusoids) if case.sinusoids
+                         else stationary())
         if m.sinusoids:
-            comps = tuple(Sinusoid(s.axis, s.amplitude_si, s.frequency_hz,
-                                   math.radians(s.phase_deg)) for s in m.sinusoids)
-            parts.append(Trajectory(comps, name=", ".join(
-                f"{s.axis} {s.amplitude_deg if s.axis in ANGLE_AXES else s.amplitude_m:g}"
-                f"{' deg' if s.axis in ANGLE_AXES else ' m'} @ {s.frequency_hz:g} Hz"
-                for s in m.sinusoids)))
+            parts.append(sines(m.sinusoids))
         if m.velocity_mps is not None:
             parts.append(constant_velocity(np.asarray(m.velocity_mps)))
         if m.hover_jitter is not None and m.hover_jitter.scale > 0:
@@ -553,15 +556,18 @@ def load_scenario(path: str | Path) -> Scenario:
 
 
 def scenario_from_case(name: str, **overrides: Any) -> Scenario:
-    """The scenario of a paper case (radar, 20 x 20 UPA, target, motion, frames).
+    """The scenario of a paper case (radar, 20 x 20 UPA, target, motion, frames, lever arm).
+
+    Built from the case's scenario keys (``raysim.studies.cases.get_case(name)``)
+    with ``motion.case = name`` standing for the case's motion sinusoids, so
+    the TOML form reads like ``examples/case_<name>.toml``.
 
     Parameters
     ----------
     name : str
         Key of :data:`raysim.studies.cases.PAPER_CASES`.
     **overrides
-        Key paths with ``__`` for dots are not accepted; use
-        :meth:`Scenario.with_values` for changes.
+        Not accepted; use :meth:`Scenario.with_values` for changes.
     """
     from raysim.studies.cases import get_case
 
@@ -569,22 +575,8 @@ def scenario_from_case(name: str, **overrides: Any) -> Scenario:
         raise ValueError(f"scenario_from_case takes no overrides, got {sorted(overrides)}; "
                          f"use Scenario.with_values")
     case = get_case(name)
-    cfg = case.config
-    data = {
-        "name": case.name,
-        "description": case.description,
-        "frames": int(case.num_frames),
-        "lever_arm_m": [float(v) for v in case.lever_arm],
-        "radar": {"carrier_frequency_hz": cfg.carrier_frequency, "bandwidth_hz": cfg.bandwidth,
-                  "chirp_duration_s": cfg.chirp_duration, "idle_time_s": cfg.idle_time,
-                  "sample_rate_hz": cfg.sample_rate, "num_chirps": cfg.num_chirps},
-        "array": {"kind": "upa", "nx": 20, "ny": 20},
-        "scene": {"kind": "points", "targets": [{
-            "range_m": case.target_range, "az_deg": round(math.degrees(case.target_az), 9),
-            "el_deg": round(math.degrees(case.target_el), 9), "rcs_dbsm": 10.0}]},
-        "motion": {"case": case.name},
-        "imu": {"preset": "ideal"},
-    }
+    data = case["scenario"]
+    data.update(name=name, description=case["description"], motion={"case": name})
     return validate_scenario(copy.deepcopy(data), source=f"paper case {name!r}")
 
 

@@ -1,6 +1,6 @@
 """Frames on disk: xarray Datasets in Zarr stores (appendable, resumable) and NetCDF.
 
-Layout of a frame Dataset (axis names of CONVENTIONS.md):
+Layout of a frame Dataset (axis names of docs/conventions.md):
 
 =====================  ==============================  =========  =======================
 variable               dims                            dtype      unit
@@ -246,7 +246,7 @@ def frames_to_dataset(frames: Sequence[RadarFrame], trajectory=None, *, imu: xr.
         },
         attrs={
             "raysim_format": FORMAT_VERSION,
-            "conventions": "raysim CONVENTIONS.md: NED world, FRD body, boresight +Z_A",
+            "conventions": "raysim docs/conventions.md: NED world, FRD body, boresight +Z_A",
             "channel_order": ("x index major, y index minor" if arr.num_slots == 1
                               else "tx major, rx minor"),
             "array_name": arr.name,

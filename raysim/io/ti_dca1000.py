@@ -48,7 +48,7 @@ each loop one ramp per transmit slot in chirp-configuration order::
 
 The reader returns a cube ``[frame, chirp, channel, sample]`` (``chirp`` = loop
 index, ``channel = tx_slot * num_rx + rx``: tx major, rx minor, as in
-CONVENTIONS.md) and the start time of every ramp,
+docs/conventions.md) and the start time of every ramp,
 ``chirp_time[frame, chirp, tx_slot] = t0 + frame * frame_period
 + (chirp * num_tx + tx_slot) * slot_interval``.
 

@@ -41,7 +41,7 @@ ANGLE_STEP_DEG = 1.0
 SINGLE_CHIRP_HALF_WIDTH_DEG = 15.0
 #: Step of the single-chirp angle grid [deg].
 SINGLE_CHIRP_STEP_DEG = 0.5
-#: Most slow-time snapshots beamformed into the angle map (decimated beyond).
+#: Chirps beamformed at a time into the coherent AE map (bounds its memory).
 MAX_SNAPSHOTS = 256
 #: Half-width of the range window searched around a known target range [m].
 RANGE_SEARCH_M = 1.5
@@ -120,11 +120,13 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     within :data:`SINGLE_CHIRP_HALF_WIDTH_DEG` of the reference direction
     (of the accumulated peak without one), its interpolated peak
     (``az_deg``, ``el_deg``, ``angle_error_deg``). Accumulated AE map: grid
-    ``+-angle_limit_deg`` in steps of ``angle_step_deg``, power summed over
-    at most :data:`MAX_SNAPSHOTS` chirps of all frames (``map_angle_error_deg``,
-    ``entropy_ae_nats``). Slow-time signal of frame 0 at the gate in the beam
-    towards the reference (or the single-chirp estimate): pseudo-velocity and
-    Doppler width; RD map of the same beam and its entropy.
+    ``+-angle_limit_deg`` in steps of ``angle_step_deg``; the beams of each
+    frame summed coherently over its chirps (the zero-Doppler beam, the
+    paper's yaw metric), their power summed over frames
+    (``map_angle_error_deg``, ``entropy_ae_nats``). Slow-time signal of
+    frame 0 at the gate in the beam towards the reference (or the
+    single-chirp estimate): pseudo-velocity and Doppler width; RD map of the
+    same beam and its entropy.
 
     Parameters
     ----------
@@ -191,17 +193,15 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
 
     # accumulated AE map over the frames (the paper chain looks towards the truth here)
     grid = np.deg2rad(np.arange(-angle_limit_deg, angle_limit_deg + 1e-9, angle_step_deg))
-    step = max(1, int(math.ceil(n * len(frames) / MAX_SNAPSHOTS)))
-    pick = np.arange(0, n, step)
+    all_chirps = np.arange(n)
     power = 0.0
     snaps0 = None
     for k, bf in enumerate(bfs):
         snaps = gate_snapshots(frames[k].data, i)[:, :, None]   # [chirp, channel, 1]
         if k == 0:
             snaps0 = snaps
-        beams = bf(snaps[pick], pick, gate_r, grid, grid, reference.direction
-                   if reference is not None else None)
-        power = power + np.sum(np.abs(beams[:, 0].astype(np.complex128)) ** 2, axis=0)
+        power = power + _coherent_power(bf, snaps, all_chirps, gate_r, grid,
+                                        reference.direction if reference is not None else None)
     ae = Map(power, ("azimuth", "elevation"), {"azimuth": grid, "elevation": grid})
     pk = ae.peak()
     u_map = _direction(pk["azimuth"], pk["elevation"])
@@ -226,7 +226,6 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     else:
         err = map_err = math.nan
 
-    all_chirps = np.arange(n)
     slow = bfs[0](snaps0, all_chirps, gate_r, [look_az], [look_el], u_hat)[:, 0, 0, 0]
     beam_rc = bfs[0](rc0, all_chirps, r_axis, [look_az], [look_el], u_hat)[:, :, 0, 0]
     spec_rd = doppler_fft(beam_rc, axis=0)                       # [doppler, range]
@@ -265,6 +264,19 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
         "range_bin": i, "slow_time": slow,
     }
     return metrics, maps
+
+
+def _coherent_power(bf, snaps: np.ndarray, chirps: np.ndarray, gate_r, grid, direction):
+    """AE power of the beams summed coherently over a frame's chirps, ``[azimuth, elevation]``.
+
+    Chirp blocks of :data:`MAX_SNAPSHOTS` bound the memory of the beams.
+    """
+    total = 0.0
+    for c in range(0, chirps.size, MAX_SNAPSHOTS):
+        sel = chirps[c:c + MAX_SNAPSHOTS]
+        beams = bf(snaps[sel], sel, gate_r, grid, grid, direction)     # [chirp, 1, az, el]
+        total = total + beams[:, 0].astype(np.complex128).sum(axis=0)
+    return np.abs(total / chirps.size) ** 2
 
 
 def _direction(az: float, el: float) -> np.ndarray:

@@ -22,8 +22,9 @@ def estimate_motion(imu_time, gyro, accel, chirp_times, *, lever_arm, trajectory
     """Strapdown-integrate IMU samples to the platform pose at every chirp.
 
     The initial attitude and position at the first chirp are the truth of
-    ``trajectory`` (an aligned navigation solution); the initial velocity
-    follows ``velocity`` (:data:`VELOCITY_MODES`).
+    ``trajectory`` (an aligned navigation solution) unless ``options`` give
+    ``initial_attitude`` / ``initial_position`` (e.g. the nominal hover pose);
+    the initial velocity follows ``velocity`` (:data:`VELOCITY_MODES`).
 
     Parameters
     ----------
@@ -41,7 +42,9 @@ def estimate_motion(imu_time, gyro, accel, chirp_times, *, lever_arm, trajectory
         IMU clock reading at radar time 0 [s].
     velocity : {"given", "hover"}
     **options
-        Passed to :func:`compensation.integrate_imu` (``hover_window`` ...).
+        Passed to :func:`compensation.integrate_imu` (``hover_window``,
+        ``initial_attitude``, ``initial_position`` ...); they override the
+        truth initial state.
 
     Returns
     -------
@@ -54,12 +57,14 @@ def estimate_motion(imu_time, gyro, accel, chirp_times, *, lever_arm, trajectory
     t = np.asarray(chirp_times, dtype=float).ravel()
     t_ref = float(t[0])
     if velocity == "given":
-        options["initial_velocity"] = trajectory.velocity([t_ref])[0]
+        options.setdefault("initial_velocity", trajectory.velocity([t_ref])[0])
+    if "initial_attitude" not in options:
+        options["initial_attitude"] = trajectory.attitude([t_ref]).as_matrix()[0]
+    if "initial_position" not in options:
+        options["initial_position"] = trajectory.position([t_ref])[0]
     return integrate_imu(np.asarray(imu_time), np.asarray(gyro), np.asarray(accel), t,
                          lever_arm=lever_arm, time_offset=time_offset, reference_time=t_ref,
-                         initial_attitude=trajectory.attitude([t_ref]).as_matrix()[0],
-                         initial_position=trajectory.position([t_ref])[0], velocity=velocity,
-                         **options)
+                         velocity=velocity, **options)
 
 
 def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory=None):

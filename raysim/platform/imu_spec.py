@@ -23,7 +23,7 @@ __all__ = [
 
 
 # ------------------------------------------------------------------ constants
-#: Standard gravity [m/s^2] (CONVENTIONS.md), also the unit ``g`` of datasheets.
+#: Standard gravity [m/s^2] (docs/conventions.md), also the unit ``g`` of datasheets.
 STANDARD_GRAVITY = 9.80665
 #: Gravity in the world NED frame ``g_W`` [m/s^2], shape ``[3]``.
 GRAVITY_W = np.array([0.0, 0.0, STANDARD_GRAVITY])

@@ -21,6 +21,8 @@ from scipy.spatial.transform import Rotation
 
 #: Axis names in the order of the internal state vector.
 AXES = ("x", "y", "z", "roll", "pitch", "yaw")
+#: Axes whose values are angles [rad] (labelled in degrees).
+ROTATION_AXES = ("roll", "pitch", "yaw")
 _AXIS_INDEX = {name: i for i, name in enumerate(AXES)}
 
 
@@ -50,6 +52,11 @@ class Sinusoid:
             raise ValueError(f"amplitude must be finite, got {self.amplitude!r}")
         if not math.isfinite(self.frequency) or self.frequency < 0:
             raise ValueError(f"frequency must be >= 0 Hz, got {self.frequency!r}")
+
+    @property
+    def label(self) -> str:
+        """``pitch 10 deg @ 20 Hz`` or ``z 0.05 m @ 5 Hz`` (see :func:`sinusoid_label`)."""
+        return sinusoid_label(self.axis, self.amplitude, self.frequency)
 
     def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Value, first and second time derivative at times ``t`` [s]."""
@@ -197,10 +204,35 @@ def stationary() -> Trajectory:
     return Trajectory((), name="stationary")
 
 
+def sinusoid_label(axis: str, amplitude: float, frequency: float) -> str:
+    """The one label of a sinusoid in every command, store and report.
+
+    Parameters
+    ----------
+    axis : str
+        One of :data:`AXES`.
+    amplitude : float
+        Amplitude in SI units: rad for roll/pitch/yaw, m for x/y/z.
+    frequency : float
+        [Hz].
+
+    Returns
+    -------
+    str
+        ``"pitch 10 deg @ 20 Hz"`` (rotations, amplitude converted to degrees)
+        or ``"z 0.05 m @ 5 Hz"`` (translations); numbers with 4 significant
+        digits (``:.4g``).
+    """
+    _axis_index(axis)
+    if axis in ROTATION_AXES:
+        return f"{axis} {math.degrees(amplitude):.4g} deg @ {frequency:.4g} Hz"
+    return f"{axis} {amplitude:.4g} m @ {frequency:.4g} Hz"
+
+
 def sinusoid(axis: str, amplitude: float, frequency: float, phase: float = 0.0) -> Trajectory:
-    """Single-axis sinusoidal motion (amplitude in m or rad)."""
-    return Trajectory((Sinusoid(axis, amplitude, frequency, phase),),
-                      name=f"{axis} sinusoid {amplitude:g} @ {frequency:g} Hz")
+    """Single-axis sinusoidal motion (amplitude in m or rad), named by :func:`sinusoid_label`."""
+    comp = Sinusoid(axis, amplitude, frequency, phase)
+    return Trajectory((comp,), name=comp.label)
 
 
 def constant_velocity(velocity: np.ndarray) -> Trajectory:

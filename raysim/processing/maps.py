@@ -4,7 +4,7 @@ Indexing: IF cubes are ``[chirp, channel, sample]``; range-compressed cubes
 ``[chirp, channel, range]``. Maps are :class:`Map` objects carrying their axes
 (``range`` [m], ``doppler`` [m/s range rate], ``azimuth``/``elevation`` [rad]).
 
-Sign conventions (CONVENTIONS.md): the IF phase grows with delay, so a forward
+Sign conventions (docs/conventions.md): the IF phase grows with delay, so a forward
 FFT over samples puts range at positive beat frequency and a forward FFT over
 chirps puts a receding target (positive range rate) at positive Doppler. The
 array response is ``exp(-j 2 pi / lambda u . p_virt)``; the beamformer applies
@@ -36,7 +36,7 @@ class Map:
     values : ndarray
         Power (|.|^2, linear) with one axis per entry of ``dims``.
     dims : tuple of str
-        Axis names from CONVENTIONS.md (``range, doppler, azimuth, elevation``).
+        Axis names from docs/conventions.md (``range, doppler, azimuth, elevation``).
     coords : dict
         Axis name -> 1-D coordinate array (m, m/s, rad).
     """

@@ -1,4 +1,4 @@
-"""Metrics of CONVENTIONS.md, shared by tests, reports and benchmarks.
+"""Metrics of docs/conventions.md, shared by tests, reports and benchmarks.
 
 * pseudo-velocity: range rate at the peak of the Doppler spectrum of a static
   target (Hann window over slow time, zero-padded 16x, peak refined by a

@@ -1,7 +1,7 @@
 """Antenna arrays in the radar frame A: virtual UPAs and physical TDM-MIMO layouts.
 
 Positions are in metres in frame A (array in the X-Y plane, boresight +Z_A).
-The phase convention follows CONVENTIONS.md: a virtual channel with
+The phase convention follows docs/conventions.md: a virtual channel with
 ``p_virt = p_tx + p_rx`` sees the one-way phase ``2 pi / lambda * u . p_virt``;
 its monostatic-equivalent element sits at ``p_virt / 2``.
 """

@@ -1,112 +1,126 @@
 """The paper's experiments as named scenarios.
 
-Each :class:`PaperCase` fixes the radar (Table 2), the 20 x 20 half-wavelength
-virtual UPA, the platform motion, the single static target and the values the
-paper reports. Motion phases are zero (every sinusoid starts at its rest
-position at ``t = 0``, moving in the positive direction) and the lever arm is
-:data:`DEFAULT_LEVER_ARM`; the paper states neither.
+A paper case is plain data: a scenario override (the TOML keys of
+:class:`raysim.io.scenario.Scenario`: target, motion sinusoids, radar, array,
+frames, lever arm) and the values the paper reports, in the words of
+:mod:`raysim.vocabulary`. :func:`raysim.io.scenario.scenario_from_case` turns a
+case into a :class:`~raysim.io.scenario.Scenario`; ``raysim simulate --case``,
+``raysim report --case`` and ``raysim reproduce`` all render that scenario.
+
+Every case shares :data:`BASE`: the paper's Table 2 radar (the ``[radar]``
+defaults), the 20 x 20 half-wavelength virtual UPA, the lever arm
+:data:`DEFAULT_LEVER_ARM` and an ideal IMU. Motion phases are zero (every
+sinusoid starts at its rest position at ``t = 0``, moving in the positive
+direction); the paper states neither phases nor lever arm.
+
+``paper`` maps a chain of :data:`raysim.vocabulary.CHAINS` to the metrics of
+:data:`raysim.vocabulary.METRICS` the paper reports for it: ``none`` before
+compensation, ``paper`` after (pseudo-velocities are magnitudes in the paper).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import copy
 
 import numpy as np
 
-from raysim.echoes.oracle import PointTarget
-from raysim.platform.motion import Trajectory, sinusoid, stationary
-from raysim.radar.arrays import VirtualArray, upa
-from raysim.radar.config import RadarConfig
+__all__ = ["DEFAULT_LEVER_ARM", "BASE", "PAPER_CASES", "get_case", "paper_values"]
 
 #: Radar phase centre in the body frame [m]: 10 cm below the IMU (FRD, +Z down).
 DEFAULT_LEVER_ARM = np.array([0.0, 0.0, 0.10])
 
-
-@dataclass(frozen=True, eq=False)
-class PaperCase:
-    """One experiment of the paper.
-
-    Attributes
-    ----------
-    name : str
-        Identifier used on the command line.
-    description : str
-    config : RadarConfig
-    trajectory : Trajectory
-    target_range : float
-        Target range from the nominal radar phase centre [m].
-    target_az, target_el : float
-        Target direction at the nominal attitude [rad].
-    num_frames : int
-        Frames accumulated (the yaw case uses 20).
-    paper : dict
-        Values the paper reports (pseudo-velocity m/s, widths Hz, angles deg, entropy nats).
-    lever_arm : ndarray, shape ``[3]`` [m]
-    """
-
-    name: str
-    description: str
-    config: RadarConfig
-    trajectory: Trajectory
-    target_range: float
-    target_az: float
-    target_el: float
-    num_frames: int = 1
-    paper: dict = field(default_factory=dict)
-    lever_arm: np.ndarray = field(default_factory=lambda: DEFAULT_LEVER_ARM.copy())
-
-    def array(self) -> VirtualArray:
-        """The 20 x 20 half-wavelength virtual UPA (x major, y minor)."""
-        return upa(20, 20, wavelength=self.config.wavelength)
-
-    def target(self) -> PointTarget:
-        """The static target, placed from the nominal radar phase centre."""
-        return PointTarget.at(self.target_range, self.target_az, self.target_el,
-                              radar_origin=self.lever_arm)
-
-
-def _deg(x: float) -> float:
-    return float(np.deg2rad(x))
-
-
-_R256 = RadarConfig()
-_R512 = RadarConfig(num_chirps=512)
-
-PAPER_CASES: dict[str, PaperCase] = {
-    c.name: c
-    for c in (
-        PaperCase("stationary", "stationary platform, target 15 m, az 20, el 0", _R256,
-                  stationary(), 15.0, _deg(20), 0.0),
-        PaperCase("rotation_y", "pitch (about Y) 10 deg at 20 Hz, target 15 m, az 20, el 0",
-                  _R256, sinusoid("pitch", _deg(10), 20.0), 15.0, _deg(20), 0.0,
-                  paper={"pseudo_velocity_before": 1.037, "pseudo_velocity_after": 0.074,
-                         "width_before_hz": 211.92, "width_after_hz": 154.53,
-                         "width_improvement_pct": 30.4, "az_before_deg": 16.0,
-                         "az_after_deg": 20.0}),
-        PaperCase("yaw", "yaw 20 deg at 10 Hz, target 18 m, az 25, el 25, 20 frames",
-                  _R256.with_(num_frames=20), sinusoid("yaw", _deg(20), 10.0), 18.0, _deg(25),
-                  _deg(25), num_frames=20,
-                  paper={"az_el_before_deg": (16.5, 31.0), "az_el_after_deg": (25.0, 25.0),
-                         "entropy_before": 7.3, "entropy_after": 6.1}),
-        PaperCase("translation_y", "Y translation 5 cm at 5 Hz, 512 chirps, target 15 m, "
-                  "az 10, el 35", _R512, sinusoid("y", 0.05, 5.0), 15.0, _deg(10), _deg(35),
-                  paper={"pseudo_velocity_before": 1.552, "pseudo_velocity_after": 0.074,
-                         "width_before_hz": 120.96, "width_after_hz": 78.18,
-                         "width_improvement_pct": 35.4}),
-        PaperCase("translation_z", "Z translation 5 cm at 5 Hz, 512 chirps, target 15 m, "
-                  "az 10, el 10", _R512, sinusoid("z", 0.05, 5.0), 15.0, _deg(10), _deg(10),
-                  paper={"pseudo_velocity_before": 2.740, "pseudo_velocity_after": 0.074,
-                         "width_before_hz": 171.10, "width_after_hz": 81.52,
-                         "width_improvement_pct": 52.4}),
-    )
+#: Scenario keys shared by every paper case (merged under each case's ``scenario``).
+BASE = {
+    "lever_arm_m": [float(v) for v in DEFAULT_LEVER_ARM],
+    "radar": {},
+    "array": {"kind": "upa", "nx": 20, "ny": 20},
+    "imu": {"preset": "ideal"},
 }
 
 
-def get_case(name: str) -> PaperCase:
-    """Look up a paper case by name; raises ValueError listing the valid names."""
-    try:
-        return PAPER_CASES[name]
-    except KeyError:
-        raise ValueError(
-            f"unknown paper case {name!r}; expected one of {sorted(PAPER_CASES)}"
-        ) from None
+def _target(range_m: float, az_deg: float, el_deg: float) -> dict:
+    """``[scene]`` of one static point target (range [m], direction [deg], 10 dBsm)."""
+    return {"kind": "points", "targets": [{"range_m": range_m, "az_deg": az_deg,
+                                           "el_deg": el_deg, "rcs_dbsm": 10.0}]}
+
+
+def _sine(axis: str, amplitude: float, frequency_hz: float) -> dict:
+    """One ``[[motion.sinusoids]]`` entry; amplitude in deg (rotations) or m."""
+    unit = "amplitude_deg" if axis in ("roll", "pitch", "yaw") else "amplitude_m"
+    return {"axis": axis, unit: amplitude, "frequency_hz": frequency_hz, "phase_deg": 0.0}
+
+
+#: Case name -> ``{"description", "scenario", "paper"}``: ``scenario`` holds the
+#: TOML keys of the case (over :data:`BASE`), ``paper`` chain -> metric -> value.
+PAPER_CASES: dict[str, dict] = {
+    "stationary": {
+        "description": "stationary platform, target 15 m, az 20, el 0",
+        "scenario": {"scene": _target(15.0, 20.0, 0.0), "motion": {}},
+        "paper": {},
+    },
+    "rotation_y": {
+        "description": "pitch (about Y) 10 deg at 20 Hz, target 15 m, az 20, el 0",
+        "scenario": {"scene": _target(15.0, 20.0, 0.0),
+                     "motion": {"sinusoids": [_sine("pitch", 10.0, 20.0)]}},
+        "paper": {"none": {"pseudo_velocity_mps": 1.037, "doppler_width_hz": 211.92,
+                           "az_deg": 16.0},
+                  "paper": {"pseudo_velocity_mps": 0.074, "doppler_width_hz": 154.53,
+                            "width_improvement_pct": 30.4, "az_deg": 20.0}},
+    },
+    "yaw": {
+        "description": "yaw 20 deg at 10 Hz, target 18 m, az 25, el 25, 20 frames",
+        "scenario": {"frames": 20, "scene": _target(18.0, 25.0, 25.0),
+                     "motion": {"sinusoids": [_sine("yaw", 20.0, 10.0)]}},
+        "paper": {"none": {"az_deg": 16.5, "el_deg": 31.0, "entropy_ae_nats": 7.3},
+                  "paper": {"az_deg": 25.0, "el_deg": 25.0, "entropy_ae_nats": 6.1}},
+    },
+    "translation_y": {
+        "description": "Y translation 5 cm at 5 Hz, 512 chirps, target 15 m, az 10, el 35",
+        "scenario": {"radar": {"num_chirps": 512}, "scene": _target(15.0, 10.0, 35.0),
+                     "motion": {"sinusoids": [_sine("y", 0.05, 5.0)]}},
+        "paper": {"none": {"pseudo_velocity_mps": 1.552, "doppler_width_hz": 120.96},
+                  "paper": {"pseudo_velocity_mps": 0.074, "doppler_width_hz": 78.18,
+                            "width_improvement_pct": 35.4}},
+    },
+    "translation_z": {
+        "description": "Z translation 5 cm at 5 Hz, 512 chirps, target 15 m, az 10, el 10",
+        "scenario": {"radar": {"num_chirps": 512}, "scene": _target(15.0, 10.0, 10.0),
+                     "motion": {"sinusoids": [_sine("z", 0.05, 5.0)]}},
+        "paper": {"none": {"pseudo_velocity_mps": 2.740, "doppler_width_hz": 171.10},
+                  "paper": {"pseudo_velocity_mps": 0.074, "doppler_width_hz": 81.52,
+                            "width_improvement_pct": 52.4}},
+    },
+}
+
+
+def _merged(base: dict, over: dict) -> dict:
+    out = copy.deepcopy(base)
+    for k, v in over.items():
+        out[k] = _merged(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) \
+            else copy.deepcopy(v)
+    return out
+
+
+def get_case(name: str) -> dict:
+    """A paper case by name: ``{"name", "description", "scenario", "paper"}`` (a copy).
+
+    ``scenario`` is the full override (:data:`BASE` merged with the case's
+    keys), ready for :func:`raysim.io.scenario.validate_scenario`.
+
+    Raises
+    ------
+    ValueError
+        Unknown name; the message lists the valid names.
+    """
+    if not isinstance(name, str) or name not in PAPER_CASES:
+        raise ValueError(f"unknown paper case {name!r}; expected one of {sorted(PAPER_CASES)}")
+    case = PAPER_CASES[name]
+    return {"name": name, "description": case["description"],
+            "scenario": _merged(BASE, case["scenario"]), "paper": copy.deepcopy(case["paper"])}
+
+
+def paper_values(name: str) -> dict[str, float]:
+    """The paper's values of a case, flat: ``"<metric> (<chain>)" -> value``, for display."""
+    return {f"{metric} ({chain})": value
+            for chain, values in get_case(name)["paper"].items()
+            for metric, value in values.items()}

@@ -1,17 +1,20 @@
-"""Self-contained HTML reports comparing the uncompensated data with the compensation chains.
+"""Self-contained HTML reports comparing the chains of :mod:`raysim.vocabulary`.
 
-A report holds, for every available chain (``uncompensated``, ``paper``,
-``exact``): range-azimuth, range-elevation, range-Doppler and
-azimuth-elevation maps, Doppler cuts of the reference target, the metric table
-of :func:`raysim.pipeline.analysis.analyse` (with the values the paper reports for a paper
-case), the scene entropies, the run parameters (scenario TOML, derived radar
-quantities) and the software versions (numpy, sionna-rt, mitsuba, drjit, ...).
-Figures are PNGs embedded as base64 ``data:`` URIs, so the single HTML file
-can be mailed or archived. The file is written atomically.
+A report holds, for every available chain (``none``, ``paper``,
+``paper:published``, ``exact``): the RA, RE, RD and AE maps
+(:data:`raysim.vocabulary.MAPS`, drawn by :func:`raysim.studies.figures.plot_map`
+with the axes of :data:`raysim.vocabulary.FIGURE_AXES`), Doppler cuts of the
+reference target, the metric table of :func:`raysim.pipeline.analysis.analyse`
+(names and units of :data:`raysim.vocabulary.METRICS`, with the values the
+paper reports for a paper case), the compensation's guard warnings per chain,
+the run parameters (motion label, scenario TOML, derived radar quantities)
+and the software versions (numpy, sionna-rt, mitsuba, drjit, ...). Figures
+are PNGs embedded as base64 ``data:`` URIs, so the single HTML file can be
+mailed or archived. The file is written atomically.
 
 Map conventions: power in dB relative to each map's maximum, clipped at
 :data:`DYNAMIC_RANGE_DB` below it; range [m], range rate [m/s] (positive
-receding), angles [deg] (CONVENTIONS.md).
+receding), angles [deg] (docs/conventions.md).
 """
 
 from __future__ import annotations
@@ -31,7 +34,14 @@ import numpy as np
 from raysim.pipeline.analysis import ANALYSIS_METRICS
 from raysim.pipeline.sources import Reference
 from raysim.synthesis.frame import RadarFrame
-from raysim.vocabulary import CHAINS, metric_unit
+from raysim.vocabulary import (
+    CHAINS,
+    FIGURE_AXES,
+    MAP_TITLES,
+    METRICS,
+    metric_unit,
+    parse_chains,
+)
 
 __all__ = ["ReportData", "collect_from_scenario", "collect_from_dataset", "build_report",
            "write_report", "software_versions", "DYNAMIC_RANGE_DB"]
@@ -54,7 +64,8 @@ class ReportData:
     title : str
     result : dict
         Output of :func:`raysim.pipeline.run.evaluate` with ``return_maps=True``
-        (``reference``, ``chains`` metrics, ``maps``, ``notes``).
+        (``reference``, ``chains`` metrics, ``maps``, ``warnings``, ``notes``),
+        keyed by chain (:attr:`raysim.vocabulary.ChainSpec.key`).
     frame : RadarFrame
         Frame 0 (its config and array describe the radar).
     num_frames : int
@@ -64,6 +75,9 @@ class ReportData:
         Values the paper reports for this case (may be empty).
     source : str
         Where the frames came from (scenario file, store path).
+    motion : str
+        Label of the platform motion (:attr:`raysim.platform.motion.Trajectory.name`,
+        e.g. ``pitch 10 deg @ 20 Hz``; '' when unknown).
     """
 
     title: str
@@ -73,28 +87,34 @@ class ReportData:
     scenario_toml: str = ""
     paper: dict = field(default_factory=dict)
     source: str = ""
+    motion: str = ""
 
 
 # ------------------------------------------------------------------ collect
 def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
                           source: str = "") -> ReportData:
-    """Render a scenario in memory and measure every available chain."""
+    """Render a scenario in memory and measure every available chain.
+
+    ``chains``: names or specs (:func:`raysim.vocabulary.parse_chains`).
+    """
     from raysim.pipeline.run import evaluate
     from raysim.pipeline.sources import LazyFrames, frame_source
 
-    frames = LazyFrames(frame_source(scenario, scenario.trajectory()), scenario.frames)
-    res = evaluate(scenario, chains=chains, frames=frames, reference=frames.reference,
+    keys = [c.key for c in parse_chains(chains)]
+    traj = scenario.trajectory()
+    frames = LazyFrames(frame_source(scenario, traj), scenario.frames)
+    res = evaluate(scenario, chains=keys, frames=frames, reference=frames.reference,
                    return_maps=True)
     return ReportData(scenario.name, res, frames[0], len(frames), scenario.to_toml(),
-                      _paper_values(scenario), source or scenario.name)
+                      _paper_values(scenario), source or scenario.name, traj.name)
 
 
 def _paper_values(scenario) -> dict:
     if scenario is None or scenario.motion.case is None:
         return {}
-    from raysim.studies.cases import get_case
+    from raysim.studies.cases import paper_values
 
-    return dict(get_case(scenario.motion.case).paper)
+    return paper_values(scenario.motion.case)
 
 
 def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = "") -> ReportData:
@@ -104,8 +124,10 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
     from raysim.pipeline.analysis import analyse
     from raysim.pipeline.run import evaluate
 
+    keys = [c.key for c in parse_chains(chains)]
     frames = dataset_to_frames(ds)
     scenario = scenario_of(ds)
+    motion = str(ds.attrs.get("motion_name", ""))
     ref = None
     if "reference_range_m" in ds.attrs:
         ref = Reference(float(ds.attrs["reference_range_m"]), float(ds.attrs["reference_az_deg"]),
@@ -113,20 +135,20 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
     title = str(ds.attrs.get("scenario_name", "stored frames"))
     if scenario is None:
         m, maps = analyse(frames, ref, return_maps=True)
-        res = {"reference": ref, "chains": {"none": m},
-               "maps": {"none": maps},
+        res = {"reference": ref, "chains": {"none": m}, "maps": {"none": maps},
+               "warnings": {"none": []},
                "notes": ["the store carries no scenario: compensation chains skipped"]}
-        return ReportData(title, res, frames[0], len(frames), "", {}, source)
+        return ReportData(title, res, frames[0], len(frames), "", {}, source, motion)
     imu = ds[["imu_gyro", "imu_accel"]] if "imu_gyro" in ds else None
     notes = []
     if imu is None:
-        chains = [c for c in chains if c == "none"]
+        keys = [c for c in keys if c == "none"] or ["none"]
         notes.append("the store has no IMU log: compensation chains skipped")
-    res = evaluate(scenario, chains=chains, frames=frames, imu=imu, reference=ref,
+    res = evaluate(scenario, chains=keys, frames=frames, imu=imu, reference=ref,
                    return_maps=True)
     res["notes"] = notes + res["notes"]
     return ReportData(title, res, frames[0], len(frames), scenario.to_toml(),
-                      _paper_values(scenario), source)
+                      _paper_values(scenario), source, motion or scenario.trajectory().name)
 
 
 # ------------------------------------------------------------------- maps
@@ -139,38 +161,32 @@ def _png(fig) -> str:
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _map_figure(maps: dict, kind: str, reference: Reference | None, max_range: float | None):
+def _map_figure(maps: dict, reference: Reference | None, max_range: float | None):
+    """One panel per chain of one kind of map, drawn by :func:`~raysim.studies.figures.plot_map`.
+
+    ``maps``: chain key -> :class:`~raysim.processing.maps.Map` (all of the same
+    kind, see :data:`raysim.vocabulary.MAPS`); the truth is marked with a red
+    cross (a static target: range rate 0); range is cut at ``max_range`` [m].
+    """
     import matplotlib.pyplot as plt
 
+    from raysim.studies.figures import map_name, plot_map
+
     chains = list(maps)
-    fig, axes = plt.subplots(1, len(chains), figsize=(4.2 * len(chains), 3.6), squeeze=False)
+    fig, axes = plt.subplots(1, len(chains), figsize=(4.4 * len(chains), 3.6), squeeze=False,
+                             layout="constrained")
     for ax, chain in zip(axes[0], chains, strict=True):
         m = maps[chain]
-        db = m.db(-DYNAMIC_RANGE_DB)
-        d0, d1 = m.dims
-        if (d0, d1) == ("azimuth", "elevation"):      # azimuth across, elevation up
-            d0, d1, db = d1, d0, db.T
-        c0 = np.asarray(m.coords[d0], dtype=float)
-        c1 = np.asarray(m.coords[d1], dtype=float)
-        if d1 in ("azimuth", "elevation"):
-            c1 = np.degrees(c1)
-        if d0 in ("azimuth", "elevation"):
-            c0 = np.degrees(c0)
-        # x: second axis (angle / doppler / elevation), y: first (range / azimuth)
-        extent = [c1[0], c1[-1], c0[0], c0[-1]]
-        im = ax.imshow(db, origin="lower", aspect="auto", extent=extent, cmap="viridis",
-                       vmin=-DYNAMIC_RANGE_DB, vmax=0.0, interpolation="nearest")
-        labels = {"range": "range [m]", "doppler": "range rate [m/s]",
-                  "azimuth": "azimuth [deg]", "elevation": "elevation [deg]"}
-        ax.set_xlabel(labels[d1])
-        ax.set_ylabel(labels[d0])
-        if d0 == "range" and max_range is not None:
-            ax.set_ylim(0, max_range)
+        name = map_name(m)
+        xa, ya = FIGURE_AXES[name]
+        im = plot_map(ax, m, title=f"{chain}: {MAP_TITLES[name]}",
+                      dynamic_range_db=DYNAMIC_RANGE_DB,
+                      ylim=(0.0, max_range) if ya == "range" and max_range is not None
+                      else None)
         if reference is not None:
             mark = {"range": reference.range_m, "azimuth": reference.az_deg,
-                    "elevation": reference.el_deg, "doppler": 0.0}  # static target
-            ax.plot(mark[d1], mark[d0], marker="+", color="red", markersize=12, mew=1.5)
-        ax.set_title(f"{chain}: {kind}")
+                    "elevation": reference.el_deg, "doppler": 0.0}
+            ax.plot(mark[xa], mark[ya], marker="+", color="red", markersize=12, mew=1.5)
     fig.colorbar(im, ax=axes[0].tolist(), label="power [dB rel. max]", shrink=0.9)
     return fig
 
@@ -235,58 +251,77 @@ def _fmt(v) -> str:
     return html.escape(str(v))
 
 
+def _warnings_section(chains: Sequence[str], warnings: dict) -> str:
+    """HTML section listing the guard warnings of every chain (or saying there are none)."""
+    out = ["<h2 id='warnings'>Warnings</h2>"]
+    found = [(c, w) for c in chains for w in warnings.get(c, [])]
+    if not found:
+        out.append("<p class='muted'>The compensation raised no warning for any chain.</p>")
+        return "\n".join(out)
+    out.append("<p>The compensation flags results whose assumptions do not hold "
+               "(see compensation.guards):</p><ul class='warnings'>")
+    out.extend(f"<li class='note'><b>{html.escape(c)}</b>: {html.escape(w)}</li>"
+               for c, w in found)
+    out.append("</ul>")
+    return "\n".join(out)
+
+
 def build_report(data: ReportData) -> str:
     """HTML text of a report (figures embedded)."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     res = data.result
-    chains = [c for c in CHAINS if c in res["chains"]]
+    chains = list(res["chains"])          # evaluation order: the order asked for
     if not chains:
         raise ValueError("nothing to report: no chain could be evaluated")
     cfg, arr = data.frame.config, data.frame.array
     ref = res["reference"]
     metrics = res["chains"]
-    ra = {c: res["maps"][c]["ra"] for c in chains}
-    re_ = {c: res["maps"][c]["re"] for c in chains}
-    rd = {c: res["maps"][c]["rd"] for c in chains}
-    ae = {c: res["maps"][c]["ae"] for c in chains}
+    warnings = res.get("warnings", {})
     slow = {c: res["maps"][c]["slow_time"] for c in chains}
     rmax = min(cfg.max_range, 2.0 * ref.range_m) if ref is not None else None
-    figs = [
-        ("Range-azimuth maps", _map_figure(ra, "range-azimuth", ref, rmax),
-         f"Beam scan at elevation {_fmt(ref.el_deg if ref else float('nan'))} deg, "
-         f"up to {RANGE_ANGLE_CHIRPS} chirps of frame 0 summed; red cross: truth."),
-        ("Range-elevation maps", _map_figure(re_, "range-elevation", ref, rmax),
-         "Beam scan at the target azimuth, frame 0."),
-        ("Range-Doppler maps", _map_figure(rd, "range-Doppler", ref, rmax),
-         "Hann windows in fast and slow time, beam towards the target (through each chain), "
-         "frame 0; its entropy is entropy_rd_nats."),
-        ("Azimuth-elevation maps", _map_figure(ae, "azimuth-elevation", ref, None),
-         "Beam power at the target range gate summed over the chirps of all frames (through "
-         "each chain); its entropy is entropy_ae_nats."),
-        ("Doppler cuts", _doppler_figure(slow, cfg),
-         "Slow-time signal of frame 0 at the target range, beamformed to the target."),
-    ]
+    captions = {
+        "ra": f"Beam scan at elevation {_fmt(ref.el_deg if ref else float('nan'))} deg, "
+              f"up to {RANGE_ANGLE_CHIRPS} chirps of frame 0 summed; red cross: truth.",
+        "re": "Beam scan at the target azimuth, frame 0.",
+        "rd": "Hann windows in fast and slow time, beam towards the target (through each "
+              "chain), frame 0; its entropy is entropy_rd_nats.",
+        "ae": "Beam power at the target range gate summed over the chirps of all frames "
+              "(through each chain); its entropy is entropy_ae_nats.",
+    }
+    figs = [(f"{MAP_TITLES[name]} maps",
+             _map_figure({c: res["maps"][c][name] for c in chains}, ref,
+                         None if name == "ae" else rmax), captions[name])
+            for name in ("ra", "re", "rd", "ae")]
+    figs.append(("Doppler cuts", _doppler_figure(slow, cfg),
+                 "Slow-time signal of frame 0 at the target range, beamformed to the target."))
     now = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
              f"<title>raysim report: {html.escape(data.title)}</title><style>{_CSS}</style>"
              f"</head><body>",
              f"<h1>raysim report: {html.escape(data.title)}</h1>",
              f"<p class='muted'>source: {html.escape(data.source)} &middot; written {now}</p>"]
+    if data.motion:
+        parts.append(f"<p>Motion: {html.escape(data.motion)}</p>")
     if ref is not None:
         parts.append(f"<p>Reference target: range {ref.range_m:.3f} m, azimuth "
                      f"{ref.az_deg:.2f} deg, elevation {ref.el_deg:.2f} deg.</p>")
     for note in res["notes"]:
         parts.append(f"<p class='note'>Note: {html.escape(note)}</p>")
+    parts.append(_warnings_section(chains, warnings))
 
-    parts.append("<h2>Metrics</h2><table><tr><th>metric</th><th>unit</th>"
-                 + "".join(f"<th>{c}</th>" for c in chains) + "</tr>")
+    parts.append("<h2>Metrics</h2><table class='metrics'><tr><th>metric</th><th>unit</th>"
+                 + "".join(f"<th>{html.escape(c)}</th>" for c in chains)
+                 + "<th>definition</th></tr>")
     for key, unit in ((m, metric_unit(m)) for m in ANALYSIS_METRICS):
-        parts.append(f"<tr><td>{key}</td><td>{unit}</td>"
-                     + "".join(f"<td>{_fmt(metrics[c][key])}</td>" for c in chains) + "</tr>")
+        parts.append(f"<tr><td>{key}</td><td>{html.escape(unit)}</td>"
+                     + "".join(f"<td>{_fmt(metrics[c][key])}</td>" for c in chains)
+                     + f"<td class='muted' style='text-align:left'>"
+                       f"{html.escape(METRICS[key][1])}</td></tr>")
     parts.append("</table>")
-    parts.append("<p class='muted'>CONVENTIONS.md metrics: pseudo-velocity and Doppler width "
+    parts.append("<p class='muted'>Metrics of raysim.vocabulary.METRICS: pseudo-velocity and "
+                 "Doppler width "
                  "from the Hann-windowed, 16x zero-padded slow-time spectrum; a stationary "
                  "platform gives about 1.44 Doppler bins. Entropies in nats of the normalised "
                  "map intensity (lower is sharper): azimuth-elevation map (scene entropy at the "
@@ -301,7 +336,7 @@ def build_report(data: ReportData) -> str:
                      f"{_png(fig)}'><p class='muted'>{html.escape(caption)}</p>")
 
     derived = {
-        "frames": data.num_frames, "chirps": cfg.num_chirps,
+        "motion": data.motion or "-", "frames": data.num_frames, "chirps": cfg.num_chirps,
         "samples per chirp": cfg.num_samples, "channels": arr.num_channels,
         "array": arr.name, "TDM slots": cfg.num_tx_slots,
         "range resolution [m]": cfg.range_resolution, "max range [m]": cfg.max_range,

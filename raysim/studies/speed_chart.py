@@ -179,18 +179,19 @@ def measure_nufft_eps(*, quick: bool) -> dict:
 def measure_motion(*, quick: bool) -> dict:
     """Stop-and-hop against intra-chirp motion (one target, pitch 10 deg at 20 Hz)."""
     from raysim.echoes.oracle import simulate_point_targets
-    from raysim.studies.cases import get_case
+    from raysim.io.scenario import scenario_from_case
     from raysim.studies.workloads import paper_setup
 
-    case = get_case("rotation_y")
+    case = scenario_from_case("rotation_y")
     n_c = 8 if quick else 32
-    cfg = case.config.with_(num_chirps=n_c)
+    cfg = case.radar_config().with_(num_chirps=n_c)
     arr = paper_setup(n_c)[1]                      # the paper's 20 x 20 UPA
-    tgt = [case.target()]
-    scale = case.config.num_chirps / n_c
-    t_ref, ref = _cpu(simulate_point_targets, cfg, arr, tgt, case.trajectory,
+    tgt = case.point_targets()
+    traj = case.trajectory()
+    scale = case.radar.num_chirps / n_c
+    t_ref, ref = _cpu(simulate_point_targets, cfg, arr, tgt, traj,
                       lever_arm=case.lever_arm, intra_chirp=True, repeat=REPEAT)
-    t_sh, sh = _cpu(simulate_point_targets, cfg, arr, tgt, case.trajectory,
+    t_sh, sh = _cpu(simulate_point_targets, cfg, arr, tgt, traj,
                     lever_arm=case.lever_arm, intra_chirp=False, repeat=REPEAT)
     settings = [
         {"setting": "stop-and-hop", "s_per_frame": t_sh * scale,

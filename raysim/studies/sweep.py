@@ -14,7 +14,12 @@ worker's file system is not shared); a rerun skips every point whose file
 exists, so an interrupted sweep only computes what is missing. The gathered
 results are one :class:`xarray.Dataset` with one dimension per varied key
 (named by its key path), ``seed`` and ``chain``, one variable per metric
-(NaN where a point is missing or failed), written to ``<out>/sweep.nc``.
+of :data:`raysim.vocabulary.METRICS` (NaN where a point is missing or
+failed) and ``warnings`` (the compensation's guard warnings of that point and
+chain, one per line, '' for none; :func:`warning_summary` condenses them),
+written to ``<out>/sweep.nc``. Chains are the keys of
+:func:`raysim.vocabulary.parse_chains` (``none``, ``paper``,
+``paper:published``, ``exact``).
 
 Scheduler: a :class:`distributed.LocalCluster` by default (in-process threads,
 ``processes=False``, which suits a 2-core machine), or any scheduler address
@@ -39,10 +44,14 @@ import numpy as np
 
 from raysim.io.scenario import Scenario, parse_value, validate_scenario
 from raysim.pipeline.analysis import ANALYSIS_METRICS
-from raysim.vocabulary import CHAINS, metric_unit
+from raysim.vocabulary import metric_unit, parse_chains
 
 __all__ = ["SweepSpec", "SweepPoint", "SweepResult", "parse_values", "sweep_points",
-           "point_key", "run_sweep", "gather_results", "load_point"]
+           "point_key", "run_sweep", "gather_results", "load_point", "warning_summary",
+           "BOOKKEEPING_VARIABLES"]
+
+#: Variables of a sweep Dataset that are not metrics.
+BOOKKEEPING_VARIABLES = ("point_done", "warnings")
 
 
 def parse_values(text: str) -> list:
@@ -99,7 +108,8 @@ class SweepSpec:
     seeds : tuple of int
         Values of the scenario ``seed`` each combination is run with.
     chains : tuple of str
-        Processing chains measured (see :data:`raysim.vocabulary.CHAINS`).
+        Processing chains measured: names accepted by
+        :func:`raysim.vocabulary.parse_chains`, stored as their keys.
     """
 
     base: Scenario
@@ -124,10 +134,7 @@ class SweepSpec:
         if not seeds or any(s < 0 for s in seeds):
             raise ValueError(f"seeds must be a non-empty list of integers >= 0, got {self.seeds}")
         object.__setattr__(self, "seeds", seeds)
-        chains = tuple(self.chains)
-        bad = [c for c in chains if c not in CHAINS]
-        if bad or not chains:
-            raise ValueError(f"chains: got {list(chains)}, expected names from {list(CHAINS)}")
+        chains = tuple(c.key for c in parse_chains(self.chains))
         object.__setattr__(self, "chains", chains)
 
 
@@ -173,11 +180,12 @@ def _scenario_of(base: Scenario, values: dict, seed: int) -> Scenario:
 
 # ------------------------------------------------------------------ tasks
 def _point_metrics(scenario: Scenario, chains: Sequence[str]) -> dict:
-    """Metrics of one point (chain -> metric -> value) and notes."""
+    """Metrics of one point (``chains``: chain -> metric -> value), ``warnings``
+    (chain -> guard warnings) and ``notes``."""
     from raysim.pipeline.run import evaluate
 
     res = evaluate(scenario, chains=chains)
-    return {"chains": res["chains"], "notes": res["notes"]}
+    return {"chains": res["chains"], "warnings": res["warnings"], "notes": res["notes"]}
 
 
 def _point_path(out_dir: Path, key: str) -> Path:
@@ -210,7 +218,8 @@ def _run_point(base_json: str, values: dict, seed: int, chains: list, key: str,
                 "error": f"{type(exc).__name__}: {exc}",
                 "traceback": traceback.format_exc(limit=5)}
     record = _jsonable({"key": key, "values": values, "seed": seed, "chains": res["chains"],
-                        "notes": res["notes"], "elapsed_s": time.perf_counter() - t0})
+                        "warnings": res.get("warnings", {}), "notes": res["notes"],
+                        "elapsed_s": time.perf_counter() - t0})
     try:
         atomic_write_text(_point_path(Path(out_dir), key), json.dumps(record, indent=1))
     except OSError:
@@ -274,6 +283,7 @@ def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint
     names = list(spec.parameters)
     shape = tuple(len(spec.parameters[n]) for n in names) + (len(spec.seeds), len(spec.chains))
     arrays = {m: np.full(shape, np.nan) for m in ANALYSIS_METRICS}
+    warns = np.full(shape, "", dtype=object)
     done = np.zeros(shape[:-1], dtype=bool)
     for p in points:
         rec = load_point(out_dir, p.key)
@@ -286,12 +296,15 @@ def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint
                 v = metrics.get(m)
                 if v is not None:
                     arrays[m][p.index + (ci,)] = float(v)
+            warns[p.index + (ci,)] = "\n".join((rec.get("warnings") or {}).get(chain) or [])
     dims = tuple(names) + ("seed", "chain")
     coords = {n: (n, _coord(spec.parameters[n])) for n in names}
     coords["seed"] = ("seed", np.array(spec.seeds, dtype=np.int64))
     coords["chain"] = ("chain", np.array(spec.chains, dtype=object))
     data = {m: (dims, arrays[m], {"units": metric_unit(m)}) for m in ANALYSIS_METRICS}
     data["point_done"] = (dims[:-1], done, {"long_name": "point finished and stored"})
+    data["warnings"] = (dims, warns, {"long_name": "guard warnings of the compensation, one "
+                                                   "per line ('' for none)"})
     base = spec.base.to_dict()
     base.pop("output", None)
     return xr.Dataset(data, coords=coords, attrs={
@@ -417,4 +430,40 @@ def _export(ds, path: Path) -> None:
         if out[name].dtype == object:
             out[name] = out[name].astype(str)
     out["point_done"] = out["point_done"].astype(np.int8)
+    out["warnings"] = out["warnings"].astype(str)
     export_netcdf(out, path)
+
+
+def warning_summary(ds) -> list[str]:
+    """One line per chain and warning kind of a sweep Dataset.
+
+    Warnings are grouped by their stable key (the text before the first
+    colon, e.g. ``small-angle``, see :mod:`compensation.guards`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Output of :func:`gather_results` (variable ``warnings``).
+
+    Returns
+    -------
+    list of str
+        ``"<chain>: <key> at <n>/<done> points (e.g. <first text>)"``; empty
+        when no point raised a warning.
+    """
+    if "warnings" not in ds:
+        return []
+    done = int(np.asarray(ds["point_done"].values).sum())
+    lines = []
+    for chain in [str(c) for c in ds["chain"].values]:
+        texts = np.asarray(ds["warnings"].sel(chain=chain).values, dtype=object).ravel()
+        groups: dict[str, list[str]] = {}
+        for cell in texts:
+            keys_here = {}
+            for w in str(cell).split("\n") if cell else []:
+                keys_here.setdefault(w.split(":", 1)[0], w)
+            for k, w in keys_here.items():
+                groups.setdefault(k, []).append(w)
+        lines.extend(f"{chain}: {k} at {len(ws)}/{done} points (e.g. {ws[0]})"
+                     for k, ws in groups.items())
+    return lines

@@ -1,7 +1,7 @@
 """IF synthesis for many paths with a non-uniform FFT along fast time.
 
 For one chirp ``n`` and one channel ``m`` the stop-and-hop IF samples are a
-sum of complex tones (CONVENTIONS.md)::
+sum of complex tones (docs/conventions.md)::
 
     s[n, m, k] = sum_p a[p, n, m] exp(+j 2 pi (f_c tau + mu tau k / f_s - mu tau^2 / 2))
 

@@ -3,7 +3,7 @@
 Every echo source (point targets, ray-traced paths) reduces to a set of paths
 with a two-way delay ``tau[path, chirp, channel]`` and a complex amplitude.
 With stop-and-hop timing the IF samples of one (chirp, channel) are a sum of
-complex tones (CONVENTIONS.md)::
+complex tones (docs/conventions.md)::
 
     s[n, m, k] = sum_p a[p, n, m] exp(+j 2 pi (f_c tau + mu tau t_k - mu tau^2 / 2))
 

@@ -89,7 +89,7 @@ def test_compensate_zarr_store_with_its_imu_log(tmp_path, capsys):
     # hover assumption over the 30 ms IMU log: compensated, but the result says so
     assert main(["compensate", str(tmp_path / "s.zarr"), "--out", str(out), *common]) == 0
     captured = capsys.readouterr()
-    assert "warning: hover window:" in captured.err
+    assert "warning: exact: hover window:" in captured.err
     assert [w.split(":")[0] for w in np.load(out)["warnings"]] == ["hover window"]
     assert main(["compensate", str(tmp_path / "s.zarr"), "--out", str(out), "--frame", "3",
                  *common]) == 2
@@ -114,3 +114,55 @@ def test_compensate_netcdf_store(tmp_path):
                  "11.5:12.5", "--az-deg", "15:15:1", "--el-deg", "0:0:1", "--velocity",
                  "given", "--initial-velocity", "0,0,0"]) == 0
     assert _check_beams(out) == []
+
+
+def test_compensate_chains_by_their_vocabulary_names(tmp_path, capsys):
+    """--chain takes the names of raysim.vocabulary: none (no IMU needed), paper,
+    paper:published, exact; the output records the chain key."""
+    from raysim.io import storage
+
+    cfg = RadarConfig(num_chirps=64, sample_rate=2.5e6)
+    arr = upa(6, 6, wavelength=cfg.wavelength)
+    lever = np.array([0.0, 0.0, 0.1])
+    ds = _store_frame(cfg, arr, sinusoid("pitch", np.deg2rad(5), 10.0), lever)
+    storage.write_store(tmp_path / "s.zarr", ds)
+    common = ["--range-m", "11.5:12.5", "--az-deg", "15:15:1", "--el-deg", "0:0:1",
+              "--velocity", "given", "--initial-velocity", "0,0,0"]
+    out = tmp_path / "beams.npz"
+    for chain in ("paper", "paper:published"):
+        assert main(["compensate", str(tmp_path / "s.zarr"), "--out", str(out), "--chain",
+                     chain, "--direction-deg", "15,0", *common]) == 0
+        assert f"chain {chain}" in capsys.readouterr().out
+        assert str(np.load(out)["chain"]) == chain
+        _check_beams(out)
+    # none: the conventional beamformer keeps the pitch's Doppler, on the real chirp times
+    assert main(["compensate", str(tmp_path / "s.zarr"), "--out", str(out), "--chain", "none",
+                 *common]) == 0
+    with np.load(out) as z:
+        assert str(z["chain"]) == "none"
+        np.testing.assert_allclose(z["chirp_times"], ds["chirp_time"].values.ravel())
+        gate = int(np.argmax(np.abs(z["beams"]).sum(axis=(0, 2, 3))))
+        slow = z["beams"][:, gate, 0, 0]
+        assert np.abs(slow.mean()) / np.abs(slow).mean() < 0.9999
+    capsys.readouterr()
+    assert main(["compensate", str(tmp_path / "s.zarr"), "--out", str(out), "--chain",
+                 "uncompensated", *common]) == 2
+    err = capsys.readouterr().err
+    assert "--chain: chain: got 'uncompensated'" in err and "'none'" in err
+    assert main(["compensate", str(tmp_path / "s.zarr"), "--out", str(out), "--chain",
+                 "paper", *common]) == 2
+    assert "--chain paper needs --direction-deg" in capsys.readouterr().err
+
+
+def test_compensate_help_has_examples(capsys):
+    import pytest
+
+    with pytest.raises(SystemExit) as ex:
+        main(["compensate", "--help"])
+    assert ex.value.code == 0
+    text = capsys.readouterr().out
+    assert "examples:" in text and "exit status" in text
+    for line in ("raysim compensate rotation_y.zarr --out beams.npz",
+                 "--chain paper:published --direction-deg 20,0",
+                 "--chain none --out none.npz"):
+        assert line in text, line

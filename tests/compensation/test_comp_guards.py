@@ -217,16 +217,15 @@ def test_paper_rotation_phase_flag(freq, n, flagged):
 
 
 def test_normal_paper_case_has_no_warnings():
-    from raysim.studies.cases import PAPER_CASES
     from raysim.studies.reproduce import ReproductionSettings, run_case
 
-    rows = {r["chain"]: r for r in run_case(PAPER_CASES["rotation_y"], imu="ideal",
+    rows = {r["chain"]: r for r in run_case("rotation_y", imu="ideal",
                                             settings=ReproductionSettings.quick(),
-                                            chains=("paper", "paper_vrt", "exact"))}
+                                            chains=("paper", "paper:published", "exact"))}
     assert rows["paper"]["warnings"] == ""
     assert rows["exact"]["warnings"] == ""
     # the published phase over 0.31 cycles of the 20 Hz pitch is the known failure
-    assert rows["paper_vrt"]["warnings"].startswith("paper rotation phase:")
+    assert rows["paper:published"]["warnings"].startswith("paper rotation phase:")
 
 
 # ------------------------------------------------------------------ levelling

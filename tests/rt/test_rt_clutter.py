@@ -17,7 +17,7 @@ pytestmark = pytest.mark.sionna
 #: platform, relative to the total [dB]. Frozen scattering points make every chirp
 #: identical, so only float32 rounding remains.
 STATIONARY_LEAKAGE_TOL_DB = -100.0
-#: CONVENTIONS.md: -3 dB Doppler mainlobe of a static scene with a Hann window [bins].
+#: docs/conventions.md: -3 dB Doppler mainlobe of a static scene with a Hann window [bins].
 HANN_WIDTH_BINS = 1.44
 HANN_WIDTH_TOL = 0.02
 

@@ -19,6 +19,7 @@ from raysim.processing import maps as processing
 from raysim.processing import metrics
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
+from raysim.vocabulary import REFERENCE
 
 pytestmark = pytest.mark.sionna
 
@@ -86,12 +87,14 @@ def test_ideal_imu_pose_matches_truth(hover_frames):
 
 
 def _slow_time(data, chain, name_r_u):
+    """Slow-time signal of one reflector's beam: ``chain`` (``none``, ``paper``, ``exact``)
+    on the hovering frame, or :data:`REFERENCE` (``none`` on the stationary frame)."""
     from compensation import beam_projection, paper_chain, rigid_body_projection
     from compensation.geometry import az_el
 
     config, array = data["config"], data["array"]
     _, r, u = name_r_u
-    frame = data["frames"]["stationary" if chain == "stationary" else "hover"]
+    frame = data["frames"]["stationary" if chain == REFERENCE else "hover"]
     rc = processing.range_compress(frame.data)                 # plain ndarray [chirp, ch, range]
     r_axis = config.range_axis()
     gate = int(np.argmin(np.abs(r_axis - r)))
@@ -99,7 +102,7 @@ def _slow_time(data, chain, name_r_u):
     kw = dict(wavelength=config.center_wavelength, range_axis=r_axis, azimuth=[az],
               elevation=[el], range_gates=[gate], grid_shape=array.grid_shape)
     pos = array.virtual_positions
-    if chain in ("stationary", "uncompensated"):
+    if chain in (REFERENCE, "none"):
         bc = beam_projection(rc, pos, chirp_time=frame.chirp_times, **kw)
     elif chain == "exact":
         bc = rigid_body_projection(rc, pos, data["pose"], **kw)
@@ -116,8 +119,8 @@ def test_compensation_restores_every_reflector(hover_frames, chain):
     bin_hz = config.doppler_resolution
     tol = EXACT_WIDTH_TOL if chain == "exact" else PAPER_WIDTH_TOL
     for target in _targets(hover_frames):
-        ref = _slow_time(hover_frames, "stationary", target)
-        unc = _slow_time(hover_frames, "uncompensated", target)
+        ref = _slow_time(hover_frames, REFERENCE, target)
+        unc = _slow_time(hover_frames, "none", target)
         comp = _slow_time(hover_frames, chain, target)
         w_ref = metrics.doppler_mainlobe_width(ref, dt)
         w_unc = metrics.doppler_mainlobe_width(unc, dt)

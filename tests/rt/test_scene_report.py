@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from raysim.studies import scene_report as sr
+from raysim.vocabulary import CHAINS, MAPS, REFERENCE, metric_unit
 
 pytestmark = pytest.mark.sionna
 
@@ -27,7 +28,7 @@ SETTINGS = sr.QUICK
 
 @pytest.fixture(scope="module")
 def results(warm_kernels):
-    """Every bundled scene, all four chains (QUICK settings)."""
+    """Every bundled scene, the stationary reference and all three chains (QUICK settings)."""
     from raysim.echoes.rt.scenes import SCENES
 
     return {name: sr.evaluate_scene(name, SETTINGS, progress=False) for name in SCENES}
@@ -36,16 +37,19 @@ def results(warm_kernels):
 def test_stationary_clutter_is_a_zero_doppler_ridge(results):
     """Stationary platform: all RD power in the zero-Doppler mainlobe, for every scene."""
     for name, r in results.items():
-        leak = r.chains["stationary"].ridge_leakage_db
+        leak = r.reference.ridge_leakage_db
         print(f"{name}: stationary RD power off the zero-Doppler ridge {leak:.1f} dB")
         assert leak < STATIONARY_RIDGE_TOL_DB
         assert r.path_kinds["diffuse"] > 100                      # distributed clutter
+        for m in sr.REPORT_MAPS:                                  # vocabulary dims, every map
+            assert r.reference.maps[m].dims == MAPS[m]
+            assert all(c.maps[m].dims == MAPS[m] for c in r.chains.values())
 
 
 def test_hover_spreads_the_range_doppler_map(results):
     """Hovering without compensation: RD entropy rises and power leaves the ridge."""
     for name, r in results.items():
-        st, unc = r.chains["stationary"], r.chains["uncompensated"]
+        st, unc = r.reference, r.chains["none"]
         rise = unc.entropy["rd"] - st.entropy["rd"]
         print(f"{name}: RD entropy {st.entropy['rd']:.4f} -> {unc.entropy['rd']:.4f} nats "
               f"(+{rise:.4f}); off-ridge {unc.ridge_leakage_db:.1f} dB")
@@ -60,16 +64,16 @@ def test_exact_chain_restores_map_entropy(results):
     tight enough to see the motion.
     """
     for name, r in results.items():
-        st = r.chains["stationary"].entropy
+        st = r.reference.entropy
         ex = r.chains["exact"].entropy
-        unc = r.chains["uncompensated"].entropy
-        for m in sr.MAPS:
+        unc = r.chains["none"].entropy
+        for m in sr.REPORT_MAPS:
             print(f"{name} {m.upper()}: stationary {st[m]:.4f}, uncompensated {unc[m]:.4f}, "
                   f"paper {r.chains['paper'].entropy[m]:.4f}, exact {ex[m]:.4f} nats")
             assert abs(ex[m] - st[m]) <= sr.ENTROPY_MARGIN_NATS, (name, m)
-        assert max(abs(unc[m] - st[m]) for m in sr.MAPS) > sr.ENTROPY_MARGIN_NATS
+        assert max(abs(unc[m] - st[m]) for m in sr.REPORT_MAPS) > sr.ENTROPY_MARGIN_NATS
         assert r.chains["exact"].ridge_leakage_db < EXACT_RIDGE_MAX_DB
-        assert r.chains["exact"].ridge_leakage_db < r.chains["uncompensated"].ridge_leakage_db
+        assert r.chains["exact"].ridge_leakage_db < r.chains["none"].ridge_leakage_db
 
 
 def test_reflectors_are_detected_where_they_are(results):
@@ -77,10 +81,9 @@ def test_reflectors_are_detected_where_they_are(results):
     r = results["flat_reflectors"]
     assert len(r.targets) == 4
     for t in r.targets:
-        for chain in ("stationary", "exact"):
-            m = t["match"][chain]
-            print(f"{t['name']} ({chain}): error {m['error_m']:.2f} m, radius {m['radius_m']:.2f}")
-            assert m["detected"], (t["name"], chain)
+        for key, m in ((REFERENCE, t["reference_match"]), ("exact", t["match"]["exact"])):
+            print(f"{t['name']} ({key}): error {m['error_m']:.2f} m, radius {m['radius_m']:.2f}")
+            assert m["detected"], (t["name"], key)
     d = r.to_dict()
     json.dumps(d)                                             # JSON-ready
     assert d["exact_within_margin"]
@@ -94,11 +97,17 @@ def test_write_report_files(tmp_path, warm_kernels):
                                     progress=False)
     names = sorted(p.name for p in tmp_path.iterdir())
     assert names == sorted(["flat_reflectors.json", "flat_reflectors_ra.png",
-                            "flat_reflectors_rd.png", "flat_reflectors_re.png", "index.html",
+                            "flat_reflectors_rd.png", "flat_reflectors_ae.png", "index.html",
                             "report.md", "summary.json"])
     data = json.loads((tmp_path / "summary.json").read_text())
-    assert set(data["flat_reflectors"]["entropy_nats"]) == set(sr.CHAINS)
-    assert summary["flat_reflectors"]["entropy_nats"] == data["flat_reflectors"]["entropy_nats"]
+    assert set(data["flat_reflectors"]["chains"]) == set(CHAINS)
+    assert data["flat_reflectors"]["reference"]["key"] == REFERENCE
+    assert summary["flat_reflectors"]["chains"] == data["flat_reflectors"]["chains"]
+    assert summary["flat_reflectors"]["reference"] == data["flat_reflectors"]["reference"]
+    metric_names = {f"entropy_{m}_nats" for m in sr.REPORT_MAPS} | {"ridge_leakage_db"}
+    assert set(data["flat_reflectors"]["reference"]["metrics"]) == metric_names
+    for m in metric_names:
+        metric_unit(m)                                        # every name is in METRICS
     assert (tmp_path / "flat_reflectors_rd.png").read_bytes()[:4] == b"\x89PNG"
     assert "<table>" in (tmp_path / "index.html").read_text()
 
@@ -126,7 +135,20 @@ def test_bad_input_is_named():
         sr.ReportSettings(imu="perfect")
     with pytest.raises(ValueError, match="unknown scene 'moon'"):
         sr.evaluate_scene("moon")
+    with pytest.raises(ValueError, match="'stationary'"):
+        sr.evaluate_scene("flat_reflectors", chains=[REFERENCE])   # a reference, not a chain
     from raysim.cli import main
 
     assert main(["scene-report", "--scenes", "moon", "--out", "/nonexistent"]) == 2
     assert main(["scene-report", "--imu", "perfect", "--out", "/nonexistent"]) == 2
+    assert main(["scene-report", "--chains", "uncompensated", "--out", "/nonexistent"]) == 2
+
+
+def test_maps_are_the_vocabulary_maps():
+    """The report's maps are vocabulary maps; the command names the same ones."""
+    from raysim.cli import cmd_scene_report
+
+    assert sr.REPORT_MAPS == ("rd", "ra", "ae")
+    assert cmd_scene_report.REPORT_MAPS == sr.REPORT_MAPS
+    assert all(m in MAPS for m in sr.REPORT_MAPS)
+    assert MAPS["ae"] == ("azimuth", "elevation")

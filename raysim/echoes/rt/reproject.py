@@ -12,7 +12,7 @@ from the actual transmit and receive positions:
     L' = L - |v_f - x_{t,0}| - |v_l - x_{r,0}| + |v_f(t) - x_t| + |v_l(t) - x_r|
 
 with ``x_t = T(t) + R(t) (r_IR + p_tx)`` and ``x_r = T(t) + R(t) (r_IR + p_rx)``
-the element world positions at the channel's transmit instant (CONVENTIONS.md)
+the element world positions at the channel's transmit instant (docs/conventions.md)
 and ``v(t) = v + velocity (t - t_trace)`` for moving scatterers. The middle
 of a multi-bounce path is kept. For point scatterers (targets, frozen diffuse
 points) this is exact.

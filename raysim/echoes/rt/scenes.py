@@ -11,7 +11,7 @@ Frames
 Scene files use frame S, east-north-up (ENU) with the ground at ``z = 0``,
 which is what Sionna's previewer and the usual scene tools expect. The
 simulator's world frame W is north-east-down (NED) with its origin at the
-radar's nominal hover point (CONVENTIONS.md). With the hover point at
+radar's nominal hover point (docs/conventions.md). With the hover point at
 ``h_S = (0, 0, hover_altitude)`` in S::
 
     p_S = M p_W + h_S,    p_W = M (p_S - h_S),    M = [[0, 1, 0], [1, 0, 0], [0, 0, -1]]

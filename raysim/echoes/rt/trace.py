@@ -10,7 +10,7 @@ centre (origin of frame A) at the nominal pose of the trace instant, and runs
   ``target_depth > 1``).
 
 Everything Sionna returns is converted to NumPy in the world frame W (NED,
-CONVENTIONS.md) and scaled to IF amplitudes [sqrt(W)] with the radar's
+docs/conventions.md) and scaled to IF amplitudes [sqrt(W)] with the radar's
 transmit power and element gains, so that ``|amplitude|^2`` is the received
 power of each path.
 
@@ -81,7 +81,7 @@ class PathSet:
     velocity : ndarray, shape ``[path, 3]``
         Velocity of the scattering point(s) in W [m/s] (zero for static geometry).
     doppler : ndarray, shape ``[path]``
-        Doppler shift from moving objects at trace time [Hz], CONVENTIONS.md sign
+        Doppler shift from moving objects at trace time [Hz], docs/conventions.md sign
         (``f_D = 2 v_r / lambda``, positive when the path lengthens).
     interactions : ndarray of uint32, shape ``[path, depth]``
         Interaction type of each bounce (1 specular, 2 diffuse, 16 target, 0 none).

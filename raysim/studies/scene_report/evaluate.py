@@ -1,0 +1,201 @@
+"""One scene of the report: the stationary reference and every chain, targets matched."""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from raysim.processing.maps import range_compress
+from raysim.vocabulary import CHAINS, REFERENCE, parse_chains
+
+from .process import ChainResult, chain_result
+from .settings import ENTROPY_MARGIN_NATS, QUICK, REPORT_MAPS, ReportSettings
+from .simulate import hover_trajectory, path_kinds, scene_motion, simulate_scene
+
+__all__ = ["SceneResult", "evaluate_scene"]
+
+
+@dataclass(frozen=True, eq=False)
+class SceneResult:
+    """Everything the report shows for one scene.
+
+    Attributes
+    ----------
+    scene : str
+    settings : ReportSettings
+    reference : ChainResult
+        The stationary platform (:data:`raysim.vocabulary.REFERENCE`), not a chain.
+    chains : dict
+        Chain key (``none``, ``paper``, ``exact`` ...) -> :class:`ChainResult`
+        of the hovering platform, in :data:`raysim.vocabulary.CHAINS` order.
+    targets : list of dict
+        Known reflectors: ``name``, ``position_m`` (W), ``range_m``, ``az_deg``,
+        ``el_deg`` from the nominal radar phase centre, ``rcs_dbsm``; the
+        nearest detection of the reference (``reference_match``) and of every
+        chain (``match``: chain key -> ``detected``, ``error_m`` [m],
+        ``radius_m`` [m], ``detection`` index).
+    num_paths : int
+        Traced paths (after culls).
+    path_kinds : dict
+        Path count per interaction kind (``specular``, ``diffuse``, ``target``).
+    motion_rms : dict
+        RMS of the radar phase-centre displacement [m] and attitude angles [deg]
+        over the frame.
+    seconds : dict
+        Wall time of tracing, synthesis, the IMU estimate, the reference and
+        each chain [s].
+    """
+
+    scene: str
+    settings: ReportSettings
+    reference: ChainResult
+    chains: dict
+    targets: list
+    num_paths: int
+    path_kinds: dict
+    motion_rms: dict
+    seconds: dict
+
+    def exact_within_margin(self) -> bool | None:
+        """True when every map entropy of ``exact`` is within the margin of the reference.
+
+        None when the ``exact`` chain was not evaluated.
+        """
+        if "exact" not in self.chains:
+            return None
+        ex, st = self.chains["exact"].entropy, self.reference.entropy
+        return bool(all(abs(ex[m] - st[m]) <= ENTROPY_MARGIN_NATS for m in REPORT_MAPS))
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (no arrays); metric names from :data:`raysim.vocabulary.METRICS`.
+
+        ``reference``: ``{"key": "stationary", "metrics", "detections"}``;
+        ``chains``: chain key -> ``{"metrics", "minus_reference", "detections"}``
+        where ``minus_reference`` holds the differences of every metric to the
+        reference's.
+        """
+        ref = self.reference.metrics()
+        chains = {}
+        for c, r in self.chains.items():
+            m = r.metrics()
+            chains[c] = {"metrics": m, "minus_reference": {k: m[k] - ref[k] for k in m},
+                         "detections": r.detections}
+        return {
+            "scene": self.scene,
+            "settings": asdict(self.settings),
+            "num_paths": self.num_paths,
+            "path_kinds": self.path_kinds,
+            "motion_rms": self.motion_rms,
+            "reference": {"key": REFERENCE, "metrics": ref,
+                          "detections": self.reference.detections},
+            "chains": chains,
+            "entropy_margin_nats": ENTROPY_MARGIN_NATS,
+            "exact_within_margin": self.exact_within_margin(),
+            "targets": self.targets,
+            "seconds": self.seconds,
+        }
+
+
+def _targets(scene, settings: ReportSettings) -> list:
+    from raysim.echoes.oracle import az_el
+
+    lever = np.asarray(settings.lever_arm, dtype=float)
+    out = []
+    for t in scene.targets:
+        v = t.position - lever
+        r = float(np.linalg.norm(v))
+        a, e = az_el(v / r)
+        out.append({"name": t.name, "position_m": t.position.tolist(), "range_m": r,
+                    "az_deg": float(np.rad2deg(a)), "el_deg": float(np.rad2deg(e)),
+                    "rcs_dbsm": float(t.rcs_dbsm)})
+    return out
+
+
+def _nearest(target: dict, result: ChainResult, radius: float) -> dict:
+    """The detection of ``result`` nearest to ``target`` and whether it is within ``radius``."""
+    if not result.detections:
+        return {"detected": False}
+    p = np.asarray(target["position_m"])
+    d = [float(np.linalg.norm(np.asarray(x["position_m"]) - p)) for x in result.detections]
+    i = int(np.argmin(d))
+    return {"detected": bool(d[i] <= radius), "error_m": d[i], "radius_m": radius,
+            "detection": i}
+
+
+def _match(targets: list, reference: ChainResult, chains: dict,
+           settings: ReportSettings) -> None:
+    """Attach the nearest detection of the reference and of every chain to every reflector."""
+    beam = 2.0 / settings.array_size                  # ~ null-to-null half width [rad]
+    for t in targets:
+        radius = max(1.0, t["range_m"] * beam / 2)
+        t["reference_match"] = _nearest(t, reference, radius)
+        t["match"] = {c: _nearest(t, r, radius) for c, r in chains.items()}
+
+
+def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bool = True,
+                   chains: Sequence[str] | str = CHAINS) -> SceneResult:
+    """Simulate and process one scene: the stationary reference and every chain.
+
+    Parameters
+    ----------
+    scene : str
+        Registry name (``flat_reflectors``, ``parking_lot``, ``rough_terrain``).
+    settings : ReportSettings
+    progress : bool
+        Show a tqdm bar on stderr.
+    chains : sequence of str or str
+        Chains of the hovering platform (:func:`raysim.vocabulary.parse_chains`:
+        ``none``, ``paper``, ``paper:published``, ``exact``; default all of
+        :data:`raysim.vocabulary.CHAINS`). The stationary reference is always
+        computed.
+
+    Returns
+    -------
+    SceneResult
+    """
+    from raysim.echoes.rt.scenes import SCENES
+
+    if scene not in SCENES:
+        raise ValueError(f"unknown scene {scene!r}; expected one of {sorted(SCENES)}")
+    specs = sorted(parse_chains(chains), key=lambda s: (CHAINS.index(s.name), s.key))
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=4 + len(specs), desc=scene, file=sys.stderr, disable=not progress,
+               leave=False)
+    trajectory = hover_trajectory(settings.jitter_seed, float(settings.radar().chirp_times()[0]))
+    sim = simulate_scene(scene, settings, trajectory,
+                         progress=lambda msg: (bar.set_postfix_str(msg), bar.update()))
+    config, array = settings.radar(), settings.array()
+    t_chirp = config.chirp_times()
+    t = time.perf_counter()
+    motion = scene_motion(trajectory, t_chirp, settings)
+    seconds = dict(sim["seconds"], imu=time.perf_counter() - t)
+    taper = settings.channel_taper().astype(np.float32)[None, :, None]
+    rc = {k: range_compress(sim[k]) * taper for k in ("stationary", "hover")}
+    bar.set_postfix_str(REFERENCE)
+    reference = chain_result(REFERENCE, rc["stationary"], None, settings, config, array)
+    seconds[REFERENCE] = reference.seconds
+    bar.update()
+    results = {}
+    for s in specs:
+        bar.set_postfix_str(s.key)
+        results[s.key] = chain_result(s, rc["hover"], motion, settings, config, array)
+        seconds[s.key] = results[s.key].seconds
+        bar.update()
+    bar.close()
+    targets = _targets(sim["scene"], settings)
+    _match(targets, reference, results, settings)
+    lever = np.asarray(settings.lever_arm, dtype=float)
+    truth_disp = trajectory.point_world(t_chirp, lever)[:, 0] - lever
+    ypr = np.rad2deg(trajectory.euler(t_chirp))
+    motion_rms = {"displacement_m": float(np.sqrt(np.mean(np.sum(truth_disp**2, axis=1)))),
+                  "displacement_span_m": float(np.max(np.ptp(truth_disp, axis=0))),
+                  "yaw_pitch_roll_deg": np.sqrt(np.mean(ypr**2, axis=0)).tolist(),
+                  "velocity_mps": float(np.sqrt(np.mean(np.sum(
+                      trajectory.velocity(t_chirp) ** 2, axis=1))))}
+    return SceneResult(scene, settings, reference, results, targets, sim["paths"].num_paths,
+                       path_kinds(sim["paths"]), motion_rms, seconds)

@@ -1,0 +1,247 @@
+"""Outputs of the report: figures, markdown, HTML and JSON files (all written atomically)."""
+
+from __future__ import annotations
+
+import html
+import json
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from raysim.io.files import atomic_write
+from raysim.vocabulary import CHAINS, MAP_TITLES, REFERENCE, chain_label, parse_chains
+
+from .evaluate import SceneResult, evaluate_scene
+from .settings import (
+    ENTROPY_MARGIN_NATS,
+    FULL,
+    RD_PLOT_HALF_WIDTH_BINS,
+    REPORT_MAPS,
+    ReportSettings,
+)
+
+__all__ = ["plot_scene", "report_markdown", "report_html", "write_scene_report"]
+
+
+def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
+               dynamic_range_db: float = 50.0) -> list[Path]:
+    """One PNG per map (``<scene>_rd.png``, ``<scene>_ra.png``, ``<scene>_ae.png``).
+
+    One panel for the stationary reference, then one per chain, each drawn by
+    :func:`raysim.studies.figures.plot_map` (azimuth on x wherever a map has
+    it). Panels share the colour scale: dB relative to the reference map's
+    peak. The RD panels zoom on the clutter ridge (+-
+    :data:`RD_PLOT_HALF_WIDTH_BINS` Doppler bins); known reflectors are
+    marked on the RA (azimuth, range) and AE (azimuth, elevation) panels.
+
+    Returns
+    -------
+    list of Path
+        The written PNG files, in :data:`REPORT_MAPS` order.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from raysim.studies.figures import plot_map
+
+    if dynamic_range_db <= 0:
+        raise ValueError(f"dynamic_range_db: got {dynamic_range_db!r}, expected > 0 dB")
+    panels = {REFERENCE: result.reference, **result.chains}
+    paths = []
+    for m in REPORT_MAPS:
+        ref = float(result.reference.maps[m].values.max())
+        fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 4.0),
+                                 constrained_layout=True)
+        axes = np.atleast_1d(axes)
+        im = None
+        for ax, (key, r) in zip(axes, panels.items(), strict=True):
+            mp = r.maps[m]
+            xlim = None
+            if m == "rd":                                   # zoom on the clutter ridge
+                dv = float(np.abs(np.diff(mp.coords["doppler"][:2]))[0])
+                xlim = (-RD_PLOT_HALF_WIDTH_BINS * dv, RD_PLOT_HALF_WIDTH_BINS * dv)
+            im = plot_map(ax, mp, title=f"{chain_label(key)}\nH = {r.entropy[m]:.3f} nats",
+                          reference_power=ref, dynamic_range_db=dynamic_range_db, xlim=xlim)
+            if m == "ae":
+                for t in result.targets:
+                    ax.plot(t["az_deg"], t["el_deg"], "r+", ms=9)
+            elif m == "ra":
+                for t in result.targets:
+                    ax.plot(t["az_deg"], t["range_m"], "r+", ms=9)
+        fig.colorbar(im, ax=list(axes), label=f"power [dB re {REFERENCE} peak]", shrink=0.9)
+        fig.suptitle(f"{result.scene}: {MAP_TITLES[m]} map")
+        out = Path(folder) / f"{result.scene}_{m}.png"
+        atomic_write(out, lambda p, fig=fig: fig.savefig(p, dpi=90, format="png"))
+        plt.close(fig)
+        paths.append(out)
+    return paths
+
+
+def _chain_keys(results: dict) -> list[str]:
+    """Chain keys of all scenes, in first-seen order."""
+    keys: list[str] = []
+    for r in results.values():
+        keys += [c for c in r.chains if c not in keys]
+    return keys
+
+
+def report_markdown(results: dict, settings: ReportSettings) -> str:
+    """The report's markdown: entropy, ridge leakage and reflector tables, figure links.
+
+    Parameters
+    ----------
+    results : dict
+        Scene name -> :class:`SceneResult`.
+    settings : ReportSettings
+
+    Returns
+    -------
+    str
+        Tables use the metric names of :data:`raysim.vocabulary.METRICS`
+        (``entropy_rd_nats`` ...), the reference key ``stationary`` and the
+        chain keys as column heads.
+    """
+    chains = _chain_keys(results)
+    cols = [REFERENCE] + chains
+    lines = ["# Scene entropy report", "",
+             f"Radar: {settings.num_chirps} chirps x "
+             f"{settings.radar().chirp_interval * 1e6:.0f} us, "
+             f"{settings.array_size}x{settings.array_size} UPA, 600 samples (range window "
+             f"{settings.range_window[0]:g}-{settings.range_window[1]:g} m), grid "
+             f"+-{settings.grid_half_width_deg:g} deg step {settings.grid_step_deg:g} deg, "
+             f"hover jitter seed {settings.jitter_seed}, IMU `{settings.imu}`.", "",
+             f"Reference `{REFERENCE}`: the same scene with the platform at rest; chains "
+             f"{', '.join(f'`{c}`' for c in chains)} process the hovering platform.", "",
+             f"Entropy margin of the exact chain: {ENTROPY_MARGIN_NATS} nats.", "",
+             "| scene | metric | " + " | ".join(cols) + f" | exact - {REFERENCE} |",
+             "|---|---|" + "---|" * (len(cols) + 1)]
+    for s, r in results.items():
+        res = {REFERENCE: r.reference, **r.chains}
+        for m in REPORT_MAPS:
+            cells = " | ".join(f"{res[c].entropy[m]:.4f}" if c in res else "-" for c in cols)
+            diff = (r.chains["exact"].entropy[m] - r.reference.entropy[m]
+                    if "exact" in r.chains else float("nan"))
+            lines.append(f"| {s} | entropy_{m}_nats | {cells} | {diff:+.4f} |")
+    lines += ["", "ridge_leakage_db: RD power outside Doppler bins -1..+1 relative to the "
+              "total [dB]", "",
+              "| scene | " + " | ".join(cols) + " |", "|---|" + "---|" * len(cols)]
+    for s, r in results.items():
+        res = {REFERENCE: r.reference, **r.chains}
+        lines.append(f"| {s} | " + " | ".join(
+            f"{res[c].ridge_leakage_db:.1f}" if c in res else "-" for c in cols) + " |")
+    lines += ["", "Known reflectors: position error of the nearest detection [m] "
+              "(* = outside the match radius)", "",
+              "| scene | target | range_m | az_deg | el_deg | "
+              + " | ".join(cols) + " |", "|---|---|---|---|---|" + "---|" * len(cols)]
+    for s, r in results.items():
+        for t in r.targets:
+            matches = {REFERENCE: t.get("reference_match"), **t.get("match", {})}
+            cells = []
+            for c in cols:
+                mt = matches.get(c)
+                if mt is None or "error_m" not in mt:
+                    cells.append("-")
+                else:
+                    cells.append(f"{mt['error_m']:.2f}" + ("" if mt["detected"] else "*"))
+            lines.append(f"| {s} | {t['name']} | {t['range_m']:.2f} | {t['az_deg']:.1f} | "
+                         f"{t['el_deg']:.1f} | " + " | ".join(cells) + " |")
+    lines.append("")
+    for s in results:
+        lines.append(f"## {s}")
+        lines += [f"![{s} {m}]({s}_{m}.png)" for m in REPORT_MAPS]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def report_html(markdown: str) -> str:
+    """A small self-contained HTML rendering of the report's markdown (tables, images)."""
+    body = []
+    rows: list[str] = []
+
+    def flush():
+        if rows:
+            body.append("<table>" + "".join(rows) + "</table>")
+            rows.clear()
+
+    for line in markdown.splitlines():
+        if line.startswith("|"):
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            if all(set(c) <= {"-"} for c in cells):
+                continue
+            tag = "th" if not rows else "td"
+            rows.append("<tr>" + "".join(f"<{tag}>{html.escape(c)}</{tag}>" for c in cells)
+                        + "</tr>")
+            continue
+        flush()
+        if line.startswith("# "):
+            body.append(f"<h1>{html.escape(line[2:])}</h1>")
+        elif line.startswith("## "):
+            body.append(f"<h2>{html.escape(line[3:])}</h2>")
+        elif line.startswith("!["):
+            alt, src = line[2:].split("](")
+            body.append(f'<img src="{html.escape(src[:-1])}" alt="{html.escape(alt)}" '
+                        f'style="max-width:100%">')
+        elif line:
+            body.append(f"<p>{html.escape(line)}</p>")
+    flush()
+    return ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>Scene entropy report"
+            "</title><style>body{font-family:sans-serif;margin:2em}table{border-collapse:"
+            "collapse;margin:1em 0}td,th{border:1px solid #999;padding:2px 6px;text-align:"
+            "right}</style></head><body>" + "\n".join(body) + "</body></html>\n")
+
+
+def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | None = None,
+                       settings: ReportSettings = FULL, progress: bool = True,
+                       chains: Sequence[str] | str = CHAINS) -> dict:
+    """Evaluate scenes; write figures, JSON, ``report.md`` and ``index.html``.
+
+    Every file is written atomically (temporary file, then ``os.replace``).
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Output folder (created).
+    scenes : sequence of str, optional
+        Registry names; default all bundled scenes.
+    settings : ReportSettings
+        :data:`FULL` or :data:`QUICK` or custom.
+    progress : bool
+        tqdm progress on stderr.
+    chains : sequence of str or str
+        Chains of the hovering platform (default all of
+        :data:`raysim.vocabulary.CHAINS`); the stationary reference is always
+        computed.
+
+    Returns
+    -------
+    dict
+        ``{scene: SceneResult.to_dict()}``.
+    """
+    from raysim.echoes.rt.scenes import SCENES
+
+    scenes = list(SCENES) if scenes is None else list(scenes)
+    bad = [s for s in scenes if s not in SCENES]
+    if bad:
+        raise ValueError(f"unknown scene {bad[0]!r}; expected one of {sorted(SCENES)}")
+    if not scenes:
+        raise ValueError(f"scenes: got {scenes!r}, expected at least one of {sorted(SCENES)}")
+    parse_chains(chains)                              # bad names fail before any tracing
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    results, summary = {}, {}
+    for s in scenes:
+        r = evaluate_scene(s, settings, progress=progress, chains=chains)
+        results[s] = r
+        summary[s] = r.to_dict()
+        plot_scene(r, out)
+        atomic_write(out / f"{s}.json",
+                     lambda p, d=summary[s]: p.write_text(json.dumps(d, indent=1)))
+    atomic_write(out / "summary.json", lambda p: p.write_text(json.dumps(summary, indent=1)))
+    md = report_markdown(results, settings)
+    atomic_write(out / "report.md", lambda p: p.write_text(md))
+    atomic_write(out / "index.html", lambda p: p.write_text(report_html(md)))
+    return summary
