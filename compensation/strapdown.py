@@ -172,25 +172,33 @@ GYRO_FULL_SCALE = np.deg2rad(2000.0)
 MIN_SPECIFIC_FORCE_RATIO = 0.3
 
 
-def check_imu_units(gyro: np.ndarray, accel: np.ndarray, gravity: float) -> None:
-    """Refuse IMU samples whose magnitudes betray other units (deg/s, g).
+def check_imu_units(gyro: np.ndarray, accel: np.ndarray, gravity: float) -> tuple[str, ...]:
+    """Check that IMU magnitudes fit rad/s and m/s^2; returns warnings.
+
+    Returns
+    -------
+    tuple of str
+        A ``"gyro units: ..."`` warning when ``max |gyro|`` exceeds
+        :data:`GYRO_FULL_SCALE` (a rate in deg/s, or a motion no gyroscope
+        measures).
 
     Raises
     ------
     ValueError
-        ``max |gyro|`` above :data:`GYRO_FULL_SCALE`, or the mean ``|accel|``
-        below :data:`MIN_SPECIFIC_FORCE_RATIO` times ``gravity``.
+        The mean ``|accel|`` is below :data:`MIN_SPECIFIC_FORCE_RATIO` times
+        ``gravity`` (an accelerometer in g).
     """
-    peak = float(np.max(np.linalg.norm(gyro, axis=1)))
-    if peak > GYRO_FULL_SCALE:
-        raise ValueError(f"gyro peaks at {peak:.4g} rad/s, beyond any gyroscope's full scale "
-                         f"({GYRO_FULL_SCALE:.4g} rad/s = 2000 deg/s); expected rad/s "
-                         f"(deg/s given? multiply by pi/180)")
     mean = float(np.mean(np.linalg.norm(accel, axis=1)))
     if mean < MIN_SPECIFIC_FORCE_RATIO * gravity:
         raise ValueError(f"accel has a mean magnitude of {mean:.4g} m/s^2 over the record; "
                          f"expected about gravity ({gravity:.4g} m/s^2) for a platform that "
                          f"flies, hovers or rests (in g? multiply by 9.80665)")
+    peak = float(np.max(np.linalg.norm(gyro, axis=1)))
+    if peak > GYRO_FULL_SCALE:
+        return (f"gyro units: the angular rate peaks at {peak:.4g} rad/s, beyond a "
+                f"gyroscope's usual full scale ({GYRO_FULL_SCALE:.4g} rad/s = 2000 deg/s); "
+                f"expected rad/s (deg/s given? multiply by pi/180)",)
+    return ()
 
 
 def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.0),
@@ -316,7 +324,7 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     offset = float(finite_array("time_offset", time_offset, shape=()))
     choice("velocity", velocity, ("hover", "given"))
     g = positive("gravity", gravity)
-    check_imu_units(w, f, g)
+    unit_warnings = check_imu_units(w, f, g)
 
     tq = tc + offset
     span = (t[0], t[-1])
@@ -364,7 +372,7 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
         part = Rotation.from_rotvec(_magnus_step(rate, t[k], times)).as_matrix()
         return rel[k] @ part
 
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = unit_warnings
     lo, hi = span if hover_window is None else (
         float(hover_window[0]) + offset, float(hover_window[1]) + offset)
     if velocity == "hover" or level:

@@ -79,7 +79,7 @@ az_deg = 50.0
 [[motion.sinusoids]]
 axis = "pitch"
 amplitude_deg = 30.0
-frequency_hz = 20.0
+frequency_hz = 5.0
 phase_deg = 90.0
 """
 
@@ -99,7 +99,7 @@ def test_report_lists_the_guard_warnings(tmp_path, capsys):
     assert all(w.startswith("small-angle: ") for _, w in items)
     for chain, w in items:
         assert f"warning: {chain}: {html.unescape(w)}" in err
-    assert "<th>paper:published</th>" in text and "Motion: pitch 30 deg @ 20 Hz" in text
+    assert "<th>paper:published</th>" in text and "Motion: pitch 30 deg @ 5 Hz" in text
     assert main(["report", "--case", "stationary", "--chains", "uncompensated"]) == 2
     assert "--chains: got 'uncompensated'" in capsys.readouterr().err
 

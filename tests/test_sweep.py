@@ -127,7 +127,7 @@ az_deg = 50.0
 [[motion.sinusoids]]
 axis = "pitch"
 amplitude_deg = 30.0
-frequency_hz = 20.0
+frequency_hz = 5.0
 phase_deg = 90.0
 """
 

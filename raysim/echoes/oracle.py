@@ -28,7 +28,7 @@ from compensation.geometry import az_el, direction  # noqa: F401  (one definitio
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import BOLTZMANN, SPEED_OF_LIGHT, T0_KELVIN, RadarConfig
-from raysim.synthesis.frame import RadarFrame
+from raysim.synthesis.frame import RadarFrame, adc_samples
 from raysim.synthesis.tones import synthesize_if, synthesize_if_intrachirp
 
 
@@ -257,6 +257,6 @@ def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
         data = synthesize_if(tau, amp, config)
     if noise:
         add_noise(data, config, seed)
-    return RadarFrame(data, config, array, config.chirp_times(frame, t0),
+    return RadarFrame(adc_samples(data, config), config, array, config.chirp_times(frame, t0),
                       np.asarray(lever_arm, dtype=float), frame,
                       {"targets": list(targets), "trajectory": trajectory.name})

@@ -74,7 +74,9 @@ def gate_snapshots(data: np.ndarray, range_bin: float) -> np.ndarray:
     """
     k = data.shape[-1]
     w = window("hann", k)
-    kern = (w / w.sum()) * np.exp(-2j * np.pi * range_bin * np.arange(k) / k)
+    # a real-sampled cube keeps the positive beat half, doubled (as range_compress)
+    gain = 1.0 if np.iscomplexobj(data) else 2.0
+    kern = gain * (w / w.sum()) * np.exp(-2j * np.pi * range_bin * np.arange(k) / k)
     return (data @ kern.astype(np.complex64)).astype(np.complex64)
 
 
@@ -180,7 +182,7 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
 
     rc0 = range_compress(frames[0].data)                       # [chirp, channel, range]
     n_range = rc0.shape[-1]
-    r_axis = cfg.range_axis(n_range)[:n_range]
+    r_axis = cfg.bin_ranges(n_range)
     profile = np.sum(np.abs(rc0) ** 2, axis=(0, 1))[: r_axis.size]
     search = profile.copy()
     if reference is not None:

@@ -211,6 +211,16 @@ class RadarConfig:
             beat = beat[: n_fft // 2]
         return SPEED_OF_LIGHT * beat / (2.0 * self.chirp_rate)
 
+    def bin_ranges(self, num_bins: int) -> np.ndarray:
+        """Range of each bin of a range-compressed cube with ``num_bins`` bins [m].
+
+        The FFT length is ``num_bins`` for complex samples and ``2 num_bins``
+        for real ones (:func:`raysim.processing.maps.range_compress` keeps the
+        positive half), zero padding included.
+        """
+        n = int(num_bins)
+        return self.range_axis(n if self.complex_sampling else 2 * n)[:n]
+
     def doppler_axis(self, n_fft: int | None = None) -> np.ndarray:
         """Doppler frequency of each fft-shifted slow-time bin, shape ``[doppler]`` [Hz]."""
         n_fft = self.num_chirps if n_fft is None else int(n_fft)
