@@ -52,7 +52,7 @@ DYNAMIC_RANGE_DB = 40.0
 #: Maps are zoomed on the cells within this many dB of their peak (target, clutter ridge) [dB].
 ZOOM_DB = 20.0
 #: Smallest zoom window, in cells of the map's grid along each axis.
-ZOOM_MIN_CELLS = 16
+ZOOM_MIN_CELLS = 8
 #: Chirps of frame 0 summed (in power) into the range-angle maps.
 RANGE_ANGLE_CHIRPS = 16
 #: Distributions whose versions the report lists.
