@@ -91,3 +91,23 @@ def test_report_of_a_real_sampled_radar(tmp_path):
     assert main(["report", "--case", "stationary", *SMALL, "--set",
                  "radar.complex_sampling=false", "--out", str(out)]) == 0
     assert out.stat().st_size > 0
+
+
+def test_real_sampled_store_round_trip(tmp_path):
+    from raysim.io import storage
+    from raysim.io.scenario import scenario_from_case
+    from raysim.pipeline.run import render
+    from raysim.pipeline.sources import render_frames
+
+    scen = scenario_from_case("stationary").with_values(
+        {"radar.num_chirps": 16, "array.nx": 2, "array.ny": 2, "frames": 2,
+         "radar.complex_sampling": False})
+    render(scen, tmp_path / "r.zarr")
+    ds = storage.open_store(tmp_path / "r.zarr")
+    fr = storage.frame_from_dataset(ds, 1)
+    assert fr.data.dtype == np.float32 and not fr.config.complex_sampling
+    np.testing.assert_array_equal(fr.data, render_frames(scen)[1].data)
+    storage.export_netcdf(ds, tmp_path / "r.nc")
+    assert storage.read_netcdf(tmp_path / "r.nc")["if_data"].dtype == np.float32
+    out = tmp_path / "r.html"
+    assert main(["report", str(tmp_path / "r.zarr"), "--out", str(out)]) == 0

@@ -1,5 +1,7 @@
 """Frames on disk: xarray Datasets in Zarr stores (appendable, resumable) and NetCDF.
 
+A real-sampled radar (``radar_complex_sampling`` False) stores ``if_data`` as float32.
+
 Layout of a frame Dataset (axis names of docs/conventions.md; ``units`` are
 UDUNITS strings, the attribute ``Conventions`` is ``CF-1.10``):
 
@@ -261,7 +263,8 @@ def frames_to_dataset(frames: Sequence[RadarFrame], trajectory=None, *, imu: xr.
     Returns
     -------
     xarray.Dataset
-        ``if_data`` of shape ``[frame, chirp, channel, sample]``, complex64.
+        ``if_data`` of shape ``[frame, chirp, channel, sample]``, complex64 (float32
+        for a real-sampled radar).
 
     Raises
     ------
@@ -278,7 +281,9 @@ def frames_to_dataset(frames: Sequence[RadarFrame], trajectory=None, *, imu: xr.
         if fr.data.shape != frames[0].data.shape:
             raise ValueError(f"frame {fr.frame_index} has shape {fr.data.shape}, expected "
                              f"{frames[0].data.shape}")
-    data = np.stack([np.asarray(fr.data, dtype=np.complex64) for fr in frames])
+    # complex64 IQ samples, or float32 from a real-sampled ADC (complex_sampling False)
+    dtype = np.complex64 if frames[0].config.complex_sampling else np.float32
+    data = np.stack([np.asarray(fr.data, dtype=dtype) for fr in frames])
     times = np.stack([np.asarray(fr.chirp_times, dtype=float) for fr in frames])
     if trajectory is not None:
         pos, rot = trajectory.pose(times.ravel())
