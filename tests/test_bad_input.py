@@ -160,7 +160,7 @@ CASES = [
     Bad("target-velocity-nan", lambda _: PointTarget(np.zeros(3), np.array([0, math.nan, 0])),
         ValueError, ("velocity", "nan")),
     Bad("target-rcs-900", lambda _: PointTarget.at(10.0, 0.0, 0.0, rcs_dbsm=900.0), ValueError,
-        ("rcs_dbsm", "900.0", "[-100, 100] dBsm")),
+        ("rcs_dbsm", "900.0", "[-250, 100] dBsm")),
     Bad("target-rcs-text", lambda _: PointTarget(np.zeros(3), rcs_dbsm="big"), ValueError,
         ("rcs_dbsm", "'big'")),
     # ------------------------------------------------------------------- arrays

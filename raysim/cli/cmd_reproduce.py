@@ -76,7 +76,7 @@ def run(args) -> int:
     chains = chains_option(args.chains)
     cases = None if not args.cases else [c.strip() for c in args.cases.split(",") if c.strip()]
     for case in cases or ():
-        known_name(case, PAPER_CASES, "--cases", "paper case")
+        known_name(case, PAPER_CASES, "--cases", "case")
     check_output(args.out, "dir", "--out")
     make = ReproductionSettings.quick if args.quick else ReproductionSettings
     settings = make(imu_rate=args.imu_rate, velocity=args.velocity)

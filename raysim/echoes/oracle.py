@@ -51,7 +51,7 @@ class PointTarget:
         Constant velocity in W [m/s].
     rcs_dbsm : float
         Radar cross-section [dBsm], within
-        :data:`raysim.radar.config.RCS_DBSM_RANGE` (-100 to 100 dBsm).
+        :data:`raysim.radar.config.RCS_DBSM_RANGE` (-250 to 100 dBsm).
     """
 
     position: np.ndarray

@@ -159,7 +159,7 @@ class TargetSpec(_Section):
     """One point target, placed from the nominal radar phase centre.
 
     ``range_m`` [m], direction ``az_deg`` / ``el_deg`` [deg] (docs/conventions.md),
-    ``rcs_dbsm`` [dBsm] (physical range -100 to 100 dBsm), constant world (NED)
+    ``rcs_dbsm`` [dBsm] (range -250 to 100 dBsm), constant world (NED)
     velocity ``velocity_mps`` [m/s].
     """
 

@@ -26,9 +26,10 @@ TX_POWER_DBM_RANGE = (-100.0, 60.0)
 ANTENNA_GAIN_DBI_RANGE = (-30.0, 50.0)
 #: Physical range of the receiver noise figure [dB] (0 dB: a noiseless receiver).
 NOISE_FIGURE_DB_RANGE = (0.0, 50.0)
-#: Physical range of a radar cross-section [dBsm]: an insect (-60 dBsm) to beyond a ship
-#: (+60 dBsm); keeps the radar equation's power finite in float32.
-RCS_DBSM_RANGE = (-100.0, 100.0)
+#: Range of a radar cross-section [dBsm]: up to beyond a ship (+60 dBsm), which keeps the
+#: radar equation's power finite in float32; down to a vanishing echo (an insect is
+#: -60 dBsm; -250 dBsm lies far below any noise floor, for noise-only frames).
+RCS_DBSM_RANGE = (-250.0, 100.0)
 
 
 def check_in_range(name: str, value, bounds: tuple[float, float], unit: str) -> float:
