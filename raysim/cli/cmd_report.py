@@ -52,21 +52,20 @@ def register(subparsers) -> None:
 def run(args) -> int:
     """Run ``raysim report``; returns the exit code."""
     from raysim.cli.cmd_simulate import print_warnings
+    from raysim.cli.options import chains_option, check_output
     from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
     from raysim.pipeline.sources import FeatureUnavailable
     from raysim.studies.report import collect_from_dataset, collect_from_scenario, write_report
-    from raysim.vocabulary import parse_chains
 
-    try:
-        chains = [s.key for s in parse_chains(args.chains)]
-    except ValueError as exc:
-        raise ValueError(f"--chains: got {args.chains!r}: {exc}") from None
+    chains = chains_option(args.chains)
     given = [x for x in (args.store, args.scenario, args.case) if x]
     if len(given) != 1:
         raise ValueError("give exactly one source: STORE, --scenario FILE.toml or --case NAME")
     if args.set and args.store:
         raise ValueError("--set applies to --scenario / --case, not to a stored render")
     default_out = "report.html"
+    if args.out:
+        check_output(args.out, "file", "--out")
     try:
         if args.store:
             from raysim.io import storage
@@ -81,6 +80,7 @@ def run(args) -> int:
                                  f"raysim render or a NetCDF export (.nc)")
             if ds.sizes.get("frame", 0) == 0:
                 raise ValueError(f"STORE {args.store!r} holds no complete frame yet")
+            check_output(args.out or default_out, "file", "--out")
             data = collect_from_dataset(ds, chains=chains, source=str(path))
         else:
             scenario = (load_scenario(args.scenario) if args.scenario
@@ -88,6 +88,8 @@ def run(args) -> int:
             if args.set:
                 scenario = scenario.with_values(dict(parse_assignment(s) for s in args.set))
             default_out = scenario.output.report or default_out
+            check_output(args.out or default_out, "file",
+                         "--out" if args.out or not scenario.output.report else "output.report")
             data = collect_from_scenario(scenario, chains=chains,
                                          source=args.scenario or f"paper case {args.case}")
     except FeatureUnavailable as exc:

@@ -27,7 +27,14 @@ import numpy as np
 from compensation.geometry import az_el, direction  # noqa: F401  (one definition of u(az, el))
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
-from raysim.radar.config import BOLTZMANN, SPEED_OF_LIGHT, T0_KELVIN, RadarConfig
+from raysim.radar.config import (
+    BOLTZMANN,
+    RCS_DBSM_RANGE,
+    SPEED_OF_LIGHT,
+    T0_KELVIN,
+    RadarConfig,
+    check_in_range,
+)
 from raysim.synthesis.frame import RadarFrame, adc_samples
 from raysim.synthesis.tones import synthesize_if, synthesize_if_intrachirp
 
@@ -43,7 +50,8 @@ class PointTarget:
     velocity : ndarray, shape ``[3]``
         Constant velocity in W [m/s].
     rcs_dbsm : float
-        Radar cross-section [dBsm].
+        Radar cross-section [dBsm], within
+        :data:`raysim.radar.config.RCS_DBSM_RANGE` (-250 to 100 dBsm).
     """
 
     position: np.ndarray
@@ -56,8 +64,8 @@ class PointTarget:
             if v.shape != (3,) or not np.all(np.isfinite(v)):
                 raise ValueError(f"{name} must be 3 finite numbers [m or m/s], got {v!r}")
             object.__setattr__(self, name, v)
-        if not math.isfinite(self.rcs_dbsm):
-            raise ValueError(f"rcs_dbsm must be finite, got {self.rcs_dbsm!r}")
+        object.__setattr__(self, "rcs_dbsm",
+                           check_in_range("rcs_dbsm", self.rcs_dbsm, RCS_DBSM_RANGE, "dBsm"))
 
     @classmethod
     def at(cls, range_m: float, az: float, el: float, *, velocity=(0.0, 0.0, 0.0),
