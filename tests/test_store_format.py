@@ -150,3 +150,24 @@ def test_old_layout_still_opens(scenario, tmp_path):
     np.testing.assert_array_equal(back["if_data"].values, ds["if_data"].values)
     fr = storage.frame_from_dataset(back, 1)
     np.testing.assert_array_equal(fr.chirp_times, ds["chirp_time"].values[1])
+
+
+def test_scenario_epoch_reaches_the_store(tmp_path):
+    """``time_epoch_utc`` of a scenario file dates the stored chirp times."""
+    import pandas as pd
+    import xarray as xr
+
+    from raysim.io.scenario import scenario_from_case
+    from raysim.pipeline.run import render
+
+    scen = scenario_from_case("stationary").with_values(
+        {"radar.num_chirps": 8, "array.nx": 2, "array.ny": 2,
+         "time_epoch_utc": "2026-05-01T12:00:00Z"})
+    render(scen, tmp_path / "e.zarr")
+    ds = xr.open_zarr(tmp_path / "e.zarr")
+    assert ds.attrs["time_epoch_utc"] == "2026-05-01T12:00:00Z"
+    assert pd.Timestamp(ds["chirp_time"].values[0, 0]) == pd.Timestamp("2026-05-01T12:00:00")
+    with pytest.raises(ValueError, match="time_epoch_utc"):
+        scen.with_values({"time_epoch_utc": "yesterday"})
+    with pytest.raises(ValueError, match="UTC"):
+        scen.with_values({"time_epoch_utc": "2026-05-01T12:00:00+02:00"})

@@ -186,3 +186,16 @@ def test_remove_debris_touches_only_its_own_store(tmp_path):
         removed = remove_debris(tmp_path / "a.zarr")
     assert [p.name for p in removed] == [".a.zarr.11111111.tmp"]
     assert (tmp_path / ".b.zarr.22222222.tmp").exists()
+
+
+def test_report_of_a_store_with_a_corrupt_chunk_names_the_store(scenario, tmp_path, capsys):
+    """The report reads frames lazily; a chunk that fails to decode is a clear error."""
+    path = tmp_path / "c.zarr"
+    render(scenario, path)
+    chunk = next(p for p in sorted((path / "if_data").rglob("*"))
+                 if p.is_file() and p.name != "zarr.json")
+    chunk.write_bytes(chunk.read_bytes()[:7])
+    assert cli_main(["report", str(path), "--out", str(tmp_path / "r.html")]) == 2
+    err = capsys.readouterr().err
+    assert "c.zarr" in err and "Traceback" not in err
+    assert not (tmp_path / "r.html").exists()

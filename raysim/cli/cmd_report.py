@@ -72,7 +72,7 @@ def run(args) -> int:
 
             path = Path(args.store)
             if storage.store_exists(path):
-                ds = storage.open_store(path)
+                ds = storage.open_store(path, load=False)     # frames are read one at a time
             elif path.is_file() and path.suffix in (".nc", ".nc4", ".netcdf"):
                 ds = storage.read_netcdf(path)
             else:
@@ -81,7 +81,14 @@ def run(args) -> int:
             if ds.sizes.get("frame", 0) == 0:
                 raise ValueError(f"STORE {args.store!r} holds no complete frame yet")
             check_output(args.out or default_out, "file", "--out")
-            data = collect_from_dataset(ds, chains=chains, source=str(path))
+            try:
+                data = collect_from_dataset(ds, chains=chains, source=str(path))
+            except (ValueError, FeatureUnavailable, MemoryError, KeyboardInterrupt):
+                raise
+            except Exception as exc:        # a chunk of the lazy store fails to decode
+                raise ValueError(f"STORE {str(path)!r} cannot be read: {type(exc).__name__}: "
+                                 f"{exc}; expected complete, decodable chunk files (a "
+                                 f"truncated or corrupted file?)") from exc
         else:
             scenario = (load_scenario(args.scenario) if args.scenario
                         else scenario_from_case(args.case))

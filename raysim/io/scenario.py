@@ -359,6 +359,9 @@ class Scenario(_Section):
         Evaluate the geometry at every sample instead of stop-and-hop.
     lever_arm_m : tuple of float
         Radar phase centre in the body frame B [m].
+    time_epoch_utc : str, optional
+        UTC instant (ISO 8601) of time 0 of the truth clock, so stored frames
+        align with a flight log; default the Unix epoch.
     radar, array, scene, motion, imu, output : sections
     """
 
@@ -369,6 +372,23 @@ class Scenario(_Section):
     noise: bool = False
     intra_chirp: bool = False
     lever_arm_m: Vec3 = (0.0, 0.0, 0.10)
+    time_epoch_utc: str | None = None
+
+    @field_validator("time_epoch_utc")
+    @classmethod
+    def _utc_instant(cls, v: str | None) -> str | None:
+        if v is None:
+            return v
+        from datetime import datetime
+
+        try:
+            when = datetime.fromisoformat(v.strip().replace("Z", "+00:00"))
+        except ValueError:
+            raise ValueError(f"expected an ISO 8601 UTC instant such as "
+                             f"'2026-05-01T12:00:00Z', got {v!r}") from None
+        if when.utcoffset() is not None and when.utcoffset().total_seconds() != 0:
+            raise ValueError(f"expected a UTC instant (suffix Z), got {v!r}")
+        return v.strip()
     radar: RadarSection = Field(default_factory=RadarSection)
     array: ArraySection = Field(default_factory=ArraySection)
     scene: SceneSection

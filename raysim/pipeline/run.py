@@ -66,6 +66,8 @@ def _scenario_key(scenario: Scenario) -> str:
 def _store_attrs(scenario: Scenario, reference: Reference | None) -> dict:
     attrs = {"scenario_json": _scenario_key(scenario), "scenario_name": scenario.name,
              "frames_planned": int(scenario.frames), "motion_name": scenario.trajectory().name}
+    if scenario.time_epoch_utc is not None:
+        attrs["time_epoch_utc"] = scenario.time_epoch_utc
     if reference is not None:
         attrs.update({"reference_range_m": reference.range_m,
                       "reference_az_deg": reference.az_deg,
