@@ -84,3 +84,32 @@ def rotation_matrices(name: str, value, n: int | None = None) -> np.ndarray:
         raise ValueError(f"{name} must hold proper rotation matrices (R^T R = I, det +1); "
                          f"orthonormality error {err:.3g}")
     return m
+
+
+def complex_cube(name: str, value) -> np.ndarray:
+    """A complex ``[chirp, channel, range]`` cube with finite entries (NaN names its cell)."""
+    x = np.asarray(value)
+    if x.ndim != 3 or not np.iscomplexobj(x):
+        raise ValueError(f"{name} must be a complex cube [chirp, channel, range], got "
+                         f"{x.dtype} array of shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(x))[0])
+        count = int(np.count_nonzero(~np.isfinite(x)))
+        raise ValueError(f"{name} must be finite; {count} entries are not, the first at "
+                         f"[chirp, channel, range] = {list(idx)} is {x[idx]!r}")
+    return x
+
+
+#: Largest grid angle [rad]: directions beyond +-90 deg lie behind the array.
+MAX_GRID_ANGLE = np.pi / 2
+
+
+def angle_axis(name: str, value) -> np.ndarray:
+    """A 1-D grid of angles in radians within +-pi/2 (a grid in degrees is named as such)."""
+    a = finite_array(name, value, ndim=1, what="(radians)")
+    if a.size and np.max(np.abs(a)) > MAX_GRID_ANGLE + 1e-9:
+        worst = float(a[np.argmax(np.abs(a))])
+        hint = " (degrees? convert with numpy.deg2rad)" if np.max(np.abs(a)) <= 360 else ""
+        raise ValueError(f"{name} must be angles in radians within +-pi/2, got {worst!r}"
+                         f"{hint}")
+    return a

@@ -33,7 +33,14 @@ from typing import Literal
 import numpy as np
 import scipy.fft
 
-from ._checks import choice, finite_array, positive, rotation_matrices
+from ._checks import (
+    angle_axis,
+    choice,
+    complex_cube,
+    finite_array,
+    positive,
+    rotation_matrices,
+)
 from .geometry import grid_directions
 
 #: Grid-alignment tolerance of :func:`lattice_vectors` [m].
@@ -283,10 +290,7 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
     the conventional beamformer ``a(u)^H x / M`` with
     ``a = exp(-j 2 pi / lambda u . p)``.
     """
-    x = np.asarray(rc)
-    if x.ndim != 3 or not np.iscomplexobj(x):
-        raise ValueError(f"rc must be a complex cube [chirp, channel, range], got "
-                         f"{x.dtype} array of shape {x.shape}")
+    x = complex_cube("rc", rc)
     n_chirp, n_chan, n_range = x.shape
     p = finite_array("element_positions", element_positions, shape=(n_chan, 3),
                      what="(one row per channel of rc)")
@@ -294,8 +298,8 @@ def beam_projection(rc, element_positions, *, wavelength: float, range_axis, azi
     r_axis = finite_array("range_axis", range_axis, ndim=1)
     if r_axis.size < n_range:
         raise ValueError(f"range_axis has {r_axis.size} entries but rc has {n_range} range bins")
-    az = finite_array("azimuth", azimuth, ndim=1)
-    el = finite_array("elevation", elevation, ndim=1)
+    az = angle_axis("azimuth", azimuth)
+    el = angle_axis("elevation", elevation)
     if az.size < 1 or el.size < 1:
         raise ValueError("azimuth and elevation must each hold at least one angle")
     if range_gates is None:

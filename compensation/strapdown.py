@@ -35,7 +35,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
-from ._checks import choice, finite_array, rotation_matrices, strictly_increasing
+from ._checks import choice, finite_array, positive, rotation_matrices, strictly_increasing
 from .guards import check_imu_gaps, hover_window_warning, levelling_warning
 
 #: Standard gravity [m/s^2]; ``g_W = (0, 0, +STANDARD_GRAVITY)`` in NED.
@@ -160,6 +160,47 @@ def _magnus_step(rate: CubicSpline, t0: np.ndarray, t1: np.ndarray) -> np.ndarra
         w1, w2)
 
 
+#: Absolute tolerance [s] of the IMU record's coverage of the chirps: above float64
+#: rounding of epoch-clock seconds (2.4e-7 s at 1.7e9 s), far below an IMU interval.
+COVERAGE_TOLERANCE = 1e-6
+#: Largest plausible angular rate [rad/s]: the full scale of the widest common MEMS
+#: gyroscopes, 2000 deg/s (a larger value is a rate in deg/s).
+GYRO_FULL_SCALE = np.deg2rad(2000.0)
+#: Smallest accepted ratio of the mean specific-force magnitude to gravity over a
+#: record: a flying, hovering or resting platform holds itself up against gravity
+#: (ratio near 1 or above, under vibration); an accelerometer in g gives about 0.1.
+MIN_SPECIFIC_FORCE_RATIO = 0.3
+
+
+def check_imu_units(gyro: np.ndarray, accel: np.ndarray, gravity: float) -> tuple[str, ...]:
+    """Check that IMU magnitudes fit rad/s and m/s^2; returns warnings.
+
+    Returns
+    -------
+    tuple of str
+        A ``"gyro units: ..."`` warning when ``max |gyro|`` exceeds
+        :data:`GYRO_FULL_SCALE` (a rate in deg/s, or a motion no gyroscope
+        measures).
+
+    Raises
+    ------
+    ValueError
+        The mean ``|accel|`` is below :data:`MIN_SPECIFIC_FORCE_RATIO` times
+        ``gravity`` (an accelerometer in g).
+    """
+    mean = float(np.mean(np.linalg.norm(accel, axis=1)))
+    if mean < MIN_SPECIFIC_FORCE_RATIO * gravity:
+        raise ValueError(f"accel has a mean magnitude of {mean:.4g} m/s^2 over the record; "
+                         f"expected about gravity ({gravity:.4g} m/s^2) for a platform that "
+                         f"flies, hovers or rests (in g? multiply by 9.80665)")
+    peak = float(np.max(np.linalg.norm(gyro, axis=1)))
+    if peak > GYRO_FULL_SCALE:
+        return (f"gyro units: the angular rate peaks at {peak:.4g} rad/s, beyond a "
+                f"gyroscope's usual full scale ({GYRO_FULL_SCALE:.4g} rad/s = 2000 deg/s); "
+                f"expected rad/s (deg/s given? multiply by pi/180)",)
+    return ()
+
+
 def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.0),
                   time_offset: float = 0.0, reference_time: float | None = None,
                   initial_attitude=None, initial_position=(0.0, 0.0, 0.0),
@@ -282,11 +323,12 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     lever = finite_array("lever_arm", lever_arm, shape=(3,))
     offset = float(finite_array("time_offset", time_offset, shape=()))
     choice("velocity", velocity, ("hover", "given"))
-    g = float(finite_array("gravity", gravity, shape=()))
+    g = positive("gravity", gravity)
+    unit_warnings = check_imu_units(w, f, g)
 
     tq = tc + offset
     span = (t[0], t[-1])
-    tol = 1e-9 * max(1.0, abs(t[-1]))
+    tol = COVERAGE_TOLERANCE
     if tq[0] < span[0] - tol or tq[-1] > span[1] + tol:
         raise ValueError(
             f"chirp_times + time_offset span [{tq[0]!r}, {tq[-1]!r}] s (IMU clock) but "
@@ -330,7 +372,7 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
         part = Rotation.from_rotvec(_magnus_step(rate, t[k], times)).as_matrix()
         return rel[k] @ part
 
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = unit_warnings
     lo, hi = span if hover_window is None else (
         float(hover_window[0]) + offset, float(hover_window[1]) + offset)
     if velocity == "hover" or level:

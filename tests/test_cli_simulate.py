@@ -16,10 +16,11 @@ SMALL = ["--set", "radar.num_chirps=32", "--set", "array.nx=4", "--set", "array.
 RANGE_TOL_M = 0.02
 #: Angle tolerance [deg] on a 4 x 4 UPA with a 1 deg scan grid and parabolic refinement.
 ANGLE_TOL_DEG = 0.1
-#: Pitch 30 deg at its crest during the frame and a target at azimuth 50 deg: outside the
-#: paper chain's small-angle regime (compensation.guards.small_angle_warnings: tilt above
+#: Pitch 30 deg at its crest during the frame (5 Hz, phase 90 deg: a 16 rad/s peak rate,
+#: within a gyroscope's full scale) and a target at azimuth 50 deg: outside the paper
+#: chain's small-angle regime (compensation.guards.small_angle_warnings: tilt above
 #: 15 deg, and a residual above half the beamwidth towards the target).
-TILTED = ["--target", "15,50,0", "--motion", "pitch:30:20:90"]
+TILTED = ["--target", "15,50,0", "--motion", "pitch:30:5:90"]
 
 
 def run_cli(args, capsys):
@@ -147,7 +148,7 @@ def test_guard_warnings_reach_json_and_stderr(capsys):
                               *SMALL], capsys)
     assert code == 0
     res = json.loads(out)
-    assert res["motion"] == "pitch 30 deg @ 20 Hz"
+    assert res["motion"] == "pitch 30 deg @ 5 Hz"
     assert set(res["warnings"]) == {"none", "paper", "exact"}
     assert res["warnings"]["none"] == [] and res["warnings"]["exact"] == []
     paper = res["warnings"]["paper"]

@@ -79,14 +79,14 @@ az_deg = 50.0
 [[motion.sinusoids]]
 axis = "pitch"
 amplitude_deg = 30.0
-frequency_hz = 20.0
+frequency_hz = 5.0
 phase_deg = 90.0
 """
 
 
 def test_report_lists_the_guard_warnings(tmp_path, capsys):
-    """Pitch 30 deg with the target at azimuth 50 deg: the paper chain's small-angle
-    warnings (compensation.guards) appear in the report and on stderr."""
+    """Pitch 30 deg (at 5 Hz: within a gyro's full scale), target at azimuth 50 deg: the paper
+    chain's small-angle warnings (compensation.guards) appear in the report and on stderr."""
     pytest.importorskip("compensation")
     (tmp_path / "t.toml").write_text(TILTED)
     assert main(["report", "--scenario", str(tmp_path / "t.toml"), "--chains",
@@ -99,7 +99,7 @@ def test_report_lists_the_guard_warnings(tmp_path, capsys):
     assert all(w.startswith("small-angle: ") for _, w in items)
     for chain, w in items:
         assert f"warning: {chain}: {html.unescape(w)}" in err
-    assert "<th>paper:published</th>" in text and "Motion: pitch 30 deg @ 20 Hz" in text
+    assert "<th>paper:published</th>" in text and "Motion: pitch 30 deg @ 5 Hz" in text
     assert main(["report", "--case", "stationary", "--chains", "uncompensated"]) == 2
     assert "--chains: got 'uncompensated'" in capsys.readouterr().err
 
@@ -129,3 +129,63 @@ def test_report_renders_in_chromium(report_html, tmp_path):
     # the figures are drawn: some strongly coloured (viridis) pixels exist
     saturation = img.max(axis=-1) - img.min(axis=-1)
     assert np.mean(saturation > 0.3) > 0.01
+
+
+# ------------------------------------------------------------ streaming and zoom
+def _peak_report_memory(store) -> tuple[int, int]:
+    """(peak bytes traced while collecting a report from the lazy store, bytes per frame)."""
+    import tracemalloc
+
+    from raysim.io import storage
+    from raysim.studies.report import collect_from_dataset
+
+    ds = storage.open_store(store, load=False)
+    frame_bytes = int(ds["if_data"].isel(frame=0).nbytes)
+    tracemalloc.start()
+    try:
+        data = collect_from_dataset(ds, chains=["none", "paper"], source=str(store))
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert data.num_frames == ds.sizes["frame"] and set(data.result["chains"]) == {"none",
+                                                                                   "paper"}
+    return peak, frame_bytes
+
+
+def test_report_streams_the_frames_of_a_store(tmp_path):
+    """The peak memory of a report does not grow with the store: 9 frames cost at most
+    ~3 frames more than 1 frame (the fixed workspace of maps and IMU is the same)."""
+    from raysim.io.scenario import scenario_from_case
+    from raysim.pipeline.run import render
+
+    small = {"radar.num_chirps": 64, "array.nx": 4, "array.ny": 4,
+             "radar.chirp_duration_s": 12.8e-6, "imu.preset": "tactical",
+             "imu.rate_hz": 20000.0}
+    peaks = {}
+    for n in (1, 9):
+        sc = scenario_from_case("rotation_y").with_values({**small, "frames": n})
+        render(sc, tmp_path / f"s{n}.zarr")
+        peaks[n], frame_bytes = _peak_report_memory(tmp_path / f"s{n}.zarr")
+    assert peaks[9] - peaks[1] < 3 * frame_bytes, (peaks, frame_bytes)
+    assert peaks[9] < peaks[1] + 9 * frame_bytes        # far from loading the 9 frames
+
+
+def test_maps_zoom_on_the_target():
+    """Today's maps showed the target as a one-pixel line in 0-35 m x +-16 m/s: the window
+    now holds the strong cells and the truth, a few metres and m/s wide."""
+    from raysim.processing.maps import Map
+    from raysim.studies.report import zoom_limits
+
+    r = np.arange(256) * 0.137
+    v = np.linspace(-16, 16, 64, endpoint=False)
+    power = np.full((256, 64), 1e-6)
+    power[60:200, 30:35] = 0.05                          # a clutter ridge near 0 m/s, -13 dB
+    power[109:111, 31:34] = 1.0                          # target at 15 m, ~0 m/s
+    (xlo, xhi), (ylo, yhi) = zoom_limits(Map(power, ("range", "doppler"),
+                                             {"range": r, "doppler": v}), (0.0, 15.0))
+    assert xlo < -0.5 and xhi > 0.5 and xhi - xlo <= 8.0   # m/s, of a 32 m/s wide axis
+    assert ylo < 60 * 0.137 and yhi > 199 * 0.137 and yhi - ylo < 30.0
+    (xlo, xhi), (ylo, yhi) = zoom_limits(Map(power, ("range", "doppler"),
+                                             {"range": r, "doppler": v}), (0.0, 15.0),
+                                         max_range=20.0)
+    assert yhi - ylo < 25.0 and ylo <= 15.0 <= yhi

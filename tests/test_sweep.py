@@ -84,7 +84,8 @@ def test_sweep_on_local_cluster_resumes_after_interruption(spec, client, tmp_pat
     assert r3.computed == list(r2.failed) and len(r3.skipped) == 5
 
     ds = r3.dataset
-    assert ds["az_deg"].dims == ("scene.targets.0.az_deg", "seed", "chain")
+    assert ds["az_deg"].dims == ("scene_targets_0_az_deg", "seed", "chain")
+    assert ds["scene_targets_0_az_deg"].attrs["key_path"] == "scene.targets.0.az_deg"
     assert bool(ds["point_done"].all())
     # the accumulated map (32 chirps) averages the noise that a single chirp sees
     np.testing.assert_allclose(ds["map_az_deg"].sel(chain="none").values,
@@ -127,13 +128,14 @@ az_deg = 50.0
 [[motion.sinusoids]]
 axis = "pitch"
 amplitude_deg = 30.0
-frequency_hz = 20.0
+frequency_hz = 5.0
 phase_deg = 90.0
 """
 
 
 def test_sweep_stores_and_summarises_guard_warnings(tmp_path, capsys):
-    """Pitch 30 deg with the target at azimuth 50 deg: the paper chain's small-angle
+    """Pitch 30 deg (at 5 Hz: within a gyro's full scale) with the target at azimuth 50 deg:
+    the paper chain's small-angle
     warnings (compensation.guards) are kept in the point record and the dataset and
     summarised on stderr; the none chain has none."""
     pytest.importorskip("compensation")
@@ -150,9 +152,77 @@ def test_sweep_stores_and_summarises_guard_warnings(tmp_path, capsys):
     import xarray as xr
 
     with xr.open_dataset(out / "sweep.nc") as ds:
-        assert ds["warnings"].dims == ("scene.targets.0.az_deg", "seed", "chain")
+        assert ds["warnings"].dims == ("scene_targets_0_az_deg", "seed", "chain")
         assert str(ds["warnings"].sel(chain="paper").values.ravel()[0]).split("\n") == paper
         assert str(ds["warnings"].sel(chain="none").values.ravel()[0]) == ""
         assert sweep_mod.warning_summary(ds) == [
             f"paper: small-angle at 1/1 points (e.g. {paper[0]})"]
     assert f"warning: paper: small-angle at 1/1 points (e.g. {paper[0]})" in err
+
+
+def test_dimension_names_are_identifiers():
+    assert sweep_mod.dimension_name("imu.preset") == "imu_preset"
+    assert sweep_mod.dimension_name("motion.sinusoids.0.amplitude_deg") == \
+        "motion_sinusoids_0_amplitude_deg"
+    assert sweep_mod.dimension_name("0.x") == "p_0_x"
+    names = sweep_mod.dimension_names(["a.b", "a_b", "chain"])
+    assert names == {"a.b": "a_b", "a_b": "a_b_2", "chain": "chain_2"}
+    assert all(n.isidentifier() for n in names.values())
+
+
+def test_sweep_dimensions_work_with_sel(tmp_path):
+    """Nothing computed (limit 0): the gathered Dataset and sweep.nc are indexed by name."""
+    import xarray as xr
+
+    base = scenario_from_case("stationary").with_values(SMALL)
+    spec = SweepSpec(base, {"imu.preset": ["ideal", "tactical"],
+                            "radar.num_chirps": [32, 64]}, (0,), ("none",))
+    res = run_sweep(spec, tmp_path, limit=0)
+    ds = res.dataset
+    assert set(ds.dims) == {"imu_preset", "radar_num_chirps", "seed", "chain"}
+    sub = ds["az_deg"].sel(imu_preset="tactical", radar_num_chirps=64, chain="none")
+    assert sub.dims == ("seed",) and bool(np.isnan(sub).all())        # not computed yet
+    assert ds["imu_preset"].attrs["key_path"] == "imu.preset"
+    assert json.loads(ds.attrs["dimensions"]) == {"imu.preset": "imu_preset",
+                                                  "radar.num_chirps": "radar_num_chirps"}
+    with xr.open_dataset(res.path) as on_disk:
+        assert on_disk["point_done"].sel(imu_preset="ideal", radar_num_chirps=32).item() == 0
+        assert on_disk["radar_num_chirps"].attrs["key_path"] == "radar.num_chirps"
+
+
+def test_sweep_refuses_out_of_another_sweep(tmp_path):
+    base = scenario_from_case("stationary").with_values(SMALL)
+    spec = SweepSpec(base, {"radar.num_chirps": [32, 64]}, (0,), ("none",))
+    run_sweep(spec, tmp_path, limit=0)
+    run_sweep(spec, tmp_path, limit=0)                       # the same sweep resumes
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    others = {
+        "parameters": SweepSpec(base, {"radar.num_chirps": [32, 128]}, (0,), ("none",)),
+        "seeds": SweepSpec(base, {"radar.num_chirps": [32, 64]}, (0, 1), ("none",)),
+        "chains": SweepSpec(base, {"radar.num_chirps": [32, 64]}, (0,), ("exact",)),
+        "base.radar.chirp_duration_s": SweepSpec(
+            base.with_values({"radar.chirp_duration_s": 25.6e-6}),
+            {"radar.num_chirps": [32, 64]}, (0,), ("none",)),
+    }
+    for what, other in others.items():
+        with pytest.raises(ValueError, match=rf"holds another sweep .*differs in {what}"):
+            run_sweep(other, tmp_path, limit=0)
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before   # nothing written
+    (tmp_path / "sweep.json").write_text("{not json")
+    with pytest.raises(ValueError, match="sweep.json cannot be read"):
+        run_sweep(spec, tmp_path, limit=0)
+    (tmp_path / "file").write_text("x")
+    for out in (tmp_path / "file", tmp_path / "file" / "sub"):
+        with pytest.raises(ValueError, match="is a file; expected a folder"):
+            run_sweep(spec, out, limit=0)
+
+
+def test_sweep_cli_refuses_out_of_another_sweep(tmp_path, capsys):
+    args = ["sweep", "--case", "stationary", "--no-progress", "--limit", "0",
+            "--out", str(tmp_path)]
+    assert main(args + ["--param", "radar.num_chirps=32"]) == 0
+    capsys.readouterr()
+    assert main(args + ["--param", "radar.num_chirps=64"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "holds another sweep" in err
+    assert "parameters.radar.num_chirps" in err

@@ -3,6 +3,8 @@
 Subcommands live in modules ``raysim/cli/cmd_<name>.py``; each defines
 ``register(subparsers)`` which adds a parser and sets ``func(args) -> int``.
 Exit codes: 0 success, 1 the work failed, 2 bad input (usage, files, values).
+Every parser is a :class:`raysim.cli.options.Parser` (option values such as
+``-30:30:1`` are read as values); every command's ``--help`` ends with examples.
 """
 
 from __future__ import annotations
@@ -13,17 +15,22 @@ import pkgutil
 import sys
 
 from raysim import __version__
+from raysim.cli.options import Parser
 
 
 def build_parser() -> argparse.ArgumentParser:
     """Parser with every discovered subcommand registered."""
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="raysim",
         description="Ray-traced FMCW MIMO radar simulation for hovering drones, "
         "and IMU-driven motion compensation.",
-    )
+        epilog="examples:\n  raysim simulate --case rotation_y\n"
+        "  raysim render examples/case_rotation_y.toml --out rotation_y.zarr\n"
+        "  raysim report rotation_y.zarr --out rotation_y.html\n"
+        "  raysim scenes list\n\nRun `raysim COMMAND --help` for a command's options and "
+        "examples.", formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"raysim {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
         if info.name.startswith("cmd_"):
             importlib.import_module(f"{__name__}.{info.name}").register(sub)
@@ -41,6 +48,10 @@ def main(argv: list[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except ValueError as exc:
         print(f"raysim {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:      # a file or folder the checks could not foresee
+        name = f" {exc.filename!r}" if exc.filename else ""
+        print(f"raysim {args.command}: error:{name} {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"raysim {args.command}: interrupted; finished outputs were kept", file=sys.stderr)

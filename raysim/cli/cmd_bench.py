@@ -23,8 +23,15 @@ ray-tracing knobs (trace samples, depth, re-trace interval) on the bundled
 rough_terrain scene when Sionna RT's LLVM backend runs, and notes their absence
 otherwise. See docs/speed.md.
 
+With --out the JSON goes to the file and a short table of the results (the
+numbers of each section, the full set in the JSON) to stdout; without it the
+JSON goes to stdout. Progress lines always go to stderr.
+
 exit status: 0 done, 1 a benchmark failed, 2 invalid options.
 """
+
+#: Rows of one section shown by :func:`summary_table` (the rest is in the JSON).
+ROWS_PER_SECTION = 8
 
 
 def register(subparsers) -> None:
@@ -54,10 +61,12 @@ def run(args) -> int:
 
     if args.chart_only and not args.chart:
         raise ValueError("--chart-only needs --chart OUT.png")
+    from raysim.cli.options import check_output
+
     for name in ("out", "chart"):
         value = getattr(args, name)
-        if value is not None and not value.strip():
-            raise ValueError(f"--{name} must be a file name, got {value!r}")
+        if value is not None:
+            check_output(value, "file", f"--{name}")
 
     def log(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
@@ -77,9 +86,40 @@ def run(args) -> int:
         result["chart"] = {"png": args.chart, "knobs": knobs}
     if args.out:
         bench.atomic_write_json(args.out, result)
+        print(summary_table(result))
         log(f"results written to {args.out}")
     else:
         import json
 
         print(json.dumps(result, indent=2, default=bench._json_default))
     return 0
+
+
+def _leaves(obj, prefix: str = ""):
+    """``(dotted key, number)`` of every numeric leaf of nested dicts (lists skipped)."""
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            yield from _leaves(v, f"{prefix}.{k}" if prefix else str(k))
+    elif isinstance(obj, (int, float)) and not isinstance(obj, bool):
+        yield prefix, float(obj)
+
+
+def summary_table(result: dict) -> str:
+    """A short text table of a bench result: section, quantity, value.
+
+    At most :data:`ROWS_PER_SECTION` numbers per section (``memory``,
+    ``synthesis``, ``oracle``, ...), then a count of those left out; the
+    machine description is skipped.
+    """
+    lines = [f"{'section':<14} {'quantity':<52} {'value':>12}"]
+    for section, body in result.items():
+        if section in ("machine", "schema", "notes", "chart", "quick", "clock"):
+            continue
+        rows = list(_leaves(body))
+        if not rows and isinstance(body, str):
+            lines.append(f"{section:<14} {body}")
+        for key, value in rows[:ROWS_PER_SECTION]:
+            lines.append(f"{section:<14} {(key or section)[:52]:<52} {value:>12.4g}")
+        if len(rows) > ROWS_PER_SECTION:
+            lines.append(f"{section:<14} ({len(rows) - ROWS_PER_SECTION} more in the JSON)")
+    return "\n".join(lines)

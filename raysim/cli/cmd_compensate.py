@@ -112,10 +112,13 @@ def _chain(text: str) -> ChainSpec:
     ValueError
         Naming the value and the accepted names.
     """
+    from raysim.cli.options import did_you_mean
+
     try:
         return parse_chain(text)
     except ValueError as exc:
-        hint = " (the uncompensated chain is called 'none')" if text == "uncompensated" else ""
+        hint = (" (the uncompensated chain is called 'none')" if text == "uncompensated"
+                else did_you_mean(text, [*CHAINS, "paper:published"]))
         raise ValueError(f"--chain: {exc}{hint}") from None
 
 
@@ -229,10 +232,12 @@ def run(args) -> int:
 
     from compensation import integrate_imu
     from compensation.geometry import direction
+    from raysim.cli.options import check_output
     from raysim.pipeline.chains import project
     from raysim.processing.maps import range_compress
 
     spec = _chain(args.chain)
+    check_output(args.out, "file", "--out")
     cube = _load_cube(args.cube, args.frame)
     fc, bw = float(cube["carrier_frequency"]), float(cube["bandwidth"])
     tc, fs = float(cube["chirp_duration"]), float(cube["sample_rate"])

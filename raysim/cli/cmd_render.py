@@ -42,6 +42,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``raysim render``; returns the exit code."""
+    from raysim.cli.options import check_output
     from raysim.io.scenario import load_scenario, parse_assignment
     from raysim.pipeline.run import render
     from raysim.pipeline.sources import FeatureUnavailable
@@ -53,7 +54,10 @@ def run(args) -> int:
     if not out:
         raise ValueError("no output store: pass --out STORE.zarr or set output.store in the "
                          "scenario file")
+    check_output(out, "dir", "--out" if args.out else "output.store")
     nc = args.netcdf or scenario.output.netcdf
+    if nc:
+        check_output(nc, "file", "--netcdf" if args.netcdf else "output.netcdf")
     try:
         summary = render(scenario, out, overwrite=args.overwrite,
                          progress=not args.no_progress, export_netcdf=nc)

@@ -52,28 +52,27 @@ def register(subparsers) -> None:
 def run(args) -> int:
     """Run ``raysim report``; returns the exit code."""
     from raysim.cli.cmd_simulate import print_warnings
+    from raysim.cli.options import chains_option, check_output
     from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
     from raysim.pipeline.sources import FeatureUnavailable
     from raysim.studies.report import collect_from_dataset, collect_from_scenario, write_report
-    from raysim.vocabulary import parse_chains
 
-    try:
-        chains = [s.key for s in parse_chains(args.chains)]
-    except ValueError as exc:
-        raise ValueError(f"--chains: got {args.chains!r}: {exc}") from None
+    chains = chains_option(args.chains)
     given = [x for x in (args.store, args.scenario, args.case) if x]
     if len(given) != 1:
         raise ValueError("give exactly one source: STORE, --scenario FILE.toml or --case NAME")
     if args.set and args.store:
         raise ValueError("--set applies to --scenario / --case, not to a stored render")
     default_out = "report.html"
+    if args.out:
+        check_output(args.out, "file", "--out")
     try:
         if args.store:
             from raysim.io import storage
 
             path = Path(args.store)
             if storage.store_exists(path):
-                ds = storage.open_store(path)
+                ds = storage.open_store(path, load=False)     # frames are read one at a time
             elif path.is_file() and path.suffix in (".nc", ".nc4", ".netcdf"):
                 ds = storage.read_netcdf(path)
             else:
@@ -81,13 +80,23 @@ def run(args) -> int:
                                  f"raysim render or a NetCDF export (.nc)")
             if ds.sizes.get("frame", 0) == 0:
                 raise ValueError(f"STORE {args.store!r} holds no complete frame yet")
-            data = collect_from_dataset(ds, chains=chains, source=str(path))
+            check_output(args.out or default_out, "file", "--out")
+            try:
+                data = collect_from_dataset(ds, chains=chains, source=str(path))
+            except (ValueError, FeatureUnavailable, MemoryError, KeyboardInterrupt):
+                raise
+            except Exception as exc:        # a chunk of the lazy store fails to decode
+                raise ValueError(f"STORE {str(path)!r} cannot be read: {type(exc).__name__}: "
+                                 f"{exc}; expected complete, decodable chunk files (a "
+                                 f"truncated or corrupted file?)") from exc
         else:
             scenario = (load_scenario(args.scenario) if args.scenario
                         else scenario_from_case(args.case))
             if args.set:
                 scenario = scenario.with_values(dict(parse_assignment(s) for s in args.set))
             default_out = scenario.output.report or default_out
+            check_output(args.out or default_out, "file",
+                         "--out" if args.out or not scenario.output.report else "output.report")
             data = collect_from_scenario(scenario, chains=chains,
                                          source=args.scenario or f"paper case {args.case}")
     except FeatureUnavailable as exc:

@@ -62,21 +62,22 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Execute ``raysim reproduce``; returns the exit code."""
-    from raysim.platform.imu import get_preset
+    from raysim.cli.options import chains_option, check_output, known_name
+    from raysim.platform.imu import PRESETS
+    from raysim.studies.cases import PAPER_CASES
     from raysim.studies.reproduce import ReproductionSettings, format_table, reproduce
-    from raysim.vocabulary import parse_chains
 
-    get_preset(args.imu)
+    known_name(args.imu, PRESETS, "--imu", "IMU preset")
     seeds = args.seeds if args.seeds is not None else (1 if args.imu == "ideal" else 20)
     if seeds < 1:
         raise ValueError(f"--seeds must be >= 1, got {seeds}")
     if args.imu_rate <= 0:
         raise ValueError(f"--imu-rate must be a positive rate in Hz, got {args.imu_rate}")
-    try:
-        chains = [s.key for s in parse_chains(args.chains)]
-    except ValueError as exc:
-        raise ValueError(f"--chains: got {args.chains!r}: {exc}") from None
+    chains = chains_option(args.chains)
     cases = None if not args.cases else [c.strip() for c in args.cases.split(",") if c.strip()]
+    for case in cases or ():
+        known_name(case, PAPER_CASES, "--cases", "case")
+    check_output(args.out, "dir", "--out")
     make = ReproductionSettings.quick if args.quick else ReproductionSettings
     settings = make(imu_rate=args.imu_rate, velocity=args.velocity)
     result = reproduce(cases, imu=args.imu, seeds=seeds, settings=settings, out_dir=args.out,

@@ -72,25 +72,18 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``raysim scene-report``; returns the exit code."""
     from dataclasses import replace
 
+    from raysim.cli.options import chains_option, check_output, known_name
     from raysim.echoes.rt.scenes import SCENES
     from raysim.platform.imu import PRESETS
     from raysim.studies.scene_report import FULL, QUICK, write_scene_report
     from raysim.vocabulary import parse_chains
 
-    if args.scenes:
-        bad = [s for s in args.scenes if s not in SCENES]
-        if bad:
-            raise ValueError(f"--scenes: unknown scene {bad[0]!r}; expected one of "
-                             f"{sorted(SCENES)}")
-    if args.imu not in PRESETS:
-        raise ValueError(f"--imu: unknown IMU preset {args.imu!r}; expected one of "
-                         f"{sorted(PRESETS)}")
+    for name in args.scenes or ():
+        known_name(name, SCENES, "--scenes", "scene")
+    known_name(args.imu, PRESETS, "--imu", "IMU preset")
     if args.threads is not None and args.threads < 1:
         raise ValueError(f"--threads must be a positive integer, got {args.threads}")
-    try:
-        chains = parse_chains(args.chains)
-    except ValueError as err:
-        raise ValueError(f"--chains: {err}") from None
+    chains = parse_chains(chains_option(args.chains))
     if args.bench_reprojection:
         import json
 
@@ -100,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
         backend.configure("cpu", threads=args.threads)
         print(json.dumps(bench_reprojection(), indent=1))
         return 0
+    check_output(args.out, "dir", "--out")
     settings = replace(QUICK if args.quick else FULL, imu=args.imu)
     if args.jitter_seed is not None:
         settings = replace(settings, jitter_seed=args.jitter_seed)

@@ -17,10 +17,15 @@ def register(subparsers) -> None:
         "registry is unavailable, 2 unknown scene name.",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="action", metavar="ACTION", required=True)
-    ls = sub.add_parser("list", help="names and one-line descriptions")
+    raw = argparse.RawDescriptionHelpFormatter
+    ls = sub.add_parser("list", help="names and one-line descriptions",
+                        epilog="examples:\n  raysim scenes list\n  raysim scenes list --json",
+                        formatter_class=raw)
     ls.add_argument("--json", action="store_true", help="print JSON")
     ls.set_defaults(func=run_list)
-    de = sub.add_parser("describe", help="details of one scene (targets, altitude, materials)")
+    de = sub.add_parser("describe", help="details of one scene (targets, altitude, materials)",
+                        epilog="examples:\n  raysim scenes describe parking_lot\n"
+                        "  raysim scenes describe flat_reflectors --json", formatter_class=raw)
     de.add_argument("name", help="scene name (see `raysim scenes list`)")
     de.add_argument("--json", action="store_true", help="print JSON")
     de.set_defaults(func=run_describe)
@@ -60,7 +65,10 @@ def run_describe(args) -> int:
     if scenes is None:
         return 1
     if args.name not in scenes:
-        raise ValueError(f"scene name: got {args.name!r}, expected one of {sorted(scenes)}")
+        from raysim.cli.options import did_you_mean
+
+        raise ValueError(f"scene name: got {args.name!r}, expected one of {sorted(scenes)}"
+                         f"{did_you_mean(args.name, scenes)}")
     d = scenes[args.name]
     meta = d.metadata()
     info = {"name": d.name, "description": d.description, "path": str(d.path),

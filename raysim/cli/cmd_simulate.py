@@ -180,15 +180,13 @@ def print_warnings(warnings: dict, file=None) -> int:
 
 def run(args) -> int:
     """Run ``raysim simulate``; returns the exit code."""
+    from raysim.cli.options import chains_option
     from raysim.pipeline.analysis import ANALYSIS_METRICS
     from raysim.pipeline.run import evaluate
     from raysim.pipeline.sources import FeatureUnavailable
-    from raysim.vocabulary import metric_unit, parse_chains
+    from raysim.vocabulary import metric_unit
 
-    try:
-        chains = [s.key for s in parse_chains(args.chains)]
-    except ValueError as exc:
-        raise ValueError(f"--chains: got {args.chains!r}: {exc}") from None
+    chains = chains_option(args.chains)
     scenario = build_scenario(args)
     try:
         result = evaluate(scenario, chains=chains)

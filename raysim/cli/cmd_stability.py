@@ -49,13 +49,12 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``raysim stability``; prints the summary table; returns the exit code."""
+    from raysim.cli.options import check_output, known_name
     from raysim.studies.stability import MAPS, summary_table, write_stability
 
-    if args.maps:
-        bad = [m for m in args.maps if m not in MAPS]
-        if bad:
-            raise ValueError(f"--maps: unknown stability map {bad[0]!r}; expected one of "
-                             f"{sorted(MAPS)}")
+    for name in args.maps or ():
+        known_name(name, MAPS, "--maps", "stability map")
+    check_output(args.out, "dir", "--out")
     summary = write_stability(args.out, quick=args.quick, maps=args.maps,
                               progress=not args.no_progress, executor=args.executor)
     print(summary_table(summary))

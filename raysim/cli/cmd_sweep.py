@@ -73,16 +73,18 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``raysim sweep``; returns the exit code."""
+    from raysim.cli.options import chains_option, check_output
     from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
     from raysim.pipeline.sources import FeatureUnavailable
     from raysim.studies.sweep import SweepSpec, parse_values, run_sweep, warning_summary
-    from raysim.vocabulary import metric_unit, parse_chains
+    from raysim.vocabulary import metric_unit
 
     if bool(args.scenario) == bool(args.case):
         raise ValueError("give exactly one base: SCENARIO.toml or --case NAME")
     for name in ("workers", "threads"):
         if getattr(args, name) < 1:
             raise ValueError(f"--{name}: got {getattr(args, name)}, expected >= 1")
+    check_output(args.out, "dir", "--out")
     base = load_scenario(args.scenario) if args.scenario else scenario_from_case(args.case)
     if args.set:
         base = base.with_values(dict(parse_assignment(s) for s in args.set))
@@ -101,10 +103,7 @@ def run(args) -> int:
         raise ValueError(f"--seeds: {exc}") from None
     if not all(isinstance(s, int) and s >= 0 for s in seeds):
         raise ValueError(f"--seeds: got {args.seeds!r}, expected integers >= 0")
-    try:
-        chains = tuple(s.key for s in parse_chains(args.chains))
-    except ValueError as exc:
-        raise ValueError(f"--chains: got {args.chains!r}: {exc}") from None
+    chains = tuple(chains_option(args.chains))
     spec = SweepSpec(base, params, tuple(seeds), chains)
     try:
         res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,
@@ -113,8 +112,13 @@ def run(args) -> int:
     except FeatureUnavailable as exc:
         print(f"raysim sweep: {exc}", file=sys.stderr)
         return 1
-    except OSError as exc:  # scheduler unreachable
-        print(f"raysim sweep: cannot reach the Dask scheduler: {exc}", file=sys.stderr)
+    except OSError as exc:
+        if exc.filename is not None:                         # a file, not the network
+            raise ValueError(f"--out {args.out!r}: cannot write {exc.filename!r}: "
+                             f"{exc.strerror or exc}") from None
+        where = (f"cannot reach the Dask scheduler {args.scheduler!r}" if args.scheduler
+                 else "the local Dask cluster failed")
+        print(f"raysim sweep: {where}: {exc}", file=sys.stderr)
         return 1
     ds = res.dataset
     total = int(ds.attrs["points_total"])

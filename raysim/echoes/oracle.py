@@ -27,8 +27,15 @@ import numpy as np
 from compensation.geometry import az_el, direction  # noqa: F401  (one definition of u(az, el))
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
-from raysim.radar.config import BOLTZMANN, SPEED_OF_LIGHT, T0_KELVIN, RadarConfig
-from raysim.synthesis.frame import RadarFrame
+from raysim.radar.config import (
+    BOLTZMANN,
+    RCS_DBSM_RANGE,
+    SPEED_OF_LIGHT,
+    T0_KELVIN,
+    RadarConfig,
+    check_in_range,
+)
+from raysim.synthesis.frame import RadarFrame, adc_samples
 from raysim.synthesis.tones import synthesize_if, synthesize_if_intrachirp
 
 
@@ -43,7 +50,8 @@ class PointTarget:
     velocity : ndarray, shape ``[3]``
         Constant velocity in W [m/s].
     rcs_dbsm : float
-        Radar cross-section [dBsm].
+        Radar cross-section [dBsm], within
+        :data:`raysim.radar.config.RCS_DBSM_RANGE` (-250 to 100 dBsm).
     """
 
     position: np.ndarray
@@ -56,8 +64,8 @@ class PointTarget:
             if v.shape != (3,) or not np.all(np.isfinite(v)):
                 raise ValueError(f"{name} must be 3 finite numbers [m or m/s], got {v!r}")
             object.__setattr__(self, name, v)
-        if not math.isfinite(self.rcs_dbsm):
-            raise ValueError(f"rcs_dbsm must be finite, got {self.rcs_dbsm!r}")
+        object.__setattr__(self, "rcs_dbsm",
+                           check_in_range("rcs_dbsm", self.rcs_dbsm, RCS_DBSM_RANGE, "dBsm"))
 
     @classmethod
     def at(cls, range_m: float, az: float, el: float, *, velocity=(0.0, 0.0, 0.0),
@@ -174,6 +182,48 @@ def point_target_delays(config: RadarConfig, array: VirtualArray, trajectory: Tr
     return np.stack(taus), np.stack(amps)
 
 
+#: Peak memory of a frame of the oracle in units of its complex64 cube (tracemalloc on
+#: a [64, 64, 600] frame: 1.10 without noise, 1.50 with the blocked noise).
+FRAME_PEAK_FACTOR = 1.6
+#: Extra peak of intra-chirp motion per cube element [bytes] (tracemalloc, same frame:
+#: 129 B, a rotation and a position per (chirp, channel, sample) in float64).
+INTRA_CHIRP_BYTES_PER_ELEMENT = 130
+#: Chirps of noise drawn at a time (bounds the noise's extra memory).
+NOISE_BLOCK_CHIRPS = 16
+
+
+def check_frame_memory(config: RadarConfig, array, num_targets: int, *,
+                       intra_chirp: bool = False) -> None:
+    """Refuse, before allocating, a frame whose peak memory exceeds what is available."""
+    from raysim.resources import check_memory, cube_bytes
+
+    n = config.num_chirps * array.num_channels * config.num_samples
+    peak = FRAME_PEAK_FACTOR * cube_bytes(config.num_chirps, array.num_channels,
+                                          config.num_samples)
+    peak += 16.0 * max(int(num_targets), 1) * config.num_chirps * array.num_channels
+    if intra_chirp:
+        peak += INTRA_CHIRP_BYTES_PER_ELEMENT * n
+    check_memory(peak, f"a frame [{config.num_chirps}, {array.num_channels}, "
+                       f"{config.num_samples}]" + (" with intra-chirp motion" if intra_chirp
+                                                    else ""),
+                 "radar.num_chirps, the array size or the sample rate")
+
+
+def add_noise(data: np.ndarray, config: RadarConfig, seed: int | None) -> None:
+    """Add complex white thermal noise of power ``k T0 F f_s`` per sample, in place.
+
+    Drawn in float32 blocks of :data:`NOISE_BLOCK_CHIRPS` chirps, so its extra
+    memory is a small fraction of the cube; the same seed gives the same noise.
+    """
+    rng = np.random.default_rng(seed)
+    sigma = np.float32(np.sqrt(noise_power(config) / 2.0))
+    for c in range(0, data.shape[0], NOISE_BLOCK_CHIRPS):
+        blk = data[c:c + NOISE_BLOCK_CHIRPS]
+        pair = rng.standard_normal(blk.shape + (2,), dtype=np.float32)
+        pair *= sigma
+        blk += pair.view(np.complex64)[..., 0]
+
+
 def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
                            trajectory: Trajectory | None = None, *, lever_arm=(0.0, 0.0, 0.0),
                            frame: int = 0, t0: float = 0.0, intra_chirp: bool = False,
@@ -206,6 +256,7 @@ def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
         ``data`` of shape ``[chirp, channel, sample]``, complex64.
     """
     trajectory = stationary() if trajectory is None else trajectory
+    check_frame_memory(config, array, len(targets), intra_chirp=intra_chirp)
     tau, amp = point_target_delays(config, array, trajectory, targets, lever_arm=lever_arm,
                                    frame=frame, t0=t0, intra_chirp=intra_chirp)
     if intra_chirp:
@@ -213,10 +264,7 @@ def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
     else:
         data = synthesize_if(tau, amp, config)
     if noise:
-        rng = np.random.default_rng(seed)
-        sigma = np.sqrt(noise_power(config) / 2.0)
-        data += (rng.normal(0, sigma, data.shape) + 1j * rng.normal(0, sigma, data.shape)
-                 ).astype(np.complex64)
-    return RadarFrame(data, config, array, config.chirp_times(frame, t0),
+        add_noise(data, config, seed)
+    return RadarFrame(adc_samples(data, config), config, array, config.chirp_times(frame, t0),
                       np.asarray(lever_arm, dtype=float), frame,
                       {"targets": list(targets), "trajectory": trajectory.name})

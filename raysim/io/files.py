@@ -74,3 +74,66 @@ def atomic_savefig(fig, path: str | os.PathLike, **kwargs) -> Path:
     """Save a Matplotlib figure atomically (format from the suffix of ``path``)."""
     fmt = kwargs.pop("format", Path(path).suffix.lstrip(".") or "png")
     return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, **kwargs))
+
+
+def check_output(path: str | os.PathLike | None, kind: str = "file", option: str = "--out"
+                 ) -> Path:
+    """Check, before any computation, that an output path can be written.
+
+    Nothing is created (a probe file in the nearest existing folder is made and
+    removed again, to catch read-only file systems).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The output: a file (``kind="file"``) or a folder such as a Zarr store
+        or a result directory (``kind="dir"``); missing parent folders are fine
+        (they are created by the writer).
+    kind : {"file", "dir"}
+        What ``path`` must be if it already exists.
+    option : str
+        The option or key the path came from, named in the message.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``option`` and ``path``: empty path, a file where a folder is
+        expected or the reverse, a path under a file, or a folder that cannot be
+        written.
+    """
+    if kind not in ("file", "dir"):
+        raise ValueError(f"kind must be 'file' or 'dir', got {kind!r}")
+    if path is None or not str(path).strip():
+        raise ValueError(f"{option}: got {path!r}, expected a "
+                         f"{'file' if kind == 'file' else 'folder'} path")
+    p = Path(path)
+    what = "a file" if kind == "file" else "a folder"
+
+    def fail(reason: str) -> ValueError:
+        return ValueError(f"{option}: cannot write {str(p)!r}: {reason} (expected {what})")
+
+    if p.exists():
+        if kind == "file" and p.is_dir():
+            raise fail("it is an existing directory")
+        if kind == "dir" and not p.is_dir():
+            raise fail("it is an existing file")
+    # nearest existing ancestor: must be a folder we can create entries in
+    anc = p if (kind == "dir" and p.is_dir()) else p.parent
+    while not anc.exists() and anc != anc.parent:
+        anc = anc.parent
+    if not anc.is_dir():
+        raise fail(f"{str(anc)!r} is a file, not a folder")
+    if not os.access(anc, os.W_OK | os.X_OK):
+        raise fail(f"the folder {str(anc)!r} is not writable")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".raysim-probe.", suffix=".tmp", dir=anc)
+    except OSError:
+        raise fail(f"the folder {str(anc)!r} is not writable") from None
+    os.close(fd)
+    Path(probe).unlink(missing_ok=True)
+    return p

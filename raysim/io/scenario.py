@@ -53,12 +53,19 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from raysim.io.scenario_keys import (
+    did_you_mean,
     dumps_toml,
     format_validation_error,
     get_key,
     parse_assignment,
     parse_value,
     set_key,
+)
+from raysim.radar.config import (
+    ANTENNA_GAIN_DBI_RANGE,
+    NOISE_FIGURE_DB_RANGE,
+    RCS_DBSM_RANGE,
+    TX_POWER_DBM_RANGE,
 )
 
 __all__ = [
@@ -77,6 +84,13 @@ TRANSLATION_AXES = ("x", "y", "z")
 Vec3 = tuple[float, float, float]
 
 
+def _in_range(value: float, bounds: tuple[float, float], unit: str, what: str) -> float:
+    """``value`` if within the physical ``bounds`` (inclusive), else a ValueError saying so."""
+    if not bounds[0] <= value <= bounds[1]:
+        raise ValueError(f"{what} in the physical range [{bounds[0]:g}, {bounds[1]:g}] {unit}")
+    return value
+
+
 class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
@@ -86,7 +100,8 @@ class RadarSection(_Section):
     """``[radar]``: FMCW waveform (defaults: the paper's Table 2).
 
     See :class:`raysim.radar.config.RadarConfig` for the meaning of every field; the
-    file keys carry their unit.
+    file keys carry their unit. Physical ranges: ``tx_power_dbm`` -100 to 60 dBm,
+    ``antenna_gain_dbi`` -30 to 50 dBi, ``noise_figure_db`` 0 to 50 dB.
     """
 
     carrier_frequency_hz: float = Field(77e9, gt=0)
@@ -100,6 +115,13 @@ class RadarSection(_Section):
     antenna_gain_dbi: float = 10.0
     noise_figure_db: float = 12.0
     frame_period_s: float | None = Field(None, gt=0)
+
+    _tx_power = field_validator("tx_power_dbm")(
+        lambda v: _in_range(v, TX_POWER_DBM_RANGE, "dBm", "a transmit power"))
+    _gain = field_validator("antenna_gain_dbi")(
+        lambda v: _in_range(v, ANTENNA_GAIN_DBI_RANGE, "dBi", "an antenna gain"))
+    _noise_figure = field_validator("noise_figure_db")(
+        lambda v: _in_range(v, NOISE_FIGURE_DB_RANGE, "dB", "a noise figure"))
 
 
 # ----------------------------------------------------------------------- array
@@ -137,13 +159,17 @@ class TargetSpec(_Section):
     """One point target, placed from the nominal radar phase centre.
 
     ``range_m`` [m], direction ``az_deg`` / ``el_deg`` [deg] (docs/conventions.md),
-    ``rcs_dbsm`` [dBsm], constant world (NED) velocity ``velocity_mps`` [m/s].
+    ``rcs_dbsm`` [dBsm] (range -250 to 100 dBsm), constant world (NED)
+    velocity ``velocity_mps`` [m/s].
     """
 
     range_m: float = Field(gt=0)
     az_deg: float = Field(0.0, ge=-90, le=90)
     el_deg: float = Field(0.0, ge=-90, le=90)
     rcs_dbsm: float = 10.0
+
+    _rcs = field_validator("rcs_dbsm")(
+        lambda v: _in_range(v, RCS_DBSM_RANGE, "dBsm", "a radar cross-section"))
     velocity_mps: Vec3 = (0.0, 0.0, 0.0)
 
 
@@ -251,7 +277,8 @@ class MotionSection(_Section):
             from raysim.studies.cases import PAPER_CASES
 
             if v not in PAPER_CASES:
-                raise ValueError(f"a paper case name, one of {sorted(PAPER_CASES)}")
+                raise ValueError(f"a paper case name, one of {sorted(PAPER_CASES)}"
+                                 f"{did_you_mean(v, PAPER_CASES)}")
         return v
 
 
@@ -332,6 +359,9 @@ class Scenario(_Section):
         Evaluate the geometry at every sample instead of stop-and-hop.
     lever_arm_m : tuple of float
         Radar phase centre in the body frame B [m].
+    time_epoch_utc : str, optional
+        UTC instant (ISO 8601) of time 0 of the truth clock, so stored frames
+        align with a flight log; default the Unix epoch.
     radar, array, scene, motion, imu, output : sections
     """
 
@@ -342,6 +372,23 @@ class Scenario(_Section):
     noise: bool = False
     intra_chirp: bool = False
     lever_arm_m: Vec3 = (0.0, 0.0, 0.10)
+    time_epoch_utc: str | None = None
+
+    @field_validator("time_epoch_utc")
+    @classmethod
+    def _utc_instant(cls, v: str | None) -> str | None:
+        if v is None:
+            return v
+        from datetime import datetime
+
+        try:
+            when = datetime.fromisoformat(v.strip().replace("Z", "+00:00"))
+        except ValueError:
+            raise ValueError(f"expected an ISO 8601 UTC instant such as "
+                             f"'2026-05-01T12:00:00Z', got {v!r}") from None
+        if when.utcoffset() is not None and when.utcoffset().total_seconds() != 0:
+            raise ValueError(f"expected a UTC instant (suffix Z), got {v!r}")
+        return v.strip()
     radar: RadarSection = Field(default_factory=RadarSection)
     array: ArraySection = Field(default_factory=ArraySection)
     scene: SceneSection
@@ -357,6 +404,46 @@ class Scenario(_Section):
         except ValueError as exc:
             raise ValueError(f"inconsistent radar: {exc}") from None
         return self
+
+    @model_validator(mode="after")
+    def _imu_above_nyquist(self) -> Scenario:
+        # an IMU sampling below twice the fastest motion component aliases it
+        freq, what = self.fastest_motion()
+        if freq > 0 and self.imu.rate_hz < 2.0 * freq:
+            raise ValueError(
+                f"imu.rate_hz: got {self.imu.rate_hz:g} Hz, below the Nyquist rate of the "
+                f"motion: {what} at {freq:g} Hz needs imu.rate_hz >= {2.0 * freq:g} Hz")
+        return self
+
+    def fastest_motion(self) -> tuple[float, str]:
+        """Highest frequency of the platform motion [Hz] and what it belongs to.
+
+        Sinusoids (the paper case's and ``[[motion.sinusoids]]``) at their
+        frequency; the hover jitter at the top of its rotor-vibration band (or of
+        its attitude / position bands when the vibration is zero); a constant
+        velocity has none. ``(0.0, "")`` for a platform without oscillation.
+        """
+        from raysim.platform.motion import HoverJitterSpec
+        from raysim.studies.cases import get_case
+
+        m = self.motion
+        sines = list(m.sinusoids)
+        if m.case is not None:
+            case = get_case(m.case)["scenario"].get("motion", {})
+            sines += [SinusoidSpec.model_validate(s) for s in case.get("sinusoids", [])]
+        best = (0.0, "")
+        for s in sines:
+            if s.frequency_hz > best[0]:
+                best = (s.frequency_hz, f"the {s.axis} sinusoid")
+        if m.hover_jitter is not None and m.hover_jitter.scale > 0:
+            d = HoverJitterSpec()
+            if d.vibration_rms > 0:
+                band = (d.vibration_band[1], "the hover jitter's rotor vibration band "
+                        f"({d.vibration_band[0]:g}-{d.vibration_band[1]:g} Hz)")
+            else:
+                band = (max(d.attitude_band[1], d.position_band[1]), "the hover jitter")
+            best = max(best, band)
+        return best
 
     # ---------------------------------------------------------- conversions
     def radar_config(self):
@@ -521,12 +608,32 @@ def validate_scenario(data: dict, source: str = "scenario") -> Scenario:
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        raise format_validation_error(exc, source) from None
+        raise format_validation_error(exc, source, known_keys=_known_keys) from None
+
+
+def _known_keys(loc: tuple) -> list[str]:
+    """Keys of the scenario table at ``loc`` (for "did you mean" on unknown keys)."""
+    model: Any = Scenario
+    for part in loc:
+        if isinstance(part, int) or model is None:
+            continue
+        field = model.model_fields.get(str(part))
+        if field is None:
+            return []
+        model = None
+        for typ in (field.annotation, *getattr(field.annotation, "__args__", ())):
+            typ = (getattr(typ, "__args__", (None,)) or (None,))[0] \
+                if getattr(typ, "__origin__", None) is list else typ
+            if isinstance(typ, type) and issubclass(typ, BaseModel):
+                model = typ
+                break
+    return list(model.model_fields) if model is not None else []
 
 
 def loads_scenario(text: str, source: str = "scenario", base_dir: Path | None = None
                    ) -> Scenario:
     """Parse and validate TOML text; relative ``scene.path`` is taken from ``base_dir``."""
+    text = text.removeprefix("\ufeff")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -549,9 +656,13 @@ def load_scenario(path: str | Path) -> Scenario:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")      # a UTF-8 byte-order mark is fine
     except OSError as exc:
         raise ValueError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"scenario file {str(path)!r} is not UTF-8 text: byte "
+                         f"{exc.object[exc.start:exc.start + 1]!r} at offset {exc.start}; "
+                         f"save it as UTF-8") from None
     return loads_scenario(text, source=str(path), base_dir=path.parent)
 
 
@@ -574,6 +685,11 @@ def scenario_from_case(name: str, **overrides: Any) -> Scenario:
     if overrides:
         raise ValueError(f"scenario_from_case takes no overrides, got {sorted(overrides)}; "
                          f"use Scenario.with_values")
+    from raysim.studies.cases import PAPER_CASES
+
+    if not isinstance(name, str) or name not in PAPER_CASES:
+        raise ValueError(f"unknown paper case {name!r}; expected one of {sorted(PAPER_CASES)}"
+                         f"{did_you_mean(name, PAPER_CASES)}")
     case = get_case(name)
     data = case["scenario"]
     data.update(name=name, description=case["description"], motion={"case": name})

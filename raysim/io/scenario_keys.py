@@ -9,16 +9,32 @@ TOML output (:func:`dumps_toml`) and pydantic errors turned into one
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import re
 import tomllib
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from pydantic import ValidationError
 
 __all__ = ["get_key", "set_key", "dumps_toml", "format_validation_error", "parse_value",
-           "parse_assignment"]
+           "parse_assignment", "did_you_mean"]
+
+
+def did_you_mean(word: Any, choices: Iterable[str]) -> str:
+    """``"; did you mean 'x'?"`` for the closest of ``choices`` (difflib), else ``""``.
+
+    Appended to messages about unknown names (cases, scenes, presets, chains,
+    maps, scenario keys).
+    """
+    if not isinstance(word, str):
+        return ""
+    close = difflib.get_close_matches(word, [str(c) for c in choices], n=2, cutoff=0.6)
+    if not close:
+        return ""
+    return "; did you mean " + " or ".join(repr(c) for c in close) + "?"
 
 
 # ------------------------------------------------------------------ key paths
@@ -40,8 +56,11 @@ def get_key(data: dict, path: str) -> Any:
             cur = cur[int(part)]
         elif isinstance(cur, dict) and part in cur:
             cur = cur[part]
+        elif isinstance(cur, dict):
+            raise ValueError(f"{path}: no key {part!r}{did_you_mean(part, cur)}")
         else:
-            raise ValueError(f"{path}: no key {part!r}")
+            raise ValueError(f"{path}: no key {part!r} (the value above it is "
+                             f"{_fmt_value(cur)}, not a table)")
     return cur
 
 
@@ -57,6 +76,8 @@ def set_key(data: dict, path: str, value: Any) -> None:
                                  f"(list has {len(cur)} items)")
             cur = cur[int(part)]
             continue
+        if not isinstance(cur, dict):
+            _not_a_table(path, parts[:i], cur)
         if cur.get(part) is None:
             cur[part] = [] if nxt_is_index else {}
         cur = cur[part]
@@ -69,8 +90,16 @@ def set_key(data: dict, path: str, value: Any) -> None:
             cur.append(value)
         else:
             cur[int(last)] = value
-    else:
+    elif isinstance(cur, dict):
         cur[last] = value
+    else:
+        _not_a_table(path, parts[:-1], cur)
+
+
+def _not_a_table(path: str, parent: list[str], value: Any) -> None:
+    raise ValueError(f"{path}: {'.'.join(parent)} is a value ({_fmt_value(value)}), not a "
+                     f"table: nothing can be set under it; expected a key such as "
+                     f"{'.'.join(parent)}=VALUE")
 
 
 # ------------------------------------------------------------------- errors
@@ -117,17 +146,34 @@ def _fmt_value(v: Any) -> str:
     return text if len(text) <= 80 else text[:77] + "..."
 
 
-def format_validation_error(exc: ValidationError, source: str = "scenario") -> ValueError:
-    """Turn a pydantic error into a ValueError listing ``key.path: got V, expected E``."""
+def _literal_choices(err: dict) -> list[str]:
+    return re.findall(r"'([^']*)'", str((err.get("ctx") or {}).get("expected", "")))
+
+
+def format_validation_error(exc: ValidationError, source: str = "scenario",
+                            known_keys: Callable[[tuple], Iterable[str]] | None = None
+                            ) -> ValueError:
+    """Turn a pydantic error into a ValueError listing ``key.path: got V, expected E``.
+
+    ``known_keys(loc)`` (optional) gives the valid keys of the table holding
+    ``loc``; an unknown key is then followed by "did you mean" the closest one,
+    as is a string outside a fixed set of names.
+    """
     lines = []
     for err in exc.errors():
         loc = ".".join(str(p) for p in err.get("loc", ())) or "(top level)"
+        hint = ""
+        if err.get("type") == "extra_forbidden" and known_keys is not None:
+            hint = did_you_mean(str(err["loc"][-1]), known_keys(tuple(err["loc"][:-1])))
+        elif err.get("type") == "literal_error":
+            hint = did_you_mean(err.get("input"), _literal_choices(err))
         if err.get("type") == "value_error" and isinstance(err.get("input"), dict):
-            lines.append(f"{loc}: {_expected(err)}")
+            lines.append(f"{loc}: {_expected(err)}" if err.get("loc") else _expected(err))
         elif err.get("type") == "missing":
             lines.append(f"{loc}: missing, expected {_expected(err)}")
         else:
-            lines.append(f"{loc}: got {_fmt_value(err.get('input'))}, expected {_expected(err)}")
+            lines.append(f"{loc}: got {_fmt_value(err.get('input'))}, expected {_expected(err)}"
+                         f"{hint}")
     n = len(lines)
     head = f"{source}: {n} invalid value{'s' if n > 1 else ''}:\n  "
     return ValueError(head + "\n  ".join(lines))

@@ -1,40 +1,52 @@
 """Frames on disk: xarray Datasets in Zarr stores (appendable, resumable) and NetCDF.
 
-Layout of a frame Dataset (axis names of docs/conventions.md):
+A real-sampled radar (``radar_complex_sampling`` False) stores ``if_data`` as float32.
 
-=====================  ==============================  =========  =======================
-variable               dims                            dtype      unit
-=====================  ==============================  =========  =======================
-``if_data``            ``frame, chirp, channel, sample``  complex64  sqrt(W)
-``chirp_time``         ``frame, chirp``                float64    s (truth clock)
-``pose_position``      ``frame, chirp, vector``        float64    m (body origin in W, NED)
-``pose_attitude``      ``frame, chirp, euler``         float64    rad (roll, pitch, yaw)
-``fast_time``          ``sample``                      float64    s
-``tx_position``        ``channel, vector``             float64    m (frame A)
-``rx_position``        ``channel, vector``             float64    m (frame A)
-``tx_slot``            ``channel``                     int64      1
-``imu_time``           ``imu_time``                    float64    s (IMU clock)
-``imu_gyro``           ``imu_time, vector``            float64    rad/s (frame B)
-``imu_accel``          ``imu_time, vector``            float64    m/s^2 (frame B)
-=====================  ==============================  =========  =======================
+Layout of a frame Dataset (axis names of docs/conventions.md; ``units`` are
+UDUNITS strings, the attribute ``Conventions`` is ``CF-1.10``):
+
+=====================  =================================  =========  ==========================
+variable               dims                               dtype      units
+=====================  =================================  =========  ==========================
+``if_data``            ``frame, chirp, channel, sample``  complex64  V (sqrt(W) into 1 ohm)
+``chirp_time``         ``frame, chirp``                   float64    seconds since <epoch>
+``pose_position``      ``frame, chirp, vector``           float64    m (body origin in W, NED)
+``pose_attitude``      ``frame, chirp, euler``            float64    rad (roll, pitch, yaw)
+``frame``              ``frame``                          int64      1
+``vector``             ``vector``                         str        ``x, y, z``
+``euler``              ``euler``                          str        ``roll, pitch, yaw``
+``sample``             ``sample``                         float64    s (fast time)
+``fast_time``          ``sample``                         float64    s (same values as sample)
+``tx_index``           ``channel``                        int64      1
+``rx_index``           ``channel``                        int64      1
+``channel_label``      ``channel``                        str        ``tx<i> rx<j>``
+``tx_position``        ``channel, vector``                float64    m (frame A)
+``rx_position``        ``channel, vector``                float64    m (frame A)
+``tx_slot``            ``channel``                        int64      1
+``imu_time``           ``imu_time``                       float64    s (IMU clock)
+``imu_gyro``           ``imu_time, vector``               float64    rad s-1 (frame B)
+``imu_accel``          ``imu_time, vector``               float64    m s-2 (frame B)
+=====================  =================================  =========  ==========================
 
 ``vector`` is ``(x, y, z)``; ``euler`` is ``(roll, pitch, yaw)`` of the Z-Y-X
-sequence. The pose is sampled at each chirp start (slot 0). The IMU log has its
-own time axis and is optional. Radar parameters live in the attributes
+sequence. ``tx_index`` / ``rx_index`` number the distinct transmit / receive
+phase centres in the order they first appear along ``channel``. The pose is
+sampled at each chirp start (slot 0). The IMU log has its own time axis and is
+optional. The frame layout has no range dimension: range bin ``k`` of the
+range FFT along ``sample`` lies at ``k * radar_range_resolution_m``
+(:func:`range_axis`). Radar parameters live in the attributes
 (``radar_carrier_frequency_hz`` ...), with the lever arm, the array name and
 grid, the scenario (JSON) and the software versions.
 
-Zarr stores are chunked per frame (one or a few chunks per frame, never a chunk
-spanning two frames) and grow along ``frame``. The attribute
-``frames_complete`` is updated only after a frame's arrays are fully written;
-:func:`open_store` and :func:`repair_store` ignore / cut anything beyond it,
-so an interrupted render keeps its finished frames and resumes at the next.
-Every chunk is written, even one equal to the fill value, so a chunk file
-that is missing from a store means damage: :func:`open_store` checks that the
-chunks of the floating-point variables (``if_data``, the pose, the axes) are
-all present for the complete frames and raises :class:`ValueError` naming the
-store, the variable and the frame otherwise; a chunk that cannot be decoded
-(truncated or corrupted file) is reported the same way.
+Time: the truth clock counts seconds since the attribute ``time_epoch_utc``
+(ISO 8601, default the Unix epoch ``1970-01-01T00:00:00Z``, so a flight log
+on Unix time aligns directly); ``chirp_time`` carries the CF units
+``seconds since <epoch>``, so a plain ``xarray.open_zarr`` decodes it to
+datetimes, while :func:`open_store` keeps float seconds.
+
+Zarr stores (:mod:`raysim.io.zarr_store`, re-exported here) have consolidated
+metadata, are chunked per frame and grow along ``frame``; stores written
+before these attributes (``raysim_format`` 1) still open.
 Files written whole (NetCDF exports) are written to a temporary name and
 moved into place with :func:`os.replace`.
 
@@ -46,11 +58,7 @@ which gives back exactly (bit for bit) the Dataset that was exported.
 from __future__ import annotations
 
 import functools
-import itertools
 import json
-import os
-import shutil
-import uuid
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -65,16 +73,23 @@ __all__ = [
     "IF_DIMS", "FORMAT_VERSION", "radar_attrs", "config_from_attrs", "array_from_dataset",
     "frames_to_dataset", "dataset_to_frames", "frame_from_dataset", "imu_dataset",
     "write_store", "append_frames", "frames_complete", "repair_store", "open_store",
-    "store_exists", "scenario_of", "export_netcdf", "read_netcdf", "netcdf_engine", "atomic_write",
+    "store_exists", "consolidate", "channel_indices", "range_axis", "CF_CONVENTIONS",
+    "scenario_of", "export_netcdf", "read_netcdf", "netcdf_engine", "atomic_write",
     "atomic_write_bytes", "atomic_write_text",
 ]
 
 #: Dimensions of the IF cube, in order.
 IF_DIMS = ("frame", "chirp", "channel", "sample")
-#: Version of this on-disk layout (attribute ``raysim_format``).
-FORMAT_VERSION = 1
-#: Upper bound of one Zarr chunk of ``if_data`` [bytes]; a frame is split along chirp.
-MAX_CHUNK_BYTES = 32 * 2**20
+#: Version of this on-disk layout (attribute ``raysim_format``): 2 added consolidated
+#: metadata, coordinate values, CF units and the time epoch.
+FORMAT_VERSION = 2
+#: CF version the attributes follow (global attribute ``Conventions``).
+CF_CONVENTIONS = "CF-1.10"
+#: Default epoch of the truth clock (attribute ``time_epoch_utc``).
+DEFAULT_EPOCH = "1970-01-01T00:00:00Z"
+#: Labels of the ``vector`` and ``euler`` axes.
+VECTOR_LABELS = ("x", "y", "z")
+EULER_LABELS = ("roll", "pitch", "yaw")
 
 _RADAR_FIELDS = {  # RadarConfig field -> attribute suffix (unit in the name)
     "carrier_frequency": "carrier_frequency_hz", "bandwidth": "bandwidth_hz",
@@ -168,16 +183,64 @@ def imu_dataset(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray,
     t = np.asarray(time, dtype=float)
     return xr.Dataset(
         {"imu_gyro": (("imu_time", "vector"), np.asarray(gyro, dtype=float),
-                      {"units": "rad/s", "long_name": "gyroscope angular rate, body frame B"}),
+                      {"units": "rad s-1", "long_name": "gyroscope angular rate, body frame B"}),
          "imu_accel": (("imu_time", "vector"), np.asarray(accel, dtype=float),
-                       {"units": "m/s^2", "long_name": "accelerometer specific force, body "
+                       {"units": "m s-2", "long_name": "accelerometer specific force, body "
                         "frame B"})},
-        coords={"imu_time": ("imu_time", t, {"units": "s", "long_name": "IMU clock time"})},
+        coords={"imu_time": ("imu_time", t, {"units": "s", "long_name": "IMU clock time"}),
+                "vector": ("vector", _labels(VECTOR_LABELS), {"long_name": "vector component"})},
         attrs={"imu_source": str(source)})
 
 
+def _labels(values) -> np.ndarray:
+    """String labels as an object array (stored as Zarr's variable-length ``string`` type)."""
+    return np.array(list(values), dtype=object)
+
+
+def channel_indices(positions: np.ndarray) -> np.ndarray:
+    """Index of each channel's phase centre among the distinct ones, shape ``[channel]``.
+
+    Distinct positions are numbered 0, 1, ... in the order they first appear.
+
+    Parameters
+    ----------
+    positions : ndarray, shape ``[channel, 3]``
+        Transmit (or receive) phase centres [m].
+    """
+    pos = np.asarray(positions, dtype=float).reshape(-1, 3)
+    _, first, inverse = np.unique(pos, axis=0, return_index=True, return_inverse=True)
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first)] = np.arange(len(first))
+    return rank[np.asarray(inverse).ravel()]
+
+
+def range_axis(ds: xr.Dataset, num_bins: int | None = None) -> xr.DataArray:
+    """Range [m] of the range-FFT bins of a frame Dataset's ``sample`` axis.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Frame Dataset (its radar attributes).
+    num_bins : int, optional
+        Number of range bins (default: the samples per chirp for complex
+        sampling, half of them for real sampling).
+
+    Returns
+    -------
+    xarray.DataArray, shape ``[range]``
+        Coordinate ``range`` [m] (units ``m``).
+    """
+    cfg = config_from_attrs(ds.attrs)
+    n = int(num_bins) if num_bins is not None else (
+        cfg.num_samples if cfg.complex_sampling else cfg.num_samples // 2)
+    r = np.arange(n) * cfg.range_resolution
+    return xr.DataArray(r, dims=("range",), coords={"range": ("range", r)},
+                        attrs={"units": "m", "long_name": "range of the range-FFT bin"})
+
+
 def frames_to_dataset(frames: Sequence[RadarFrame], trajectory=None, *, imu: xr.Dataset | None
-                      = None, attrs: dict | None = None) -> xr.Dataset:
+                      = None, attrs: dict | None = None,
+                      epoch: str | None = None) -> xr.Dataset:
     """Stack frames (and truth pose, IMU log) into one Dataset.
 
     Parameters
@@ -192,21 +255,35 @@ def frames_to_dataset(frames: Sequence[RadarFrame], trajectory=None, *, imu: xr.
         From :func:`imu_dataset`.
     attrs : dict, optional
         Extra NetCDF-safe attributes (str, int, float, 1-D numeric lists).
+    epoch : str, optional
+        ISO 8601 UTC instant at which the truth clock reads 0 s (attribute
+        ``time_epoch_utc``, units of ``chirp_time``); default ``attrs
+        ["time_epoch_utc"]`` if given, else :data:`DEFAULT_EPOCH`.
 
     Returns
     -------
     xarray.Dataset
-        ``if_data`` of shape ``[frame, chirp, channel, sample]``, complex64.
+        ``if_data`` of shape ``[frame, chirp, channel, sample]``, complex64 (float32
+        for a real-sampled radar).
+
+    Raises
+    ------
+    ValueError
+        For no frames, frames of different shapes or an epoch that is not an
+        ISO 8601 instant.
     """
     frames = list(frames)
     if not frames:
         raise ValueError("frames is empty: give at least one RadarFrame")
+    epoch = _check_epoch(epoch or (attrs or {}).get("time_epoch_utc") or DEFAULT_EPOCH)
     cfg, arr = frames[0].config, frames[0].array
     for fr in frames[1:]:
         if fr.data.shape != frames[0].data.shape:
             raise ValueError(f"frame {fr.frame_index} has shape {fr.data.shape}, expected "
                              f"{frames[0].data.shape}")
-    data = np.stack([np.asarray(fr.data, dtype=np.complex64) for fr in frames])
+    # complex64 IQ samples, or float32 from a real-sampled ADC (complex_sampling False)
+    dtype = np.complex64 if frames[0].config.complex_sampling else np.float32
+    data = np.stack([np.asarray(fr.data, dtype=dtype) for fr in frames])
     times = np.stack([np.asarray(fr.chirp_times, dtype=float) for fr in frames])
     if trajectory is not None:
         pos, rot = trajectory.pose(times.ravel())
@@ -217,10 +294,14 @@ def frames_to_dataset(frames: Sequence[RadarFrame], trajectory=None, *, imu: xr.
         position = np.zeros(times.shape + (3,))
         attitude = np.zeros(times.shape + (3,))
     lever = np.asarray(frames[0].lever_arm, dtype=float)
+    tx_i, rx_i = channel_indices(arr.tx_positions), channel_indices(arr.rx_positions)
+    fast = cfg.fast_time()
     ds = xr.Dataset(
         {
-            "if_data": (IF_DIMS, data, {"units": "sqrt(W)", "long_name": "dechirped complex IF "
-                                        "samples s_tx conj(s_rx)"}),
+            "if_data": (IF_DIMS, data, {
+                "units": "V", "long_name": "dechirped complex IF samples s_tx conj(s_rx)",
+                "comment": "amplitude in sqrt(W), i.e. volts into a 1 ohm load: |if_data|^2 "
+                           "is the power in W"}),
             "pose_position": (("frame", "chirp", "vector"), position,
                               {"units": "m", "long_name": "truth body-origin position in W (NED) "
                                "at chirp start", "components": "x y z"}),
@@ -230,25 +311,41 @@ def frames_to_dataset(frames: Sequence[RadarFrame], trajectory=None, *, imu: xr.
         },
         coords={
             "frame": ("frame", np.array([fr.frame_index for fr in frames], dtype=np.int64),
-                      {"long_name": "frame index"}),
-            "chirp_time": (("frame", "chirp"), times, {"units": "s",
-                                                       "long_name": "chirp start time"}),
-            "fast_time": ("sample", cfg.fast_time(), {"units": "s",
-                                                      "long_name": "sample time within chirp"}),
+                      {"units": "1", "long_name": "frame index"}),
+            "vector": ("vector", _labels(VECTOR_LABELS), {"long_name": "vector component"}),
+            "euler": ("euler", _labels(EULER_LABELS),
+                      {"long_name": "Euler angle of the Z-Y-X sequence"}),
+            "sample": ("sample", fast, {"units": "s", "standard_name": "time",
+                                        "long_name": "fast time: sample time within the chirp"}),
+            "chirp_time": (("frame", "chirp"), times, {
+                "units": f"seconds since {epoch}", "calendar": "proleptic_gregorian",
+                "standard_name": "time", "long_name": "chirp start time, truth clock"}),
+            "fast_time": ("sample", fast, {"units": "s",
+                                           "long_name": "sample time within chirp"}),
+            "tx_index": ("channel", tx_i, {"units": "1", "long_name": "transmit element index"}),
+            "rx_index": ("channel", rx_i, {"units": "1", "long_name": "receive element index"}),
+            "channel_label": ("channel", _labels(f"tx{t} rx{r}" for t, r in zip(
+                tx_i, rx_i, strict=True)), {"long_name": "virtual channel"}),
             "tx_position": (("channel", "vector"), arr.tx_positions,
                             {"units": "m", "long_name": "transmit phase centre in A"}),
             "rx_position": (("channel", "vector"), arr.rx_positions,
                             {"units": "m", "long_name": "receive phase centre in A"}),
             "tx_slot": ("channel", arr.tx_slot.astype(np.int64),
-                        {"long_name": "TDM transmit slot"}),
+                        {"units": "1", "long_name": "TDM transmit slot"}),
         },
         attrs={
+            "Conventions": CF_CONVENTIONS,
+            "title": "raysim FMCW radar frames",
+            "source": "raysim ray-traced FMCW MIMO radar simulation",
             "raysim_format": FORMAT_VERSION,
-            "conventions": "raysim docs/conventions.md: NED world, FRD body, boresight +Z_A",
+            "raysim_conventions": "raysim docs/conventions.md (raysim/data/conventions.md in "
+                                  "the package): NED world, FRD body, boresight +Z_A",
+            "time_epoch_utc": epoch,
             "channel_order": ("x index major, y index minor" if arr.num_slots == 1
                               else "tx major, rx minor"),
             "array_name": arr.name,
             "lever_arm_m": lever.tolist(),
+            "radar_range_resolution_m": float(cfg.range_resolution),
             **radar_attrs(cfg), **_versions(),
         },
     )
@@ -260,7 +357,24 @@ def frames_to_dataset(frames: Sequence[RadarFrame], trajectory=None, *, imu: xr.
         ds.attrs.update(imu_attrs)
     if attrs:
         ds.attrs.update(attrs)
+    ds.attrs["time_epoch_utc"] = epoch
     return ds
+
+
+def _check_epoch(epoch) -> str:
+    """``epoch`` as given when it is an ISO 8601 UTC instant (``...Z`` or without zone)."""
+    from datetime import datetime
+
+    text = str(epoch).strip()
+    try:
+        when = datetime.fromisoformat(text.replace("Z", "+00:00"))
+    except ValueError:
+        raise ValueError(f"time epoch {epoch!r}: expected an ISO 8601 UTC instant such as "
+                         f"{DEFAULT_EPOCH!r}") from None
+    if when.utcoffset() not in (None,) and when.utcoffset().total_seconds() != 0:
+        raise ValueError(f"time epoch {epoch!r}: expected UTC (suffix Z), got offset "
+                         f"{when.utcoffset()}")
+    return text
 
 
 def frame_from_dataset(ds: xr.Dataset, index: int = 0) -> RadarFrame:
@@ -280,236 +394,19 @@ def dataset_to_frames(ds: xr.Dataset) -> list[RadarFrame]:
 
 
 # ------------------------------------------------------------------------ zarr
-def _zarr_encoding(ds: xr.Dataset) -> dict:
-    enc = {}
-    for name, var in ds.variables.items():
-        e: dict = {}
-        if var.dtype.kind in "fc":
-            e["_FillValue"] = None
-        if "frame" in var.dims:
-            chunks = list(var.shape)
-            chunks[var.dims.index("frame")] = 1
-            if "chirp" in var.dims:
-                i = var.dims.index("chirp")
-                per_chirp = var.dtype.itemsize * int(np.prod(
-                    [n for d, n in zip(var.dims, var.shape, strict=True)
-                     if d not in ("frame", "chirp")]))
-                chunks[i] = max(1, min(var.shape[i], MAX_CHUNK_BYTES // max(per_chirp, 1)))
-            e["chunks"] = tuple(chunks)
-        enc[name] = e
-    return enc
-
-
-def store_exists(path: str | Path) -> bool:
-    """Whether ``path`` holds a Zarr group written by this module."""
-    p = Path(path)
-    return (p / "zarr.json").is_file() or (p / ".zgroup").is_file()
-
-
-def write_store(path: str | Path, ds: xr.Dataset, *, overwrite: bool = False) -> None:
-    """Create a Zarr store from ``ds`` atomically (written aside, then renamed).
-
-    Raises
-    ------
-    ValueError
-        If ``path`` exists and ``overwrite`` is False.
-    """
-    path = Path(path)
-    if path.exists() and not overwrite:
-        raise ValueError(f"store {str(path)!r} already exists (overwrite to replace it)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.parent / f".{path.name}.{uuid.uuid4().hex[:8]}.tmp"
-    ds = ds.copy()
-    ds.attrs["frames_complete"] = int(ds.sizes.get("frame", 0))
-    try:
-        ds.to_zarr(tmp, mode="w", consolidated=False, encoding=_zarr_encoding(ds),
-                   write_empty_chunks=True)
-        if path.exists():
-            shutil.rmtree(path) if path.is_dir() else path.unlink()
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
-
-
-def _frame_arrays(group) -> list:
-    out = []
-    for name, arr in group.arrays():
-        dims = getattr(arr.metadata, "dimension_names", None) or arr.attrs.get(
-            "_ARRAY_DIMENSIONS", ())
-        if dims and dims[0] == "frame":
-            out.append((name, arr))
-    return out
-
-
-def frames_complete(path: str | Path) -> int:
-    """Frames fully written to the store at ``path`` (0 if there is no store)."""
-    import zarr
-
-    if not store_exists(path):
-        return 0
-    g = zarr.open_group(str(path), mode="r")
-    return int(g.attrs.get("frames_complete", 0))
-
-
-def repair_store(path: str | Path) -> int:
-    """Cut arrays back to ``frames_complete`` frames after an interrupted append.
-
-    Returns
-    -------
-    int
-        Number of complete frames kept.
-    """
-    import zarr
-
-    g = zarr.open_group(str(path), mode="r+")
-    n = int(g.attrs.get("frames_complete", 0))
-    for _, arr in _frame_arrays(g):
-        if arr.shape[0] != n:
-            arr.resize((n,) + tuple(arr.shape[1:]))
-    return n
-
-
-def append_frames(path: str | Path, ds: xr.Dataset) -> int:
-    """Append the frames of ``ds`` to an existing store, then mark them complete.
-
-    Only variables with a ``frame`` dimension are appended; the others (array
-    geometry, IMU log) were written when the store was created.
-
-    Returns
-    -------
-    int
-        Frames complete after the append.
-    """
-    import zarr
-
-    n = repair_store(path)
-    g = zarr.open_group(str(path), mode="r")
-    attrs = dict(g.attrs)
-    keep = [v for v in ds.variables if "frame" in ds[v].dims]
-    part = ds[[v for v in keep if v in ds.data_vars]]
-    part = part.drop_vars([c for c in part.coords if "frame" not in part[c].dims])
-    part.attrs = attrs  # xarray rewrites the group attributes: keep them (frames_complete = n)
-    part.to_zarr(str(path), append_dim="frame", consolidated=False, write_empty_chunks=True)
-    n += int(ds.sizes["frame"])
-    g = zarr.open_group(str(path), mode="r+")
-    attrs["frames_complete"] = n
-    g.attrs.update(attrs)
-    return n
-
-
-def _frame_span(arr, chunk: int, n: int) -> str:
-    """Frames covered by chunk number ``chunk`` along axis 0 of ``arr`` (``n`` frames)."""
-    lo = chunk * arr.chunks[0]
-    hi = min(lo + arr.chunks[0], n) - 1
-    return f"frame {lo}" if hi <= lo else f"frames {lo}-{hi}"
-
-
-def _check_chunks_present(path: Path, group, n_done: int) -> None:
-    """Raise ValueError for a missing chunk file of a floating-point variable.
-
-    The writers here keep every chunk (``write_empty_chunks=True``) and the
-    real-valued variables have the fill value NaN, so a missing float or
-    complex chunk is damage. Integer variables are not checked: Zarr's
-    default leaves out chunks equal to their fill value 0 (frame index 0).
-    """
-    for name, arr in group.arrays():
-        if arr.dtype.kind not in "fc" or arr.size == 0:
-            continue
-        dims = tuple(getattr(arr.metadata, "dimension_names", None)
-                     or arr.attrs.get("_ARRAY_DIMENSIONS", ()))
-        grid = list(arr.cdata_shape)
-        per_frame = bool(dims) and dims[0] == "frame" and n_done >= 0
-        if per_frame:
-            grid[0] = min(grid[0], -(-n_done // arr.chunks[0]))
-        folder = path / arr.path
-        for coords in itertools.product(*(range(g) for g in grid)):
-            key = arr.metadata.encode_chunk_key(coords)
-            if not (folder / key).is_file():
-                where, expected = (
-                    (f"{_frame_span(arr, coords[0], n_done)}, ",
-                     f"all chunk files of the {n_done} complete frames")
-                    if per_frame else ("", "all chunk files of the variable"))
-                raise ValueError(
-                    f"Zarr store {str(path)!r} is damaged: variable {name!r} has no chunk file "
-                    f"{key!r} ({where}chunk {coords}); expected {expected} (a missing one "
-                    f"would read as the fill value {np.asarray(arr.fill_value).item()!r})")
-
-
-def _load_checked(path: Path, ds: xr.Dataset, group) -> xr.Dataset:
-    """Read every variable into memory; an undecodable chunk becomes a ValueError."""
-    for name, var in ds.variables.items():
-        try:
-            var.load()
-        except MemoryError:
-            raise
-        except Exception as exc:
-            raise ValueError(
-                f"Zarr store {str(path)!r} is damaged: variable {name!r} cannot be read "
-                f"({_bad_chunks(group, str(name), ds.sizes.get('frame', 0))}): "
-                f"{type(exc).__name__}: {exc}; expected complete, decodable chunk files "
-                f"(a truncated or corrupted file?)") from exc
-    return ds
-
-
-def _bad_chunks(group, name: str, n: int) -> str:
-    """Which frames of variable ``name`` fail to decode (error path only)."""
-    try:
-        arr = group[name]
-        dims = tuple(getattr(arr.metadata, "dimension_names", None)
-                     or arr.attrs.get("_ARRAY_DIMENSIONS", ()))
-        if not dims or dims[0] != "frame":
-            return "not a per-frame variable"
-        bad = []
-        for c in range(-(-n // arr.chunks[0])):
-            try:
-                arr[c * arr.chunks[0]:min((c + 1) * arr.chunks[0], n)]
-            except Exception:
-                bad.append(_frame_span(arr, c, n))
-        return ", ".join(bad) if bad else "frame unknown"
-    except Exception:
-        return "frame unknown"
-
-
-def open_store(path: str | Path, *, load: bool = True) -> xr.Dataset:
-    """Open a Zarr frame store, restricted to its complete frames.
-
-    A frame left half-written by an interrupted append (arrays longer than
-    ``frames_complete``) is cut off first (see :func:`repair_store`). The
-    chunk files of the floating-point variables (``if_data`` ...) must all be
-    present for the complete frames: a deleted chunk would otherwise read
-    back silently as the fill value.
-
-    Parameters
-    ----------
-    load : bool
-        Read everything into memory (else variables stay lazy, dask-backed,
-        and a chunk that cannot be decoded fails only when it is computed).
-
-    Raises
-    ------
-    ValueError
-        If ``path`` is not a raysim Zarr store, or a chunk file is missing
-        or cannot be decoded (truncated, corrupted); the message names the
-        store, the variable and the frame.
-    """
-    import zarr
-
-    if not store_exists(path):
-        raise ValueError(f"{str(path)!r} is not a Zarr store (no zarr.json / .zgroup found)")
-    path = Path(path)
-    g = zarr.open_group(str(path), mode="r")
-    n_done = int(g.attrs.get("frames_complete", -1))
-    if n_done >= 0 and any(a.shape[0] != n_done for _, a in _frame_arrays(g)):
-        repair_store(path)  # half-appended frame of an interrupted render: drop it
-        g = zarr.open_group(str(path), mode="r")
-    _check_chunks_present(path, g, n_done)
-    # load: read through zarr directly (no dask graph); else lazy, dask-backed
-    ds = xr.open_zarr(str(path), consolidated=False, **({"chunks": None} if load else {}))
-    n = int(ds.attrs.get("frames_complete", ds.sizes.get("frame", 0)))
-    if ds.sizes.get("frame", 0) != n:
-        ds = ds.isel(frame=slice(0, n))
-    return _load_checked(path, ds, g) if load else ds
+# the Zarr store functions live in raysim.io.zarr_store; re-exported here
+from raysim.io.zarr_store import (  # noqa: E402,F401
+    MAX_CHUNK_BYTES,
+    OPEN_RETRIES,
+    append_frames,
+    consolidate,
+    frames_complete,
+    open_store,
+    repair_store,
+    store_exists,
+    strings_as_object,
+    write_store,
+)
 
 
 # ---------------------------------------------------------------------- netcdf
@@ -574,7 +471,7 @@ def read_netcdf(path: str | Path) -> xr.Dataset:
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"NetCDF file {str(path)!r} does not exist")
-    with xr.open_dataset(path, engine=_netcdf_engine()) as f:
+    with xr.open_dataset(path, engine=_netcdf_engine(), decode_times=False) as f:
         ds = f.load()
     for name in list(ds.data_vars):
         if name.endswith("_real") and ds[name].attrs.get("complex_part") == "real":
@@ -586,6 +483,7 @@ def read_netcdf(path: str | Path) -> xr.Dataset:
             attrs = {k: v for k, v in re_.attrs.items() if k != "complex_part"}
             ds = ds.drop_vars([name, f"{base}_imag"]).assign(
                 {base: (re_.dims, data, attrs)})
+    ds = strings_as_object(ds)
     for name in ds.variables:
         ds[name].encoding = {}
     return ds

@@ -26,7 +26,7 @@ from raysim.vocabulary import ChainSpec, parse_chain
 
 __all__ = ["ANALYSIS_METRICS", "ANGLE_LIMIT_DEG", "ANGLE_STEP_DEG", "SINGLE_CHIRP_HALF_WIDTH_DEG",
            "SINGLE_CHIRP_STEP_DEG", "MAX_SNAPSHOTS", "RANGE_SEARCH_M", "angle_chirp",
-           "gate_snapshots", "analyse"]
+           "gate_snapshots", "analyse", "angle_apertures", "check_finite_frames"]
 
 #: Metrics returned by :func:`analyse`, in order (units in :data:`raysim.vocabulary.METRICS`).
 ANALYSIS_METRICS = ("range_m", "az_deg", "el_deg", "angle_error_deg", "map_az_deg",
@@ -74,8 +74,44 @@ def gate_snapshots(data: np.ndarray, range_bin: float) -> np.ndarray:
     """
     k = data.shape[-1]
     w = window("hann", k)
-    kern = (w / w.sum()) * np.exp(-2j * np.pi * range_bin * np.arange(k) / k)
+    # a real-sampled cube keeps the positive beat half, doubled (as range_compress)
+    gain = 1.0 if np.iscomplexobj(data) else 2.0
+    kern = gain * (w / w.sum()) * np.exp(-2j * np.pi * range_bin * np.arange(k) / k)
     return (data @ kern.astype(np.complex64)).astype(np.complex64)
+
+
+def check_finite_frames(frames: Sequence[RadarFrame]) -> None:
+    """Raise if any IF sample is NaN or infinite.
+
+    Raises
+    ------
+    ValueError
+        Naming the frame (its ``frame_index``), chirp, channel and sample of the
+        first bad value.
+    """
+    for k, fr in enumerate(frames):
+        data = np.asarray(fr.data)
+        ok = np.isfinite(data)
+        if not ok.all():
+            c, m, s = (int(v) for v in np.argwhere(~ok)[0])
+            idx = getattr(fr, "frame_index", k)
+            raise ValueError(f"frame {idx} (position {k}): IF data holds a non-finite value "
+                             f"{complex(data[c, m, s])} at chirp {c}, channel {m}, sample {s} "
+                             f"({int((~ok).sum())} such samples); expected finite samples")
+
+
+def angle_apertures(positions: np.ndarray, wavelength: float) -> tuple[bool, bool]:
+    """Whether the virtual array resolves azimuth and elevation.
+
+    With ``u = (cos el sin az, sin el, cos el cos az)`` azimuth is measured by
+    the spread of the positions along x and elevation by their spread along y
+    (positions ``[channel, 3]`` in frame A [m]); an axis whose spread is below a
+    thousandth of ``wavelength`` [m] (a single channel, a line array) has no
+    aperture.
+    """
+    p = np.asarray(positions, dtype=float).reshape(-1, 3)
+    tol = 1e-3 * wavelength
+    return bool(np.ptp(p[:, 0]) > tol), bool(np.ptp(p[:, 1]) > tol)
 
 
 def _parabolic_peak(y: np.ndarray, i: int) -> float:
@@ -154,8 +190,17 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     -------
     dict
         Metric name -> value, units in :data:`raysim.vocabulary.METRICS`
-        (angle errors are NaN without a reference). With ``return_maps``, a
-        tuple ``(metrics, maps)``.
+        (angle errors are NaN without a reference; azimuth metrics are NaN for
+        an array without aperture along x, elevation metrics for one without
+        aperture along y, and the angle errors with either, see
+        :func:`angle_apertures`). With ``return_maps``, a tuple
+        ``(metrics, maps)``.
+
+    Raises
+    ------
+    ValueError
+        Bad arguments, or a NaN / infinite IF sample (naming its frame, chirp,
+        channel and sample).
     """
     if not isinstance(frames, Sequence):
         frames = list(frames)
@@ -167,6 +212,7 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     if not (0 < angle_step_deg <= angle_limit_deg <= 90):
         raise ValueError(f"need 0 < angle_step_deg <= angle_limit_deg <= 90, got "
                          f"{angle_step_deg!r}, {angle_limit_deg!r}")
+    check_finite_frames(frames)
     cfg = frames[0].config
     n = frames[0].data.shape[0]
     if motion is not None and motion.num_chirps != n * len(frames):
@@ -180,7 +226,7 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
 
     rc0 = range_compress(frames[0].data)                       # [chirp, channel, range]
     n_range = rc0.shape[-1]
-    r_axis = cfg.range_axis(n_range)[:n_range]
+    r_axis = cfg.bin_ranges(n_range)
     profile = np.sum(np.abs(rc0) ** 2, axis=(0, 1))[: r_axis.size]
     search = profile.copy()
     if reference is not None:
@@ -233,13 +279,16 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
              {"range": r_axis, "doppler": cfg.velocity_axis(spec_rd.shape[0])})
     width = doppler_mainlobe_width(slow, cfg.chirp_interval)
     pv = pseudo_velocity(slow, cfg.chirp_interval, wl)
+    has_az, has_el = angle_apertures(frames[0].array.virtual_positions, cfg.center_wavelength)
+    if not (has_az and has_el):
+        err = map_err = math.nan
     metrics = {
         "range_m": range_m,
-        "az_deg": math.degrees(pk1["azimuth"]),
-        "el_deg": math.degrees(pk1["elevation"]),
+        "az_deg": math.degrees(pk1["azimuth"]) if has_az else math.nan,
+        "el_deg": math.degrees(pk1["elevation"]) if has_el else math.nan,
         "angle_error_deg": float(err),
-        "map_az_deg": math.degrees(pk["azimuth"]),
-        "map_el_deg": math.degrees(pk["elevation"]),
+        "map_az_deg": math.degrees(pk["azimuth"]) if has_az else math.nan,
+        "map_el_deg": math.degrees(pk["elevation"]) if has_el else math.nan,
         "map_angle_error_deg": float(map_err),
         "pseudo_velocity_mps": pv,
         "pseudo_velocity_bins": pv / cfg.velocity_resolution,

@@ -66,6 +66,8 @@ def _scenario_key(scenario: Scenario) -> str:
 def _store_attrs(scenario: Scenario, reference: Reference | None) -> dict:
     attrs = {"scenario_json": _scenario_key(scenario), "scenario_name": scenario.name,
              "frames_planned": int(scenario.frames), "motion_name": scenario.trajectory().name}
+    if scenario.time_epoch_utc is not None:
+        attrs["time_epoch_utc"] = scenario.time_epoch_utc
     if reference is not None:
         attrs.update({"reference_range_m": reference.range_m,
                       "reference_az_deg": reference.az_deg,
@@ -106,31 +108,85 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
         The store holds frames of a different scenario (and ``overwrite`` is False).
     """
     from raysim.io import storage
+    from raysim.io.store_guard import check_replaceable, remove_debris, writer_lock
 
     store = Path(store)
     traj = scenario.trajectory()
-    done = 0
-    if store.exists() and not overwrite:
-        if not storage.store_exists(store):
-            raise ValueError(f"{str(store)!r} exists and is not a Zarr store; choose another "
-                             f"--out or pass --overwrite")
-        import zarr
+    if store.exists():
+        check_replaceable(store, "--out")      # never touch what raysim did not write
+    announce_store_size(scenario, store, progress=progress)
+    summary = RenderSummary(str(store), scenario.frames, 0, 0)
+    with writer_lock(store):
+        removed = remove_debris(store)
+        if removed:
+            summary.notes.append(f"removed {len(removed)} leftover file(s) of an interrupted "
+                                 f"writer of {str(store)!r}")
+        done = 0
+        if store.exists() and not overwrite and storage.store_exists(store):
+            import zarr
 
-        attrs = dict(zarr.open_group(str(store), mode="r").attrs)
-        if attrs.get("scenario_json") != _scenario_key(scenario):
-            raise ValueError(f"store {str(store)!r} holds frames of a different scenario "
-                             f"({attrs.get('scenario_name')!r}); pass --overwrite to replace "
-                             f"it or choose another --out")
-        done = storage.repair_store(store)
-    elif store.exists() and overwrite:
-        import shutil
+            attrs = dict(zarr.open_group(str(store), mode="r").attrs)
+            if attrs.get("scenario_json") != _scenario_key(scenario):
+                raise ValueError(f"store {str(store)!r} holds frames of a different scenario "
+                                 f"({attrs.get('scenario_name')!r}); pass --overwrite to "
+                                 f"replace it or choose another --out")
+            done = storage.repair_store(store)
+        elif store.exists() and overwrite:
+            from raysim.io.store_guard import remove_store
 
-        shutil.rmtree(store) if store.is_dir() else store.unlink()
+            remove_store(store)
+        summary.frames_resumed = done
+        _render_frames(scenario, store, traj, done, max_frames, progress, summary)
+    if export_netcdf is not None and storage.frames_complete(store) == scenario.frames:
+        storage.export_netcdf(storage.open_store(store), export_netcdf)
+    return summary
+
+
+def announce_store_size(scenario: Scenario, store: Path, *, progress: bool = False) -> int:
+    """Estimate a render's store size; refuse it if the disk lacks room, announce it if large.
+
+    The size is the IF cubes (complex64) plus the per-chirp pose; compression
+    does not shrink noisy IF data. Printed on stderr when ``progress`` is set
+    or the size exceeds :data:`raysim.resources.LARGE_OUTPUT_BYTES`.
+
+    Returns
+    -------
+    int
+        Estimated store size [bytes].
+    """
+    import shutil
+    import sys
+
+    from raysim.resources import LARGE_OUTPUT_BYTES, cube_bytes, format_bytes
+
+    cfg = scenario.radar_config()
+    shape = (cfg.num_chirps, scenario.virtual_array().num_channels, cfg.num_samples)
+    per_frame = cube_bytes(*shape) + cfg.num_chirps * 7 * 8
+    total = per_frame * scenario.frames
+    parent = store.resolve().parent
+    while not parent.exists():
+        parent = parent.parent
+    free = shutil.disk_usage(parent).free
+    if total > free:
+        raise ValueError(f"store {str(store)!r} would take about {format_bytes(total)} "
+                         f"({scenario.frames} frames of {list(shape)} complex64), "
+                         f"{format_bytes(free)} are free on its disk; expected a render that "
+                         f"fits: reduce frames, radar.num_chirps or the array")
+    if progress or total > LARGE_OUTPUT_BYTES:
+        print(f"render: {scenario.frames} frame(s) of {list(shape)} complex64, "
+              f"{format_bytes(per_frame)} each, about {format_bytes(total)} in {str(store)!r}",
+              file=sys.stderr, flush=True)
+    return total
+
+
+def _render_frames(scenario: Scenario, store: Path, traj, done: int, max_frames, progress: bool,
+                   summary: RenderSummary) -> None:
+    """Frames ``done ..`` of a scenario appended to a store (the caller holds its lock)."""
+    from raysim.io import storage
 
     todo = list(range(done, scenario.frames))
     if max_frames is not None:
         todo = todo[: max(0, int(max_frames))]
-    summary = RenderSummary(str(store), scenario.frames, 0, done)
     if todo:
         source = frame_source(scenario, traj)
         bar = None
@@ -157,9 +213,6 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
         finally:
             if bar is not None:
                 bar.close()
-    if export_netcdf is not None and storage.frames_complete(store) == scenario.frames:
-        storage.export_netcdf(storage.open_store(store), export_netcdf)
-    return summary
 
 
 def render_dataset(scenario: Scenario) -> object:

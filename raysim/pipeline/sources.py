@@ -96,10 +96,11 @@ def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFr
     FeatureUnavailable
         For a ray-traced scene when Sionna RT cannot be used here.
     """
-    from raysim.echoes.oracle import simulate_point_targets
+    from raysim.echoes.oracle import check_frame_memory, simulate_point_targets
 
     cfg = scenario.radar_config()
     arr = scenario.virtual_array()
+    check_frame_memory(cfg, arr, len(scenario.scene.targets), intra_chirp=scenario.intra_chirp)
     traj = scenario.trajectory() if trajectory is None else trajectory
     lever = scenario.lever_arm
     if scenario.scene.kind == "points":

@@ -223,6 +223,10 @@ def _check_vector(name: str, v) -> np.ndarray:
 
 # Independent random streams, one per error source (order fixed: adding a
 # source at the end never changes the others).
+#: Peak memory of the simulation per IMU sample [bytes]: time, truth rate and force,
+#: eight error streams of three axes and the outputs, in float64 (an upper bound).
+IMU_BYTES_PER_SAMPLE = 512
+
 _STREAMS = ("gyro_static", "gyro_gm", "gyro_rw", "gyro_white",
             "accel_static", "accel_gm", "accel_rw", "accel_white")
 
@@ -295,6 +299,12 @@ class Imu:
         if k1 < k0:
             raise ValueError(
                 f"no IMU sample falls in [{start!r}, {end!r}] s at rate {self.rate!r} Hz")
+        from raysim.resources import check_memory
+
+        n = k1 - k0 + 1
+        check_memory(IMU_BYTES_PER_SAMPLE * n, f"an IMU record of {n} samples ({self.rate:g} Hz "
+                                               f"over {end - start:g} s)",
+                     "imu.rate_hz or the length of the record")
         return np.arange(k0, k1 + 1, dtype=float) / self.rate
 
     # ----------------------------------------------------------- simulation

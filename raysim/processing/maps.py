@@ -87,10 +87,19 @@ def range_compress(data: np.ndarray, *, window_name: str | None = "hann",
     Returns
     -------
     ndarray, shape ``[..., range]``, complex64
+        ``range = n_fft`` bins for complex samples; for real samples (a
+        real-sampled ADC) the ``n_fft // 2`` bins of positive beat frequency,
+        doubled so that a real tone ``a cos(...)`` peaks at ``a`` as its complex
+        counterpart ``a exp(j ...)`` does (:meth:`RadarConfig.range_axis`
+        gives their ranges).
     """
     k = data.shape[-1]
     w = window(window_name, k)
     w = (w / w.sum()).astype(np.float32)
+    if not np.iscomplexobj(data):
+        n = k if n_fft is None else int(n_fft)
+        half = scipy.fft.rfft(data * w, n=n, axis=-1, workers=FFT_WORKERS)[..., : n // 2]
+        return (2.0 * half).astype(np.complex64, copy=False)
     return scipy.fft.fft(data * w, n=n_fft, axis=-1, workers=FFT_WORKERS).astype(
         np.complex64, copy=False)
 
@@ -156,7 +165,7 @@ def range_doppler_map(rc: np.ndarray, config: RadarConfig, *, window_name: str |
     power = np.sum(np.abs(spec) ** 2, axis=1).T
     n_range = rc.shape[-1]
     return Map(power, ("range", "doppler"),
-               {"range": config.range_axis(n_range)[:n_range],
+               {"range": config.bin_ranges(n_range),
                 "doppler": config.velocity_axis(spec.shape[0])})
 
 
@@ -177,7 +186,7 @@ def range_azimuth_map(rc_chirp: np.ndarray, array: VirtualArray, config: RadarCo
     y = beamform(rc_chirp.T, array, config.center_wavelength, u)          # [range, azimuth]
     n_range = rc_chirp.shape[-1]
     return Map(np.abs(y) ** 2, ("range", "azimuth"),
-               {"range": config.range_axis(n_range)[:n_range], "azimuth": np.asarray(az)})
+               {"range": config.bin_ranges(n_range), "azimuth": np.asarray(az)})
 
 
 def azimuth_elevation_map(snapshots: np.ndarray, array: VirtualArray, wavelength: float,

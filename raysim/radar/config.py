@@ -19,6 +19,32 @@ BOLTZMANN = 1.380649e-23
 #: Reference noise temperature [K].
 T0_KELVIN = 290.0
 
+#: Physical range of the transmit power per transmitter [dBm]: 0.1 fW to 1 kW (automotive
+#: 77 GHz parts emit 10-13 dBm; 55 dBm EIRP is the regulatory limit).
+TX_POWER_DBM_RANGE = (-100.0, 60.0)
+#: Physical range of one element's antenna gain [dBi].
+ANTENNA_GAIN_DBI_RANGE = (-30.0, 50.0)
+#: Physical range of the receiver noise figure [dB] (0 dB: a noiseless receiver).
+NOISE_FIGURE_DB_RANGE = (0.0, 50.0)
+#: Range of a radar cross-section [dBsm]: up to beyond a ship (+60 dBsm), which keeps the
+#: radar equation's power finite in float32; down to a vanishing echo (an insect is
+#: -60 dBsm; -250 dBsm lies far below any noise floor, for noise-only frames).
+RCS_DBSM_RANGE = (-250.0, 100.0)
+
+
+def check_in_range(name: str, value, bounds: tuple[float, float], unit: str) -> float:
+    """``value`` as a float within ``bounds`` (inclusive); else ValueError naming it, the
+    range and ``unit``."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number in [{bounds[0]:g}, {bounds[1]:g}] {unit}, "
+                         f"got {value!r}") from None
+    if not (math.isfinite(v) and bounds[0] <= v <= bounds[1]):
+        raise ValueError(f"{name} must lie in the physical range [{bounds[0]:g}, "
+                         f"{bounds[1]:g}] {unit}, got {value!r}")
+    return v
+
 
 def _positive(name: str, value: float) -> float:
     value = float(value)
@@ -52,11 +78,14 @@ class RadarConfig:
         Complex (I/Q) baseband if True; real sampling halves the unambiguous
         beat band.
     tx_power_dbm : float
-        Transmit power per active transmitter [dBm].
+        Transmit power per active transmitter [dBm], within
+        :data:`TX_POWER_DBM_RANGE` (-100 to 60 dBm).
     antenna_gain_dbi : float
-        Gain of one transmit and one receive element [dBi] (same for both).
+        Gain of one transmit and one receive element [dBi] (same for both),
+        within :data:`ANTENNA_GAIN_DBI_RANGE` (-30 to 50 dBi).
     noise_figure_db : float
-        Receiver noise figure [dB], used when thermal noise is switched on.
+        Receiver noise figure [dB], used when thermal noise is switched on,
+        within :data:`NOISE_FIGURE_DB_RANGE` (0 to 50 dB).
     frame_period : float or None
         Frame start-to-start interval [s]; ``None`` means frames are
         contiguous (``num_chirps * T_rep``).
@@ -85,6 +114,9 @@ class RadarConfig:
         _positive("bandwidth", self.bandwidth)
         _positive("chirp_duration", self.chirp_duration)
         _positive("sample_rate", self.sample_rate)
+        check_in_range("tx_power_dbm", self.tx_power_dbm, TX_POWER_DBM_RANGE, "dBm")
+        check_in_range("antenna_gain_dbi", self.antenna_gain_dbi, ANTENNA_GAIN_DBI_RANGE, "dBi")
+        check_in_range("noise_figure_db", self.noise_figure_db, NOISE_FIGURE_DB_RANGE, "dB")
         if not math.isfinite(self.idle_time) or self.idle_time < 0:
             raise ValueError(f"idle_time must be >= 0 s, got {self.idle_time!r}")
         for name in ("num_chirps", "num_frames", "num_tx_slots"):
@@ -210,6 +242,16 @@ class RadarConfig:
         if not self.complex_sampling:
             beat = beat[: n_fft // 2]
         return SPEED_OF_LIGHT * beat / (2.0 * self.chirp_rate)
+
+    def bin_ranges(self, num_bins: int) -> np.ndarray:
+        """Range of each bin of a range-compressed cube with ``num_bins`` bins [m].
+
+        The FFT length is ``num_bins`` for complex samples and ``2 num_bins``
+        for real ones (:func:`raysim.processing.maps.range_compress` keeps the
+        positive half), zero padding included.
+        """
+        n = int(num_bins)
+        return self.range_axis(n if self.complex_sampling else 2 * n)[:n]
 
     def doppler_axis(self, n_fft: int | None = None) -> np.ndarray:
         """Doppler frequency of each fft-shifted slow-time bin, shape ``[doppler]`` [Hz]."""

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from raysim.pipeline.analysis import ANALYSIS_METRICS
-from raysim.pipeline.sources import Reference
+from raysim.pipeline.sources import LazyFrames, Reference
 from raysim.synthesis.frame import RadarFrame
 from raysim.vocabulary import (
     CHAINS,
@@ -43,11 +43,16 @@ from raysim.vocabulary import (
     parse_chains,
 )
 
-__all__ = ["ReportData", "collect_from_scenario", "collect_from_dataset", "build_report",
-           "write_report", "software_versions", "DYNAMIC_RANGE_DB"]
+__all__ = ["ReportData", "StoredFrames", "collect_from_scenario", "collect_from_dataset",
+           "build_report",
+           "write_report", "software_versions", "zoom_limits", "DYNAMIC_RANGE_DB"]
 
 #: Colour-scale depth of the maps [dB].
 DYNAMIC_RANGE_DB = 40.0
+#: Maps are zoomed on the cells within this many dB of their peak (target, clutter ridge) [dB].
+ZOOM_DB = 20.0
+#: Smallest zoom window, in cells of the map's grid along each axis.
+ZOOM_MIN_CELLS = 8
 #: Chirps of frame 0 summed (in power) into the range-angle maps.
 RANGE_ANGLE_CHIRPS = 16
 #: Distributions whose versions the report lists.
@@ -98,7 +103,7 @@ def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
     ``chains``: names or specs (:func:`raysim.vocabulary.parse_chains`).
     """
     from raysim.pipeline.run import evaluate
-    from raysim.pipeline.sources import LazyFrames, frame_source
+    from raysim.pipeline.sources import frame_source
 
     keys = [c.key for c in parse_chains(chains)]
     traj = scenario.trajectory()
@@ -117,15 +122,52 @@ def _paper_values(scenario) -> dict:
     return paper_values(scenario.motion.case)
 
 
+class StoredFrames(LazyFrames):
+    """The frames of a stored Dataset, read one at a time when accessed (frame 0 is kept).
+
+    With a lazy (dask-backed) Dataset, e.g. ``open_store(path, load=False)``,
+    an analysis holds about two frames in memory, not the whole store.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Frame Dataset (:mod:`raysim.io.storage` layout), lazy or in memory.
+    """
+
+    def __init__(self, ds):
+        from raysim.io.storage import array_from_dataset, config_from_attrs
+
+        self._ds = ds
+        config, array = config_from_attrs(ds.attrs), array_from_dataset(ds)
+        lever = np.asarray(ds.attrs.get("lever_arm_m", [0, 0, 0]), dtype=float)
+
+        def read(f: int) -> RadarFrame:
+            sub = ds.isel(frame=f)
+            return RadarFrame(np.asarray(sub["if_data"].values), config, array,
+                              np.asarray(sub["chirp_time"].values, dtype=float), lever,
+                              int(sub["frame"].values), {"source": "dataset"})
+
+        super().__init__(read, int(ds.sizes["frame"]))
+
+    def chirp_times(self) -> np.ndarray:
+        """Stored chirp start times of all frames, shape ``[frame * chirp]`` [s]."""
+        return np.asarray(self._ds["chirp_time"].values, dtype=float).ravel()
+
+
 def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = "") -> ReportData:
     """Frames of a stored Dataset (Zarr / NetCDF), measured through every chain its IMU log
-    and scenario allow."""
-    from raysim.io.storage import dataset_to_frames, scenario_of
+    and scenario allow.
+
+    Frames are read one at a time (:class:`StoredFrames`): give a lazy Dataset
+    (``raysim.io.storage.open_store(path, load=False)``) and a report of a
+    store of any length holds about two frames in memory.
+    """
+    from raysim.io.storage import scenario_of
     from raysim.pipeline.analysis import analyse
     from raysim.pipeline.run import evaluate
 
     keys = [c.key for c in parse_chains(chains)]
-    frames = dataset_to_frames(ds)
+    frames = StoredFrames(ds)
     scenario = scenario_of(ds)
     motion = str(ds.attrs.get("motion_name", ""))
     ref = None
@@ -139,7 +181,7 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
                "warnings": {"none": []},
                "notes": ["the store carries no scenario: compensation chains skipped"]}
         return ReportData(title, res, frames[0], len(frames), "", {}, source, motion)
-    imu = ds[["imu_gyro", "imu_accel"]] if "imu_gyro" in ds else None
+    imu = ds[["imu_gyro", "imu_accel"]].load() if "imu_gyro" in ds else None
     notes = []
     if imu is None:
         keys = [c for c in keys if c == "none"] or ["none"]
@@ -161,32 +203,93 @@ def _png(fig) -> str:
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
+def zoom_limits(m, mark=(None, None), *, max_range: float | None = None,
+                zoom_db: float = ZOOM_DB) -> tuple:
+    """Axis limits of a map figure around its strong cells and the truth mark.
+
+    The window covers every cell within ``zoom_db`` of the map's peak (the
+    target and the clutter ridge) and the mark, spans at least
+    :data:`ZOOM_MIN_CELLS` cells, gets a margin of a quarter of its span on
+    each side and stays within the map.
+
+    Parameters
+    ----------
+    m : raysim.processing.maps.Map
+        Two-dimensional map (axes of :data:`raysim.vocabulary.FIGURE_AXES`).
+    mark : (float or None, float or None)
+        Truth position in figure units (x, y), e.g. ``(az_deg, range_m)``.
+    max_range : float, optional
+        Cells beyond this range [m] are not considered.
+    zoom_db : float
+        Depth of the cells kept [dB below the peak].
+
+    Returns
+    -------
+    (xlim, ylim)
+        Each a ``(low, high)`` pair in figure units (degrees for angles).
+    """
+    from raysim.studies.figures import map_image, map_name
+
+    x, y, db = map_image(m)
+    xa, ya = FIGURE_AXES[map_name(m)]
+    keep = np.ones(db.shape, dtype=bool)
+    if max_range is not None:
+        if ya == "range":
+            keep &= (y <= max_range)[:, None]
+        if xa == "range":
+            keep &= (x <= max_range)[None, :]
+    shown = np.where(keep, db, -np.inf)
+    strong = shown >= shown.max() - zoom_db
+    out = []
+    for values, hit, mk in ((x, strong.any(axis=0), mark[0]), (y, strong.any(axis=1), mark[1])):
+        v = np.asarray(values, dtype=float)
+        lo, hi = float(v[hit].min()), float(v[hit].max())
+        if mk is not None and np.isfinite(mk):
+            lo, hi = min(lo, float(mk)), max(hi, float(mk))
+        cell = float(np.median(np.abs(np.diff(v)))) if v.size > 1 else 1.0
+        span = max(hi - lo, ZOOM_MIN_CELLS * cell)
+        centre = 0.5 * (lo + hi)
+        lo, hi = centre - 0.75 * span, centre + 0.75 * span
+        out.append((max(lo, float(v.min()) - 0.5 * cell), min(hi, float(v.max()) + 0.5 * cell)))
+    return tuple(out)
+
+
 def _map_figure(maps: dict, reference: Reference | None, max_range: float | None):
     """One panel per chain of one kind of map, drawn by :func:`~raysim.studies.figures.plot_map`.
 
     ``maps``: chain key -> :class:`~raysim.processing.maps.Map` (all of the same
     kind, see :data:`raysim.vocabulary.MAPS`); the truth is marked with a red
-    cross (a static target: range rate 0); range is cut at ``max_range`` [m].
+    cross (a static target: range rate 0). Every panel shows the same window,
+    zoomed on the strong cells of all chains (:func:`zoom_limits`; range cut at
+    ``max_range`` [m]).
     """
     import matplotlib.pyplot as plt
 
     from raysim.studies.figures import map_name, plot_map
 
     chains = list(maps)
-    fig, axes = plt.subplots(1, len(chains), figsize=(4.4 * len(chains), 3.6), squeeze=False,
-                             layout="constrained")
+    fig, axes = plt.subplots(1, len(chains), figsize=(3.6 * len(chains) + 1.2, 3.6),
+                             squeeze=False, layout="constrained")
+    first = maps[chains[0]]
+    xa, ya = FIGURE_AXES[map_name(first)]
+    mark = (None, None)
+    if reference is not None:
+        where = {"range": reference.range_m, "azimuth": reference.az_deg,
+                 "elevation": reference.el_deg, "doppler": 0.0}
+        mark = (where[xa], where[ya])
+    lims = [zoom_limits(maps[c], mark, max_range=max_range) for c in chains]
+    xlim = (min(lo[0][0] for lo in lims), max(lo[0][1] for lo in lims))
+    ylim = (min(lo[1][0] for lo in lims), max(lo[1][1] for lo in lims))
     for ax, chain in zip(axes[0], chains, strict=True):
         m = maps[chain]
-        name = map_name(m)
-        xa, ya = FIGURE_AXES[name]
-        im = plot_map(ax, m, title=f"{chain}: {MAP_TITLES[name]}",
-                      dynamic_range_db=DYNAMIC_RANGE_DB,
-                      ylim=(0.0, max_range) if ya == "range" and max_range is not None
-                      else None)
-        if reference is not None:
-            mark = {"range": reference.range_m, "azimuth": reference.az_deg,
-                    "elevation": reference.el_deg, "doppler": 0.0}
-            ax.plot(mark[xa], mark[ya], marker="+", color="red", markersize=12, mew=1.5)
+        im = plot_map(ax, m, title=chain, dynamic_range_db=DYNAMIC_RANGE_DB,
+                      xlim=xlim, ylim=ylim)
+        if mark[0] is not None:
+            ax.plot(*mark, marker="+", color="red", markersize=12, mew=1.5)
+    for ax in axes[0][1:]:
+        ax.set_ylabel("")
+        ax.tick_params(labelleft=False)
+    fig.suptitle(MAP_TITLES[map_name(first)], fontsize=11)
     fig.colorbar(im, ax=axes[0].tolist(), label="power [dB rel. max]", shrink=0.9)
     return fig
 
@@ -196,11 +299,18 @@ def _doppler_figure(slow: dict, cfg):
 
     from raysim.processing.metrics import doppler_power_spectrum
 
-    fig, ax = plt.subplots(figsize=(8, 3.4))
+    fig, ax = plt.subplots(figsize=(8, 3.4), layout="constrained")
+    lo, hi = np.inf, -np.inf
     for chain, x in slow.items():
         f, p = doppler_power_spectrum(x, cfg.chirp_interval)
-        ax.plot(f * cfg.center_wavelength / 2.0, 10 * np.log10(np.maximum(p / p.max(), 1e-12)),
-                label=chain)
+        v, db = f * cfg.center_wavelength / 2.0, 10 * np.log10(np.maximum(p / p.max(), 1e-12))
+        ax.plot(v, db, label=chain)
+        seen = v[db >= -50.0]                   # zoom on what rises above the plot's floor
+        lo, hi = min(lo, seen.min()), max(hi, seen.max())
+    span = max(hi - lo, 8 * cfg.velocity_resolution)
+    centre = 0.5 * (lo + hi)
+    ax.set_xlim(max(centre - 0.75 * span, -cfg.max_velocity),
+                min(centre + 0.75 * span, cfg.max_velocity))
     ax.set_xlabel("range rate [m/s]  (f_D lambda / 2, positive receding)")
     ax.set_ylabel("power [dB rel. peak]")
     ax.set_ylim(-60, 3)

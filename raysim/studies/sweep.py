@@ -13,13 +13,20 @@ values and its seed. Each finished point is written atomically to
 worker's file system is not shared); a rerun skips every point whose file
 exists, so an interrupted sweep only computes what is missing. The gathered
 results are one :class:`xarray.Dataset` with one dimension per varied key
-(named by its key path), ``seed`` and ``chain``, one variable per metric
+(named by :func:`dimension_name`: the key path as a Python identifier, e.g.
+``imu_preset`` for ``imu.preset``, usable with ``.sel``; the key path itself is
+the coordinate's attribute ``key_path``), ``seed`` and ``chain``, one variable per metric
 of :data:`raysim.vocabulary.METRICS` (NaN where a point is missing or
 failed) and ``warnings`` (the compensation's guard warnings of that point and
 chain, one per line, '' for none; :func:`warning_summary` condenses them),
 written to ``<out>/sweep.nc``. Chains are the keys of
 :func:`raysim.vocabulary.parse_chains` (``none``, ``paper``,
 ``paper:published``, ``exact``).
+
+One folder, one sweep: ``<out>/sweep.json`` records the spec (base scenario,
+parameters, seeds, chains); a sweep given an ``--out`` whose ``sweep.json``
+describes another spec raises :class:`ValueError` naming what differs
+(:func:`check_out_dir`) instead of mixing the two sweeps' points.
 
 Scheduler: a :class:`distributed.LocalCluster` by default (in-process threads,
 ``processes=False``, which suits a 2-core machine), or any scheduler address
@@ -48,7 +55,7 @@ from raysim.vocabulary import metric_unit, parse_chains
 
 __all__ = ["SweepSpec", "SweepPoint", "SweepResult", "parse_values", "sweep_points",
            "point_key", "run_sweep", "gather_results", "load_point", "warning_summary",
-           "BOOKKEEPING_VARIABLES"]
+           "BOOKKEEPING_VARIABLES", "dimension_name", "dimension_names", "check_out_dir"]
 
 #: Variables of a sweep Dataset that are not metrics.
 BOOKKEEPING_VARIABLES = ("point_done", "warnings")
@@ -275,6 +282,32 @@ def _coord(values: list):
                     dtype=object)
 
 
+def dimension_name(key: str) -> str:
+    """A Python identifier for a swept key path: ``imu.preset`` -> ``imu_preset``.
+
+    Every character that cannot appear in an identifier becomes ``_``; a name
+    that would start with a digit gets the prefix ``p_``.
+    """
+    name = re.sub(r"\W", "_", str(key))
+    return f"p_{name}" if not name or name[0].isdigit() else name
+
+
+def dimension_names(keys: Sequence[str]) -> dict:
+    """Key path -> dimension name (:func:`dimension_name`), unique and never ``seed`` /
+    ``chain`` (a clash gets the suffix ``_2``, ``_3`` ...)."""
+    out: dict = {}
+    taken = {"seed", "chain"}
+    for key in keys:
+        base = name = dimension_name(key)
+        n = 1
+        while name in taken:
+            n += 1
+            name = f"{base}_{n}"
+        taken.add(name)
+        out[key] = name
+    return out
+
+
 def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint] | None = None):
     """Assemble the stored point records into one Dataset (NaN where missing)."""
     import xarray as xr
@@ -297,8 +330,10 @@ def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint
                 if v is not None:
                     arrays[m][p.index + (ci,)] = float(v)
             warns[p.index + (ci,)] = "\n".join((rec.get("warnings") or {}).get(chain) or [])
-    dims = tuple(names) + ("seed", "chain")
-    coords = {n: (n, _coord(spec.parameters[n])) for n in names}
+    dim_of = dimension_names(names)
+    dims = tuple(dim_of[n] for n in names) + ("seed", "chain")
+    coords = {dim_of[n]: (dim_of[n], _coord(spec.parameters[n]), {"key_path": n})
+              for n in names}
     coords["seed"] = ("seed", np.array(spec.seeds, dtype=np.int64))
     coords["chain"] = ("chain", np.array(spec.chains, dtype=object))
     data = {m: (dims, arrays[m], {"units": metric_unit(m)}) for m in ANALYSIS_METRICS}
@@ -309,18 +344,67 @@ def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint
     base.pop("output", None)
     return xr.Dataset(data, coords=coords, attrs={
         "scenario_json": json.dumps(base, sort_keys=True), "scenario_name": spec.base.name,
-        "parameters": json.dumps(names), "points_total": len(points),
+        "parameters": json.dumps(names), "dimensions": json.dumps(dim_of),
+        "points_total": len(points),
         "points_done": int(done.sum())})
+
+
+def _manifest(spec: SweepSpec) -> dict:
+    """The spec as written to ``sweep.json`` (JSON types)."""
+    base = spec.base.to_dict()
+    base.pop("output", None)
+    return json.loads(json.dumps(_jsonable({
+        "base": base, "parameters": spec.parameters, "seeds": list(spec.seeds),
+        "chains": list(spec.chains)})))
 
 
 def _write_manifest(spec: SweepSpec, out_dir: Path) -> None:
     from raysim.io.storage import atomic_write_text
 
-    base = spec.base.to_dict()
-    base.pop("output", None)
-    atomic_write_text(out_dir / "sweep.json", json.dumps(_jsonable({
-        "base": base, "parameters": spec.parameters, "seeds": list(spec.seeds),
-        "chains": list(spec.chains)}), indent=1))
+    atomic_write_text(out_dir / "sweep.json", json.dumps(_manifest(spec), indent=1))
+
+
+def _differences(old, new, prefix: str = "") -> list[str]:
+    """Key paths where two JSON values differ (dicts compared key by key)."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        out = []
+        for k in sorted(set(old) | set(new), key=str):
+            out.extend(_differences(old.get(k), new.get(k), f"{prefix}.{k}" if prefix else k))
+        return out
+    return [] if old == new else [prefix or "(all)"]
+
+
+def check_out_dir(spec: SweepSpec, out_dir: str | Path) -> None:
+    """Refuse an output folder that cannot hold this sweep, before anything is computed.
+
+    Raises
+    ------
+    ValueError
+        ``out_dir`` is a file, lies under a file, or holds a ``sweep.json``
+        of another sweep (a different base scenario, parameters, seeds or
+        chains; the message names the keys that differ) or an unreadable one.
+    """
+    out = Path(out_dir)
+    for p in (out, *out.parents):
+        if p.exists() and not p.is_dir():
+            raise ValueError(f"--out {str(out)!r}: {str(p)!r} is a file; expected a folder "
+                             f"for the sweep's results")
+        if p.exists():
+            break
+    manifest = out / "sweep.json"
+    if not manifest.exists():
+        return
+    try:
+        old = json.loads(manifest.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"--out {str(out)!r}: its sweep.json cannot be read ({exc}); expected "
+                         f"the manifest of a raysim sweep, or choose another --out") from None
+    diff = _differences(old, _manifest(spec))
+    if diff:
+        shown = ", ".join(diff[:6]) + (f" and {len(diff) - 6} more" if len(diff) > 6 else "")
+        raise ValueError(f"--out {str(out)!r} holds another sweep (its sweep.json differs in "
+                         f"{shown}); choose another --out, or remove that folder to start "
+                         f"this sweep there")
 
 
 def _client(scheduler: str | None, n_workers: int, threads_per_worker: int, processes: bool):
@@ -362,10 +446,21 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, scheduler: str | None = N
     Returns
     -------
     SweepResult
+
+    Raises
+    ------
+    ValueError
+        A bad point, or an ``out_dir`` that is a file, cannot be created or
+        holds another sweep (:func:`check_out_dir`); nothing is computed then.
     """
     out_dir = Path(out_dir)
-    (out_dir / "points").mkdir(parents=True, exist_ok=True)
     points = sweep_points(spec)
+    check_out_dir(spec, out_dir)
+    try:
+        (out_dir / "points").mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"--out {str(out_dir)!r}: cannot create the results folder "
+                         f"({exc.strerror or exc}); expected a writable folder") from None
     _write_manifest(spec, out_dir)
     todo = [p for p in points if load_point(out_dir, p.key) is None]
     result = SweepResult(None, skipped=[p.key for p in points if p not in todo])

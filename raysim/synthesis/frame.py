@@ -16,8 +16,10 @@ class RadarFrame:
 
     Attributes
     ----------
-    data : ndarray, shape ``[chirp, channel, sample]``, complex64
-        Dechirped IF samples [sqrt(W)].
+    data : ndarray, shape ``[chirp, channel, sample]``
+        Dechirped IF samples [sqrt(W)]: complex64 for a complex (IQ) receiver,
+        float32 (the in-phase channel, :func:`adc_samples`) for a real-sampled
+        one (``config.complex_sampling`` False).
     config : RadarConfig
         Waveform that produced it.
     array : VirtualArray
@@ -41,6 +43,10 @@ class RadarFrame:
     truth: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        want = np.complex64 if self.config.complex_sampling else np.float32
+        if self.data.dtype != want:
+            raise ValueError(f"data must be {np.dtype(want).name} for complex_sampling="
+                             f"{self.config.complex_sampling}, got {self.data.dtype}")
         expected = (self.config.num_chirps, self.array.num_channels, self.config.num_samples)
         if self.data.shape != expected:
             raise ValueError(
@@ -73,3 +79,26 @@ class RadarFrame:
     def doppler_axis(self) -> np.ndarray:
         """Doppler frequency of each fft-shifted bin, shape ``[doppler]`` [Hz]."""
         return self.config.doppler_axis()
+
+
+def adc_samples(data: np.ndarray, config: RadarConfig) -> np.ndarray:
+    """What the ADC delivers from a complex IF cube: itself (IQ) or its real part.
+
+    A real-sampled receiver digitises the in-phase channel only,
+    ``Re(s_if)``: a tone of complex amplitude ``a`` becomes
+    ``|a| cos(...)``, half its power (its noise too: the SNR is 3 dB below
+    the IQ receiver's, the negative-frequency noise folding in).
+
+    Parameters
+    ----------
+    data : ndarray, shape ``[chirp, channel, sample]``, complex64
+    config : RadarConfig
+
+    Returns
+    -------
+    ndarray, shape ``[chirp, channel, sample]``
+        complex64 (``complex_sampling``) or float32.
+    """
+    if config.complex_sampling:
+        return data
+    return np.ascontiguousarray(data.real, dtype=np.float32)

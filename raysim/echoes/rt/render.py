@@ -6,14 +6,14 @@ import os
 
 import numpy as np
 
-from raysim.echoes.oracle import noise_power
+from raysim.echoes.oracle import add_noise
 from raysim.echoes.rt.reproject import IF_BAND_MODES, SPECULAR_MODES, synthesize_paths
 from raysim.echoes.rt.scenes import RadarScene, SceneDescriptor, load_scene
 from raysim.echoes.rt.trace import MonostaticTracer, PathSet
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
-from raysim.synthesis.frame import RadarFrame
+from raysim.synthesis.frame import RadarFrame, adc_samples
 
 
 def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config: RadarConfig,
@@ -117,10 +117,7 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
             dropped[k] = dropped.get(k, 0) + v
         dropped["if_band"] = dropped.get("if_band", 0) + cut
     if noise:
-        rng = np.random.default_rng(seed)
-        sigma = np.sqrt(noise_power(config) / 2.0)
-        data += (rng.normal(0, sigma, data.shape)
-                 + 1j * rng.normal(0, sigma, data.shape)).astype(np.complex64)
+        add_noise(data, config, seed)
     truth = {"scene": scene.name, "trajectory": trajectory.name, "paths": first,
              "num_traces": len(range(0, n, block)), "num_paths": num_paths, "dropped": dropped}
-    return RadarFrame(data, config, array, chirp_times, lever, frame, truth)
+    return RadarFrame(adc_samples(data, config), config, array, chirp_times, lever, frame, truth)

@@ -1,7 +1,9 @@
 """Canonical ray-tracing scenes and the radio materials they use at 77 GHz.
 
-Scenes ship in the repository's ``scenes/`` folder (Mitsuba XML + PLY meshes +
-a JSON sidecar, written by ``scenes/generate.py``). Each is exposed as a named
+Scenes ship inside the package, in ``raysim/data/scenes/`` (Mitsuba XML + PLY
+meshes + a JSON sidecar, written by ``raysim/data/scenes/generate.py``; the
+repository's ``scenes/`` is a link to that folder), so a wheel installed
+anywhere finds them. Each is exposed as a named
 constant (a :class:`SceneDescriptor`, like ``sionna.rt.scene.*``) and in the
 registry :data:`SCENES`; :func:`load_scene` turns a name, descriptor or XML
 path into a :class:`RadarScene` ready for tracing.
@@ -55,7 +57,7 @@ ENU_FROM_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 
 #: Folder holding the generated scenes (override with ``RAYSIM_SCENES_DIR``).
 SCENES_DIR = Path(os.environ.get("RAYSIM_SCENES_DIR",
-                                 Path(__file__).resolve().parents[3] / "scenes"))
+                                 Path(__file__).resolve().parents[2] / "data" / "scenes"))
 
 
 # --------------------------------------------------------------------------- materials
@@ -540,7 +542,7 @@ def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *
     Raises
     ------
     ValueError
-        Unknown scene name, missing scene file (run ``python scenes/generate.py``),
+        Unknown scene name, missing scene file (run ``python raysim/data/scenes/generate.py``),
         a non-positive frequency or hover altitude, a bad mesh or an ITU material
         undefined at ``frequency`` (see :func:`check_scene_file`).
     """
@@ -548,7 +550,8 @@ def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *
 
     desc = get_scene(scene)
     if not desc.path.exists():
-        raise ValueError(f"scene file {desc.path} is missing; run `python scenes/generate.py`")
+        raise ValueError(f"scene file {desc.path} is missing; run "
+                         f"`python {SCENES_DIR / 'generate.py'}`")
     try:
         f_hz = float(frequency)
     except (TypeError, ValueError):

@@ -221,7 +221,7 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
         key = spec.key
     t = time.perf_counter()
     n_range = rc.shape[-1]
-    r_axis = config.range_axis(n_range)[:n_range]
+    r_axis = config.bin_ranges(n_range)
     lo, hi = settings.range_window
     gates = np.nonzero((r_axis >= lo) & (r_axis <= hi))[0]
     az, el = settings.grid()

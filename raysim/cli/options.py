@@ -1,0 +1,70 @@
+"""Shared pieces of the ``raysim`` commands: the parser class, name checks, output checks.
+
+:class:`Parser` accepts option values that start with a minus sign and a
+digit (``--az-deg -30:30:1``, ``--direction-deg -20,0``, ``--time-offset -1e-3``);
+:func:`known_name` and :func:`chains_option` refuse unknown names with the
+accepted ones and a "did you mean" suggestion; :func:`check_output` (from
+:mod:`raysim.io.files`) checks an output path before any computation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from collections.abc import Iterable
+
+from raysim.io.files import check_output
+from raysim.io.scenario_keys import did_you_mean
+
+__all__ = ["Parser", "NEGATIVE_VALUE", "known_name", "chains_option", "check_output",
+           "did_you_mean"]
+
+#: Option values that are numbers, ranges or lists starting with a minus sign:
+#: ``-30``, ``-1e-3``, ``-.5``, ``-30:30:1``, ``-30,0,30``, ``-0.1,0,0.2``.
+NEGATIVE_VALUE = re.compile(r"^-\.?\d[\d.eE+\-:,]*$")
+
+
+class Parser(argparse.ArgumentParser):
+    """ArgumentParser that reads ``-30:30:1`` or ``-20,0`` as a value, not as an option.
+
+    argparse treats an argument starting with ``-`` as an option unless it
+    looks like a plain negative number; ranges and comma lists of the raysim
+    options (:data:`NEGATIVE_VALUE`) are values too. No raysim option name
+    starts with a digit, so nothing is lost.
+    """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_VALUE
+
+
+def known_name(value: str, choices: Iterable[str], option: str, what: str) -> str:
+    """``value`` if it is one of ``choices``; else ValueError naming ``option``, the
+    accepted names and the closest one."""
+    choices = list(choices)
+    if value not in choices:
+        raise ValueError(f"{option}: unknown {what} {value!r}; expected one of "
+                         f"{sorted(choices)}{did_you_mean(value, choices)}")
+    return value
+
+
+def chains_option(text: str, option: str = "--chains") -> list[str]:
+    """Comma list of chain names -> chain keys (:func:`raysim.vocabulary.parse_chains`).
+
+    Raises
+    ------
+    ValueError
+        Naming ``option``, the value and the closest chain name.
+    """
+    from raysim.vocabulary import CHAINS, parse_chains
+
+    names = [*CHAINS, "paper:published"]
+    try:
+        return [s.key for s in parse_chains(text)]
+    except ValueError as exc:
+        bad = next((c.strip() for c in str(text).split(",")
+                    if c.strip() and c.strip() not in names), None)
+        hint = did_you_mean(bad, names) if bad else ""
+        if bad == "uncompensated":
+            hint = " (the uncompensated chain is called 'none')"
+        raise ValueError(f"{option}: got {text!r}: {exc}{hint}") from None

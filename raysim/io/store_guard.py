@@ -1,0 +1,154 @@
+"""Who may write a frame store, and what a writer may delete.
+
+* A store belongs to raysim when its Zarr group carries the attribute
+  ``raysim_format`` (:func:`is_raysim_store`). Only such a store (or an empty
+  folder) is ever replaced or deleted (:func:`check_replaceable`): a user's
+  folder given by mistake as ``--out`` is refused, never emptied.
+* One writer at a time: :func:`writer_lock` takes an exclusive, non-blocking
+  lock on the file ``.<store name>.lock`` beside the store for the whole
+  render; a second writer gets a :class:`ValueError` naming the store and the
+  process that holds it. The lock file is removed when the writer ends.
+* Readers never write and take no lock (see
+  :func:`raysim.io.storage.open_store`).
+* Debris of a killed writer: the hidden ``.<store name>.<hex>.tmp`` folders
+  of an unfinished :func:`~raysim.io.storage.write_store` and Zarr's
+  ``*.partial`` files inside the store are removed by the next writer of the
+  same store, under its lock (:func:`remove_debris`), and nothing else.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+
+__all__ = ["STORE_MARKER", "is_raysim_store", "check_replaceable", "remove_store",
+           "lock_path", "writer_lock", "remove_debris", "tmp_siblings"]
+
+#: Group attribute that marks a store written by raysim.
+STORE_MARKER = "raysim_format"
+
+
+def _group_attrs(path: Path) -> dict | None:
+    import zarr
+
+    if not ((path / "zarr.json").is_file() or (path / ".zgroup").is_file()):
+        return None
+    try:
+        return dict(zarr.open_group(str(path), mode="r").attrs)
+    except Exception:
+        return None
+
+
+def is_raysim_store(path: str | os.PathLike) -> bool:
+    """True when ``path`` is a Zarr group written by raysim (attribute ``raysim_format``)."""
+    attrs = _group_attrs(Path(path))
+    return attrs is not None and STORE_MARKER in attrs
+
+
+def check_replaceable(path: str | os.PathLike, what: str = "store") -> None:
+    """Raise ValueError unless ``path`` is absent, an empty folder or a raysim store.
+
+    Parameters
+    ----------
+    path : path
+        What a writer is about to replace.
+    what : str
+        Name of the output in the message (``store``, ``--out`` ...).
+    """
+    p = Path(path)
+    if not p.exists() and not p.is_symlink():
+        return
+    if p.is_symlink():
+        raise ValueError(f"{what} {str(p)!r} is a symbolic link; refusing to replace it "
+                         f"(expected a raysim Zarr store or a new path)")
+    if p.is_dir() and not any(p.iterdir()):
+        return
+    if p.is_dir() and is_raysim_store(p):
+        return
+    kind = "folder" if p.is_dir() else "file"
+    raise ValueError(f"{what} {str(p)!r} is a {kind} that raysim did not write (no Zarr group "
+                     f"with attribute {STORE_MARKER!r}); refusing to replace or delete it. "
+                     f"Expected a raysim store or a new path: choose another output")
+
+
+def remove_store(path: str | os.PathLike) -> None:
+    """Delete a raysim store (or an empty folder); anything else raises ValueError."""
+    p = Path(path)
+    check_replaceable(p)
+    if p.is_dir():
+        shutil.rmtree(p)
+
+
+def lock_path(store: str | os.PathLike) -> Path:
+    """The writer's lock file of a store: ``.<name>.lock`` in the same folder."""
+    p = Path(store)
+    return p.parent / f".{p.name}.lock"
+
+
+@contextlib.contextmanager
+def writer_lock(store: str | os.PathLike) -> Iterator[Path]:
+    """Hold the exclusive writer lock of a store for the duration of the block.
+
+    Raises
+    ------
+    ValueError
+        Another process writes the store; the message names the store and
+        that process.
+    """
+    p = Path(store)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    lock = lock_path(p)
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "unknown"
+            raise ValueError(f"store {str(p)!r} is being written by another process (pid "
+                             f"{holder}); expected one writer at a time: wait for it to "
+                             f"finish or choose another output") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        try:
+            yield lock
+        finally:
+            # unlink while still holding the lock: a writer that opened the old file
+            # failed its non-blocking lock already, the next one creates a new file
+            with contextlib.suppress(FileNotFoundError):
+                lock.unlink()
+    finally:
+        os.close(fd)
+
+
+def tmp_siblings(store: str | os.PathLike) -> list[Path]:
+    """The hidden temporary folders of :func:`~raysim.io.storage.write_store` for a store."""
+    p = Path(store)
+    if not p.parent.is_dir():
+        return []
+    return sorted(q for q in p.parent.glob(f".{p.name}.*.tmp") if q.is_dir())
+
+
+def remove_debris(store: str | os.PathLike) -> list[Path]:
+    """Remove what a killed writer of this store left; call it holding :func:`writer_lock`.
+
+    Returns
+    -------
+    list of Path
+        What was removed: temporary store folders beside it, ``*.partial``
+        files inside it.
+    """
+    p = Path(store)
+    removed = []
+    for tmp in tmp_siblings(p):
+        shutil.rmtree(tmp, ignore_errors=True)
+        removed.append(tmp)
+    if p.is_dir() and is_raysim_store(p):
+        for part in p.rglob("*.partial"):
+            if part.is_file():
+                part.unlink()
+                removed.append(part)
+    return removed
