@@ -11,6 +11,7 @@ import subprocess
 
 import numpy as np
 import pytest
+from scenario_texts import small_scenario
 
 from raysim.cli import main
 from raysim.io.scenario import scenario_from_case
@@ -65,23 +66,8 @@ def test_report_cli_from_store_and_errors(tmp_path, capsys):
     assert main(["report", "--case", "stationary", str(tmp_path / "s.zarr")]) == 2
 
 
-TILTED = """\
-name = "tilted"
-[radar]
-num_chirps = 32
-chirp_duration_s = 12.8e-6
-[array]
-nx = 4
-ny = 4
-[[scene.targets]]
-range_m = 15.0
-az_deg = 50.0
-[[motion.sinusoids]]
-axis = "pitch"
-amplitude_deg = 30.0
-frequency_hz = 5.0
-phase_deg = 90.0
-"""
+TILTED = small_scenario("tilted", az_deg=50.0, pitch_deg=30.0, pitch_hz=5.0,
+                        pitch_phase_deg=90.0)
 
 
 def test_report_lists_the_guard_warnings(tmp_path, capsys):

@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from scenario_texts import small_scenario
 
 import raysim.studies.sweep as sweep_mod
 from raysim.cli import main
@@ -114,23 +115,8 @@ def test_sweep_cli_default_local_cluster(tmp_path, capsys):
                  "--out", str(tmp_path)]) == 2
 
 
-TILTED = """\
-name = "tilted"
-[radar]
-num_chirps = 32
-chirp_duration_s = 12.8e-6
-[array]
-nx = 4
-ny = 4
-[[scene.targets]]
-range_m = 15.0
-az_deg = 50.0
-[[motion.sinusoids]]
-axis = "pitch"
-amplitude_deg = 30.0
-frequency_hz = 5.0
-phase_deg = 90.0
-"""
+TILTED = small_scenario("tilted", az_deg=50.0, pitch_deg=30.0, pitch_hz=5.0,
+                        pitch_phase_deg=90.0)
 
 
 def test_sweep_stores_and_summarises_guard_warnings(tmp_path, capsys):

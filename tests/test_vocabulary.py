@@ -19,6 +19,7 @@ import re
 import pytest
 import xarray as xr
 import zarr
+from scenario_texts import small_scenario
 
 from raysim.cli import main
 from raysim.pipeline.analysis import ANALYSIS_METRICS
@@ -38,23 +39,7 @@ from raysim.vocabulary import (
 ALL_CHAINS = "none,paper,paper:published,exact"
 #: The scenario every command runs: SMALL of tests/test_cli_simulate.py (32 chirps,
 #: 4 x 4 UPA, 12.8 us chirps) with the rotation_y motion and target.
-SCENARIO = """\
-name = "vocabulary"
-frames = 1
-[radar]
-num_chirps = 32
-chirp_duration_s = 12.8e-6
-[array]
-nx = 4
-ny = 4
-[[scene.targets]]
-range_m = 15.0
-az_deg = 20.0
-[[motion.sinusoids]]
-axis = "pitch"
-amplitude_deg = 10.0
-frequency_hz = 20.0
-"""
+SCENARIO = small_scenario("vocabulary", frames=1, pitch_deg=10.0)
 MOTION_LABEL = "pitch 10 deg @ 20 Hz"
 
 
