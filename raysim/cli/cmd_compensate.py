@@ -142,7 +142,7 @@ def register(subparsers) -> None:
                    help="IMU log, same as --imu")
     p.add_argument("--imu", default=None, metavar="FILE",
                    help="IMU log: CSV (units in the header), PX4 .ulg, ArduPilot .bin or a "
-                   "ROS 2 bag (folder, .mcap, .db3) (default: the IMU log of the frame store)")
+                   "ROS 2 bag (folder, .mcap, .db3); left out: the IMU log of the frame store")
     p.add_argument("--frame", type=int, default=0,
                    help="frame of a Zarr / NetCDF store to compensate (position along frame)")
     p.add_argument("--out", required=True, help="output .npz")
