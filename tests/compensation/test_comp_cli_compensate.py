@@ -82,6 +82,22 @@ def test_compensate_takes_the_imu_log_once(tmp_path, capsys):
     assert "unknown suffix '.txt'" in capsys.readouterr().err
 
 
+def test_compensate_names_the_ardupilot_extra(tmp_path, capsys, monkeypatch):
+    import sys
+
+    from raysim.io.flight_logs.dataflash import write_dataflash_imu
+
+    np.savez(tmp_path / "c.npz", data=np.zeros((2, 2, 2), complex), chirp_times=np.zeros(2),
+             element_positions=np.zeros((2, 3)), carrier_frequency=77e9, bandwidth=1e9,
+             chirp_duration=1e-5, sample_rate=1e6)
+    s = simulate_imu(sinusoid("pitch", 0.01, 10.0), "ideal", rate=1000.0, start=0.0, end=0.01)
+    path = write_dataflash_imu(tmp_path / "f.bin", s)
+    monkeypatch.setitem(sys.modules, "pymavlink", None)   # as if the extra is not installed
+    assert main(["compensate", str(tmp_path / "c.npz"), "--imu", str(path), "--out",
+                 str(tmp_path / "o.npz")]) == 2
+    assert "pip install raysim[ardupilot]" in capsys.readouterr().err
+
+
 def test_compensate_reports_bad_files(tmp_path, capsys):
     assert main(["compensate", str(tmp_path / "none.npz"), str(tmp_path / "imu.csv"),
                  "--out", str(tmp_path / "o.npz")]) == 2
