@@ -19,10 +19,15 @@ key                    shape                      meaning
 ``lever_arm``          ``[3]`` (optional)         r_IR in B [m]
 =====================  =========================  =================================
 
-IMU log (CSV with a header): ``time_s, gyro_x, gyro_y, gyro_z, accel_x,
-accel_y, accel_z`` in s (IMU clock), rad/s and m/s^2 (body frame, specific
-force). It may be left out when the frame store holds an IMU log
-(``imu_time``, ``imu_gyro``, ``imu_accel``).
+IMU log (``--imu FILE``, or a second positional argument), any format of
+:func:`raysim.io.flight_logs.read_imu_log`: the project's IMU CSV (units in
+the header, ``#`` comments; what :func:`raysim.io.write_imu_csv` writes), a
+PX4 ULog ``.ulg`` (``sensor_combined``), an ArduPilot DataFlash ``.bin``
+(``IMU``; needs ``raysim[ardupilot]``) or a ROS 2 bag (folder, ``.mcap`` or
+``.db3``; ``sensor_msgs/msg/Imu``, FLU turned into FRD). Times are on the IMU
+clock [s] (``--time-offset`` is IMU clock minus radar clock), angular rate and
+specific force in the body frame FRD. It may be left out when the frame store
+holds an IMU log (``imu_time``, ``imu_gyro``, ``imu_accel``).
 
 Output (``.npz``, written to a temporary file then moved into place):
 ``beams [chirp, range, azimuth, elevation]`` (complex64),
@@ -55,8 +60,10 @@ examples:
   raysim compensate rotation_y.zarr --out beams.npz             # IMU log of the store
   raysim compensate rotation_y.zarr --frame 2 --range-m 14:16 --az-deg 10:30:0.5 \\
       --el-deg -10:10:0.5 --out beams.npz
-  raysim compensate cube.npz imu.csv --velocity given --initial-velocity 0,0,0 \\
+  raysim compensate cube.npz --imu imu.csv --velocity given --initial-velocity 0,0,0 \\
       --lever-arm 0,0,0.1 --out beams.npz
+  raysim compensate cube.npz --imu flight.ulg --out beams.npz     # PX4 log
+  raysim compensate cube.npz --imu rosbag2_folder --out beams.npz # ROS 2 bag
   raysim compensate rotation_y.zarr --chain paper --direction-deg 20,0 --out paper.npz
   raysim compensate rotation_y.zarr --chain paper:published --direction-deg 20,0 \\
       --out published.npz
@@ -72,7 +79,6 @@ and the value).
 """
 
 SPEED_OF_LIGHT = 299_792_458.0
-IMU_COLUMNS = ("time_s", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 
 
 def _floats(text: str, n: int, name: str) -> np.ndarray:
@@ -132,9 +138,11 @@ def register(subparsers) -> None:
         epilog=EPILOG, formatter_class=_HelpFormatter)
     p.add_argument("cube", help="raysim Zarr store, NetCDF file (.nc) or .npz (keys: see "
                    "`raysim compensate --help`)")
-    p.add_argument("imu", nargs="?", default=None,
-                   help="IMU CSV: time_s,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z "
-                   "(default: the IMU log of the frame store)")
+    p.add_argument("imu_positional", nargs="?", default=None, metavar="imu",
+                   help="IMU log, same as --imu")
+    p.add_argument("--imu", default=None, metavar="FILE",
+                   help="IMU log: CSV (units in the header), PX4 .ulg, ArduPilot .bin or a "
+                   "ROS 2 bag (folder, .mcap, .db3); left out: the IMU log of the frame store")
     p.add_argument("--frame", type=int, default=0,
                    help="frame of a Zarr / NetCDF store to compensate (position along frame)")
     p.add_argument("--out", required=True, help="output .npz")
@@ -212,16 +220,16 @@ def _load_cube(path: str, frame: int = 0) -> dict:
 
 
 def _load_imu(path: str) -> np.ndarray:
-    if not os.path.isfile(path):
+    """IMU log of any supported format as a table ``[sample, 7]``: time, gyro, accel (SI, FRD)."""
+    from raysim.io.flight_logs import read_imu_log
+
+    if not os.path.exists(path):
         raise ValueError(f"IMU file {path!r} does not exist")
-    with open(path) as fh:
-        header = [h.strip() for h in fh.readline().split(",")]
-    if tuple(header) != IMU_COLUMNS:
-        raise ValueError(f"IMU CSV header must be {','.join(IMU_COLUMNS)}, got {header}")
-    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    if table.shape[1] != 7:
-        raise ValueError(f"IMU CSV must have 7 columns, got {table.shape[1]}")
-    return table
+    try:
+        s = read_imu_log(path)
+    except ImportError as exc:   # an optional reader (pymavlink for .bin) is missing
+        raise ValueError(f"IMU file {path!r}: {exc}") from None
+    return np.column_stack([s.time, s.gyro, s.accel])
 
 
 def run(args) -> int:
@@ -251,12 +259,16 @@ def run(args) -> int:
         u = direction(*np.deg2rad(_floats(args.direction_deg, 2, "--direction-deg")))
     motion = None
     if spec.compensated:
-        if args.imu is not None:
-            imu = _load_imu(args.imu)
+        if args.imu is not None and args.imu_positional is not None:
+            raise ValueError(f"give the IMU log once: --imu {args.imu!r} and the positional "
+                             f"{args.imu_positional!r} were both given")
+        imu_path = args.imu if args.imu is not None else args.imu_positional
+        if imu_path is not None:
+            imu = _load_imu(imu_path)
         elif "_imu" in cube:
             imu = cube["_imu"]
         else:
-            raise ValueError(f"{args.cube!r} holds no IMU log; give an IMU CSV after the cube")
+            raise ValueError(f"{args.cube!r} holds no IMU log; give an IMU log with --imu FILE")
         lever = (_floats(args.lever_arm, 3, "--lever-arm") if args.lever_arm is not None
                  else np.asarray(cube.get("lever_arm", np.zeros(3)), dtype=float))
         if args.initial_attitude_deg.strip() == "level":

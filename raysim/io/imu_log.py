@@ -18,6 +18,10 @@ Recognised columns (order free, other columns ignored):
 ``accel_<a>_<u>``  ``u`` in ``m_s2``, ``g``, ``mg`` (``g = 9.80665 m/s^2``)
 =================  ===========================================================
 
+A vector column without a unit (``gyro_x``, ``accel_x``; the layout
+``raysim compensate`` documented before this format) is read in SI units,
+rad/s and m/s^2.
+
 Values are converted to SI on reading (s, rad/s, m/s^2). Time stamps must be
 strictly increasing; every value must be a finite number. Errors name the row
 (1-based data row and file line) and the column.
@@ -47,7 +51,9 @@ ACCEL_UNITS = MappingProxyType({"m_s2": 1.0, "g": STANDARD_GRAVITY, "mg": MILLI_
 
 _AXES = ("x", "y", "z")
 _TIME_RE = re.compile(r"^time_(?P<unit>[a-z]+)$")
-_VEC_RE = re.compile(r"^(?P<sensor>gyro|accel)_(?P<axis>[xyz])_(?P<unit>[a-z0-9_]+)$")
+_VEC_RE = re.compile(r"^(?P<sensor>gyro|accel)_(?P<axis>[xyz])(?:_(?P<unit>[a-z0-9_]+))?$")
+#: Unit of a vector column named without one (``gyro_x``): SI.
+_SI_UNIT = {"gyro": "rad_s", "accel": "m_s2"}
 
 
 def _units_for(sensor: str) -> MappingProxyType:
@@ -73,7 +79,8 @@ def _parse_header(header: list[str], where: str) -> tuple[int, float, dict]:
             continue
         m = _VEC_RE.match(name)
         if m:
-            sensor, axis, unit = m["sensor"], m["axis"], m["unit"]
+            sensor, axis = m["sensor"], m["axis"]
+            unit = m["unit"] or _SI_UNIT[sensor]
             units = _units_for(sensor)
             if unit not in units:
                 raise ValueError(f"{where}column {name!r}: unknown {sensor} unit {unit!r}; "

@@ -1,8 +1,9 @@
-"""`raysim compensate`: a stored cube plus an IMU CSV, compensated by the exact chain."""
+"""`raysim compensate`: a stored cube plus an IMU log (CSV, PX4 ULog, ROS 2 bag), exact chain."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from raysim.cli import main
 from raysim.echoes.oracle import PointTarget, simulate_point_targets
@@ -11,8 +12,35 @@ from raysim.platform.motion import sinusoid
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
 
+BOOT_S = 1.0   # flight-controller logs count from boot: the IMU clock reads 1 s at chirp 0
 
-def test_compensate_cube_and_imu_csv(tmp_path):
+
+def _write_imu(fmt: str, tmp_path, s):
+    """The IMU log in format ``fmt``; returns (CLI arguments, IMU clock minus radar clock)."""
+    from dataclasses import replace
+
+    from raysim.io import write_imu_csv
+    from raysim.io.flight_logs.rosbag import write_ros2_imu
+    from raysim.io.flight_logs.ulog import write_px4_ulog
+
+    if fmt == "legacy-csv":   # the header `raysim compensate` documented before, positional
+        np.savetxt(tmp_path / "imu.csv", np.column_stack([s.time, s.gyro, s.accel]),
+                   delimiter=",", header="time_s,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z",
+                   comments="", fmt="%.17g")
+        return [str(tmp_path / "imu.csv")], 0.0
+    if fmt == "write_imu_csv":
+        path = write_imu_csv(tmp_path / "imu.csv", s, time_unit="ms", gyro_unit="deg_s")
+        return ["--imu", str(path)], 0.0
+    booted = replace(s, time=s.time + BOOT_S)
+    if fmt == "ulog":
+        return ["--imu", str(write_px4_ulog(tmp_path / "f.ulg", booted))], BOOT_S
+    if fmt == "ros2-mcap":
+        return ["--imu", str(write_ros2_imu(tmp_path / "bag", booted, storage="mcap"))], BOOT_S
+    raise AssertionError(fmt)
+
+
+@pytest.mark.parametrize("fmt", ["legacy-csv", "write_imu_csv", "ulog", "ros2-mcap"])
+def test_compensate_cube_and_imu_log(tmp_path, fmt):
     cfg = RadarConfig(num_chirps=64, sample_rate=2.5e6)
     arr = upa(6, 6, wavelength=cfg.wavelength)
     lever = np.array([0.0, 0.0, 0.1])
@@ -24,12 +52,12 @@ def test_compensate_cube_and_imu_csv(tmp_path):
              bandwidth=cfg.bandwidth, chirp_duration=cfg.chirp_duration,
              sample_rate=cfg.sample_rate, grid_shape=np.array(arr.grid_shape), lever_arm=lever)
     s = simulate_imu(traj, "ideal", rate=1000.0, start=-0.01, end=0.02)
-    np.savetxt(tmp_path / "imu.csv", np.column_stack([s.time, s.gyro, s.accel]), delimiter=",",
-               header="time_s,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z", comments="")
+    imu_args, offset = _write_imu(fmt, tmp_path, s)
     out = tmp_path / "beams.npz"
-    code = main(["compensate", str(tmp_path / "cube.npz"), str(tmp_path / "imu.csv"),
+    code = main(["compensate", str(tmp_path / "cube.npz"), *imu_args,
                  "--out", str(out), "--range-m", "11.5:12.5", "--az-deg", "15:15:1",
-                 "--el-deg", "0:0:1", "--velocity", "given", "--initial-velocity", "0,0,0"])
+                 "--el-deg", "0:0:1", "--velocity", "given", "--initial-velocity", "0,0,0",
+                 "--time-offset", repr(offset)])
     assert code == 0
     with np.load(out) as z:
         beams, v = z["beams"], z["velocity_mps"]
@@ -40,6 +68,34 @@ def test_compensate_cube_and_imu_csv(tmp_path):
         assert np.abs(slow.mean()) / np.abs(slow).mean() > 0.9999
         assert v[int(np.argmax(power[:, gate, 0, 0]))] == 0.0
     assert not list(tmp_path.glob(".tmp_*"))
+
+
+def test_compensate_takes_the_imu_log_once(tmp_path, capsys):
+    np.savez(tmp_path / "c.npz", data=np.zeros((2, 2, 2), complex), chirp_times=np.zeros(2),
+             element_positions=np.zeros((2, 3)), carrier_frequency=77e9, bandwidth=1e9,
+             chirp_duration=1e-5, sample_rate=1e6)
+    (tmp_path / "imu.txt").write_text("0,1\n")
+    cube, out = str(tmp_path / "c.npz"), ["--out", str(tmp_path / "o.npz")]
+    assert main(["compensate", cube, "a.csv", "--imu", "b.csv", *out]) == 2
+    assert "give the IMU log once" in capsys.readouterr().err
+    assert main(["compensate", cube, "--imu", str(tmp_path / "imu.txt"), *out]) == 2
+    assert "unknown suffix '.txt'" in capsys.readouterr().err
+
+
+def test_compensate_names_the_ardupilot_extra(tmp_path, capsys, monkeypatch):
+    import sys
+
+    from raysim.io.flight_logs.dataflash import write_dataflash_imu
+
+    np.savez(tmp_path / "c.npz", data=np.zeros((2, 2, 2), complex), chirp_times=np.zeros(2),
+             element_positions=np.zeros((2, 3)), carrier_frequency=77e9, bandwidth=1e9,
+             chirp_duration=1e-5, sample_rate=1e6)
+    s = simulate_imu(sinusoid("pitch", 0.01, 10.0), "ideal", rate=1000.0, start=0.0, end=0.01)
+    path = write_dataflash_imu(tmp_path / "f.bin", s)
+    monkeypatch.setitem(sys.modules, "pymavlink", None)   # as if the extra is not installed
+    assert main(["compensate", str(tmp_path / "c.npz"), "--imu", str(path), "--out",
+                 str(tmp_path / "o.npz")]) == 2
+    assert "pip install raysim[ardupilot]" in capsys.readouterr().err
 
 
 def test_compensate_reports_bad_files(tmp_path, capsys):

@@ -1,0 +1,246 @@
+"""Flight-controller IMU logs: PX4 ULog, ROS 2 bags, ArduPilot DataFlash and the IMU CSV.
+
+The same simulated motion is written in every format and read back through the
+one reader :func:`raysim.io.read_imu_log`; each format must return the samples
+within its own storage precision, in the body frame FRD.
+"""
+
+from __future__ import annotations
+
+import struct
+import sys
+
+import numpy as np
+import pytest
+
+from raysim.io import read_imu_csv, read_imu_log, write_imu_csv
+from raysim.io.flight_logs import flu_to_frd
+from raysim.io.flight_logs.dataflash import write_dataflash_imu
+from raysim.io.flight_logs.rosbag import IMU_MSGTYPE, write_ros2_imu
+from raysim.io.flight_logs.ulog import read_px4_ulog, write_px4_ulog
+from raysim.platform.imu import ImuSamples, simulate_imu
+from raysim.platform.motion import sinusoid
+
+#: Unit roundoff of IEEE float32 (round to nearest): |fl(x) - x| <= u |x| with
+#: u = 2^-24 (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed.,
+#: Theorem 2.2). ULog and DataFlash store the IMU values as float32.
+FLOAT32_UNIT_ROUNDOFF = 2.0 ** -24
+#: ULog / DataFlash stamps are whole microseconds: at most half a step away [s].
+MICROSECOND_ROUNDING_S = 0.5e-6
+#: ROS stamps are whole nanoseconds [s].
+NANOSECOND_ROUNDING_S = 0.5e-9
+#: float64 spacing allowance for times of order 1 s and their 1e-6 / 1e-9 scaling.
+TIME_FLOAT64_S = 1e-15
+
+
+def _motion(start: float = 0.0) -> ImuSamples:
+    """Consumer-MEMS IMU on a yaw sinusoid (noise, bias: every digit matters), 1 kHz, 60 ms."""
+    traj = sinusoid("yaw", np.deg2rad(4), 7.0)
+    return simulate_imu(traj, "consumer_mems", rate=1000.0, start=start, end=start + 0.06,
+                        seed=3)
+
+
+def _within_float32(back: np.ndarray, ref: np.ndarray) -> bool:
+    return bool(np.all(np.abs(back - ref) <= FLOAT32_UNIT_ROUNDOFF * np.abs(ref)))
+
+
+def _write_all(tmp_path, s: ImuSamples) -> dict:
+    paths = {"csv": write_imu_csv(tmp_path / "imu.csv", s),
+             "ulog": write_px4_ulog(tmp_path / "imu.ulg", s),
+             "bag_sqlite3": write_ros2_imu(tmp_path / "bag_db3", s, storage="sqlite3"),
+             "bag_mcap": write_ros2_imu(tmp_path / "bag_mcap", s, storage="mcap"),
+             "dataflash": write_dataflash_imu(tmp_path / "imu.bin", s)}
+    return paths
+
+
+def test_same_motion_in_every_format_reads_back_the_same(tmp_path):
+    s = _motion()
+    paths = _write_all(tmp_path, s)
+    back = {}
+    for fmt, path in paths.items():
+        if fmt == "dataflash" and not _have_pymavlink():
+            continue
+        back[fmt] = read_imu_log(path)
+    # CSV: shortest round-trip decimals, exact
+    np.testing.assert_array_equal(back["csv"].time, s.time)
+    np.testing.assert_array_equal(back["csv"].gyro, s.gyro)
+    np.testing.assert_array_equal(back["csv"].accel, s.accel)
+    # ROS 2 bags: float64 fields, nanosecond stamps; FLU -> FRD is an exact sign flip
+    for fmt in ("bag_sqlite3", "bag_mcap"):
+        b = back[fmt]
+        assert np.max(np.abs(b.time - s.time)) <= NANOSECOND_ROUNDING_S + TIME_FLOAT64_S, fmt
+        np.testing.assert_array_equal(b.gyro, s.gyro)
+        np.testing.assert_array_equal(b.accel, s.accel)
+    # ULog and DataFlash: float32 values, microsecond stamps
+    for fmt in ("ulog", "dataflash"):
+        if fmt not in back:
+            continue
+        b = back[fmt]
+        assert np.max(np.abs(b.time - s.time)) <= MICROSECOND_ROUNDING_S + TIME_FLOAT64_S, fmt
+        assert _within_float32(b.gyro, s.gyro), fmt
+        assert _within_float32(b.accel, s.accel), fmt
+        assert not np.array_equal(b.gyro, s.gyro)   # float32 storage really happened
+    for b in back.values():
+        assert b.rate == pytest.approx(1000.0) or b.rate is None
+
+
+def _have_pymavlink() -> bool:
+    try:
+        import pymavlink  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def test_ulog_is_read_by_pyulog_as_px4_sensor_combined(tmp_path):
+    """The ULog writer follows the spec: pyulog itself sees the PX4 topic and fields."""
+    from pyulog import ULog
+
+    s = _motion(start=2.5)   # 2.5 s after boot
+    path = write_px4_ulog(tmp_path / "f.ulg", s)
+    raw = path.read_bytes()
+    assert raw[:7] == b"ULog\x01\x12\x35"
+    assert struct.unpack("<Q", raw[8:16])[0] == 2_500_000   # log start [us since boot]
+    log = ULog(str(path))
+    (d,) = log.data_list
+    assert d.name == "sensor_combined"
+    np.testing.assert_array_equal(d.data["timestamp"], np.rint(s.time * 1e6).astype(np.uint64))
+    np.testing.assert_array_equal(d.data["gyro_rad[2]"], s.gyro[:, 2].astype(np.float32))
+    np.testing.assert_array_equal(d.data["accelerometer_m_s2[2]"],
+                                  s.accel[:, 2].astype(np.float32))
+    np.testing.assert_array_equal(d.data["gyro_integral_dt"], 1000)
+
+
+def test_ulog_accelerometer_relative_stamp_is_interpolated(tmp_path):
+    """accel taken 500 us after the gyro stamp: read back at the gyro stamp."""
+    from pyulog import ULog
+
+    t = np.arange(20) * 1e-3 + 1.0
+    offset_us = 500
+    slope = 2.0   # accel_x = slope * t_acc [m/s^2]: linear, so interpolation is exact
+    accel = np.column_stack([slope * (t + offset_us * 1e-6), np.zeros(20), np.full(20, -9.8)])
+    s = ImuSamples(t, np.zeros((20, 3)), accel)
+    path = write_px4_ulog(tmp_path / "a.ulg", s)
+    log = ULog(str(path))
+    log.data_list[0].data["accelerometer_timestamp_relative"][:] = offset_us
+    log.write_ulog(str(tmp_path / "b.ulg"))
+    back = read_px4_ulog(tmp_path / "b.ulg")
+    inner = slice(1, None)   # the first gyro stamp precedes every accel sample: held, skipped
+    expected = slope * t[inner]
+    assert np.all(np.abs(back.accel[inner, 0] - expected)
+                  <= 4 * FLOAT32_UNIT_ROUNDOFF * np.abs(expected))
+
+
+def test_ros_flu_positive_yaw_rate_is_negative_frd_yaw_rate(tmp_path):
+    """REP 103: +z up. A left turn (+yaw about z-up) is -yaw about FRD z-down;
+    gravity reaction +9.81 on ROS z-up is -9.81 on FRD z-down (level at rest)."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    t = ts.types
+    bag = tmp_path / "left_turn"
+    with Writer(bag, version=9) as w:
+        conn = w.add_connection("/mavros/imu/data", IMU_MSGTYPE, typestore=ts)
+        for k in range(5):
+            stamp_ns = 1_700_000_000_000_000_000 + k * 5_000_000   # Unix time, 200 Hz
+            sec, nsec = divmod(stamp_ns, 1_000_000_000)
+            msg = t[IMU_MSGTYPE](
+                header=t["std_msgs/msg/Header"](
+                    stamp=t["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec),
+                    frame_id="base_link"),
+                orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+                orientation_covariance=np.zeros(9),
+                angular_velocity=t["geometry_msgs/msg/Vector3"](x=0.1, y=0.2, z=0.5),
+                angular_velocity_covariance=np.zeros(9),
+                linear_acceleration=t["geometry_msgs/msg/Vector3"](x=0.3, y=0.4, z=9.81),
+                linear_acceleration_covariance=np.zeros(9))
+            w.write(conn, stamp_ns + 123, ts.serialize_cdr(msg, IMU_MSGTYPE))
+    s = read_imu_log(bag, epoch_ns=1_700_000_000_000_000_000)
+    np.testing.assert_array_equal(s.gyro, np.tile([0.1, -0.2, -0.5], (5, 1)))
+    np.testing.assert_array_equal(s.accel, np.tile([0.3, -0.4, -9.81], (5, 1)))
+    # header stamps, not the bag's receive time (123 ns later), after the integer epoch shift
+    assert np.max(np.abs(s.time - np.arange(5) * 5e-3)) <= TIME_FLOAT64_S
+
+
+def test_simulated_right_turn_is_written_as_negative_ros_yaw_rate(tmp_path):
+    """FRD yaw rate > 0 at t = 0 of a yaw sinusoid (a right turn) -> ROS z rate < 0."""
+    from rosbags.highlevel import AnyReader
+
+    s = simulate_imu(sinusoid("yaw", np.deg2rad(4), 7.0), "ideal", rate=1000.0, start=0.0,
+                     end=0.01)
+    assert s.gyro[0, 2] > 0
+    bag = write_ros2_imu(tmp_path / "b", s, storage="mcap")
+    with AnyReader([bag]) as reader:
+        first = next(reader.messages())
+        msg = reader.deserialize(first[2], first[0].msgtype)
+    assert msg.angular_velocity.z == -s.gyro[0, 2]
+    assert msg.linear_acceleration.z == -s.accel[0, 2] > 0   # gravity reaction up in FLU
+
+
+def test_flu_to_frd_is_its_own_inverse_and_checks_shape():
+    v = np.array([[1.0, 2.0, 3.0]])
+    np.testing.assert_array_equal(flu_to_frd(v), [[1.0, -2.0, -3.0]])
+    np.testing.assert_array_equal(flu_to_frd(flu_to_frd(v)), v)
+    with pytest.raises(ValueError, match=r"\[\.\.\., 3\]"):
+        flu_to_frd(np.zeros((2, 2)))
+
+
+def test_legacy_compensate_header_and_write_imu_csv_are_one_format(tmp_path):
+    """The header `raysim compensate` took before (time_s,gyro_x,...: SI) and the
+    unit-suffixed header of write_imu_csv read to the same samples."""
+    s = _motion()
+    legacy = tmp_path / "legacy.csv"
+    np.savetxt(legacy, np.column_stack([s.time, s.gyro, s.accel]), delimiter=",",
+               header="time_s,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z", comments="",
+               fmt="%.17g")
+    new = write_imu_csv(tmp_path / "new.csv", s, time_unit="ms", gyro_unit="deg_s",
+                        accel_unit="g")
+    a, b = read_imu_csv(legacy), read_imu_log(new)
+    np.testing.assert_array_equal(a.gyro, s.gyro)
+    np.testing.assert_allclose(b.gyro, a.gyro, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(b.accel, a.accel, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(b.time, a.time, rtol=1e-14, atol=1e-18)
+
+
+def test_dataflash_file_is_read_with_pymavlink(tmp_path):
+    pytest.importorskip("pymavlink", reason="optional extra raysim[ardupilot] not installed")
+    s = _motion(start=0.25)
+    write_dataflash_imu(tmp_path / "i0.bin", s, instance=1)
+    back = read_imu_log(tmp_path / "i0.bin", instance=1)
+    np.testing.assert_array_equal(back.time, np.rint(s.time * 1e6) * 1e-6)
+    assert _within_float32(back.gyro, s.gyro)
+    with pytest.raises(ValueError, match=r"instance=0.*present: \[1\]"):
+        read_imu_log(tmp_path / "i0.bin", instance=0)
+
+
+def test_dataflash_without_pymavlink_names_the_extra(tmp_path, monkeypatch):
+    path = write_dataflash_imu(tmp_path / "x.bin", _motion())
+    monkeypatch.setitem(sys.modules, "pymavlink", None)   # import fails as if not installed
+    with pytest.raises(ImportError, match=r"pip install raysim\[ardupilot\]"):
+        read_imu_log(path)
+
+
+@pytest.mark.parametrize("name, body, match", [
+    ("x.txt", b"1,2,3", r"unknown suffix '\.txt'"),
+    ("x.ulg", b"not a ulog", "not a ULog file"),
+    ("x.bin", b"\x00\x01", "not an ArduPilot DataFlash log"),
+])
+def test_bad_flight_logs_raise_value_errors(tmp_path, name, body, match):
+    (tmp_path / name).write_bytes(body)
+    with pytest.raises(ValueError, match=match):
+        read_imu_log(tmp_path / name)
+
+
+def test_missing_log_topic_and_stamps_are_named(tmp_path):
+    with pytest.raises(ValueError, match="does not exist"):
+        read_imu_log(tmp_path / "none.ulg")
+    s = _motion()
+    bag = write_ros2_imu(tmp_path / "bag", s, topic="/imu/data")
+    with pytest.raises(ValueError, match=r"topic='/imu'.*\['/imu/data'\]"):
+        read_imu_log(bag, topic="/imu")
+    with pytest.raises(ValueError, match="must be >= 0"):
+        write_px4_ulog(tmp_path / "neg.ulg", _motion(start=-0.01))
+    too_fine = ImuSamples(np.array([1.0, 1.0 + 0.2e-6]), s.gyro[:2], s.accel[:2])
+    with pytest.raises(ValueError, match=r"rounded to 1 us.*strictly increasing"):
+        write_px4_ulog(tmp_path / "fine.ulg", too_fine)
