@@ -16,6 +16,10 @@ Modules
     beamformer on a fixed global grid.
 ``projection``
     :func:`beam_projection` (the engine) and its result :class:`BeamCube`.
+``realtime``
+    :class:`RealtimeProjector`: the exact per-slot projection of
+    ``rigid_body_projection(method="direct")`` for a stream of frames of one
+    geometry (tables set up once, threads), equal within float32 rounding.
 ``geometry``
     Direction and angle-grid helpers.
 ``guards``
@@ -40,12 +44,14 @@ from .paper import (
     yaw_projection,
 )
 from .projection import BeamCube, beam_projection
+from .realtime import RealtimeProjector
 from .strapdown import STANDARD_GRAVITY, PlatformMotion, integrate_imu, static_motion
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "BeamCube", "CompensationWarning", "PAPER_STEPS", "PlatformMotion", "STANDARD_GRAVITY",
+    "BeamCube", "CompensationWarning", "PAPER_STEPS", "PlatformMotion", "RealtimeProjector",
+    "STANDARD_GRAVITY",
     "az_el", "beam_projection", "direction", "grid_directions", "integrate_imu", "paper_chain",
     "range_change", "rigid_body_projection", "slow_time_correction", "static_motion",
     "tilt_correction", "tilt_residual", "yaw_projection",

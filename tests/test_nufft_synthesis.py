@@ -272,7 +272,15 @@ def test_chart_default_on_pareto_front(monkeypatch, tmp_path):
     monkeypatch.setattr(sa, "KNOB_PATHS", 3000)
     measured = sa.measure_knobs(quick=True, log=lambda m: None, rt=False)
     names = [k["knob"] for k in measured["knobs"]]
-    assert names == ["nufft_eps", "motion", "geometry", "chirp_block"]
+    from raysim.synthesis import kernel
+
+    if kernel.available():
+        assert names == ["nufft_eps", "kernel_eps", "decimation", "motion", "geometry",
+                         "chirp_block"]
+    else:
+        assert names == ["nufft_eps", "motion", "geometry", "chirp_block"]
+        assert "kernel not built" in measured["not_measured"]["kernel_eps_decimation"]
+    assert "tube density" in measured["not_measured"]["tube_density"]
     for k in measured["knobs"]:
         assert k["default_on_front"], k
         assert sum(s["default"] for s in k["settings"]) == 1, k["knob"]

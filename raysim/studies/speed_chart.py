@@ -18,6 +18,16 @@ default. Knobs:
     Plane-wave element delays (range and direction at the array centroid)
     against the exact spherical delays (default and reference), 2,000 ground
     paths from 2 m to 60 m.
+``kernel_eps``
+    Tolerance ``eps`` of the fused C++ kernel (``method="kernel"``, reference:
+    the complex128 direct sum), the same 2,000 hover paths as ``nufft_eps``.
+``decimation``
+    Slow-time decimation off (``decimate=1``, default and reference) against
+    ``decimate="auto"`` (exact rows on every D-th chirp, Kaiser-sinc
+    interpolation between), fused kernel at ``eps = 1e-5``, whole slow time.
+    Both kernel knobs need the compiled extension; without it they are left
+    out and ``not_measured`` says so. (A tube-density knob of a scattering
+    engine is not drawn: no such engine exists yet.)
 ``chirp_block``
     Chirps synthesised per block in :func:`raysim.synthesis.streaming.render_stream`
     (memory against per-call overhead); same values, so only time differs.
@@ -56,6 +66,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+#: Resolution of the PNG (9 panels at 90 dpi stay below 300 kB for docs/).
+CHART_DPI = 90
 #: Relative timing difference below which two settings count as equally fast.
 TIME_TOLERANCE = 0.10
 #: Paths of the multipath knobs (the chirp-block knob uses a quarter).
@@ -66,7 +78,7 @@ REPEAT = 1
 REFERENCE_ERROR_FLOOR = 1e-9
 #: Defaults of the simulator, per knob.
 DEFAULTS = {"nufft_eps": "1e-06", "motion": "stop-and-hop", "geometry": "spherical",
-            "chirp_block": "16"}
+            "chirp_block": "16", "kernel_eps": "1e-06", "decimation": "off"}
 #: Bundled scene of the ray-tracing knobs.
 RT_SCENE = "rough_terrain"
 #: Chirps per ray-traced frame (quick, full).
@@ -174,6 +186,67 @@ def measure_nufft_eps(*, quick: bool) -> dict:
         arr.num_channels / (8 if quick else 32)), "rel_error": 0.0, "reference": True})
     return _knob("nufft_eps", f"NUFFT tolerance eps ({KNOB_PATHS:,} paths)", settings,
                  f"timed on {n_t} chirps x 400 channels, error on 1 chirp x 16 channels")
+
+
+def measure_kernel_eps(*, quick: bool) -> dict:
+    """Fused kernel tolerance against the direct sum (2,000 hover paths, one thread)."""
+    from raysim.studies.workloads import hover_paths, paper_setup, subset
+    from raysim.synthesis.select import synthesize
+
+    cfg, arr, traj, lever = paper_setup()
+    pd = hover_paths(KNOB_PATHS, cfg, arr, traj, lever, seed=11)
+    n_t = 2 if quick else 8
+    timed = subset(pd, n_t, arr.num_channels)
+    acc = subset(pd, 1, 16)
+    ref = synthesize(acc, None, cfg, method="direct")
+    eps_values = (1e-3, 1e-4, 1e-5, 1e-6)
+    best = dict.fromkeys(eps_values, np.inf)
+    for _ in range(max(REPEAT, 2)):                     # interleaved repeats (load drift)
+        for eps in eps_values:
+            t, _ = _cpu(synthesize, timed, None, cfg, method="kernel", eps=eps, threads=1)
+            best[eps] = min(best[eps], t)
+    settings = [{"setting": f"{eps:.0e}", "s_per_frame": best[eps] * cfg.num_chirps / n_t,
+                 "rel_error": _rel(synthesize(acc, None, cfg, method="kernel", eps=eps), ref)}
+                for eps in eps_values]
+    t_dir, _ = _cpu(synthesize, subset(pd, 1, 8 if quick else 32), None, cfg, method="direct")
+    settings.append({"setting": "direct", "s_per_frame": t_dir * cfg.num_chirps * (
+        arr.num_channels / (8 if quick else 32)), "rel_error": 0.0, "reference": True})
+    return _knob("kernel_eps", f"fused kernel eps ({KNOB_PATHS:,} paths)", settings,
+                 f"one thread, timed on {n_t} chirps x 400 channels, error on 1 chirp x 16 "
+                 "channels against the complex128 direct sum")
+
+
+def measure_decimation(*, quick: bool) -> dict:
+    """Slow-time decimation off (reference) and auto, fused kernel at eps 1e-5."""
+    from raysim.studies.workloads import hover_paths, paper_setup, subset
+    from raysim.synthesis.decimate import plan_decimation
+    from raysim.synthesis.select import DECIMATION_EPS_SHARE, synthesize
+
+    eps = 1e-5
+    cfg, arr, traj, lever = paper_setup()
+    pd = hover_paths(KNOB_PATHS, cfg, arr, traj, lever, seed=11)
+    n_ch = 16 if quick else 40
+    timed = subset(pd, cfg.num_chirps, n_ch)
+    plan = plan_decimation(timed, cfg, cfg.num_chirps, DECIMATION_EPS_SHARE * eps, "auto")
+    best = {1: np.inf, "auto": np.inf}
+    for _ in range(max(REPEAT, 2)):
+        for d in best:
+            t, _ = _cpu(synthesize, timed, None, cfg, method="kernel", eps=eps, threads=1,
+                        decimate=d)
+            best[d] = min(best[d], t)
+    acc = subset(pd, cfg.num_chirps, 4)
+    ref = synthesize(acc, None, cfg, method="kernel", eps=eps)
+    scale = arr.num_channels / n_ch
+    settings = [
+        {"setting": "off", "s_per_frame": best[1] * scale, "rel_error": 0.0, "reference": True},
+        {"setting": f"auto (D={plan.factor})", "s_per_frame": best["auto"] * scale,
+         "rel_error": _rel(synthesize(acc, None, cfg, method="kernel", eps=eps,
+                                      decimate="auto"), ref)},
+    ]
+    return _knob("decimation", "slow-time decimation (kernel, eps 1e-5)", settings,
+                 f"one thread, all 256 chirps x {n_ch} channels timed, scaled to 400; error on "
+                 "256 chirps x 4 channels against decimation off; plan: "
+                 f"factor {plan.factor} ({plan.reason})")
 
 
 def measure_motion(*, quick: bool) -> dict:
@@ -435,11 +508,20 @@ def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print,
     ``rt=False`` leaves out the ray-tracing knobs; when Sionna RT's LLVM
     backend cannot run, they are left out and ``not_measured`` says why.
     """
-    knobs = []
-    for fn in (measure_nufft_eps, measure_motion, measure_geometry, measure_chirp_block):
+    from raysim.synthesis import kernel
+
+    knobs, not_measured = [], {}
+    fns = [measure_nufft_eps, measure_motion, measure_geometry, measure_chirp_block]
+    if kernel.available():
+        fns[1:1] = [measure_kernel_eps, measure_decimation]
+    else:
+        not_measured["kernel_eps_decimation"] = (
+            "fused kernel not built (pip install -e . or python setup.py build_ext --inplace); "
+            "kernel tolerance and decimation panels skipped")
+    not_measured["tube_density"] = "no scattering engine with a tube density exists yet"
+    for fn in fns:
         log(f"  chart knob: {fn.__name__.removeprefix('measure_')}")
         knobs.append(fn(quick=quick))
-    not_measured = {}
     if rt:
         from raysim.echoes.rt.backend import BackendError
 
@@ -527,5 +609,5 @@ def draw_chart(measured: dict, path) -> None:
         fig.text(0.5, 0.005, "not measured: " + "; ".join(notes), ha="center", va="bottom",
                  fontsize=8, color="tab:red", wrap=True)
     fig.tight_layout(rect=(0, 0.04 if notes else 0, 1, 1))
-    atomic_savefig(fig, path, dpi=120, format="png")
+    atomic_savefig(fig, path, dpi=CHART_DPI, format="png")
     plt.close(fig)
