@@ -206,3 +206,19 @@ def test_cli_json_and_negative_specs(capsys):
     assert np.shape(out["rcs_dbsm"]) == (3, 2)
     assert abs(out["rcs_dbsm"][1][1] - db(T.plate_rcs(0.05, LAM))) < CLOSED_FORM_DB
     assert main(["rcs", "nosuch.ply", "--az-deg", "0", "--el-deg", "0"]) == 2
+
+
+def test_cli_reads_a_mesh_file(tmp_path, capsys):
+    import trimesh
+
+    from raysim.cli import main
+
+    plate = T.square_plate(0.04)
+    path = tmp_path / "plate.ply"
+    trimesh.Trimesh(plate.vertices, plate.faces).export(path)
+    png = tmp_path / "plate.png"
+    assert main(["rcs", str(path), "--az-deg", "0", "--el-deg", "0", "--json",
+                 "--plot", str(png)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert abs(out["rcs_dbsm"][0][0] - db(T.plate_rcs(0.04, LAM))) < CLOSED_FORM_DB
+    assert png.stat().st_size > 0

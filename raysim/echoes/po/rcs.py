@@ -39,8 +39,9 @@ DEFAULT_FREQUENCY = 77e9
 #: (tube side lambda / 10: the linear phase over a tube is integrated exactly,
 #: and ten tubes per wavelength resolve facet edges to lambda / 10).
 RAYS_PER_WAVELENGTH = 10.0
-#: Near field: sub-facet edge at most this share of the Fresnel length
-#: ``sqrt(lambda R)`` (quadratic phase error over a sub-facet <= pi/4 * 0.1^2 * ... << 1 rad).
+#: Near field: sub-facet edge ``s`` at most this share of the Fresnel length
+#: ``sqrt(lambda R)``; the two-way quadratic phase left out over a sub-facet,
+#: ``k s^2 / (4 R)``, is then at most ``pi / 200`` rad (0.016 rad).
 FRESNEL_FRACTION = 0.1
 #: Default deepest bounce traced.
 MAX_BOUNCES = 3
