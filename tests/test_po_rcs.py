@@ -222,3 +222,23 @@ def test_cli_reads_a_mesh_file(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert abs(out["rcs_dbsm"][0][0] - db(T.plate_rcs(0.04, LAM))) < CLOSED_FORM_DB
     assert png.stat().st_size > 0
+
+
+def test_partial_shadowing_of_a_stepped_plate(metal):
+    """A strip in front of a plate, lambda/2 towards the radar, hides part of it.
+
+    PO over the lit areas only: the strip (area A_f) and the unhidden back plate
+    (A_b - A_f) add in phase (two-way step lambda), so sigma = 4 pi A_b^2 / lambda^2;
+    counting the hidden part gives 4 pi (A_b + A_f)^2 / lambda^2, dropping the
+    partly hidden back facets 4 pi A_f^2 / lambda^2 (both over 3 dB away).
+    """
+    from raysim.echoes.po.mesh import TriangleMesh
+
+    side, top = 0.04, 0.0073                    # the strip covers -side/2 < y < top
+    back = [[-0.02, -0.02, 0.0], [0.02, -0.02, 0.0], [0.02, 0.02, 0.0], [-0.02, 0.02, 0.0]]
+    z = LAM / 2
+    front = [[-0.02, -0.02, z], [0.02, -0.02, z], [0.02, top, z], [-0.02, top, z]]
+    mesh = TriangleMesh(np.array(back + front), np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6],
+                                                          [4, 6, 7]]))
+    res = monostatic_rcs(mesh, metal, [0.0], [0.0])
+    assert abs(res.rcs_dbsm[0, 0] - db(4 * math.pi * side**4 / LAM**2)) < CLOSED_FORM_DB

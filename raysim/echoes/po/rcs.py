@@ -5,8 +5,9 @@ Geometry (the frame of ``raysim rcs``): the radar sits at ``R u(az, el)``,
 polarisation vectors are ``e_v = du/d(el)`` (VV) and
 ``e_h = (cos az, 0, -sin az)`` (HH); transmit and receive share one.
 
-Single bounce: the PO integral over every illuminated facet whose centroid
-sees the radar (Mitsuba shadow ray), each integrated in closed form
+Single bounce: the PO integral over the illuminated, unshadowed part of every
+facet (Mitsuba shadow rays from each facet's centroid and corners; facets in
+partial shadow are split down to the SBR tube side), each integrated in closed form
 (:func:`~raysim.echoes.po.integral.polygon_phase_integral`). In the far field
 the incident wave is plane. At a finite range the facets are first
 subdivided until no edge exceeds ``FRESNEL_FRACTION * sqrt(lambda R)``, and each
@@ -104,48 +105,78 @@ class RcsResult:
                 "rcs_dbsm": [[round(float(x), 4) for x in row] for row in self.rcs_dbsm]}
 
 
-def _single_far(scene: RayScene, material: PoMaterial, u, e_pol, k) -> complex:
-    mesh = scene.mesh
-    n = scene.normals
-    nu = n @ u
-    lit = np.abs(nu) > 1e-12
-    idx = np.flatnonzero(lit)
-    n_eff = n[idx] * np.sign(nu[idx])[:, None]
-    cent = mesh.triangles[idx].mean(axis=1)
-    seen = scene.unoccluded(cent + scene.epsilon * n_eff, np.broadcast_to(u, cent.shape))
-    idx, n_eff = idx[seen], n_eff[seen]
-    if len(idx) == 0:
+def _split4(tri: np.ndarray) -> np.ndarray:
+    """Each triangle ``[m, 3, 3]`` into its four midpoint triangles ``[4 m, 3, 3]`` (same turn)."""
+    v0, v1, v2 = tri[:, 0], tri[:, 1], tri[:, 2]
+    m01, m12, m20 = (v0 + v1) / 2, (v1 + v2) / 2, (v2 + v0) / 2
+    return np.concatenate([np.stack(t, axis=1) for t in
+                           ((v0, m01, m20), (m01, v1, m12), (m20, m12, v2), (m01, m12, m20))])
+
+
+def _lit(scene: RayScene, tri: np.ndarray, u: np.ndarray, range_m: float | None,
+         min_edge: float) -> tuple[np.ndarray, np.ndarray]:
+    """Lit parts of the facets ``tri`` [m, 3, 3] and their normals facing the radar.
+
+    A facet's centroid and its corners (pulled 5 % towards the centroid) are
+    tested for a clear line to the radar (direction ``u`` in the far field, the
+    point ``range_m * u`` otherwise). All clear: lit; none: shadowed; mixed: the
+    facet is split in four and tested again, down to edges of ``min_edge`` [m]
+    where the centroid decides.
+    """
+    out_t, out_n = [], []
+    while len(tri):
+        cent = tri.mean(axis=1)
+        cr = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        n = cr / np.linalg.norm(cr, axis=1, keepdims=True)
+        pts = np.concatenate([cent[:, None], tri + 0.05 * (cent[:, None] - tri)], axis=1)
+        if range_m is None:
+            toward = np.broadcast_to(u, pts.shape)
+            dist = np.full(pts.shape[:2], np.inf)
+        else:
+            rel = range_m * u - pts
+            dist = np.linalg.norm(rel, axis=2)
+            toward = rel / dist[..., None]
+        facing = np.einsum("fi,fi->f", n, toward[:, 0])
+        keep = np.abs(facing) > 1e-12
+        tri, n, pts, toward, dist = tri[keep], n[keep], pts[keep], toward[keep], dist[keep]
+        n = n * np.sign(np.einsum("fi,fi->f", n, toward[:, 0]))[:, None]
+        start = pts + scene.epsilon * n[:, None]
+        seen = scene.unoccluded(start.reshape(-1, 3), toward.reshape(-1, 3),
+                                dist.reshape(-1)).reshape(-1, 4)
+        big = np.linalg.norm(tri - np.roll(tri, -1, axis=1), axis=2).max(axis=1) > min_edge
+        mixed = seen.any(axis=1) & ~seen.all(axis=1) & big
+        done = ~mixed & seen[:, 0]
+        out_t.append(tri[done])
+        out_n.append(n[done])
+        tri = _split4(tri[mixed])
+    return np.concatenate(out_t), np.concatenate(out_n)
+
+
+def _single_far(scene: RayScene, material: PoMaterial, u, e_pol, k, min_edge) -> complex:
+    tri, n_eff = _lit(scene, scene.mesh.triangles, u, None, min_edge)
+    if len(tri) == 0:
         return 0j
     d = np.broadcast_to(-u, n_eff.shape)
     e = np.broadcast_to(e_pol.astype(complex), n_eff.shape)
     co = po_vector(material, d, e, n_eff, u) @ e_pol
-    integral = polygon_phase_integral(mesh.triangles[idx], 2 * k * u)
+    integral = polygon_phase_integral(tri, 2 * k * u)
     return complex((-1j * k / (4 * np.pi)) * np.sum(co * integral))
 
 
 def _single_near(scene: RayScene, fine: TriangleMesh, material: PoMaterial, u, e_pol, k,
-                 range_m: float) -> complex:
-    radar = range_m * u
-    tri = fine.triangles
-    n = fine.normals
-    cent = tri.mean(axis=1)
-    to_radar = radar - cent
-    r_i = np.linalg.norm(to_radar, axis=1)
-    u_i = to_radar / r_i[:, None]
-    nu = np.einsum("fi,fi->f", n, u_i)
-    idx = np.flatnonzero(np.abs(nu) > 1e-12)
-    n_eff = n[idx] * np.sign(nu[idx])[:, None]
-    seen = scene.unoccluded(cent[idx] + scene.epsilon * n_eff, u_i[idx], r_i[idx])
-    idx, n_eff = idx[seen], n_eff[seen]
-    if len(idx) == 0:
+                 range_m: float, min_edge) -> complex:
+    tri, n_eff = _lit(scene, fine.triangles, u, range_m, min_edge)
+    if len(tri) == 0:
         return 0j
-    ui, ri = u_i[idx], r_i[idx]
+    cent = tri.mean(axis=1)
+    to_radar = range_m * u - cent
+    ri = np.linalg.norm(to_radar, axis=1)
+    ui = to_radar / ri[:, None]
     e = e_pol - (ui @ e_pol)[:, None] * ui
     e = (e / np.linalg.norm(e, axis=1, keepdims=True)).astype(complex)
     co = np.einsum("fi,fi->f", po_vector(material, -ui, e, n_eff, ui), e.real)
     w = 2 * k * ui
-    local = polygon_phase_integral(tri[idx], w) * np.exp(-1j * np.einsum("fi,fi->f", w,
-                                                                        cent[idx]))
+    local = polygon_phase_integral(tri, w) * np.exp(-1j * np.einsum("fi,fi->f", w, cent))
     amp = (range_m / ri) ** 2 * np.exp(-2j * k * (ri - range_m))
     return complex((-1j * k / (4 * np.pi)) * np.sum(co * amp * local))
 
@@ -226,9 +257,9 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
             e_h, e_v = polarisation_basis(a, e)
             e_pol = e_v if pol == "VV" else e_h
             if range_m is None:
-                f = _single_far(scene, material, u, e_pol, k)
+                f = _single_far(scene, material, u, e_pol, k, spacing)
             else:
-                f = _single_near(scene, fine, material, u, e_pol, k, range_m)
+                f = _single_near(scene, fine, material, u, e_pol, k, range_m, spacing)
             f += sbr_amplitude(scene, material, u, e_pol, e_h, e_v, wavelength,
                                spacing=spacing, max_bounces=int(max_bounces), range_m=range_m)
             out[i, j] = 4 * math.pi * abs(f) ** 2
