@@ -1,0 +1,16 @@
+"""Physical-optics scattering: facet PO integrals and shooting-and-bouncing rays (SBR).
+
+Modules: :mod:`~raysim.echoes.po.mesh` (meshes, materials, Fresnel),
+:mod:`~raysim.echoes.po.integral` (Gordon's closed-form facet integral, PO
+currents), :mod:`~raysim.echoes.po.rays` (Mitsuba ray intersection),
+:mod:`~raysim.echoes.po.sbr` (ray tubes), :mod:`~raysim.echoes.po.rcs`
+(monostatic RCS driver), :mod:`~raysim.echoes.po.targets` (canonical meshes and
+closed forms). See ``docs/rcs.md``.
+"""
+
+from raysim.echoes.po.mesh import PoMaterial, TriangleMesh, po_material
+from raysim.echoes.po.rcs import RcsResult, monostatic_rcs
+from raysim.echoes.po.targets import canonical_target
+
+__all__ = ["PoMaterial", "TriangleMesh", "po_material", "RcsResult", "monostatic_rcs",
+           "canonical_target"]
