@@ -14,10 +14,12 @@ examples:
 Measures the fused kernel (+ slow-time decimation) against FINUFFT for 1e5 paths
 (key synthesis_1e5: speedup_vs_finufft, relative_error, threads, clock), NUFFT
 vs direct-sum vs tone-sum synthesis for 10 to 1e5 paths on the
-paper frame (256 chirps x 400 channels x 600 samples), the oracle against the
-write + range-FFT floor and a naive NumPy synthesis, compensation + processing
-against the bare FFT chain, the per-frame time split, re-projection, and the
-peak memory of a 1e5-path frame (child process). Slow references are timed on
+paper frame (256 chirps x 400 channels x 600 samples), the oracle against a
+pure-write floor and a naive NumPy synthesis (wall and CPU seconds),
+compensation + processing against the bare FFT chain, real-time compensation
+of a TI-size frame (key realtime_compensation: frames per second against the
+frame rate), the per-frame time split, re-projection, and the peak memory of a
+1e5-path frame (child process). Slow references are timed on
 a subset and extrapolated linearly; the JSON says which. The chart adds the
 ray-tracing knobs (trace samples, depth, re-trace interval) on the bundled
 rough_terrain scene when Sionna RT's LLVM backend runs, and notes their absence
