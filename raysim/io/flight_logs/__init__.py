@@ -123,3 +123,33 @@ def check_increasing(time: np.ndarray, where: str) -> None:
         k = int(bad[0]) + 1
         raise ValueError(f"{where}: IMU time stamp {k} ({time[k]!r} s) is not after stamp "
                          f"{k - 1} ({time[k - 1]!r} s); time stamps must be strictly increasing")
+
+
+def microsecond_stamps(samples, writer: str, clock: str) -> np.ndarray:
+    """Whole-microsecond stamps ``[sample]`` (int64) of IMU samples for a log writer.
+
+    Parameters
+    ----------
+    samples : raysim.platform.imu.ImuSamples
+    writer : str
+        Name of the writer, for messages.
+    clock : str
+        The log's time field, for messages (``"ULog time stamps"``, ``"DataFlash TimeUS"``).
+
+    Raises
+    ------
+    ValueError
+        ``samples`` is not ImuSamples, a time is negative (the logs count from boot) or two
+        times round to the same microsecond.
+    """
+    from raysim.platform.imu import ImuSamples
+
+    if not isinstance(samples, ImuSamples):
+        raise ValueError(f"samples must be ImuSamples, got {type(samples).__name__}")
+    t = np.asarray(samples.time, dtype=float)
+    if t[0] < 0:
+        raise ValueError(f"{clock} are microseconds since boot and must be >= 0; the first "
+                         f"sample is at {t[0]!r} s")
+    stamps = np.rint(t * 1e6).astype(np.int64)
+    check_increasing(stamps.astype(float), f"{writer} (times rounded to 1 us)")
+    return stamps

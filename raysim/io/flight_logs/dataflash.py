@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.flight_logs import check_increasing
+from raysim.io.flight_logs import check_increasing, microsecond_stamps
 from raysim.platform.imu import ImuSamples
 
 __all__ = ["ARDUPILOT_EXTRA", "read_dataflash_imu", "write_dataflash_imu"]
@@ -132,20 +132,13 @@ def write_dataflash_imu(path: str | os.PathLike, samples: ImuSamples,
     pathlib.Path
         The written file.
     """
-    if not isinstance(samples, ImuSamples):
-        raise ValueError(f"samples must be ImuSamples, got {type(samples).__name__}")
     if not 0 <= instance <= 255:
         raise ValueError(f"instance must be in 0..255, got {instance}")
-    t = np.asarray(samples.time, dtype=float)
-    if t[0] < 0:
-        raise ValueError(f"DataFlash TimeUS is microseconds since boot and must be >= 0; the "
-                         f"first sample is at {t[0]!r} s")
-    stamps = np.rint(t * 1e6).astype(np.int64)
-    check_increasing(stamps.astype(float), "write_dataflash_imu (times rounded to 1 us)")
+    stamps = microsecond_stamps(samples, "write_dataflash_imu", "DataFlash TimeUS")
     fmt = struct.pack("<BB4s16s64s", _IMU_TYPE, 3 + _IMU_RECORD.size, b"IMU",
                       _IMU_FORMAT.encode(), _IMU_COLUMNS.encode())
     body = bytearray(_HEAD + bytes([_FMT_TYPE]) + fmt)
-    for k in range(t.size):
+    for k in range(stamps.size):
         body += _HEAD + bytes([_IMU_TYPE]) + _IMU_RECORD.pack(
             int(stamps[k]), instance, *map(float, samples.gyro[k]), *map(float, samples.accel[k]))
     from raysim.io.files import atomic_write_bytes

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.flight_logs import check_increasing
+from raysim.io.flight_logs import check_increasing, microsecond_stamps
 from raysim.platform.imu import ImuSamples
 
 __all__ = ["ULOG_TOPIC", "read_px4_ulog", "write_px4_ulog"]
@@ -138,21 +138,14 @@ def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples) -> Path:
         ``samples`` is not ImuSamples, a time is negative, or two times round to
         the same microsecond.
     """
-    if not isinstance(samples, ImuSamples):
-        raise ValueError(f"samples must be ImuSamples, got {type(samples).__name__}")
-    t = np.asarray(samples.time, dtype=float)
-    if t[0] < 0:
-        raise ValueError(f"ULog time stamps are microseconds since boot and must be >= 0; "
-                         f"the first sample is at {t[0]!r} s")
-    stamps = np.rint(t * 1e6).astype(np.uint64)
-    check_increasing(stamps.astype(float), "write_px4_ulog (times rounded to 1 us)")
+    stamps = microsecond_stamps(samples, "write_px4_ulog", "ULog time stamps").astype(np.uint64)
     steps = np.diff(stamps.astype(np.int64))
     dt_us = np.concatenate([steps[:1], steps])   # integral interval ending at each stamp
     body = bytearray(_MAGIC + b"\x01" + struct.pack("<Q", int(stamps[0])))
     body += _message(b"B", bytes(8) + bytes(8) + bytes(24))   # flag bits: none set
     body += _message(b"F", _FORMAT.encode())
     body += _message(b"A", struct.pack("<BH", 0, 0) + ULOG_TOPIC.encode())
-    for k in range(t.size):
+    for k in range(stamps.size):
         g = samples.gyro[k]
         f = samples.accel[k]
         rec = _RECORD.pack(int(stamps[k]), *map(float, g), int(dt_us[k]), 0, *map(float, f),
