@@ -130,12 +130,21 @@ def _beamformer(spec: ChainSpec, frame: RadarFrame, motion, warnings: list):
     Guard warnings of the chain are appended to ``warnings``.
     """
     arr, cfg = frame.array, frame.config
+    slots = arr.num_slots
+    per_slot = spec.name == "exact" and slots > 1
 
     def bf(rc, chirps, ranges, az, el, direction=None):
-        mot = None if motion is None else motion.select(np.asarray(chirps))
+        c = np.asarray(chirps)
+        mot, channel_slot = None, None
+        if motion is not None and per_slot:           # every TDM slot at its own pose
+            mot = motion.select((c[:, None] * slots + np.arange(slots)).ravel())
+            channel_slot = arr.tx_slot
+        elif motion is not None:                      # one pose per chirp loop (slot 0)
+            mot = motion.select(c * slots)
         out = project(spec, rc, arr.virtual_positions, wavelength=cfg.center_wavelength,
                       range_axis=ranges, azimuth=az, elevation=el, motion=mot,
-                      direction=direction, grid_shape=arr.grid_shape)
+                      direction=direction, grid_shape=arr.grid_shape,
+                      channel_slot=channel_slot)
         warnings.extend(w for w in out.warnings if w not in warnings)
         return out.data
     return bf
@@ -174,8 +183,12 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
         ``none``, ``paper``, ``paper:published`` or ``exact``; the paper
         chain corrects slow time towards its own single-chirp estimate.
     motion : compensation.PlatformMotion, optional
-        Pose at every chirp of all frames, frame after frame (required for
-        the compensated chains; see :func:`raysim.pipeline.estimate.scenario_motion`).
+        Pose at every transmit slot of every chirp of all frames, frame after
+        frame, chirp major, slot minor (one pose per chirp for a single-slot
+        array); required for the compensated chains (see
+        :func:`raysim.pipeline.run.motion_times`). The exact chain projects each
+        TDM slot's channels with the pose of its own transmit instant; the paper
+        chain, as published, uses one pose per chirp loop (slot 0).
     return_maps : bool
         Also return the maps: ``range_profile`` (``range``), ``rd``, ``ae``,
         ``ra``, ``re`` (dimensions of :data:`raysim.vocabulary.MAPS`) as
@@ -215,12 +228,14 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     check_finite_frames(frames)
     cfg = frames[0].config
     n = frames[0].data.shape[0]
-    if motion is not None and motion.num_chirps != n * len(frames):
-        raise ValueError(f"motion has {motion.num_chirps} chirps, frames have "
-                         f"{n * len(frames)}")
+    slots = frames[0].array.num_slots
+    if motion is not None and motion.num_chirps != n * slots * len(frames):
+        raise ValueError(f"motion has {motion.num_chirps} poses, frames need {n * len(frames)} "
+                         f"chirps x {slots} TDM slot(s) = {n * slots * len(frames)}")
     found = [] if warnings is None else warnings
+    per_frame = n * slots
     bfs = [_beamformer(spec, frames[0], None if motion is None else
-                       motion.select(slice(k * n, (k + 1) * n)), found)
+                       motion.select(slice(k * per_frame, (k + 1) * per_frame)), found)
            for k in range(len(frames))]
     wl = cfg.center_wavelength
 

@@ -227,6 +227,26 @@ def render_dataset(scenario: Scenario) -> object:
 
 
 
+def motion_times(frame, chirp_times: np.ndarray) -> np.ndarray:
+    """Times at which the motion is needed: every TDM slot of every chirp [s].
+
+    Parameters
+    ----------
+    frame : RadarFrame
+        A frame of the run (its array's slots and its config's slot interval).
+    chirp_times : ndarray, shape ``[chirp]``
+        Chirp-loop start times of all frames [s].
+
+    Returns
+    -------
+    ndarray, shape ``[chirp * slot]``
+        Chirp major, slot minor; equal to ``chirp_times`` for a single-slot array.
+    """
+    slots = frame.array.num_slots
+    offsets = np.arange(slots) * frame.config.slot_interval
+    return (np.asarray(chirp_times, dtype=float)[:, None] + offsets[None, :]).ravel()
+
+
 def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None, imu=None,
              reference: Reference | None = None, return_maps: bool = False) -> dict:
     """Render a scenario in memory (unless ``frames`` are given) and measure every chain.
@@ -276,7 +296,7 @@ def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None,
                     raise FeatureUnavailable("raysim.platform.imu is not available")
                 times = (frames.chirp_times() if isinstance(frames, LazyFrames)
                          else np.concatenate([fr.chirp_times for fr in frames]))
-                motion = scenario_motion(scenario, imu, times, traj)
+                motion = scenario_motion(scenario, imu, motion_times(frames[0], times), traj)
                 found.extend(motion.warnings)
             res = analyse(frames, reference, chain=spec, motion=motion if spec.compensated
                           else None, return_maps=return_maps, warnings=found)
