@@ -6,8 +6,9 @@ References are re-derived here in plain NumPy (``ref_tone_sum``) or taken from
 
 import numpy as np
 import pytest
+from path_sets import random_paths
 
-from raysim.echoes.oracle import PointTarget, direction, point_target_delays, simulate_point_targets
+from raysim.echoes.oracle import PointTarget, point_target_delays, simulate_point_targets
 from raysim.platform.motion import sinusoid
 from raysim.radar.arrays import ti_3tx4rx, upa
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
@@ -38,23 +39,6 @@ def short_radar():
     return RadarConfig(num_chirps=3)
 
 
-def random_paths(cfg, array, rng, n, *, trajectory=None, near=0.3):
-    """Random multipath geometry: near-field (from 0.3 m) to max range, wide angles,
-    bounces with interior length, per-chirp moving vertices for a quarter of them."""
-    rmax = 0.45 * cfg.max_range
-    r = np.exp(rng.uniform(np.log(near), np.log(rmax), n))
-    first = r[:, None] * direction(rng.uniform(-1.45, 1.45, n), rng.uniform(-1.45, 1.45, n))
-    bounce = rng.random(n) < 0.5
-    last = np.where(bounce[:, None], rng.uniform(0.2, 1.0, n)[:, None]
-                    * direction(rng.uniform(-1.4, 1.4, n), rng.uniform(-1.4, 1.4, n)) * r[:, None],
-                    first)
-    length = np.where(bounce, rng.uniform(0.0, 0.3, n) * rmax, 0.0)
-    moving = rng.random(n) < 0.25
-    v = rng.normal(0, 2.0, (n, 3)) * moving[:, None]
-    t = cfg.chirp_times()
-    first = first[:, None, :] + v[:, None, :] * t[None, :, None]
-    amp = (rng.normal(size=n) + 1j * rng.normal(size=n)) * np.exp(rng.uniform(-2, 2, n))
-    return PathDelays.for_array(first, last, length, amp, cfg, array, trajectory)
 
 
 def test_pathdelays_match_per_element_norm(short_radar, rng):

@@ -8,8 +8,8 @@ extension is not built (``method="auto"`` then falls back to FINUFFT).
 
 import numpy as np
 import pytest
+from path_sets import random_paths
 
-from raysim.echoes.oracle import direction
 from raysim.platform.motion import sinusoid
 from raysim.radar.arrays import ti_3tx4rx, upa
 from raysim.radar.config import RadarConfig
@@ -27,25 +27,6 @@ def rel_err(x, ref):
     return float(np.linalg.norm(x - ref) / np.linalg.norm(ref))
 
 
-def random_paths(cfg, array, rng, n, *, trajectory=None, per_chirp=True, velocity=False):
-    """Near-field to far, wide angles, bounces; per-chirp moving vertices or velocities."""
-    rmax = 0.45 * cfg.max_range
-    r = np.exp(rng.uniform(np.log(0.3), np.log(rmax), n))
-    first = r[:, None] * direction(rng.uniform(-1.45, 1.45, n), rng.uniform(-1.45, 1.45, n))
-    bounce = rng.random(n) < 0.5
-    last = np.where(bounce[:, None], rng.uniform(0.2, 1.0, n)[:, None]
-                    * direction(rng.uniform(-1.4, 1.4, n), rng.uniform(-1.4, 1.4, n)) * r[:, None],
-                    first)
-    length = np.where(bounce, rng.uniform(0.0, 0.3, n) * rmax, 0.0)
-    moving = rng.random(n) < 0.25
-    v = rng.normal(0, 2.0, (n, 3)) * moving[:, None]
-    amp = (rng.normal(size=n) + 1j * rng.normal(size=n)) * np.exp(rng.uniform(-2, 2, n))
-    if velocity:
-        return PathDelays.for_array(first, last, length, amp, cfg, array, trajectory,
-                                    velocity=v, reference_time=2e-5)
-    if per_chirp:
-        first = first[:, None, :] + v[:, None, :] * cfg.chirp_times()[None, :, None]
-    return PathDelays.for_array(first, last, length, amp, cfg, array, trajectory)
 
 
 @pytest.fixture(scope="module")
