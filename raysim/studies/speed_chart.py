@@ -158,8 +158,14 @@ def _knob(name: str, label: str, settings: list[dict], note: str, *,
             "settings": settings}
 
 
-def measure_nufft_eps(*, quick: bool) -> dict:
-    """NUFFT tolerance against the direct sum (2,000 hover paths)."""
+def _tolerance_knob(method: str, eps_values, *, quick: bool, repeat: int, name: str,
+                    label: str, note: str) -> dict:
+    """Time and error of a synthesis method over its tolerances, and the direct sum.
+
+    One thread; timed on a few chirps x all 400 channels of :data:`KNOB_PATHS` hover
+    paths (best of ``repeat`` interleaved runs), error on 1 chirp x 16 channels
+    against the complex128 direct sum; times scaled to a whole paper frame.
+    """
     from raysim.studies.workloads import hover_paths, paper_setup, subset
     from raysim.synthesis.select import synthesize
 
@@ -169,51 +175,38 @@ def measure_nufft_eps(*, quick: bool) -> dict:
     timed = subset(pd, n_t, arr.num_channels)
     acc = subset(pd, 1, 16)
     ref = synthesize(acc, None, cfg, method="direct")
-    settings = []
-    scale = cfg.num_chirps / n_t
-    eps_values = (1e-2, 1e-4, 1e-6, 1e-7) if quick else (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
     best = dict.fromkeys(eps_values, np.inf)
-    for _ in range(max(REPEAT, 1 if quick else 2)):    # interleaved repeats (load drift)
+    for _ in range(repeat):                             # interleaved repeats (load drift)
         for eps in eps_values:
-            t, _ = _cpu(synthesize, timed, None, cfg, method="nufft", eps=eps, threads=1)
+            t, _ = _cpu(synthesize, timed, None, cfg, method=method, eps=eps, threads=1)
             best[eps] = min(best[eps], t)
-    for eps in eps_values:
-        err = _rel(synthesize(acc, None, cfg, method="nufft", eps=eps), ref)
-        settings.append({"setting": f"{eps:.0e}", "s_per_frame": best[eps] * scale,
-                         "rel_error": err})
-    t_dir, _ = _cpu(synthesize, subset(pd, 1, 8 if quick else 32), None, cfg, method="direct")
+    settings = [{"setting": f"{eps:.0e}", "s_per_frame": best[eps] * cfg.num_chirps / n_t,
+                 "rel_error": _rel(synthesize(acc, None, cfg, method=method, eps=eps), ref)}
+                for eps in eps_values]
+    n_dir = 8 if quick else 32
+    t_dir, _ = _cpu(synthesize, subset(pd, 1, n_dir), None, cfg, method="direct")
     settings.append({"setting": "direct", "s_per_frame": t_dir * cfg.num_chirps * (
-        arr.num_channels / (8 if quick else 32)), "rel_error": 0.0, "reference": True})
-    return _knob("nufft_eps", f"NUFFT tolerance eps ({KNOB_PATHS:,} paths)", settings,
-                 f"timed on {n_t} chirps x 400 channels, error on 1 chirp x 16 channels")
+        arr.num_channels / n_dir), "rel_error": 0.0, "reference": True})
+    return _knob(name, label, settings, note.format(n_t=n_t))
+
+
+def measure_nufft_eps(*, quick: bool) -> dict:
+    """NUFFT tolerance against the direct sum (2,000 hover paths)."""
+    eps_values = (1e-2, 1e-4, 1e-6, 1e-7) if quick else (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
+    return _tolerance_knob("nufft", eps_values, quick=quick,
+                           repeat=max(REPEAT, 1 if quick else 2), name="nufft_eps",
+                           label=f"NUFFT tolerance eps ({KNOB_PATHS:,} paths)",
+                           note="timed on {n_t} chirps x 400 channels, error on 1 chirp x 16 "
+                                "channels")
 
 
 def measure_kernel_eps(*, quick: bool) -> dict:
     """Fused kernel tolerance against the direct sum (2,000 hover paths, one thread)."""
-    from raysim.studies.workloads import hover_paths, paper_setup, subset
-    from raysim.synthesis.select import synthesize
-
-    cfg, arr, traj, lever = paper_setup()
-    pd = hover_paths(KNOB_PATHS, cfg, arr, traj, lever, seed=11)
-    n_t = 2 if quick else 8
-    timed = subset(pd, n_t, arr.num_channels)
-    acc = subset(pd, 1, 16)
-    ref = synthesize(acc, None, cfg, method="direct")
-    eps_values = (1e-3, 1e-4, 1e-5, 1e-6)
-    best = dict.fromkeys(eps_values, np.inf)
-    for _ in range(max(REPEAT, 2)):                     # interleaved repeats (load drift)
-        for eps in eps_values:
-            t, _ = _cpu(synthesize, timed, None, cfg, method="kernel", eps=eps, threads=1)
-            best[eps] = min(best[eps], t)
-    settings = [{"setting": f"{eps:.0e}", "s_per_frame": best[eps] * cfg.num_chirps / n_t,
-                 "rel_error": _rel(synthesize(acc, None, cfg, method="kernel", eps=eps), ref)}
-                for eps in eps_values]
-    t_dir, _ = _cpu(synthesize, subset(pd, 1, 8 if quick else 32), None, cfg, method="direct")
-    settings.append({"setting": "direct", "s_per_frame": t_dir * cfg.num_chirps * (
-        arr.num_channels / (8 if quick else 32)), "rel_error": 0.0, "reference": True})
-    return _knob("kernel_eps", f"fused kernel eps ({KNOB_PATHS:,} paths)", settings,
-                 f"one thread, timed on {n_t} chirps x 400 channels, error on 1 chirp x 16 "
-                 "channels against the complex128 direct sum")
+    return _tolerance_knob("kernel", (1e-3, 1e-4, 1e-5, 1e-6), quick=quick,
+                           repeat=max(REPEAT, 2), name="kernel_eps",
+                           label=f"fused kernel eps ({KNOB_PATHS:,} paths)",
+                           note="one thread, timed on {n_t} chirps x 400 channels, error on 1 "
+                                "chirp x 16 channels against the complex128 direct sum")
 
 
 def measure_decimation(*, quick: bool) -> dict:
