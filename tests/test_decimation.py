@@ -104,3 +104,24 @@ def test_error_model_and_bad_input(hover):
             plan_decimation(pd, cfg, 256, 1e-6, bad)
         with pytest.raises(ValueError, match="decimate"):
             synthesize(pd, None, cfg, method="nufft", decimate=bad)
+
+
+def test_auto_picks_the_factor_with_fewest_exact_chirps(hover):
+    """The edge margins grow with the factor: "auto" minimises the exact chirps."""
+    cfg, pd, _ = hover
+    plan = plan_decimation(pd, cfg, 256, 1e-6)
+    assert plan.factor >= 2, plan.reason
+    for d in range(2, 9):
+        other = plan_decimation(pd, cfg, 256, 1e-6, d)
+        if other.factor == d:
+            assert plan.exact.size <= other.exact.size, (plan.factor, d)
+
+
+def test_decimation_near_the_eps_floor_renders_every_chirp(hover):
+    """At eps just above the floor the rows' share would fall below it: no decimation."""
+    from raysim.synthesis.nufft import MIN_EPS
+
+    cfg, pd, ref = hover
+    sub = subset(pd, 256, 1)
+    got = synthesize(sub, None, cfg, method="nufft", eps=1.05 * MIN_EPS, decimate="auto")
+    assert rel_err(got, ref[:, :1]) < 1.05 * MIN_EPS

@@ -172,8 +172,9 @@ def plan_decimation(src: PathDelays, config: RadarConfig, num_chirps: int, eps: 
     eps : float
         Error share allowed for interpolation (relative l2).
     decimate : "auto" or int >= 1
-        ``"auto"``: the largest factor up to :data:`MAX_FACTOR` that meets
-        ``eps``; an integer: that factor if it meets ``eps``, else refusal.
+        ``"auto"``: of the factors up to :data:`MAX_FACTOR` that meet ``eps``,
+        the one with the fewest exact chirps (edge margins included); an
+        integer: that factor if it meets ``eps``, else refusal.
     """
     if not (decimate == "auto" or (isinstance(decimate, (int, np.integer))
                                    and not isinstance(decimate, bool) and decimate >= 1)):
@@ -193,11 +194,16 @@ def plan_decimation(src: PathDelays, config: RadarConfig, num_chirps: int, eps: 
     if not ok:
         return _refuse(n_local, doppler, f"Doppler band {doppler:.3g} cycles/chirp too wide for "
                        f"factor {factors[0]} at eps={eps:g}")
-    factor = max(ok)
-    err = interpolation_error(doppler, factor)
-    attenuation = -20.0 * math.log10(max(err, 1e-300)) if err > 1e-9 else \
-        _kaiser_attenuation(1.0 - 2.0 * doppler * factor)
-    exact, missing, w = _weights(n_local, factor, TAPS, min(attenuation, 300.0))
+    def weights_for(d: int):
+        err = interpolation_error(doppler, d)
+        attenuation = -20.0 * math.log10(max(err, 1e-300)) if err > 1e-9 else \
+            _kaiser_attenuation(1.0 - 2.0 * doppler * d)
+        return err, _weights(n_local, d, TAPS, min(attenuation, 300.0))
+
+    # the cheapest factor, not the largest: the exact edge margins grow with the factor
+    candidates = {d: weights_for(d) for d in ok}
+    factor = min(ok, key=lambda d: (candidates[d][1][0].size, -d))
+    err, (exact, missing, w) = candidates[factor]
     if missing.size < MIN_SAVING * n_local:
         return _refuse(n_local, doppler, f"only {missing.size} of {n_local} chirps would be "
                        "interpolated (edge margins)")

@@ -228,7 +228,9 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         raise ValueError(f"eps={eps!r} is below the {tones_error(src.num_paths):.1e} that "
                          f"method 'tones' reaches with {src.num_paths} paths (complex64 "
                          f"accumulation); use method='nufft' or 'direct'")
-    if method in ("nufft", "kernel") and decimate != 1:
+    # decimation needs its row share of eps to stay above the methods' floor
+    if method in ("nufft", "kernel") and decimate != 1 and \
+            (1.0 - DECIMATION_EPS_SHARE) * eps >= MIN_EPS:
         from raysim.synthesis.decimate import interpolate, plan_decimation
 
         plan = plan_decimation(src, config, len(chirps), DECIMATION_EPS_SHARE * eps, decimate)
