@@ -80,8 +80,10 @@ def gate_snapshots(data: np.ndarray, range_bin: float) -> np.ndarray:
     return (data @ kern.astype(np.complex64)).astype(np.complex64)
 
 
-def check_finite_frames(frames: Sequence[RadarFrame]) -> None:
+def check_finite_frames(frames: Sequence[RadarFrame], start: int = 0) -> None:
     """Raise if any IF sample is NaN or infinite.
+
+    ``start`` is the position of ``frames[0]`` in the run (for the message).
 
     Raises
     ------
@@ -89,7 +91,7 @@ def check_finite_frames(frames: Sequence[RadarFrame]) -> None:
         Naming the frame (its ``frame_index``), chirp, channel and sample of the
         first bad value.
     """
-    for k, fr in enumerate(frames):
+    for k, fr in enumerate(frames, start):
         data = np.asarray(fr.data)
         ok = np.isfinite(data)
         if not ok.all():
@@ -225,7 +227,7 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     if not (0 < angle_step_deg <= angle_limit_deg <= 90):
         raise ValueError(f"need 0 < angle_step_deg <= angle_limit_deg <= 90, got "
                          f"{angle_step_deg!r}, {angle_limit_deg!r}")
-    check_finite_frames(frames)
+    check_finite_frames([frames[0]])        # the others when the frame loop reads them
     cfg = frames[0].config
     n = frames[0].data.shape[0]
     slots = frames[0].array.num_slots
@@ -258,7 +260,10 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
     power = 0.0
     snaps0 = None
     for k, bf in enumerate(bfs):
-        snaps = gate_snapshots(frames[k].data, i)[:, :, None]   # [chirp, channel, 1]
+        fr = frames[k]                  # lazy frames are rendered once, here
+        if k:
+            check_finite_frames([fr], start=k)
+        snaps = gate_snapshots(fr.data, i)[:, :, None]          # [chirp, channel, 1]
         if k == 0:
             snaps0 = snaps
         power = power + _coherent_power(bf, snaps, all_chirps, gate_r, grid,
