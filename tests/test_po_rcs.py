@@ -197,6 +197,8 @@ def test_cli_json_and_negative_specs(capsys):
     np.testing.assert_allclose(parse_spec("-1,2.5", "--az-deg"), [-1, 2.5])
     with pytest.raises(ValueError, match="--el-deg"):
         parse_spec("5:0:1", "--el-deg")
+    with pytest.raises(ValueError, match=r"--az-deg: got '0:1e13:1e-3', .* \(at most 100000\)"):
+        parse_spec("0:1e13:1e-3", "--az-deg")        # refused before allocating 1e16 angles
     rc = main(["rcs", "plate:0.05", "--material", "metal", "--az-deg", "-2:2:2", "--el-deg",
                "-1,0", "--json", "--max-bounces", "1"])
     assert rc == 0

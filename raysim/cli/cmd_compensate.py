@@ -52,6 +52,7 @@ import sys
 
 import numpy as np
 
+from raysim.cli.options import chains_option, span_grid, span_option
 from raysim.io.files import atomic_write
 from raysim.vocabulary import CHAINS, ChainSpec, parse_chain
 
@@ -91,19 +92,6 @@ def _floats(text: str, n: int, name: str) -> np.ndarray:
     return vals
 
 
-def _span(text: str, name: str, with_step: bool) -> tuple:
-    parts = text.split(":")
-    try:
-        vals = tuple(float(p) for p in parts)
-    except ValueError:
-        raise ValueError(f"{name} must look like {'LO:HI:STEP' if with_step else 'LO:HI'}, "
-                         f"got {text!r}") from None
-    if len(vals) != (3 if with_step else 2) or not vals[0] <= vals[1] or \
-            (with_step and vals[2] <= 0):
-        raise ValueError(f"{name} must look like {'LO:HI:STEP' if with_step else 'LO:HI'} "
-                         f"with LO <= HI{' and STEP > 0' if with_step else ''}, got {text!r}")
-    return vals
-
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter,
                      argparse.RawDescriptionHelpFormatter):
@@ -118,14 +106,11 @@ def _chain(text: str) -> ChainSpec:
     ValueError
         Naming the value and the accepted names.
     """
-    from raysim.cli.options import did_you_mean
-
-    try:
-        return parse_chain(text)
-    except ValueError as exc:
-        hint = (" (the uncompensated chain is called 'none')" if text == "uncompensated"
-                else did_you_mean(text, [*CHAINS, "paper:published"]))
-        raise ValueError(f"--chain: {exc}{hint}") from None
+    keys = chains_option(text, "--chain")
+    if len(keys) != 1:
+        raise ValueError(f"--chain: got {text!r}, expected one chain of "
+                         f"{[*CHAINS, 'paper:published']}")
+    return parse_chain(keys[0])
 
 
 def register(subparsers) -> None:
@@ -286,15 +271,13 @@ def run(args) -> int:
                                initial_attitude=attitude, velocity=args.velocity, **kwargs)
     n_samples = cube["data"].shape[-1]
     r_axis = SPEED_OF_LIGHT * np.arange(n_samples) * fs / n_samples / (2.0 * bw / tc)
-    r_lo, r_hi = _span(args.range_m, "--range-m", False)
+    r_lo, r_hi = span_option(args.range_m, "--range-m", False)
     gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
     if gates.size == 0:
         raise ValueError(f"--range-m {args.range_m} selects no range cell; cells span "
                          f"0 .. {r_axis[-1]:.2f} m")
-    a0, a1, da = _span(args.az_deg, "--az-deg", True)
-    e0, e1, de = _span(args.el_deg, "--el-deg", True)
-    az = np.deg2rad(np.arange(a0, a1 + 1e-9, da))
-    el = np.deg2rad(np.arange(e0, e1 + 1e-9, de))
+    az = np.deg2rad(span_grid(args.az_deg, "--az-deg"))
+    el = np.deg2rad(span_grid(args.el_deg, "--el-deg"))
     rc = range_compress(cube["data"])
     beams = project(spec, rc, cube["element_positions"], wavelength=lam, range_axis=r_axis,
                     azimuth=az, elevation=el, motion=motion, direction=u, grid_shape=grid,

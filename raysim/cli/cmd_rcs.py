@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from raysim.cli.options import MAX_SPAN_VALUES, span_grid
+
 _EPILOG = """\
 MESH is a mesh file trimesh reads (PLY, OBJ, STL, GLB/glTF; metres) or a canonical
 target: plate:A (square plate of side A), dihedral:AxB (right dihedral, faces A wide,
@@ -64,25 +66,18 @@ def parse_spec(text: str, option: str) -> np.ndarray:
         Naming ``option`` and the value.
     """
     s = str(text).strip()
+    if ":" in s:
+        return span_grid(s, option)          # names the option, the value and the limit
     try:
-        if ":" in s:
-            parts = [float(x) for x in s.split(":")]
-            if len(parts) != 3:
-                raise ValueError
-            start, stop, step = parts
-            if step <= 0 or stop < start:
-                raise ValueError
-            count = int(math.floor((stop - start) / step + 1e-9)) + 1
-            values = start + step * np.arange(count)
-        else:
-            values = np.array([float(x) for x in s.split(",")])
+        values = np.array([float(x) for x in s.split(",")])
     except ValueError:
         raise ValueError(f"{option}: got {text!r}, expected a number, a comma list or "
                          "start:stop:step with step > 0 and stop >= start") from None
     if not np.all(np.isfinite(values)):
         raise ValueError(f"{option}: got {text!r}, angles must be finite")
-    if len(values) > 100_000:
-        raise ValueError(f"{option}: got {text!r}, {len(values)} angles (at most 100000)")
+    if len(values) > MAX_SPAN_VALUES:
+        raise ValueError(f"{option}: got {text!r}, {len(values)} angles (at most "
+                         f"{MAX_SPAN_VALUES})")
     return values
 
 

@@ -64,8 +64,6 @@ def run(args) -> int:
     if args.set and args.store:
         raise ValueError("--set applies to --scenario / --case, not to a stored render")
     default_out = "report.html"
-    if args.out:
-        check_output(args.out, "file", "--out")
     try:
         if args.store:
             from raysim.io import storage
@@ -81,14 +79,7 @@ def run(args) -> int:
             if ds.sizes.get("frame", 0) == 0:
                 raise ValueError(f"STORE {args.store!r} holds no complete frame yet")
             check_output(args.out or default_out, "file", "--out")
-            try:
-                data = collect_from_dataset(ds, chains=chains, source=str(path))
-            except (ValueError, FeatureUnavailable, MemoryError, KeyboardInterrupt):
-                raise
-            except Exception as exc:        # a chunk of the lazy store fails to decode
-                raise ValueError(f"STORE {str(path)!r} cannot be read: {type(exc).__name__}: "
-                                 f"{exc}; expected complete, decodable chunk files (a "
-                                 f"truncated or corrupted file?)") from exc
+            data = collect_from_dataset(ds, chains=chains, source=str(path))
         else:
             scenario = (load_scenario(args.scenario) if args.scenario
                         else scenario_from_case(args.case))

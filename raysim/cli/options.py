@@ -10,14 +10,17 @@ accepted ones and a "did you mean" suggestion; :func:`check_output` (from
 from __future__ import annotations
 
 import argparse
+import math
 import re
 from collections.abc import Iterable
+
+import numpy as np
 
 from raysim.io.files import check_output
 from raysim.io.scenario_keys import did_you_mean
 
 __all__ = ["Parser", "NEGATIVE_VALUE", "known_name", "chains_option", "check_output",
-           "did_you_mean"]
+           "did_you_mean", "span_option", "span_grid", "MAX_SPAN_VALUES"]
 
 #: Option values that are numbers, ranges or lists starting with a minus sign:
 #: ``-30``, ``-1e-3``, ``-.5``, ``-30:30:1``, ``-30,0,30``, ``-0.1,0,0.2``.
@@ -68,3 +71,31 @@ def chains_option(text: str, option: str = "--chains") -> list[str]:
         if bad == "uncompensated":
             hint = " (the uncompensated chain is called 'none')"
         raise ValueError(f"{option}: got {text!r}: {exc}{hint}") from None
+
+
+def span_option(text: str, name: str, with_step: bool) -> tuple:
+    """``LO:HI`` or ``LO:HI:STEP`` -> floats; errors name the option and the value."""
+    parts = text.split(":")
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        raise ValueError(f"{name} must look like {'LO:HI:STEP' if with_step else 'LO:HI'}, "
+                         f"got {text!r}") from None
+    if len(vals) != (3 if with_step else 2) or not vals[0] <= vals[1] or \
+            (with_step and vals[2] <= 0):
+        raise ValueError(f"{name} must look like {'LO:HI:STEP' if with_step else 'LO:HI'} "
+                         f"with LO <= HI{' and STEP > 0' if with_step else ''}, got {text!r}")
+    return vals
+
+
+#: Most values a ``LO:HI:STEP`` option may expand to (checked before allocating).
+MAX_SPAN_VALUES = 100_000
+
+
+def span_grid(text: str, name: str) -> np.ndarray:
+    """``LO:HI:STEP`` -> ``LO, LO + STEP, ...`` up to ``HI`` included, shape ``[value]``."""
+    lo, hi, step = span_option(text, name, True)
+    count = int(math.floor((hi - lo) / step + 1e-9)) + 1
+    if count > MAX_SPAN_VALUES:
+        raise ValueError(f"{name}: got {text!r}, {count} values (at most {MAX_SPAN_VALUES})")
+    return lo + step * np.arange(count)

@@ -132,9 +132,16 @@ class StoredFrames(LazyFrames):
     ----------
     ds : xarray.Dataset
         Frame Dataset (:mod:`raysim.io.storage` layout), lazy or in memory.
+    source : str
+        The store, for messages.
+
+    Raises
+    ------
+    ValueError
+        When a frame's chunks cannot be read or decoded (naming the store and the frame).
     """
 
-    def __init__(self, ds):
+    def __init__(self, ds, source: str = "dataset"):
         from raysim.io.storage import array_from_dataset, config_from_attrs
 
         self._ds = ds
@@ -143,9 +150,18 @@ class StoredFrames(LazyFrames):
 
         def read(f: int) -> RadarFrame:
             sub = ds.isel(frame=f)
-            return RadarFrame(np.asarray(sub["if_data"].values), config, array,
-                              np.asarray(sub["chirp_time"].values, dtype=float), lever,
-                              int(sub["frame"].values), {"source": "dataset"})
+            try:                          # a lazy store decodes its chunks here
+                data = np.asarray(sub["if_data"].values)
+                times = np.asarray(sub["chirp_time"].values, dtype=float)
+            except (MemoryError, KeyboardInterrupt):
+                raise
+            except Exception as exc:
+                raise ValueError(f"store {source!r}: frame {f} cannot be read "
+                                 f"({type(exc).__name__}: {exc}); expected complete, "
+                                 f"decodable chunk files (a truncated or corrupted file?)"
+                                 ) from exc
+            return RadarFrame(data, config, array, times, lever, int(sub["frame"].values),
+                              {"source": source})
 
         super().__init__(read, int(ds.sizes["frame"]))
 
@@ -167,7 +183,7 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
     from raysim.pipeline.run import evaluate
 
     keys = [c.key for c in parse_chains(chains)]
-    frames = StoredFrames(ds)
+    frames = StoredFrames(ds, source or "dataset")
     scenario = scenario_of(ds)
     motion = str(ds.attrs.get("motion_name", ""))
     ref = None

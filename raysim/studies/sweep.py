@@ -384,13 +384,10 @@ def check_out_dir(spec: SweepSpec, out_dir: str | Path) -> None:
         of another sweep (a different base scenario, parameters, seeds or
         chains; the message names the keys that differ) or an unreadable one.
     """
+    from raysim.io.files import check_output
+
     out = Path(out_dir)
-    for p in (out, *out.parents):
-        if p.exists() and not p.is_dir():
-            raise ValueError(f"--out {str(out)!r}: {str(p)!r} is a file; expected a folder "
-                             f"for the sweep's results")
-        if p.exists():
-            break
+    check_output(out, "dir", "--out")
     manifest = out / "sweep.json"
     if not manifest.exists():
         return

@@ -204,7 +204,7 @@ def test_compensate_chains_by_their_vocabulary_names(tmp_path, capsys):
     assert main(["compensate", str(tmp_path / "s.zarr"), "--out", str(out), "--chain",
                  "uncompensated", *common]) == 2
     err = capsys.readouterr().err
-    assert "--chain: chain: got 'uncompensated'" in err and "'none'" in err
+    assert "--chain: got 'uncompensated'" in err and "'none'" in err
     assert main(["compensate", str(tmp_path / "s.zarr"), "--out", str(out), "--chain",
                  "paper", *common]) == 2
     assert "--chain paper needs --direction-deg" in capsys.readouterr().err
