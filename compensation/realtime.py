@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import finite_array, positive
+from ._checks import angle_axis, finite_array, positive
 from .geometry import grid_directions
 from .projection import BeamCube
 from .strapdown import PlatformMotion
@@ -122,8 +122,8 @@ class RealtimeProjector:
         self.wavelength = positive("wavelength", wavelength)
         self.k = _TWO_PI / self.wavelength
         r_axis = finite_array("range_axis", range_axis, ndim=1)
-        self.azimuth = finite_array("azimuth", azimuth, ndim=1)
-        self.elevation = finite_array("elevation", elevation, ndim=1)
+        self.azimuth = angle_axis("azimuth", azimuth)
+        self.elevation = angle_axis("elevation", elevation)
         if self.azimuth.size < 1 or self.elevation.size < 1:
             raise ValueError("azimuth and elevation must each hold at least one angle")
         gates = np.atleast_1d(np.asarray(range_gates))

@@ -219,7 +219,7 @@ def _soa(v: np.ndarray, order: np.ndarray, chirps: np.ndarray) -> list[np.ndarra
     """Coordinates of ``v`` ([path, 3] or [path, chirp, 3]) as contiguous ``[B or 1, path]``."""
     if v.ndim == 2:
         return [np.ascontiguousarray(v[order, i])[None, :] for i in range(3)]
-    sub = v[order][:, chirps]                                   # [path, B, 3]
+    sub = v[order[:, None], chirps]                             # [path, B, 3], block only
     return [np.ascontiguousarray(sub[:, :, i].T) for i in range(3)]
 
 
@@ -227,7 +227,7 @@ def _per_chirp(v: np.ndarray, order: np.ndarray, chirps: np.ndarray) -> np.ndarr
     """``[path]`` or ``[path, chirp]`` values as contiguous ``[B or 1, path]``."""
     if v.ndim == 1:
         return np.ascontiguousarray(v[order])[None, :]
-    return np.ascontiguousarray(v[order][:, chirps].T)
+    return np.ascontiguousarray(v[order[:, None], chirps].T)
 
 
 def render_rows(src: PathDelays, config: RadarConfig, design: KernelDesign,

@@ -105,6 +105,7 @@ def test_static_platform_unit_echo_gives_one():
     (dict(wavelength=-1.0), "wavelength"),
     (dict(weights=np.zeros(12)), "weights"),
     (dict(azimuth=[]), "azimuth"),
+    (dict(azimuth=np.arange(-30.0, 31.0, 1.0)), r"azimuth must be angles in radians.*degrees\?"),
 ])
 def test_bad_setup_is_refused(kwargs, match):
     p, slot = _ti_positions()

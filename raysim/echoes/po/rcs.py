@@ -26,10 +26,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+# u(az, el) = (cos el sin az, sin el, cos el cos az): one definition of the direction
+from compensation.geometry import direction as radar_direction
 from raysim.echoes.po.integral import po_vector, polygon_phase_integral
 from raysim.echoes.po.mesh import PoMaterial, TriangleMesh
 from raysim.echoes.po.rays import RayScene
 from raysim.echoes.po.sbr import sbr_amplitude
+from raysim.radar.config import SPEED_OF_LIGHT
 
 __all__ = ["RcsResult", "monostatic_rcs", "radar_direction", "polarisation_basis",
            "DEFAULT_FREQUENCY", "RAYS_PER_WAVELENGTH", "FRESNEL_FRACTION", "MAX_BOUNCES"]
@@ -46,12 +49,6 @@ RAYS_PER_WAVELENGTH = 10.0
 FRESNEL_FRACTION = 0.1
 #: Default deepest bounce traced.
 MAX_BOUNCES = 3
-_SPEED_OF_LIGHT = 299_792_458.0
-
-
-def radar_direction(az: float, el: float) -> np.ndarray:
-    """``u(az, el) = (cos el sin az, sin el, cos el cos az)`` for angles in rad, shape ``[3]``."""
-    return np.array([math.cos(el) * math.sin(az), math.sin(el), math.cos(el) * math.cos(az)])
 
 
 def polarisation_basis(az: float, el: float) -> tuple[np.ndarray, np.ndarray]:
@@ -240,7 +237,7 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
         raise ValueError(f"rays_per_wavelength must be > 0, got {rays_per_wavelength!r}")
     az = _angles(azimuth_deg, "azimuth_deg")
     el = _angles(elevation_deg, "elevation_deg")
-    wavelength = _SPEED_OF_LIGHT / frequency
+    wavelength = SPEED_OF_LIGHT / frequency
     k = 2 * math.pi / wavelength
     spacing = wavelength / rays_per_wavelength
     scene = RayScene(mesh, variant)
