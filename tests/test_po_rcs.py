@@ -199,6 +199,9 @@ def test_cli_json_and_negative_specs(capsys):
         parse_spec("5:0:1", "--el-deg")
     with pytest.raises(ValueError, match=r"--az-deg: got '0:1e13:1e-3', .* \(at most 100000\)"):
         parse_spec("0:1e13:1e-3", "--az-deg")        # refused before allocating 1e16 angles
+    # a 100 m plate would need 6.6e10 ray tubes: refused with the size, before tracing
+    assert main(["rcs", "plate:100", "--az-deg", "0", "--el-deg", "0", "--json"]) == 2
+    assert "SBR ray tubes" in capsys.readouterr().err
     rc = main(["rcs", "plate:0.05", "--material", "metal", "--az-deg", "-2:2:2", "--el-deg",
                "-1,0", "--json", "--max-bounces", "1"])
     assert rc == 0

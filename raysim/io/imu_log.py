@@ -218,7 +218,7 @@ def write_imu_csv(path: str | os.PathLike, samples: ImuSamples, *, time_unit: st
     if comment is None:
         comment = (f"raysim IMU log; source: {samples.source or 'unknown'}; body frame FRD; "
                    f"accel is specific force")
-    from raysim.io.storage import atomic_write
+    from raysim.io.files import atomic_write
 
     def write(tmp: Path) -> None:
         with tmp.open("w", newline="") as fh:

@@ -221,12 +221,12 @@ def _check_vector(name: str, v) -> np.ndarray:
     return v
 
 
-# Independent random streams, one per error source (order fixed: adding a
-# source at the end never changes the others).
 #: Peak memory of the simulation per IMU sample [bytes]: time, truth rate and force,
 #: eight error streams of three axes and the outputs, in float64 (an upper bound).
 IMU_BYTES_PER_SAMPLE = 512
 
+# Independent random streams, one per error source (order fixed: adding a
+# source at the end never changes the others).
 _STREAMS = ("gyro_static", "gyro_gm", "gyro_rw", "gyro_white",
             "accel_static", "accel_gm", "accel_rw", "accel_white")
 

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from raysim.echoes.rt.scenes import MATERIALS
+
 __all__ = ["TriangleMesh", "PoMaterial", "po_material", "PO_MATERIAL_NAMES", "fresnel"]
 
 #: Vacuum permittivity [F/m].
@@ -129,15 +131,9 @@ class PoMaterial:
         return self.permittivity is None
 
 
-def _scene_materials() -> dict:
-    from raysim.echoes.rt.scenes import MATERIALS
-
-    return MATERIALS
-
-
 #: Material names :func:`po_material` accepts (the scene materials of
 #: :mod:`raysim.echoes.rt.scenes`, plus ``pec``).
-PO_MATERIAL_NAMES = ("pec", "metal", "concrete", "glass", "dry-soil", "asphalt-77ghz")
+PO_MATERIAL_NAMES = ("pec", *MATERIALS)
 
 
 def po_material(name: str, frequency: float) -> PoMaterial:
@@ -161,7 +157,7 @@ def po_material(name: str, frequency: float) -> PoMaterial:
                          f"{sorted(PO_MATERIAL_NAMES)}{did_you_mean(name, PO_MATERIAL_NAMES)}")
     if name in ("pec", "metal"):
         return PoMaterial(name)
-    spec = _scene_materials()[name]
+    spec = MATERIALS[name]
     if spec.itu_type is None:
         return PoMaterial(name, spec.complex_permittivity(frequency))
     from raysim.echoes.rt.backend import sionna_rt

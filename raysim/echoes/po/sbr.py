@@ -26,8 +26,14 @@ import numpy as np
 from raysim.echoes.po.integral import po_vector, reflect
 from raysim.echoes.po.mesh import PoMaterial
 from raysim.echoes.po.rays import RayScene
+from raysim.resources import check_memory
 
 __all__ = ["sbr_amplitude", "launch_grid"]
+
+
+#: Peak memory per ray tube while tracing [bytes]: about a dozen ``[ray, 3]`` float64 or
+#: complex128 arrays (origins, directions, hit points, normals, fields) at once.
+SBR_BYTES_PER_RAY = 512
 
 
 def launch_grid(scene: RayScene, u: np.ndarray, e_h: np.ndarray, e_v: np.ndarray,
@@ -48,6 +54,10 @@ def launch_grid(scene: RayScene, u: np.ndarray, e_h: np.ndarray, e_v: np.ndarray
     pad = spacing
     xs = np.arange(x.min() - pad, x.max() + pad, spacing)
     ys = np.arange(y.min() - pad, y.max() + pad, spacing)
+    n = xs.size * ys.size
+    check_memory(SBR_BYTES_PER_RAY * n, f"{n} SBR ray tubes ({xs.size} x {ys.size} at "
+                 f"{spacing:.3g} m)", "--rays-per-wavelength, the target size or "
+                 "--max-bounces 1")
     gx, gy = np.meshgrid(xs, ys, indexing="ij")
     return gx.reshape(-1, 1) * e_h + gy.reshape(-1, 1) * e_v
 

@@ -147,6 +147,7 @@ def microsecond_stamps(samples, writer: str, clock: str) -> np.ndarray:
     if not isinstance(samples, ImuSamples):
         raise ValueError(f"samples must be ImuSamples, got {type(samples).__name__}")
     t = np.asarray(samples.time, dtype=float)
+    check_increasing(t, writer)                     # at least 2 samples, increasing
     if t[0] < 0:
         raise ValueError(f"{clock} are microseconds since boot and must be >= 0; the first "
                          f"sample is at {t[0]!r} s")
