@@ -49,7 +49,6 @@ import numpy as np
 from scipy.signal import lfilter
 
 from raysim.platform.imu_spec import (  # noqa: F401  (re-exported: the IMU's public names)
-    _GM_ADEV_PEAK,
     CONSUMER_MEMS,
     DEG,
     FOOT,
@@ -65,7 +64,6 @@ from raysim.platform.imu_spec import (  # noqa: F401  (re-exported: the IMU's pu
     TACTICAL,
     ImuSpec,
     SensorErrors,
-    _check_nonneg,
     _resolve_spec,
     get_preset,
 )

@@ -382,12 +382,9 @@ def naive_synthesis(tau: np.ndarray, amp: np.ndarray, config: RadarConfig) -> np
 
 def _both_clocks(fn: Callable[[], object], repeat: int = 1) -> tuple[float, float]:
     """Best wall seconds and best CPU seconds (all threads of the process) of ``fn``."""
-    wall = cpu = np.inf
-    for _ in range(repeat):
-        w0, c0 = time.perf_counter(), time.process_time()
-        fn()
-        wall, cpu = min(wall, time.perf_counter() - w0), min(cpu, time.process_time() - c0)
-    return float(wall), float(cpu)
+    from raysim.studies.bench_realtime import best_clocks
+
+    return best_clocks(fn, repeat)[:2]
 
 
 def bench_oracle(*, quick: bool) -> dict:

@@ -67,7 +67,7 @@ def ti_setup(*, grid: int = 61, half_width_deg: float = 30.0, target_range: floa
             "target_gate": int(np.argmin(np.abs(cfg.range_axis() - target_range)))}
 
 
-def _best(fn, repeat: int) -> tuple[float, float, object]:
+def best_clocks(fn, repeat: int) -> tuple[float, float, object]:
     """Best wall and CPU seconds of ``repeat`` calls, and the last result."""
     wall = cpu = np.inf
     out = None
@@ -118,8 +118,8 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
 
     rc = range_compress(cube)
     motion = strapdown()
-    t_range = _best(lambda: range_compress(cube), rep)[0]
-    t_strap = _best(strapdown, rep)[0]
+    t_range = best_clocks(lambda: range_compress(cube), rep)[0]
+    t_strap = best_clocks(strapdown, rep)[0]
     out = {
         "frame_shape": list(cube.shape), "tdm_slots": cfg.num_tx_slots,
         "frame_duration_s": cfg.frame_duration, "frame_rate_hz": 1.0 / cfg.frame_duration,
@@ -148,16 +148,16 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
             return np.abs(beams.doppler()) ** 2
 
         chain()                                                      # warm-up
-        wall, cpu, _ = _best(chain, rep)
-        t_proj, _, beams = _best(lambda proj=proj: proj.project(rc, motion), rep)
-        t_dopp = _best(lambda beams=beams: np.abs(beams.doppler()) ** 2, rep)[0]
+        wall, cpu, _ = best_clocks(chain, rep)
+        t_proj, _, beams = best_clocks(lambda proj=proj: proj.project(rc, motion), rep)
+        t_dopp = best_clocks(lambda beams=beams: np.abs(beams.doppler()) ** 2, rep)[0]
 
         def direct(kw=kw):
             return compensation.rigid_body_projection(
                 rc, arr.virtual_positions, motion, channel_slot=arr.tx_slot, method="direct",
                 **kw)
 
-        t_direct, cpu_direct, ref = _best(direct, 1)
+        t_direct, cpu_direct, ref = best_clocks(direct, 1)
         err = float(np.abs(beams.data - ref.data).max() / np.abs(ref.data).max())
         out["cases"].append({
             "gates": int(n_gate), "threads": proj.threads, "setup_s": setup_s,
