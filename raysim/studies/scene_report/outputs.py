@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import html
-import json
 import os
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from raysim.io.files import atomic_write
+from raysim.io.files import atomic_savefig, atomic_write_json, atomic_write_text
 from raysim.vocabulary import CHAINS, MAP_TITLES, REFERENCE, chain_label, parse_chains
 
 from .evaluate import SceneResult, evaluate_scene
@@ -75,7 +74,7 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
         fig.colorbar(im, ax=list(axes), label=f"power [dB re {REFERENCE} peak]", shrink=0.9)
         fig.suptitle(f"{result.scene}: {MAP_TITLES[m]} map")
         out = Path(folder) / f"{result.scene}_{m}.png"
-        atomic_write(out, lambda p, fig=fig: fig.savefig(p, dpi=90, format="png"))
+        atomic_savefig(fig, out, dpi=90)
         plt.close(fig)
         paths.append(out)
     return paths
@@ -238,10 +237,9 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
         results[s] = r
         summary[s] = r.to_dict()
         plot_scene(r, out)
-        atomic_write(out / f"{s}.json",
-                     lambda p, d=summary[s]: p.write_text(json.dumps(d, indent=1)))
-    atomic_write(out / "summary.json", lambda p: p.write_text(json.dumps(summary, indent=1)))
+        atomic_write_json(out / f"{s}.json", summary[s], indent=1)
+    atomic_write_json(out / "summary.json", summary, indent=1)
     md = report_markdown(results, settings)
-    atomic_write(out / "report.md", lambda p: p.write_text(md))
-    atomic_write(out / "index.html", lambda p: p.write_text(report_html(md)))
+    atomic_write_text(out / "report.md", md)
+    atomic_write_text(out / "index.html", report_html(md))
     return summary

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.files import atomic_write
+from raysim.io.files import atomic_savefig, atomic_write
 from raysim.studies.stability.maps import tick_labels
 from raysim.studies.stability.metrics import STABILITY_METRICS
 from raysim.vocabulary import metric_unit
@@ -207,12 +207,7 @@ def plot_stability(ds, path: str | os.PathLike) -> Path:
         fig.colorbar(mesh, cax=cax, label="log10 (fail above 0)")
     fig.suptitle(f"{ds.attrs['title']}  (black: boundary of this criterion; white dotted: "
                  f"either criterion fails; red dashed: worse than none)", fontsize=9)
-    path = Path(path)
-
-    def write(tmp: Path) -> None:
-        fig.savefig(tmp, format="png", dpi=100)
-
     try:
-        return atomic_write(path, write)
+        return atomic_savefig(fig, Path(path), dpi=100)
     finally:
         plt.close(fig)

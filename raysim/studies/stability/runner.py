@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.files import atomic_write
+from raysim.io.files import atomic_write_json
 from raysim.studies.stability.criteria import criteria_for
 from raysim.studies.stability.maps import INT_AXES, MAPS, MapSpec
 from raysim.studies.stability.metrics import MAP_CHAINS, STABILITY_METRICS, evaluate
@@ -165,7 +165,7 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
     def done(key: str, rec: dict) -> None:
         records[key] = rec
         if pdir is not None:
-            atomic_write(pdir / f"{key}.json", lambda p: p.write_text(json.dumps(rec)))
+            atomic_write_json(pdir / f"{key}.json", rec)
         if bar is not None:
             bar.update(1)
 
@@ -314,9 +314,8 @@ def _write_maps(out: Path, names: list, quick: bool, progress: bool, client) -> 
             ds.attrs["seconds"] = round(time.perf_counter() - t, 2)
             write_netcdf(ds, nc)
         summ = summarise(ds)
-        atomic_write(out / f"{n}.json", lambda p, s=summ: p.write_text(json.dumps(s, indent=1)))
+        atomic_write_json(out / f"{n}.json", summ, indent=1)
         plot_stability(ds, out / f"{n}.png")
         summary[n] = summ
-    atomic_write(out / "summary.json",
-                 lambda p: p.write_text(json.dumps(summary, indent=1)))
+    atomic_write_json(out / "summary.json", summary, indent=1)
     return summary
