@@ -274,7 +274,7 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
                 rotation_phase: Literal["integrated", "published"] = "integrated",
                 grid_shape: tuple[int, int] | None = None,
                 method: Literal["auto", "nufft", "lattice", "direct"] = "auto",
-                weights=None) -> BeamCube:
+                weights=None, channel_slot=None) -> BeamCube:
     """The published compensation chain on a range-compressed cube.
 
     Applies, as selected in ``steps``: the tilt (roll/pitch) element phase, the
@@ -298,12 +298,21 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
     steps : sequence of {"tilt", "translation", "rotation", "yaw"}
     rotation_phase : {"integrated", "published"}
         See :func:`range_change`.
+    channel_slot : array_like of int, shape ``[channel]``, optional
+        TDM transmit slot of each channel (0 .. slots-1). ``motion`` then holds
+        the pose at every transmit slot, chirp major, slot minor
+        (``motion.num_chirps == chirp * slots``), and every step uses, for each
+        channel, the pose of its own slot: the tilt phase and the slow-time
+        phase of that pose, and the yaw projection of each slot's channels
+        (summed with their share of ``weights``, as
+        :func:`compensation.exact.rigid_body_projection` does).
 
     Returns
     -------
     BeamCube
-        ``warnings``: those of ``motion``, plus ``"small-angle: ..."`` (with
-        ``"tilt"``) when roll or pitch exceeds
+        ``data [chirp, range, azimuth, elevation]``, ``chirp_time`` the slot-0
+        times with ``channel_slot``. ``warnings``: those of ``motion``, plus
+        ``"small-angle: ..."`` (with ``"tilt"``) when roll or pitch exceeds
         :data:`~compensation.guards.SMALL_ANGLE_TILT_LIMIT` or the tilt
         correction leaves an angle error above half the 3 dB beamwidth towards
         ``direction`` at some chirp, and ``"paper rotation phase: ..."`` (with
@@ -312,9 +321,14 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
         :data:`~compensation.guards.ROTATION_PHASE_LIMIT`.
     """
     x = np.asarray(rc)
-    _check_motion(motion, x.shape[0])
     for s in steps:
         choice("steps entry", s, PAPER_STEPS)
+    if channel_slot is not None:
+        return _paper_chain_slots(x, element_positions, motion, channel_slot, wavelength=wavelength,
+                                  direction=direction, range_axis=range_axis, azimuth=azimuth,
+                                  elevation=elevation, range_gates=range_gates, steps=steps,
+                                  rotation_phase=rotation_phase, method=method, weights=weights)
+    _check_motion(motion, x.shape[0])
     u = None if direction is None else _unit("direction", direction)
     found: tuple[str, ...] = ()
     if "tilt" in steps:
@@ -339,3 +353,59 @@ def paper_chain(rc, element_positions, motion: PlatformMotion, *, wavelength: fl
                                 range_gates=range_gates, chirp_time=motion.time, focus="far",
                                 grid_shape=grid_shape, method=method, weights=weights)
     return beams.with_warnings(merge(motion.warnings, found))
+
+
+def _paper_chain_slots(x, element_positions, motion: PlatformMotion, channel_slot, *,
+                       wavelength, direction, range_axis, azimuth, elevation, range_gates, steps,
+                       rotation_phase, method, weights) -> BeamCube:
+    """:func:`paper_chain` with the pose of each channel's own TDM slot (see there)."""
+    if x.ndim != 3:
+        raise ValueError(f"rc must have shape [chirp, channel, range], got {x.shape}")
+    p = finite_array("element_positions", element_positions, shape=(x.shape[1], 3))
+    slot = np.asarray(channel_slot)
+    if slot.shape != (x.shape[1],) or not np.issubdtype(slot.dtype, np.integer) or \
+            slot.min() < 0:
+        raise ValueError(f"channel_slot must hold one non-negative integer slot per channel "
+                         f"({x.shape[1]}), got {channel_slot!r}")
+    n_slot = int(slot.max()) + 1
+    if not isinstance(motion, PlatformMotion) or motion.num_chirps != x.shape[0] * n_slot:
+        raise ValueError(f"with {n_slot} TDM slots motion must be a PlatformMotion with "
+                         f"chirp * slots = {x.shape[0] * n_slot} poses (chirp major), got "
+                         f"{getattr(motion, 'num_chirps', type(motion).__name__)}")
+    w = np.ones(x.shape[1]) if weights is None else np.asarray(weights, dtype=float)
+    if w.shape != (x.shape[1],):
+        raise ValueError(f"weights must have shape [{x.shape[1]}], got {w.shape}")
+    lam = positive("wavelength", wavelength)
+    u = None if direction is None else _unit("direction", direction)
+    found: tuple[str, ...] = ()
+    if "tilt" in steps:
+        found += small_angle_warnings(motion.attitude, p, u, wavelength=lam)
+    comps = tuple(c for c in ("translation", "rotation") if c in steps)
+    if "rotation" in comps and rotation_phase == "published":
+        found += rotation_phase_warnings(motion, _unit("direction", direction), wavelength=lam)
+    total, out = float(w.sum()), None
+    if method == "auto":
+        method = "direct"            # one slot's channels rarely form a grid
+    for s in range(n_slot):
+        sel = np.flatnonzero(slot == s)
+        if sel.size == 0:
+            continue
+        m = motion.select(slice(s, None, n_slot))
+        xs = x[:, sel]
+        if "tilt" in steps:
+            xs = _apply_tilt(xs, p[sel], lam, m.attitude)
+        if comps:
+            xs = slow_time_correction(xs, m, direction, wavelength=lam, components=comps,
+                                      rotation_phase=rotation_phase)
+        common = dict(wavelength=lam, range_axis=range_axis, azimuth=azimuth,
+                      elevation=elevation, range_gates=range_gates, method=method,
+                      weights=w[sel])
+        if "yaw" in steps:
+            part = yaw_projection(xs, p[sel], m, **common)
+        else:
+            part = beam_projection(xs, p[sel], chirp_time=m.time, focus="far", **common)
+        share = np.float32(float(w[sel].sum()) / total)
+        out = part.data * share if out is None else out + part.data * share
+    return BeamCube(out.astype(np.complex64, copy=False), motion.time[::n_slot], part.range,
+                    part.azimuth, part.elevation, part.wavelength,
+                    merge(motion.warnings, found))

@@ -133,7 +133,7 @@ def _beamformer(spec: ChainSpec, frame: RadarFrame, motion, warnings: list):
     """
     arr, cfg = frame.array, frame.config
     slots = arr.num_slots
-    per_slot = spec.name == "exact" and slots > 1
+    per_slot = spec.compensated and slots > 1
 
     def bf(rc, chirps, ranges, az, el, direction=None):
         c = np.asarray(chirps)
@@ -189,8 +189,8 @@ def analyse(frames: Sequence[RadarFrame], reference: Reference | None = None, *,
         frame, chirp major, slot minor (one pose per chirp for a single-slot
         array); required for the compensated chains (see
         :func:`raysim.pipeline.run.motion_times`). The exact chain projects each
-        TDM slot's channels with the pose of its own transmit instant; the paper
-        chain, as published, uses one pose per chirp loop (slot 0).
+        TDM slot's channels with the pose of its own transmit instant; so do
+        the paper chain's tilt, slow-time and yaw steps.
     return_maps : bool
         Also return the maps: ``range_profile`` (``range``), ``rd``, ``ae``,
         ``ra``, ``re`` (dimensions of :data:`raysim.vocabulary.MAPS`) as

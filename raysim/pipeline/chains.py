@@ -44,7 +44,9 @@ def project(chain: str | ChainSpec, rc, element_positions, *, wavelength: float,
     grid_shape, weights, range_gates
         As in :func:`compensation.beam_projection`.
     channel_slot : array_like of int, shape ``[channel]``, optional
-        TDM transmit slot of each channel (``exact`` only).
+        TDM transmit slot of each channel (``paper`` and ``exact``): ``motion``
+        then holds the pose at every transmit slot, chirp major, slot minor, and
+        each channel is compensated with the pose of its own slot.
 
     Returns
     -------
@@ -68,4 +70,4 @@ def project(chain: str | ChainSpec, rc, element_positions, *, wavelength: float,
     if direction is None:
         raise ValueError("chain 'paper' needs direction (its slow-time correction direction)")
     return paper_chain(rc, element_positions, motion, direction=np.asarray(direction),
-                       rotation_phase=spec.rotation_phase, **kw)
+                       rotation_phase=spec.rotation_phase, channel_slot=channel_slot, **kw)
