@@ -1,9 +1,13 @@
-"""``raysim compensate``: motion-compensate a stored IF cube with an IMU log.
+"""``raysim compensate``: motion-compensate a stored IF cube or a raw capture with an IMU log.
 
-The cube is a frame store written by :mod:`raysim.io.storage` (a Zarr store
-directory, opened with :func:`raysim.io.storage.open_store`, or a NetCDF file
-``.nc`` from :func:`raysim.io.storage.export_netcdf`; one frame, ``--frame``) or
-an ``.npz`` file with these keys:
+The input is a raw TI DCA1000 capture (``adc_data.bin``) with its radar
+configuration (``--radar-config``: an mmWave SDK ``.cfg`` or an mmWave Studio
+``.json`` export, :mod:`raysim.io.mmwave_config`; it sets the waveform, the
+TDM slot order of the virtual array and the binary layout; every frame, or
+``--frames LO:HI``), a frame store written by :mod:`raysim.io.storage` (a Zarr
+store directory, opened with :func:`raysim.io.storage.open_store`, or a NetCDF
+file ``.nc`` from :func:`raysim.io.storage.export_netcdf`; ``--frame`` or
+``--frames``) or an ``.npz`` file with these keys:
 
 =====================  =========================  =================================
 key                    shape                      meaning
@@ -17,7 +21,13 @@ key                    shape                      meaning
 ``sample_rate``        scalar                     f_s [Hz] (complex sampling)
 ``grid_shape``         ``[2]`` (optional)         (nx, ny), x major, y minor
 ``lever_arm``          ``[3]`` (optional)         r_IR in B [m]
+``tx_slot``            ``[channel]`` (optional)   TDM slot of each channel
+``slot_interval``      scalar (optional)          ramp-to-ramp interval of slots [s]
 =====================  =========================  =================================
+
+TDM MIMO: the IMU log is integrated once to the start of every transmit slot
+of every selected frame, and each slot's channels are compensated with the
+pose of their own ramp (exact and paper chains).
 
 IMU log (``--imu FILE``, or a second positional argument), any format of
 :func:`raysim.io.flight_logs.read_imu_log`: the project's IMU CSV (units in
@@ -29,13 +39,19 @@ clock [s] (``--time-offset`` is IMU clock minus radar clock), angular rate and
 specific force in the body frame FRD. It may be left out when the frame store
 holds an IMU log (``imu_time``, ``imu_gyro``, ``imu_accel``).
 
-Output (``.npz``, written to a temporary file then moved into place):
-``beams [chirp, range, azimuth, elevation]`` (complex64),
-``doppler_power [doppler, range, azimuth, elevation]`` (float32), and the axes
-``chirp_times`` [s], ``range_m``, ``azimuth_deg``, ``elevation_deg``,
-``velocity_mps``, ``chain`` (the chain key) and ``warnings`` (the result's
-assumption warnings, see :mod:`compensation.guards`; also printed on stderr as
-``warning: <chain>: <text>``).
+Output (``--out``): a labelled Zarr store (written aside, then moved into
+place; :func:`raysim.cli.compensate_io.write_compensated_store`) with
+``beams [frame, chirp, range, azimuth, elevation]`` (complex64),
+``doppler_power [frame, doppler, range, azimuth, elevation]`` (float32),
+``chirp_time [frame, chirp]`` and ``slot_time [frame, chirp, slot]`` [s], the
+coordinates ``range`` [m], ``azimuth``, ``elevation`` [deg], ``doppler``
+[m/s] and the attributes ``chain`` and ``warnings``; or, for one frame and a
+path ending in ``.npz``: ``beams [chirp, range, azimuth, elevation]``,
+``doppler_power [doppler, range, azimuth, elevation]``, ``chirp_times`` [s],
+``range_m``, ``azimuth_deg``, ``elevation_deg``, ``velocity_mps``, ``chain``
+and ``warnings``. The warnings are the result's assumption warnings (see
+:mod:`compensation.guards`), also printed on stderr as
+``warning: <chain>: <text>``.
 
 Chains (``--chain``, names of :mod:`raysim.vocabulary`, turned into beams by
 :func:`raysim.pipeline.chains.project`): ``exact`` (rigid-body projection,
@@ -58,6 +74,8 @@ from raysim.vocabulary import CHAINS, ChainSpec, parse_chain
 
 EPILOG = """\
 examples:
+  raysim compensate adc_data.bin --radar-config awr1843.cfg --imu flight.ulg \\
+      --range-m 10:13 --az-deg -40:40:1 --el-deg 0:0:1 --out beams.zarr   # DCA1000 capture
   raysim compensate rotation_y.zarr --out beams.npz             # IMU log of the store
   raysim compensate rotation_y.zarr --frame 2 --range-m 14:16 --az-deg 10:30:0.5 \\
       --el-deg -10:10:0.5 --out beams.npz
@@ -121,8 +139,8 @@ def register(subparsers) -> None:
         description=__doc__.split("\n\n")[0] + " Runs the exact rigid-body projection "
         "(or the paper's chain) on the selected range cells and angle grid.",
         epilog=EPILOG, formatter_class=_HelpFormatter)
-    p.add_argument("cube", help="raysim Zarr store, NetCDF file (.nc) or .npz (keys: see "
-                   "`raysim compensate --help`)")
+    p.add_argument("cube", help="raysim Zarr store, NetCDF file (.nc), .npz (keys: see "
+                   "`raysim compensate --help`) or DCA1000 capture (.bin, with --radar-config)")
     p.add_argument("imu_positional", nargs="?", default=None, metavar="imu",
                    help="IMU log, same as --imu")
     p.add_argument("--imu", default=None, metavar="FILE",
@@ -130,7 +148,22 @@ def register(subparsers) -> None:
                    "ROS 2 bag (folder, .mcap, .db3); left out: the IMU log of the frame store")
     p.add_argument("--frame", type=int, default=0,
                    help="frame of a Zarr / NetCDF store to compensate (position along frame)")
-    p.add_argument("--out", required=True, help="output .npz")
+    p.add_argument("--frames", default=None, metavar="LO:HI",
+                   help="frames of a capture or store (HI excluded; default: every frame of a "
+                   "capture, --frame of a store)")
+    p.add_argument("--radar-config", default=None, metavar="FILE",
+                   help="radar configuration of a DCA1000 capture: mmWave SDK .cfg or mmWave "
+                   "Studio .json (waveform, TDM slot order, ADC format)")
+    p.add_argument("--layout", choices=("2lane", "4lane"), default=None,
+                   help="LVDS lanes of a DCA1000 capture (default: the Studio JSON's lane "
+                   "mask, 2 lanes for an SDK .cfg)")
+    p.add_argument("--capture-t0", type=float, default=0.0, metavar="SECONDS",
+                   help="radar-clock time of the first ramp of a DCA1000 capture [s] (a raw "
+                   "capture carries no time stamps)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--out", required=True,
+                   help="output: a Zarr store (labelled beams and Doppler maps of every frame) "
+                   "or, for one frame, an .npz")
     p.add_argument("--range-m", default="0:1e9", metavar="LO:HI", help="range cells [m]")
     p.add_argument("--az-deg", default="-60:60:1", metavar="LO:HI:STEP")
     p.add_argument("--el-deg", default="-60:60:1", metavar="LO:HI:STEP")
@@ -151,57 +184,10 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _load_store(path: str, frame: int) -> dict:
-    """Cube keys (as in the ``.npz`` layout) and the IMU log of one frame of a store."""
-    from raysim.io import storage
+def _is_store(path: str) -> bool:
+    from raysim.io.zarr_store import store_exists
 
-    if path.endswith(".nc") and not os.path.isdir(path):
-        ds = storage.read_netcdf(path)
-    else:
-        ds = storage.open_store(path)
-    n = int(ds.sizes.get("frame", 0))
-    if not -n <= frame < n:
-        raise ValueError(f"--frame {frame} is outside the store {path!r}, which holds {n} "
-                         f"frame(s)")
-    fr = storage.frame_from_dataset(ds, frame)
-    cfg = fr.config
-    out = {"data": np.asarray(fr.data), "chirp_times": np.asarray(fr.chirp_times, dtype=float),
-           "element_positions": fr.array.virtual_positions,
-           "carrier_frequency": cfg.carrier_frequency, "bandwidth": cfg.bandwidth,
-           "chirp_duration": cfg.chirp_duration, "sample_rate": cfg.sample_rate,
-           "lever_arm": np.asarray(fr.lever_arm, dtype=float)}
-    if fr.array.grid_shape:
-        out["grid_shape"] = np.asarray(fr.array.grid_shape)
-    if all(k in ds.variables for k in ("imu_time", "imu_gyro", "imu_accel")):
-        out["_imu"] = np.column_stack([np.asarray(ds["imu_time"].values, dtype=float),
-                                       np.asarray(ds["imu_gyro"].values, dtype=float),
-                                       np.asarray(ds["imu_accel"].values, dtype=float)])
-    if not np.iscomplexobj(out["data"]):
-        raise ValueError(f"store {path!r}: if_data must be complex IF samples, got "
-                         f"{out['data'].dtype}")
-    return out
-
-
-def _load_cube(path: str, frame: int = 0) -> dict:
-    if not path.endswith(".npz"):
-        from raysim.io import storage
-
-        if storage.store_exists(path) or (path.endswith(".nc") and os.path.isfile(path)):
-            return _load_store(path, frame)
-    if not os.path.isfile(path):
-        raise ValueError(f"cube file {path!r} does not exist")
-    with np.load(path) as z:
-        need = ("data", "chirp_times", "element_positions", "carrier_frequency", "bandwidth",
-                "chirp_duration", "sample_rate")
-        missing = [k for k in need if k not in z]
-        if missing:
-            raise ValueError(f"cube file {path!r} lacks keys {missing}; expected {list(need)}")
-        out = {k: z[k] for k in z.files}
-    data = out["data"]
-    if data.ndim != 3 or not np.iscomplexobj(data):
-        raise ValueError(f"cube 'data' must be complex [chirp, channel, sample], got "
-                         f"{data.dtype} {data.shape}")
-    return out
+    return store_exists(path)
 
 
 def _load_imu(path: str) -> np.ndarray:
@@ -225,23 +211,32 @@ def run(args) -> int:
 
     from compensation import integrate_imu
     from compensation.geometry import direction
+    from raysim.cli.compensate_io import load_input, write_compensated_store
     from raysim.cli.options import check_output
     from raysim.pipeline.chains import project
     from raysim.processing.maps import range_compress
 
     spec = _chain(args.chain)
-    check_output(args.out, "file", "--out")
-    cube = _load_cube(args.cube, args.frame)
-    fc, bw = float(cube["carrier_frequency"]), float(cube["bandwidth"])
-    tc, fs = float(cube["chirp_duration"]), float(cube["sample_rate"])
-    lam = SPEED_OF_LIGHT / (fc + bw / 2)
-    grid = tuple(int(v) for v in cube["grid_shape"]) if "grid_shape" in cube else None
+    as_npz = args.out.endswith(".npz")
+    check_output(args.out, "file" if as_npz else "dir", "--out")
+    if not as_npz and os.path.isdir(args.out) and not _is_store(args.out):
+        raise ValueError(f"--out: cannot write {args.out!r}: it is an existing directory that "
+                         f"is not a Zarr store (expected a new store path, or .npz for one "
+                         f"frame)")
+    inp = load_input(args.cube, radar_config=args.radar_config, frames=args.frames,
+                     frame=args.frame, layout=args.layout, capture_t0=args.capture_t0)
+    if as_npz and len(inp.frames) != 1:
+        raise ValueError(f"--out {args.out!r}: an .npz holds one frame, the selection has "
+                         f"{len(inp.frames)}; give a store path (no .npz) or --frames K")
+    cfg = inp.config
+    lam = cfg.center_wavelength
     u = None
     if spec.name == "paper":
         if args.direction_deg is None:
             raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target "
                              f"direction)")
         u = direction(*np.deg2rad(_floats(args.direction_deg, 2, "--direction-deg")))
+    slots = inp.num_slots
     motion = None
     if spec.compensated:
         if args.imu is not None and args.imu_positional is not None:
@@ -250,12 +245,12 @@ def run(args) -> int:
         imu_path = args.imu if args.imu is not None else args.imu_positional
         if imu_path is not None:
             imu = _load_imu(imu_path)
-        elif "_imu" in cube:
-            imu = cube["_imu"]
+        elif inp.imu is not None:
+            imu = inp.imu
         else:
             raise ValueError(f"{args.cube!r} holds no IMU log; give an IMU log with --imu FILE")
         lever = (_floats(args.lever_arm, 3, "--lever-arm") if args.lever_arm is not None
-                 else np.asarray(cube.get("lever_arm", np.zeros(3)), dtype=float))
+                 else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
         if args.initial_attitude_deg.strip() == "level":
             attitude = "level"
         else:
@@ -266,11 +261,12 @@ def run(args) -> int:
             if args.initial_velocity is None:
                 raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
             kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
-        motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], cube["chirp_times"],
+        # one integration over every slot of every selected frame, chirp major, slot minor
+        motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], inp.slot_times.ravel(),
                                lever_arm=lever, time_offset=args.time_offset,
                                initial_attitude=attitude, velocity=args.velocity, **kwargs)
-    n_samples = cube["data"].shape[-1]
-    r_axis = SPEED_OF_LIGHT * np.arange(n_samples) * fs / n_samples / (2.0 * bw / tc)
+    n_samples = inp.read(0).shape[-1]
+    r_axis = cfg.bin_ranges(n_samples if cfg.complex_sampling else n_samples // 2)
     r_lo, r_hi = span_option(args.range_m, "--range-m", False)
     gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
     if gates.size == 0:
@@ -278,12 +274,43 @@ def run(args) -> int:
                          f"0 .. {r_axis[-1]:.2f} m")
     az = np.deg2rad(span_grid(args.az_deg, "--az-deg"))
     el = np.deg2rad(span_grid(args.el_deg, "--el-deg"))
-    rc = range_compress(cube["data"])
-    beams = project(spec, rc, cube["element_positions"], wavelength=lam, range_axis=r_axis,
-                    azimuth=az, elevation=el, motion=motion, direction=u, grid_shape=grid,
-                    range_gates=gates)
-    if motion is None:   # the conventional beamformer carries chirp indices, not times
-        beams = replace(beams, chirp_time=np.asarray(cube["chirp_times"], dtype=float))
+    per_frame = inp.slot_times[0].size
+    results, found = [], []
+    frames = range(len(inp.frames))
+    if len(inp.frames) > 1 and not args.no_progress:
+        from tqdm import tqdm
+
+        frames = tqdm(frames, unit="frame", desc="compensate", file=sys.stderr)
+    for k in frames:
+        mot = None if motion is None else motion.select(slice(k * per_frame,
+                                                               (k + 1) * per_frame))
+        # TDM: every slot's channels with the pose of their own ramp
+        channel_slot = inp.tx_slot if mot is not None and slots > 1 else None
+        rc = range_compress(inp.read(k))[..., : r_axis.size]
+        beams = project(spec, rc, inp.element_positions, wavelength=lam, range_axis=r_axis,
+                        azimuth=az, elevation=el, motion=mot, direction=u,
+                        grid_shape=inp.grid_shape, range_gates=gates, channel_slot=channel_slot)
+        if motion is None:   # the conventional beamformer carries chirp indices, not times
+            beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
+        found.extend(w for w in beams.warnings if w not in found)
+        results.append(beams)
+    if as_npz:
+        _write_npz(args.out, results[0], spec.key, az, el)
+    else:
+        write_compensated_store(args.out, inp, results, chain=spec.key, warnings=found,
+                                azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
+                                extra_attrs={"time_offset_s": float(args.time_offset),
+                                             "velocity": args.velocity})
+    for w in found:
+        print(f"warning: {spec.key}: {w}", file=sys.stderr)
+    shape = (len(results),) + results[0].data.shape
+    print(f"wrote {args.out}: beams {shape} [frame, chirp, range, azimuth, elevation], "
+          f"chain {spec.key}" + (f", {len(found)} warning(s)" if found else ""))
+    return 0
+
+
+def _write_npz(path: str, beams, chain: str, az, el) -> None:
+    """The single-frame ``.npz`` output (keys in the module docstring)."""
     doppler = beams.doppler()
 
     def write(tmp):
@@ -292,13 +319,7 @@ def run(args) -> int:
                      doppler_power=(np.abs(doppler) ** 2).astype(np.float32),
                      chirp_times=beams.chirp_time, range_m=beams.range,
                      azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
-                     velocity_mps=beams.velocity(), chain=np.array(spec.key),
+                     velocity_mps=beams.velocity(), chain=np.array(chain),
                      warnings=np.array(beams.warnings, dtype=str))
 
-    atomic_write(args.out, write)
-    for w in beams.warnings:
-        print(f"warning: {spec.key}: {w}", file=sys.stderr)
-    print(f"wrote {args.out}: beams {beams.data.shape} [chirp, range, azimuth, elevation], "
-          f"chain {spec.key}" + (f", {len(beams.warnings)} warning(s)" if beams.warnings
-                                 else ""))
-    return 0
+    atomic_write(path, write)

@@ -1,0 +1,311 @@
+"""Input and output of ``raysim compensate``: cubes, captures and the compensated store.
+
+Inputs, all turned into one :class:`CompensateInput`:
+
+* a frame store (Zarr, or NetCDF ``.nc``) of :mod:`raysim.io.storage`;
+* an ``.npz`` cube (keys in :mod:`raysim.cli.cmd_compensate`);
+* a DCA1000 capture (``.bin``, :mod:`raysim.io.ti_dca1000`) with its radar
+  configuration (mmWave SDK ``.cfg`` or mmWave Studio ``.json``,
+  :mod:`raysim.io.mmwave_config`), which sets the waveform, the TDM slot order
+  of the virtual array and the binary layout.
+
+Output: a labelled Zarr store (:func:`write_compensated_store`), or for one
+frame the ``.npz`` of earlier versions.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from raysim.radar.config import RadarConfig
+from raysim.vocabulary import AXIS_UNITS
+
+__all__ = ["CompensateInput", "load_input", "frame_selection", "write_compensated_store",
+           "COMPENSATED_FORMAT"]
+
+#: Format version of the compensated store (attribute ``raysim_compensated``).
+COMPENSATED_FORMAT = 1
+_NPZ_NEED = ("data", "chirp_times", "element_positions", "carrier_frequency", "bandwidth",
+             "chirp_duration", "sample_rate")
+
+
+@dataclass(frozen=True, eq=False)
+class CompensateInput:
+    """What ``raysim compensate`` needs of its input, whatever the file.
+
+    Attributes
+    ----------
+    frames : list of int
+        Frame numbers within the source (capture or store) of the selected frames.
+    read : callable
+        ``read(k) -> ndarray [chirp, channel, sample]`` IF samples of the
+        ``k``-th selected frame (read when needed: captures are not loaded whole).
+    slot_times : ndarray, shape ``[frame, chirp, slot]``
+        Start time of every transmit slot's ramp on the radar clock [s].
+    config : RadarConfig
+        Waveform and sampling (range axis, wavelength).
+    element_positions : ndarray, shape ``[channel, 3]``
+        Virtual positions in A [m].
+    tx_slot : ndarray of int, shape ``[channel]``
+        TDM slot of each channel.
+    grid_shape : tuple of int or None
+    lever_arm : ndarray, shape ``[3]``, or None
+        ``r_IR`` in B [m] if the source knows it.
+    imu : ndarray, shape ``[sample, 7]``, or None
+        IMU log held by a store: time, gyro, accel.
+    units : str
+        Unit of the samples (``"V"`` for simulated stores, ``"ADC counts"``).
+    source : dict
+        Provenance written to the output's attributes.
+    """
+
+    frames: list
+    read: object
+    slot_times: np.ndarray
+    config: RadarConfig
+    element_positions: np.ndarray
+    tx_slot: np.ndarray
+    grid_shape: tuple | None = None
+    lever_arm: np.ndarray | None = None
+    imu: np.ndarray | None = None
+    units: str = "V"
+    source: dict = field(default_factory=dict)
+
+    @property
+    def num_slots(self) -> int:
+        """TDM transmit slots per chirp loop."""
+        return int(self.slot_times.shape[-1])
+
+
+def frame_selection(text: str | None, total: int, option: str = "--frames") -> list[int]:
+    """Frames ``LO:HI`` (HI excluded, either may be left out) or one ``K`` of ``total``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``option``, the value and the frames available.
+    """
+    if text is None:
+        return list(range(total))
+    try:
+        if ":" in text:
+            lo_s, hi_s = text.split(":", 1)
+            lo = int(lo_s) if lo_s.strip() else 0
+            hi = int(hi_s) if hi_s.strip() else total
+        else:
+            lo = int(text)
+            hi = lo + 1
+    except ValueError:
+        raise ValueError(f"{option}: got {text!r}, expected LO:HI or K (frame numbers)") \
+            from None
+    if not 0 <= lo < hi <= total:
+        raise ValueError(f"{option}: got {text!r}, expected frames within 0:{total} (the input "
+                         f"holds {total} frame(s))")
+    return list(range(lo, hi))
+
+
+def _slot_times(chirp_times: np.ndarray, slots: int, slot_interval: float) -> np.ndarray:
+    """``[frame, chirp] -> [frame, chirp, slot]`` by the slot interval."""
+    return chirp_times[..., None] + np.arange(slots) * float(slot_interval)
+
+
+def _load_capture(path: str, radar_config: str, frames: str | None, layout: str | None,
+                  t0: float) -> CompensateInput:
+    from raysim.io.mmwave_config import read_mmwave_config
+    from raysim.io.ti_dca1000 import read_dca1000
+
+    if radar_config is None:
+        raise ValueError(f"{path!r} is a raw capture: give its radar configuration with "
+                         f"--radar-config FILE (mmWave SDK .cfg or mmWave Studio .json)")
+    if not os.path.isfile(path):
+        raise ValueError(f"capture {path!r} does not exist")
+    if not np.isfinite(t0):
+        raise ValueError(f"--capture-t0 must be a finite time in seconds, got {t0!r}")
+    m = read_mmwave_config(radar_config, layout=layout, t0=t0)
+    fmt = m.fmt
+    size = os.path.getsize(path)
+    total, extra = divmod(size, fmt.bytes_per_frame)
+    if extra or total == 0:
+        raise ValueError(f"capture {path!r} holds {size} bytes, not a whole number of frames of "
+                         f"{fmt.bytes_per_frame} bytes ({fmt.describe_frame()}) as "
+                         f"--radar-config {radar_config!r} describes")
+    sel = frame_selection(frames, total)
+
+    def read(k: int) -> np.ndarray:
+        f = sel[k]
+        return read_dca1000(path, fmt, frames=slice(f, f + 1)).cube[0]
+
+    times = np.concatenate([fmt.chirp_times(1, f) for f in sel])
+    return CompensateInput(sel, read, times, m.config, m.array.virtual_positions,
+                           m.array.tx_slot, m.array.grid_shape, units="ADC counts",
+                           source={"capture": os.path.abspath(path),
+                                   "radar_config": os.path.abspath(radar_config),
+                                   "tx_order": list(m.tx_order), "layout": fmt.layout})
+
+
+def _load_store(path: str, frames: str | None, frame: int) -> CompensateInput:
+    from raysim.io import storage
+
+    if path.endswith(".nc") and not os.path.isdir(path):
+        ds = storage.read_netcdf(path)
+    else:
+        ds = storage.open_store(path)
+    n = int(ds.sizes.get("frame", 0))
+    if frames is None:
+        if not -n <= frame < n:
+            raise ValueError(f"--frame {frame} is outside the store {path!r}, which holds {n} "
+                             f"frame(s)")
+        sel = [frame % n]
+    else:
+        sel = frame_selection(frames, n)
+    loaded = [storage.frame_from_dataset(ds, f) for f in sel]
+    fr = loaded[0]
+    if not np.iscomplexobj(np.asarray(fr.data)):
+        raise ValueError(f"store {path!r}: if_data must be complex IF samples, got "
+                         f"{np.asarray(fr.data).dtype}")
+    times = np.stack([np.asarray(f.chirp_times, dtype=float) for f in loaded])
+    imu = None
+    if all(k in ds.variables for k in ("imu_time", "imu_gyro", "imu_accel")):
+        imu = np.column_stack([np.asarray(ds["imu_time"].values, dtype=float),
+                               np.asarray(ds["imu_gyro"].values, dtype=float),
+                               np.asarray(ds["imu_accel"].values, dtype=float)])
+    arr = fr.array
+    return CompensateInput(sel, lambda k: np.asarray(loaded[k].data),
+                           _slot_times(times, arr.num_slots, fr.config.slot_interval),
+                           fr.config, arr.virtual_positions, arr.tx_slot, arr.grid_shape,
+                           np.asarray(fr.lever_arm, dtype=float), imu,
+                           source={"store": os.path.abspath(path)})
+
+
+def _load_npz(path: str) -> CompensateInput:
+    if not os.path.isfile(path):
+        raise ValueError(f"cube file {path!r} does not exist")
+    with np.load(path) as z:
+        missing = [k for k in _NPZ_NEED if k not in z]
+        if missing:
+            raise ValueError(f"cube file {path!r} lacks keys {missing}; expected "
+                             f"{list(_NPZ_NEED)}")
+        c = {k: z[k] for k in z.files}
+    data = c["data"]
+    if data.ndim != 3 or not np.iscomplexobj(data):
+        raise ValueError(f"cube 'data' must be complex [chirp, channel, sample], got "
+                         f"{data.dtype} {data.shape}")
+    tc, fs = float(c["chirp_duration"]), float(c["sample_rate"])
+    t = np.asarray(c["chirp_times"], dtype=float)
+    slot = np.asarray(c.get("tx_slot", np.zeros(data.shape[1], dtype=int)), dtype=int)
+    n_slot = int(slot.max()) + 1 if slot.size else 1
+    slot_interval = float(c.get("slot_interval", tc))
+    cfg = RadarConfig(carrier_frequency=float(c["carrier_frequency"]),
+                      bandwidth=float(c["bandwidth"]), chirp_duration=tc, sample_rate=fs,
+                      num_chirps=int(data.shape[0]), num_tx_slots=n_slot,
+                      idle_time=max(slot_interval - tc, 0.0))
+    grid = tuple(int(v) for v in c["grid_shape"]) if "grid_shape" in c else None
+    lever = np.asarray(c["lever_arm"], dtype=float) if "lever_arm" in c else None
+    return CompensateInput([0], lambda k: data, _slot_times(t[None], n_slot, slot_interval),
+                           cfg, np.asarray(c["element_positions"], dtype=float), slot, grid,
+                           lever, source={"cube": os.path.abspath(path)})
+
+
+def load_input(path: str, *, radar_config: str | None = None, frames: str | None = None,
+               frame: int = 0, layout: str | None = None,
+               capture_t0: float = 0.0) -> CompensateInput:
+    """Open the input of ``raysim compensate``.
+
+    Parameters
+    ----------
+    path : str
+        Zarr store, NetCDF ``.nc``, ``.npz`` cube, or DCA1000 capture (any
+        other file; needs ``radar_config``).
+    radar_config : str, optional
+        mmWave SDK ``.cfg`` or Studio ``.json`` of a capture.
+    frames : str, optional
+        ``LO:HI`` or ``K``: frames of a capture or store (default: all frames of
+        a capture, ``frame`` of a store).
+    frame : int
+        One frame of a store when ``frames`` is None.
+    layout : {"2lane", "4lane"}, optional
+        LVDS layout of a capture (default from the configuration).
+    capture_t0 : float
+        Radar-clock time of the first ramp of a capture [s].
+
+    Raises
+    ------
+    ValueError
+        Missing files, bad selections, invalid configurations (named).
+    """
+    from raysim.io import storage
+
+    if radar_config is not None or path.endswith(".bin"):
+        return _load_capture(path, radar_config, frames, layout, capture_t0)
+    if not path.endswith(".npz") and (storage.store_exists(path) or
+                                      (path.endswith(".nc") and os.path.isfile(path))):
+        return _load_store(path, frames, frame)
+    if frames is not None:
+        raise ValueError(f"--frames {frames!r}: an .npz cube holds one frame")
+    return _load_npz(path)
+
+
+def write_compensated_store(path: str, inp: CompensateInput, beams: list, *, chain: str,
+                            warnings, azimuth_deg, elevation_deg, extra_attrs=None) -> None:
+    """Write the compensated beams and Doppler maps of every frame as a Zarr store.
+
+    Layout (dimension names and units of :data:`raysim.vocabulary.AXIS_UNITS`):
+
+    =================  =============================================  ==============
+    variable           dimensions                                     unit
+    =================  =============================================  ==============
+    ``beams``          ``frame, chirp, range, azimuth, elevation``    input units
+    ``doppler_power``  ``frame, doppler, range, azimuth, elevation``  input units^2
+    ``chirp_time``     ``frame, chirp``                               s (slot 0)
+    ``slot_time``      ``frame, chirp, slot``                         s
+    =================  =============================================  ==============
+
+    Coordinates: ``frame`` (frame number in the source), ``range`` [m],
+    ``azimuth``, ``elevation`` [deg], ``doppler`` (range rate) [m/s], ``slot``.
+    Attributes: ``chain``, ``warnings`` (JSON list), the source files and
+    ``raysim_compensated`` (:data:`COMPENSATED_FORMAT`). Written aside and
+    renamed into place (:func:`raysim.io.zarr_store.write_store`), replacing
+    an earlier compensated store at ``path``.
+
+    Parameters
+    ----------
+    beams : list of compensation.BeamCube
+        One per selected frame, ``data [chirp, range, azimuth, elevation]``.
+    """
+    import xarray as xr
+
+    from raysim.io.zarr_store import write_store
+
+    data = np.stack([b.data for b in beams]).astype(np.complex64)
+    doppler = np.stack([np.abs(b.doppler()) ** 2 for b in beams]).astype(np.float32)
+    b0 = beams[0]
+
+    def coord(name, values, **attrs):
+        return (name, np.asarray(values), {"units": AXIS_UNITS.get(name, ""), **attrs})
+
+    ds = xr.Dataset(
+        {"beams": (("frame", "chirp", "range", "azimuth", "elevation"), data,
+                   {"units": inp.units, "long_name": f"beams of chain {chain}"}),
+         "doppler_power": (("frame", "doppler", "range", "azimuth", "elevation"), doppler,
+                           {"units": f"({inp.units})^2",
+                            "long_name": "power of the Doppler FFT of the beams over chirp"}),
+         "chirp_time": (("frame", "chirp"), np.stack([b.chirp_time for b in beams]),
+                        {"units": "s", "long_name": "start of each chirp loop (slot 0), "
+                                                    "radar clock"}),
+         "slot_time": (("frame", "chirp", "slot"), inp.slot_times,
+                       {"units": "s", "long_name": "start of each TDM slot's ramp, "
+                                                   "radar clock"})},
+        coords={"frame": coord("frame", inp.frames),
+                "range": coord("range", b0.range),
+                "azimuth": coord("azimuth", azimuth_deg),
+                "elevation": coord("elevation", elevation_deg),
+                "doppler": coord("doppler", b0.velocity(), long_name="range rate"),
+                "slot": coord("slot", np.arange(inp.num_slots))},
+        attrs={"raysim_compensated": COMPENSATED_FORMAT, "chain": chain,
+               "warnings": json.dumps(list(warnings)),
+               "source": json.dumps(inp.source), **(extra_attrs or {})})
+    write_store(path, ds, overwrite=os.path.exists(path))

@@ -1,0 +1,177 @@
+"""A simulated drone flight written as the files of a real one: ULog, DCA1000 capture, SDK .cfg.
+
+:func:`write_flight` renders a point target with the exact oracle
+(:mod:`raysim.echoes.oracle`) from a platform that moves along a trajectory
+(default: seeded hover jitter with rotor vibration), samples an IMU along the
+same trajectory (default ``consumer_mems``, with a clock offset) and writes
+
+* ``flight.ulg``: the IMU as PX4 ``sensor_combined`` (:mod:`raysim.io.flight_logs`),
+* ``adc_data.bin``: the IF frames as a DCA1000 capture in ADC counts
+  (:mod:`raysim.io.ti_dca1000`, 2 LVDS lanes, 16 bit),
+* ``radar.cfg``: its mmWave SDK configuration (:mod:`raysim.io.mmwave_config`),
+
+so that one ``raysim compensate`` command (:attr:`FlightFiles.command`) gives
+the compensated store. Clocks: the radar clock is the truth time (the first
+ramp at ``start`` s, ``--capture-t0``), the IMU clock reads truth time plus
+``time_offset`` (``--time-offset``); the IMU record starts at truth time 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["FlightFiles", "write_flight", "FLIGHT_RADAR"]
+
+#: Waveform of the flight: TI 3 Tx x 4 Rx TDM (TX0, TX2, TX1), 64 loops, 150 samples.
+FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_period=0.05)
+#: Largest ADC value of the written capture (the IF cube is scaled to it) [counts].
+FULL_SCALE_COUNTS = 8000.0
+
+
+@dataclass(frozen=True)
+class FlightFiles:
+    """Files of a simulated flight and the truth a test compares against.
+
+    Attributes
+    ----------
+    capture, radar_config, imu_log : Path
+        ``adc_data.bin``, ``radar.cfg``, ``flight.ulg``.
+    start : float
+        Radar-clock time of the first ramp [s].
+    frame_starts : ndarray, shape ``[frame]``
+        Radar-clock time of the first ramp of every frame [s].
+    time_offset : float
+        IMU clock minus radar clock [s].
+    initial_velocity : ndarray, shape ``[frame, 3]``
+        Body-origin velocity in W at the first ramp of every frame [m/s].
+    initial_attitude_deg : ndarray, shape ``[frame, 3]``
+        Z-Y-X Euler angles (yaw, pitch, roll) there [deg].
+    initial_position : ndarray, shape ``[frame, 3]``
+        Body-origin position in W there [m]; the compensation takes the
+        platform at the hover point at its first ramp, so it sees the target
+        from ``-initial_position`` (:meth:`apparent_direction`).
+    lever_arm : ndarray, shape ``[3]``
+        ``r_IR`` in B [m].
+    target : tuple of float
+        ``(range_m, az_deg, el_deg)`` of the point target from the nominal pose.
+    """
+
+    capture: Path
+    radar_config: Path
+    imu_log: Path
+    start: float
+    frame_starts: np.ndarray
+    time_offset: float
+    initial_velocity: np.ndarray
+    initial_attitude_deg: np.ndarray
+    initial_position: np.ndarray
+    lever_arm: np.ndarray
+    target: tuple
+
+    def apparent_direction(self, frame: int = 0) -> tuple[float, float]:
+        """``(az, el)`` [deg] of the target from the radar at the hover point, the platform
+        displaced by ``-initial_position[frame]`` (``u = (cos el sin az, sin el, cos el cos
+        az)``): where the compensated beams of a run starting at ``frame`` see it."""
+        from compensation.geometry import direction
+
+        r, az, el = self.target
+        v = r * direction(np.deg2rad(az), np.deg2rad(el)) - self.initial_position[frame]
+        return (float(np.rad2deg(np.arctan2(v[0], v[2]))),
+                float(np.rad2deg(np.arcsin(v[1] / np.linalg.norm(v)))))
+
+    def command(self, out: str | Path, *extra: str, frame: int | None = None) -> list[str]:
+        """``raysim compensate`` arguments (without ``raysim``) that compensate the flight.
+
+        ``frame`` None: every frame, with the velocity and attitude of the first
+        ramp; ``frame`` k: that frame alone (``--frames k:k+1``), with its own.
+        """
+        k = 0 if frame is None else int(frame)
+        v = ",".join(repr(float(x)) for x in self.initial_velocity[k])
+        sel = () if frame is None else ("--frames", f"{k}:{k + 1}")
+        return ["compensate", str(self.capture), "--radar-config", str(self.radar_config),
+                "--imu", str(self.imu_log), "--capture-t0", repr(self.start),
+                "--time-offset", repr(self.time_offset), "--velocity", "given",
+                "--initial-velocity", v, "--initial-attitude-deg",
+                ",".join(repr(float(x)) for x in self.initial_attitude_deg[k]), "--lever-arm",
+                ",".join(repr(float(x)) for x in self.lever_arm), "--out", str(out), *sel,
+                *extra]
+
+
+def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_mems",
+                 imu_rate: float = 1000.0, time_offset: float = 0.003, seed: int = 0,
+                 frames: int = 2, target=(11.3, 20.0, 0.0), lever_arm=(0.0, 0.0, 0.05),
+                 start: float = 0.5) -> FlightFiles:
+    """Simulate a flight and write its ULog, DCA1000 capture and SDK ``.cfg``.
+
+    Parameters
+    ----------
+    folder : str or path-like
+        Output folder (created); the three files are written atomically.
+    trajectory : raysim.platform.motion.Trajectory, optional
+        Body motion; default :func:`raysim.platform.motion.hover_jitter` (seed
+        ``seed``: attitude and position wander plus rotor vibration).
+    imu : str
+        IMU preset (:mod:`raysim.platform.imu_spec`).
+    imu_rate : float
+        IMU output rate [Hz].
+    time_offset : float
+        IMU clock minus radar clock [s].
+    seed : int
+        Seed of the jitter and the IMU errors.
+    frames : int
+        Radar frames.
+    target : (float, float, float)
+        Range [m], azimuth and elevation [deg] of the point target.
+    lever_arm : array_like, shape ``[3]``
+        Radar phase centre in B [m].
+    start : float
+        Truth (radar-clock) time of the first ramp [s]; the IMU starts at 0.
+
+    Returns
+    -------
+    FlightFiles
+    """
+    from raysim.echoes.oracle import PointTarget, simulate_point_targets
+    from raysim.io.files import atomic_write_text
+    from raysim.io.flight_logs.ulog import write_px4_ulog
+    from raysim.io.mmwave_config import sdk_cfg_text, ti_antenna_positions
+    from raysim.io.ti_dca1000 import Dca1000Format, write_dca1000
+    from raysim.platform.imu import simulate_imu
+    from raysim.platform.motion import hover_jitter
+    from raysim.radar.arrays import tdm_mimo
+    from raysim.radar.config import RadarConfig
+
+    if not (isinstance(frames, int) and frames >= 1):
+        raise ValueError(f"frames must be a positive integer, got {frames!r}")
+    if not (np.isfinite(start) and start > 0):
+        raise ValueError(f"start must be a positive time [s] (the IMU starts at 0), got "
+                         f"{start!r}")
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    traj = hover_jitter(seed) if trajectory is None else trajectory
+    cfg = RadarConfig(num_tx_slots=3, num_frames=frames, **FLIGHT_RADAR)
+    tx_order, rx_on = (0, 2, 1), (0, 1, 2, 3)
+    tx, rx = ti_antenna_positions(cfg.center_wavelength)
+    array = tdm_mimo(tx[list(tx_order)], rx[list(rx_on)], name="TI 3Tx x 4Rx (TX0, TX2, TX1)")
+    lever = np.asarray(lever_arm, dtype=float)
+    r, az, el = (float(v) for v in target)
+    tgt = PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=lever)
+    cube = np.stack([simulate_point_targets(cfg, array, [tgt], traj, lever_arm=lever, frame=f,
+                                            t0=start).data for f in range(frames)])
+    cube = cube * (FULL_SCALE_COUNTS / np.abs(cube).max())
+    fmt = Dca1000Format.from_radar_config(cfg, num_rx=len(rx_on), t0=start)
+    capture = write_dca1000(folder / "adc_data.bin", cube, fmt)
+    radar_cfg = atomic_write_text(folder / "radar.cfg",
+                                  sdk_cfg_text(cfg, tx_order=tx_order, rx_enabled=rx_on))
+    end = start + frames * cfg.frame_interval + 0.05
+    samples = simulate_imu(traj, imu, rate=imu_rate, start=0.0, end=end, seed=seed,
+                           time_offset=time_offset)
+    ulog = write_px4_ulog(folder / "flight.ulg", samples)
+    starts = start + np.arange(frames) * cfg.frame_interval
+    return FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,
+                       float(time_offset), np.asarray(traj.velocity(starts), dtype=float),
+                       np.rad2deg(np.asarray(traj.euler(starts), dtype=float)),
+                       np.asarray(traj.position(starts), dtype=float), lever, (r, az, el))

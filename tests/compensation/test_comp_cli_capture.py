@@ -1,0 +1,162 @@
+"""`raysim compensate` on a DCA1000 capture with its SDK .cfg and a PX4 ULog.
+
+The files are written by :func:`raysim.studies.flight.write_flight` (the exact
+oracle rendering a point target from a moving platform, TI 3 Tx x 4 Rx TDM in
+the slot order TX0, TX2, TX1); the result is read back from the labelled store.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from raysim.cli import main
+from raysim.io.mmwave_config import read_mmwave_config
+from raysim.io.zarr_store import open_store
+from raysim.platform.motion import sinusoid
+from raysim.processing.metrics import parabolic_offset, pseudo_velocity
+from raysim.studies.flight import write_flight
+
+#: Largest exact-chain azimuth error [deg] of the TDM case with per-slot poses.
+TDM_ANGLE_TOL_DEG = 0.1
+#: Must-show bounds for the flight from files (consumer MEMS IMU, 3 ms clock offset,
+#: hover jitter with rotor vibration; offset, initial velocity and attitude given):
+#: residual pseudo-velocity [bin], Doppler power outside +-1 bin [dB], azimuth error [deg].
+FLIGHT_PSEUDO_VELOCITY_BINS = 0.05
+FLIGHT_LEAKAGE_DB = -35.0
+FLIGHT_ANGLE_TOL_DEG = 0.2
+#: Angle grid step [deg] of the measurements (peaks interpolated by a parabola on dB).
+GRID_STEP_DEG = 0.25
+
+
+def _run(flight, out, chain="exact", *extra, frame=None):
+    args = flight.command(out, "--range-m", "10.8:11.8",
+                          "--az-deg", f"{flight.target[1] - 6}:{flight.target[1] + 6}:"
+                          f"{GRID_STEP_DEG}", "--el-deg", "0:0:1", "--chain", chain, *extra,
+                          frame=frame)
+    assert main(args) == 0
+    return open_store(out)
+
+
+def _measure(ds, flight, first=0):
+    """Per frame: azimuth error [deg] of the zero-Doppler beam peak, pseudo-velocity [bin]
+    and Doppler power outside +-1 bin of the peak [dB] in the beam at the peak.
+
+    Azimuth only: the 3 Tx x 4 Rx array has one lambda/2 step of elevation aperture (TX1
+    raised), a beam some 100 deg wide in elevation, so the targets sit at elevation 0 and
+    the beams are formed in that cut.
+    """
+    cfg = read_mmwave_config(flight.radar_config).config
+    az_true = flight.apparent_direction(first)[0]
+    out = []
+    for b in ds["beams"].values[..., 0]:                        # [chirp, range, azimuth]
+        zero = np.abs(b.astype(np.complex128).sum(axis=0)) ** 2  # [range, azimuth]
+        g, a = np.unravel_index(np.argmax(zero), zero.shape)
+        db = 10 * np.log10(zero[g])
+        assert 0 < a < db.size - 1, "the peak must lie inside the azimuth grid"
+        az = ds.azimuth.values[a] + GRID_STEP_DEG * parabolic_offset(*db[a - 1:a + 2])
+        slow = b[:, g, a]
+        pv = pseudo_velocity(slow, cfg.chirp_interval, cfg.center_wavelength)
+        spec = np.abs(np.fft.fft(slow * np.hanning(slow.size))) ** 2
+        k = int(np.argmax(spec))
+        near = spec[[(k - 1) % spec.size, k, (k + 1) % spec.size]].sum()
+        leak = 10 * np.log10(max(spec.sum() - near, 1e-30 * spec.sum()) / spec.sum())
+        out.append((abs(az - az_true), pv / cfg.velocity_resolution, leak))
+    return out
+
+
+def _tdm_flight(tmp_path):
+    motion = sinusoid("pitch", np.deg2rad(8.0), 20.0, np.pi / 2) + sinusoid("z", 0.05, 5.0)
+    return write_flight(tmp_path / "tdm", trajectory=motion, imu="ideal", time_offset=0.0,
+                        frames=1, target=(11.3, 28.0, 0.0), lever_arm=(0.0, 0.0, 0.0))
+
+
+def test_tdm_capture_is_compensated_per_slot(tmp_path):
+    """TI 3 Tx x 4 Rx, target 11.3 m at 28 deg, pitch 8 deg + z 5 cm, ideal IMU, from the files."""
+    flight = _tdm_flight(tmp_path)
+    ds = _run(flight, tmp_path / "exact.zarr")
+    (err, pv, _), = _measure(ds, flight)
+    assert err <= TDM_ANGLE_TOL_DEG
+    (err_none, _, _), = _measure(_run(flight, tmp_path / "none.zarr", "none"), flight)
+    assert err_none > 1.0                       # there was motion to correct
+    # the store carries its axes, units and the time of every slot's ramp
+    cfg = read_mmwave_config(flight.radar_config).config
+    assert ds["beams"].dims == ("frame", "chirp", "range", "azimuth", "elevation")
+    assert ds["doppler_power"].dims == ("frame", "doppler", "range", "azimuth", "elevation")
+    assert ds["range"].attrs["units"] == "m" and ds["azimuth"].attrs["units"] == "deg"
+    assert ds["doppler"].attrs["units"] == "m/s" and ds.attrs["chain"] == "exact"
+    t = ds["slot_time"].values[0]                                    # [chirp, slot]
+    assert np.allclose(t - t[:1, :1], (np.arange(64)[:, None] * 3 + np.arange(3)) *
+                       cfg.slot_interval, rtol=0, atol=1e-12)
+    assert math.isclose(t[0, 0], flight.start + 0.0, abs_tol=1e-12)
+    assert np.array_equal(ds["chirp_time"].values[0], t[:, 0])
+
+
+def test_tdm_capture_paper_chain(tmp_path):
+    """The paper chain with per-slot poses leaves only its small-angle tilt bias,
+    ``asin(sin(az - theta) + theta) - az`` (compensation.paper.tilt_correction, Notes)."""
+    flight = _tdm_flight(tmp_path)
+    az, th = np.deg2rad(28.0), np.deg2rad(8.0)
+    bound = abs(np.rad2deg(np.arcsin(np.sin(az - th) + th) - az)) + TDM_ANGLE_TOL_DEG
+    ds = _run(flight, tmp_path / "paper.zarr", "paper", "--direction-deg", "28,0")
+    (err, _, _), = _measure(ds, flight)
+    assert err <= bound
+
+
+def test_flight_from_files_one_command(tmp_path, capsys):
+    """Consumer MEMS IMU, 3 ms clock offset, hover jitter with rotor vibration, 2 frames 50 ms
+    apart: ULog + DCA1000 capture + SDK .cfg, one `raysim compensate` (with progress), against
+    the same flight with an ideal IMU. The velocity given at the first ramp holds for frame 0;
+    frame 1 is compensated again with the velocity at its own first ramp (``--frames 1:2``),
+    as a per-frame velocity estimate would do (the consumer accelerometer bias integrated over
+    the 50 ms between them is not observable from the IMU alone)."""
+    flight = write_flight(tmp_path / "f", imu="consumer_mems", time_offset=0.003, frames=2,
+                          seed=1)
+    ideal = write_flight(tmp_path / "i", imu="ideal", time_offset=0.003, frames=2, seed=1)
+    ds = _run(flight, tmp_path / "c.zarr")
+    assert "compensate" in capsys.readouterr().err          # the progress bar
+    assert list(ds["frame"].values) == [0, 1]
+    runs = [(_measure(ds, flight)[0], _measure(_run(ideal, tmp_path / "i.zarr"), ideal)[0])]
+    one = _run(flight, tmp_path / "one.zarr", frame=1)
+    assert list(one["frame"].values) == [1]
+    one_ideal = _run(ideal, tmp_path / "one_i.zarr", frame=1)
+    runs.append((_measure(one, flight, 1)[0], _measure(one_ideal, ideal, 1)[0]))
+    for (err, pv, leak), (err_i, pv_i, _) in runs:
+        assert err_i <= TDM_ANGLE_TOL_DEG and abs(pv_i) <= FLIGHT_PSEUDO_VELOCITY_BINS
+        assert err <= FLIGHT_ANGLE_TOL_DEG
+        assert abs(pv) <= FLIGHT_PSEUDO_VELOCITY_BINS
+        assert leak <= FLIGHT_LEAKAGE_DB
+
+
+def test_capture_needs_its_configuration(tmp_path, capsys):
+    flight = _tdm_flight(tmp_path)
+    out = ["--out", str(tmp_path / "o.zarr")]
+    assert main(["compensate", str(flight.capture), "--chain", "none", *out]) == 2
+    assert "--radar-config" in capsys.readouterr().err
+    bad = tmp_path / "bad.cfg"
+    text = flight.radar_config.read_text()
+    assert " 150 2500.0 " in text                      # numAdcSamples, digOutSampleRate
+    bad.write_text(text.replace(" 150 2500.0 ", " 148 2500.0 "))
+    assert main(["compensate", str(flight.capture), "--radar-config", str(bad), "--chain",
+                 "none", *out]) == 2
+    assert "not a whole number of frames" in capsys.readouterr().err
+    assert main(["compensate", str(flight.capture), "--radar-config",
+                 str(flight.radar_config), "--chain", "none", "--frames", "0:5", *out]) == 2
+    assert "--frames: got '0:5'" in capsys.readouterr().err
+    assert main(["compensate", str(flight.capture), "--radar-config",
+                 str(flight.radar_config), "--chain", "none", "--range-m", "10:12",
+                 "--az-deg", "20:30:1", "--el-deg", "0:0:1", "--out",
+                 str(tmp_path / "x.npz")]) == 0
+    with np.load(tmp_path / "x.npz") as z:              # one frame: the .npz layout
+        assert z["beams"].shape[0] == 64 and z["azimuth_deg"].size == 11
+
+
+@pytest.mark.parametrize("text", ["2:1", "a:b"])
+def test_frame_selection_is_checked(text):
+    from raysim.cli.compensate_io import frame_selection
+
+    with pytest.raises(ValueError, match="--frames"):
+        frame_selection(text, 4)
+    assert frame_selection(":2", 4) == [0, 1] and frame_selection("3", 4) == [3]
