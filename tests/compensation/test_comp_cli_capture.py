@@ -160,3 +160,55 @@ def test_frame_selection_is_checked(text):
     with pytest.raises(ValueError, match="--frames"):
         frame_selection(text, 4)
     assert frame_selection(":2", 4) == [0, 1] and frame_selection("3", 4) == [3]
+
+
+TDM_SCENARIO = """\
+name = "tdm"
+lever_arm_m = [0.0, 0.0, 0.0]
+[radar]
+num_chirps = 64
+[array]
+kind = "ti_3tx4rx"
+[[scene.targets]]
+range_m = 11.3
+az_deg = 28.0
+[[motion.sinusoids]]
+axis = "pitch"
+amplitude_deg = 8.0
+frequency_hz = 20.0
+phase_deg = 90.0
+[[motion.sinusoids]]
+axis = "z"
+amplitude_m = 0.05
+frequency_hz = 5.0
+[imu]
+preset = "ideal"
+rate_hz = 2000.0
+"""
+
+
+def test_rendered_tdm_store_is_compensated_per_slot(tmp_path):
+    """`raysim render` of the TDM case, then `raysim compensate` of the store (its IMU log,
+    the true initial velocity and attitude): azimuth error within the TDM tolerance."""
+    from raysim.io.scenario import loads_scenario
+
+    (tmp_path / "tdm.toml").write_text(TDM_SCENARIO)
+    store = tmp_path / "tdm.zarr"
+    assert main(["render", str(tmp_path / "tdm.toml"), "--out", str(store),
+                 "--no-progress"]) == 0
+    traj = loads_scenario(TDM_SCENARIO).trajectory()
+    v0 = traj.velocity([0.0])[0]
+    ypr = np.rad2deg(traj.euler([0.0])[0])
+    out = tmp_path / "c.zarr"
+    assert main(["compensate", str(store), "--velocity", "given", "--initial-velocity",
+                 ",".join(map(repr, map(float, v0))), "--initial-attitude-deg",
+                 ",".join(map(repr, map(float, ypr))), "--range-m", "10.8:11.8",
+                 "--az-deg", f"22:34:{GRID_STEP_DEG}", "--el-deg", "0:0:1",
+                 "--out", str(out)]) == 0
+    ds = open_store(out)
+    zero = np.abs(ds["beams"].values[0, ..., 0].astype(np.complex128).sum(axis=0)) ** 2
+    g, a = np.unravel_index(np.argmax(zero), zero.shape)
+    db = 10 * np.log10(zero[g])
+    az = ds.azimuth.values[a] + GRID_STEP_DEG * parabolic_offset(*db[a - 1:a + 2])
+    assert abs(az - 28.0) <= TDM_ANGLE_TOL_DEG
+    assert ds["slot_time"].shape == (1, 64, 3)
