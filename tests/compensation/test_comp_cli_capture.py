@@ -212,3 +212,16 @@ def test_rendered_tdm_store_is_compensated_per_slot(tmp_path):
     az = ds.azimuth.values[a] + GRID_STEP_DEG * parabolic_offset(*db[a - 1:a + 2])
     assert abs(az - 28.0) <= TDM_ANGLE_TOL_DEG
     assert ds["slot_time"].shape == (1, 64, 3)
+
+
+def test_flight_command_prints_a_working_compensate(tmp_path, capsys):
+    import shlex
+
+    assert main(["flight", str(tmp_path / "fl"), "--frames", "1", "--imu", "ideal"]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1].split()
+    assert line[0] == "raysim" and line[1] == "compensate"
+    args = shlex.split(" ".join(line[1:]))
+    assert main(args + ["--az-deg", "15:25:1", "--no-progress"]) == 0
+    assert open_store(tmp_path / "fl" / "compensated.zarr")["beams"].shape[:2] == (1, 64)
+    assert main(["flight", str(tmp_path / "fl2"), "--target", "11,20"]) == 2
+    assert "--target" in capsys.readouterr().err
