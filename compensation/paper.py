@@ -397,6 +397,12 @@ def _paper_chain_slots(x, element_positions, motion: PlatformMotion, channel_slo
         if comps:
             xs = slow_time_correction(xs, m, direction, wavelength=lam, components=comps,
                                       rotation_phase=rotation_phase)
+            if "rotation" in comps and rotation_phase == "published":
+                # v_r(t_n) (t_n - t_0) counts from the first ramp of the frame (slot 0),
+                # not from this slot's first ramp: add the slot's own start offset
+                v_r = -(np.cross(m.angular_rate, m.lever_arm) @ u)
+                dr = v_r * (m.time[0] - motion.time[0])
+                xs = xs * np.exp(-4j * np.pi * dr / lam).astype(xs.dtype)[:, None, None]
         common = dict(wavelength=lam, range_axis=range_axis, azimuth=azimuth,
                       elevation=elevation, range_gates=range_gates, method=method,
                       weights=w[sel])

@@ -57,3 +57,32 @@ def test_each_slot_uses_its_own_pose():
     assert np.array_equal(got.chirp_time, t[::2])
     with pytest.raises(ValueError, match="chirp \\* slots"):
         paper_chain(rc, p, m.select(slice(0, 5)), channel_slot=slot, **kw)
+
+
+#: Phase agreement [rad] of the published and integrated rotation phases for a constant
+#: rate over 20 ms (second-order difference 1/2 w^2 t^2 |r| 4 pi / lambda ~ 3e-3 rad); a
+#: published phase counted from each slot's own first ramp would be off by
+#: 4 pi v_r dt / lambda ~ 1.6e-2 rad for the slot 1 ms later.
+PUBLISHED_PHASE_TOL = 5e-3
+
+
+def test_published_rotation_phase_counts_from_the_frame_start():
+    """Constant pitch rate: v_r (t_n - t_0) equals the integrated lever-arm displacement
+    to first order, slot by slot, when t_0 is the frame's first ramp."""
+    from scipy.spatial.transform import Rotation
+
+    n, rate, lever = 10, 0.3, np.array([0.0, 0.0, 0.05])
+    t = (np.arange(n)[:, None] * 2e-3 + np.array([0.0, 1e-3])[None, :]).ravel()
+    att = Rotation.from_euler("y", (rate * t)[:, None]).as_matrix()
+    z = np.zeros((t.size, 3))
+    m = PlatformMotion(t, att, z, z.copy(), np.tile([0.0, rate, 0.0], (t.size, 1)), lever)
+    u = np.array([np.sin(np.deg2rad(20.0)), 0.0, np.cos(np.deg2rad(20.0))])
+    rc = np.zeros((n, 8, 1), dtype=np.complex128)
+    rc[:, 4:] = 1.0                                   # slot 1 alone: its phase is not diluted
+    p = np.column_stack([np.arange(8) * 1.95e-3, np.zeros(8), np.zeros(8)])
+    kw = dict(wavelength=3.9e-3, direction=u, range_axis=[5.0], azimuth=[np.deg2rad(20.0)],
+              elevation=[0.0], steps=("rotation",), method="direct",
+              channel_slot=np.repeat([0, 1], 4))
+    a = paper_chain(rc, p, m, rotation_phase="integrated", **kw).data[:, 0, 0, 0]
+    b = paper_chain(rc, p, m, rotation_phase="published", **kw).data[:, 0, 0, 0]
+    assert np.max(np.abs(np.angle(b / a))) < PUBLISHED_PHASE_TOL
