@@ -190,6 +190,14 @@ def _is_store(path: str) -> bool:
     return store_exists(path)
 
 
+def _is_compensated_store(path: str) -> bool:
+    import zarr
+
+    from raysim.cli.compensate_io import COMPENSATED_FORMAT_ATTR
+
+    return COMPENSATED_FORMAT_ATTR in zarr.open_group(path, mode="r").attrs
+
+
 def _load_imu(path: str) -> np.ndarray:
     """IMU log of any supported format as a table ``[sample, 7]``: time, gyro, accel (SI, FRD)."""
     from raysim.io.flight_logs import read_imu_log
@@ -219,10 +227,15 @@ def run(args) -> int:
     spec = _chain(args.chain)
     as_npz = args.out.endswith(".npz")
     check_output(args.out, "file" if as_npz else "dir", "--out")
-    if not as_npz and os.path.isdir(args.out) and not _is_store(args.out):
-        raise ValueError(f"--out: cannot write {args.out!r}: it is an existing directory that "
-                         f"is not a Zarr store (expected a new store path, or .npz for one "
-                         f"frame)")
+    if not as_npz and os.path.isdir(args.out):
+        if not _is_store(args.out):
+            raise ValueError(f"--out: cannot write {args.out!r}: it is an existing directory "
+                             f"that is not a Zarr store (expected a new store path, or .npz "
+                             f"for one frame)")
+        if not _is_compensated_store(args.out):
+            raise ValueError(f"--out: cannot write {args.out!r}: it is an existing Zarr store "
+                             f"not written by raysim compensate (a frame store?); expected a "
+                             f"new path or an earlier compensated store to replace")
     inp = load_input(args.cube, radar_config=args.radar_config, frames=args.frames,
                      frame=args.frame, layout=args.layout, capture_t0=args.capture_t0)
     if as_npz and len(inp.frames) != 1:

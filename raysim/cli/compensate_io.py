@@ -25,10 +25,12 @@ from raysim.radar.config import RadarConfig
 from raysim.vocabulary import AXIS_UNITS
 
 __all__ = ["CompensateInput", "load_input", "frame_selection", "write_compensated_store",
-           "COMPENSATED_FORMAT"]
+           "COMPENSATED_FORMAT", "COMPENSATED_FORMAT_ATTR"]
 
-#: Format version of the compensated store (attribute ``raysim_compensated``).
+#: Format version of the compensated store (attribute :data:`COMPENSATED_FORMAT_ATTR`).
 COMPENSATED_FORMAT = 1
+#: Group attribute that marks a store written by :func:`write_compensated_store`.
+COMPENSATED_FORMAT_ATTR = "raysim_compensated"
 _NPZ_NEED = ("data", "chirp_times", "element_positions", "carrier_frequency", "bandwidth",
              "chirp_duration", "sample_rate")
 
@@ -266,8 +268,10 @@ def write_compensated_store(path: str, inp: CompensateInput, beams: list, *, cha
 
     Coordinates: ``frame`` (frame number in the source), ``range`` [m],
     ``azimuth``, ``elevation`` [deg], ``doppler`` (range rate) [m/s], ``slot``.
-    Attributes: ``chain``, ``warnings`` (JSON list), the source files and
-    ``raysim_compensated`` (:data:`COMPENSATED_FORMAT`). Written aside and
+    Attributes: ``chain``, ``warnings`` (JSON list), the source files,
+    ``raysim_compensated`` (:data:`COMPENSATED_FORMAT`) and the store marker
+    ``raysim_format`` of :mod:`raysim.io.store_guard` (a raysim store that
+    a later run may replace). Written aside and
     renamed into place (:func:`raysim.io.zarr_store.write_store`), replacing
     an earlier compensated store at ``path``.
 
@@ -278,6 +282,8 @@ def write_compensated_store(path: str, inp: CompensateInput, beams: list, *, cha
     """
     import xarray as xr
 
+    from raysim.io.storage import FORMAT_VERSION
+    from raysim.io.store_guard import STORE_MARKER
     from raysim.io.zarr_store import write_store
 
     data = np.stack([b.data for b in beams]).astype(np.complex64)
@@ -305,7 +311,7 @@ def write_compensated_store(path: str, inp: CompensateInput, beams: list, *, cha
                 "elevation": coord("elevation", elevation_deg),
                 "doppler": coord("doppler", b0.velocity(), long_name="range rate"),
                 "slot": coord("slot", np.arange(inp.num_slots))},
-        attrs={"raysim_compensated": COMPENSATED_FORMAT, "chain": chain,
-               "warnings": json.dumps(list(warnings)),
+        attrs={COMPENSATED_FORMAT_ATTR: COMPENSATED_FORMAT, STORE_MARKER: FORMAT_VERSION,
+               "chain": chain, "warnings": json.dumps(list(warnings)),
                "source": json.dumps(inp.source), **(extra_attrs or {})})
     write_store(path, ds, overwrite=os.path.exists(path))

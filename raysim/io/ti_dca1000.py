@@ -52,6 +52,10 @@ docs/conventions.md) and the start time of every ramp,
 ``chirp_time[frame, chirp, tx_slot] = t0 + frame * frame_period
 + (chirp * num_tx + tx_slot) * slot_interval``.
 
+The format need not be typed by hand: :func:`raysim.io.mmwave_config.read_mmwave_config`
+builds it (with the waveform and the virtual array) from the radar's mmWave SDK
+``.cfg`` or mmWave Studio JSON configuration.
+
 ADC words narrower than 16 bit (``adc_bits`` 12 or 14) are sign-extended as
 in TI's scripts: a value above ``2**(adc_bits-1) - 1`` becomes
 ``value - 2**adc_bits``.

@@ -212,6 +212,12 @@ def test_rendered_tdm_store_is_compensated_per_slot(tmp_path):
     az = ds.azimuth.values[a] + GRID_STEP_DEG * parabolic_offset(*db[a - 1:a + 2])
     assert abs(az - 28.0) <= TDM_ANGLE_TOL_DEG
     assert ds["slot_time"].shape == (1, 64, 3)
+    # the frame store is never replaced by an output; an earlier compensated store is
+    assert main(["compensate", str(store), "--chain", "none", "--range-m", "10.8:11.8",
+                 "--az-deg", "0:0:1", "--el-deg", "0:0:1", "--out", str(store)]) == 2
+    assert main(["compensate", str(store), "--chain", "none", "--range-m", "10.8:11.8",
+                 "--az-deg", "0:0:1", "--el-deg", "0:0:1", "--out", str(out)]) == 0
+    assert open_store(out).attrs["chain"] == "none" and open_store(store).sizes["frame"] == 1
 
 
 def test_flight_command_prints_a_working_compensate(tmp_path, capsys):
