@@ -171,7 +171,8 @@ def test_converted_scene_traces_the_plate_below(tmp_path):
     out = convert_user_meshes([m.placement() for m in sc.scene.meshes],
                               root=tmp_path / "cache")
     cfg = RadarConfig(num_chirps=8)
-    paths = MonostaticTracer(diffuse=False, targets=False)(load_scene(out.xml_path), cfg)
+    paths = MonostaticTracer(diffuse=False, targets=False, max_depth=1,
+                             samples_per_src=2_000)(load_scene(out.xml_path), cfg)
     spec = paths.kind == SPECULAR
     assert spec.sum() == 1
     # the plate's top face is 1 cm above its centre at 10 m

@@ -210,3 +210,36 @@ def test_tracer_culls_below_the_pattern_floor(warm_kernels, rt_radar):
     power = sigma * g2 / r ** 4                             # radar equation up to a constant
     assert pattern_culled_share(cut) == pytest.approx(power[below].sum() / power.sum(),
                                                       rel=1e-3)
+
+
+_TARGET = "[[scene.targets]]\nrange_m = 10.0\naz_deg = 0.0\nel_deg = 0.0\n"
+
+
+def test_scenario_element_pattern_key(tmp_path):
+    from raysim.io.scenario import load_scenario, loads_scenario
+
+    cfg = loads_scenario('[radar]\nelement_pattern = "tr38901"\n' + _TARGET).radar_config()
+    assert cfg.element_pattern == "tr38901" and cfg.antenna_gain_dbi == pytest.approx(8.0)
+    assert loads_scenario(_TARGET).radar_config().element_pattern == "patch"
+    with pytest.raises(ValueError) as err:
+        loads_scenario('[radar]\nelement_pattern = "tr38901"\nantenna_gain_dbi = 12.0\n'
+                       + _TARGET)
+    assert "radar" in str(err.value) and "12.0" in str(err.value) and "8.00" in str(err.value)
+    with pytest.raises(ValueError, match="'horn'"):
+        loads_scenario('[radar]\nelement_pattern = "horn"\n' + _TARGET)
+    # a pattern file relative to the scenario file
+    _cos_table(tmp_path / "elem.csv")
+    (tmp_path / "s.toml").write_text('[radar]\nelement_pattern = "elem.csv"\n' + _TARGET)
+    cfg = load_scenario(tmp_path / "s.toml").radar_config()
+    assert cfg.element_pattern == str((tmp_path / "elem.csv").resolve())
+    assert cfg.antenna_gain_dbi == pytest.approx(10.0, abs=0.05)
+
+
+def test_stores_keep_the_element_pattern():
+    from raysim.io.storage import config_from_attrs, radar_attrs
+
+    cfg = RadarConfig(element_pattern="tr38901", antenna_gain_dbi=8.0)
+    attrs = radar_attrs(cfg)
+    assert config_from_attrs(attrs) == cfg
+    del attrs["radar_element_pattern"]            # a store from before element patterns
+    assert config_from_attrs(attrs).element_pattern == "constant"
