@@ -254,7 +254,7 @@ class MonostaticTracer:
         gains are applied at re-projection.
     plan : raysim.echoes.rt.budget.TracePlan or None
         When given, scene geometry is traced on the plan's pruned copy of the
-        scene (triangles outside the range window / FoV removed, see
+        scene (triangles outside the range window / pattern cone removed, see
         :meth:`for_scene`); ``None`` traces the scene as loaded.
     """
 
@@ -301,8 +301,8 @@ class MonostaticTracer:
         """A tracer sized for ``scene`` by :func:`raysim.echoes.rt.budget.plan_trace`.
 
         The plan sets ``max_depth`` and ``samples_per_src`` and prunes the
-        geometry outside the range window and the field of view (triangle by
-        triangle; shapes with nothing left are removed). ``overrides`` are
+        geometry outside the range window and the element-pattern cone (triangle
+        by triangle; shapes with nothing left are removed). ``overrides`` are
         other tracer parameters and win over the plan; ``pattern_floor_db`` and
         ``max_range`` are also used by the plan (the pruning cone is where the
         one-way element gain falls below the floor). With ``max_depth > 2`` the
