@@ -243,3 +243,17 @@ def test_stores_keep_the_element_pattern():
     assert config_from_attrs(attrs) == cfg
     del attrs["radar_element_pattern"]            # a store from before element patterns
     assert config_from_attrs(attrs).element_pattern == "constant"
+
+
+@pytest.mark.parametrize("floor", [3.0, math.nan, "low"])
+def test_bad_pattern_floor_is_refused(floor):
+    from raysim.echoes.rt.budget import plan_trace
+    from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.radar.arrays import upa
+
+    with pytest.raises(ValueError, match="pattern_floor_db"):
+        MonostaticTracer(pattern_floor_db=floor)
+    cfg = RadarConfig(num_chirps=8)
+    with pytest.raises(ValueError, match="pattern_floor_db"):
+        plan_trace("flat_reflectors", cfg, upa(2, 2, wavelength=cfg.wavelength),
+                   pattern_floor_db=floor)

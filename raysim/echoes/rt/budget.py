@@ -473,7 +473,8 @@ def plan_trace(scene: str | os.PathLike | SceneDescriptor | RadarScene, config: 
         raise ValueError(f"config must be a RadarConfig, got {type(config)}")
     if not isinstance(array, VirtualArray):
         raise ValueError(f"array must be a VirtualArray, got {type(array)}")
-    if math.isnan(pattern_floor_db) or pattern_floor_db >= 0:
+    if not isinstance(pattern_floor_db, (int, float)) or math.isnan(pattern_floor_db) \
+            or pattern_floor_db >= 0:
         raise ValueError(f"pattern_floor_db must be a level below the peak (< 0 dB), "
                          f"got {pattern_floor_db!r}")
     if fov_half_angle is None:

@@ -282,7 +282,8 @@ class MonostaticTracer:
         _check_int("target_depth", self.target_depth, 1)
         _check_int("samples_per_src", self.samples_per_src, 1)
         _check_int("seed", self.seed, 0)
-        if math.isnan(self.pattern_floor_db) or self.pattern_floor_db >= 0:
+        if not isinstance(self.pattern_floor_db, (int, float)) \
+                or math.isnan(self.pattern_floor_db) or self.pattern_floor_db >= 0:
             raise ValueError(f"pattern_floor_db must be a level below the peak (< 0 dB, -inf "
                              f"keeps all paths), got {self.pattern_floor_db!r}")
         if self.min_range < 0 or (self.max_range is not None
