@@ -12,8 +12,13 @@ Approximations, all documented and all small for a hovering drone:
   each transmit slot; ``intra_chirp=True`` evaluates them at every sample.
 * the target position is taken at the transmit instant, not at the instant
   of reflection (error ``v tau``, under 1 um for 10 m/s at 30 m);
-* isotropic element patterns with a constant gain; the amplitude follows the
-  radar equation with the actual one-way ranges of each chirp and channel;
+* isotropic element patterns with a constant gain by default (``pattern=None``);
+  the amplitude follows the radar equation with the actual one-way ranges of
+  each chirp and channel. ``pattern=`` (an
+  :class:`raysim.radar.pattern.ElementPattern`, e.g. ``config.pattern``) replaces
+  the constant ``G_t G_r`` by the pattern's gains towards the target from each
+  transmit and receive element, in frame A at each instant, as the ray-traced
+  echoes get them;
 * free space, no multipath (that is the ray tracer's job).
 """
 
@@ -147,10 +152,26 @@ def element_world_positions(trajectory: Trajectory, times: np.ndarray, points_a:
     return pos[inverse.reshape(times.shape)] + np.einsum("...ij,...j->...i", mats, body)
 
 
+def _pattern_factor(pattern, trajectory: Trajectory, times: np.ndarray, p: np.ndarray,
+                    x_tx: np.ndarray, x_rx: np.ndarray) -> np.ndarray:
+    """``sqrt(G_t G_r) / G_const`` towards ``p`` from the elements, frame A at ``times``."""
+    from raysim.radar.pattern import two_way_gain
+
+    uniq, inverse = np.unique(times, return_inverse=True)
+    mats = trajectory.attitude(uniq).as_matrix()[inverse.reshape(times.shape)]  # A -> W
+    u_tx = np.einsum("...ji,...j->...i", mats, p - x_tx)                         # W -> A
+    u_rx = np.einsum("...ji,...j->...i", mats, p - x_rx)
+    return np.sqrt(two_way_gain(pattern, u_tx, u_rx))
+
+
 def point_target_delays(config: RadarConfig, array: VirtualArray, trajectory: Trajectory,
                         targets, *, lever_arm=(0.0, 0.0, 0.0), frame: int = 0, t0: float = 0.0,
-                        intra_chirp: bool = False):
+                        intra_chirp: bool = False, pattern=None):
     """Exact two-way delays and radar-equation amplitudes of point targets.
+
+    ``pattern`` (:class:`raysim.radar.pattern.ElementPattern`, optional) gives
+    each transmit and receive element its gain towards the target in frame A;
+    ``None`` keeps the constant gain ``config.antenna_gain_dbi``.
 
     Returns
     -------
@@ -158,6 +179,10 @@ def point_target_delays(config: RadarConfig, array: VirtualArray, trajectory: Tr
         With ``intra_chirp`` a trailing ``sample`` axis is added.
     amplitude : ndarray, same shape as ``tau`` [sqrt(W)]
     """
+    from raysim.radar.pattern import ElementPattern
+
+    if pattern is not None and not isinstance(pattern, ElementPattern):
+        raise ValueError(f"pattern must be an ElementPattern or None, got {type(pattern)}")
     targets = list(targets)
     if not targets:
         raise ValueError("targets is empty: give at least one PointTarget")
@@ -178,7 +203,11 @@ def point_target_delays(config: RadarConfig, array: VirtualArray, trajectory: Tr
         r_rx = r_tx if virtual else np.linalg.norm(p - x_rx, axis=-1)
         config.check_range(0.5 * (r_tx + r_rx).max(), "point-target range")
         taus.append((r_tx + r_rx) / SPEED_OF_LIGHT)
-        amps.append(radar_equation_amplitude(config, r_tx, r_rx, tgt.rcs_dbsm))
+        amp = radar_equation_amplitude(config, r_tx, r_rx, tgt.rcs_dbsm)
+        if pattern is not None:
+            amp = amp / 10 ** (config.antenna_gain_dbi / 10) * _pattern_factor(
+                pattern, trajectory, times, p, x_tx, x_rx)
+        amps.append(amp)
     return np.stack(taus), np.stack(amps)
 
 
@@ -227,7 +256,8 @@ def add_noise(data: np.ndarray, config: RadarConfig, seed: int | None) -> None:
 def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
                            trajectory: Trajectory | None = None, *, lever_arm=(0.0, 0.0, 0.0),
                            frame: int = 0, t0: float = 0.0, intra_chirp: bool = False,
-                           noise: bool = False, seed: int | None = None) -> RadarFrame:
+                           noise: bool = False, seed: int | None = None,
+                           pattern=None) -> RadarFrame:
     """Render the IF frame of point targets seen from a moving platform.
 
     Parameters
@@ -249,6 +279,9 @@ def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
         Add complex white thermal noise of power ``k T0 F f_s`` per sample.
     seed : int, optional
         Seed of the noise generator.
+    pattern : raysim.radar.pattern.ElementPattern, optional
+        Element pattern (e.g. ``config.pattern``); default: the constant gain
+        ``config.antenna_gain_dbi`` in every direction.
 
     Returns
     -------
@@ -258,7 +291,7 @@ def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
     trajectory = stationary() if trajectory is None else trajectory
     check_frame_memory(config, array, len(targets), intra_chirp=intra_chirp)
     tau, amp = point_target_delays(config, array, trajectory, targets, lever_arm=lever_arm,
-                                   frame=frame, t0=t0, intra_chirp=intra_chirp)
+                                   frame=frame, t0=t0, intra_chirp=intra_chirp, pattern=pattern)
     if intra_chirp:
         data = synthesize_if_intrachirp(tau, amp, config)
     else:

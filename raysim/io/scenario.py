@@ -50,7 +50,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
 
 from raysim.io.scenario_keys import (
     did_you_mean,
@@ -61,12 +61,9 @@ from raysim.io.scenario_keys import (
     parse_value,
     set_key,
 )
-from raysim.radar.config import (
-    ANTENNA_GAIN_DBI_RANGE,
-    NOISE_FIGURE_DB_RANGE,
-    RCS_DBSM_RANGE,
-    TX_POWER_DBM_RANGE,
-)
+from raysim.io.scenario_meshes import MeshSpec
+from raysim.io.scenario_radar import RadarSection, _in_range, _Section
+from raysim.radar.config import RCS_DBSM_RANGE
 
 __all__ = [
     "RadarSection", "ArraySection", "TargetSpec", "SceneSection", "SinusoidSpec",
@@ -82,46 +79,6 @@ ANGLE_AXES = ("roll", "pitch", "yaw")
 TRANSLATION_AXES = ("x", "y", "z")
 
 Vec3 = tuple[float, float, float]
-
-
-def _in_range(value: float, bounds: tuple[float, float], unit: str, what: str) -> float:
-    """``value`` if within the physical ``bounds`` (inclusive), else a ValueError saying so."""
-    if not bounds[0] <= value <= bounds[1]:
-        raise ValueError(f"{what} in the physical range [{bounds[0]:g}, {bounds[1]:g}] {unit}")
-    return value
-
-
-class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-
-# ----------------------------------------------------------------------- radar
-class RadarSection(_Section):
-    """``[radar]``: FMCW waveform (defaults: the paper's Table 2).
-
-    See :class:`raysim.radar.config.RadarConfig` for the meaning of every field; the
-    file keys carry their unit. Physical ranges: ``tx_power_dbm`` -100 to 60 dBm,
-    ``antenna_gain_dbi`` -30 to 50 dBi, ``noise_figure_db`` 0 to 50 dB.
-    """
-
-    carrier_frequency_hz: float = Field(77e9, gt=0)
-    bandwidth_hz: float = Field(1e9, gt=0)
-    chirp_duration_s: float = Field(60e-6, gt=0)
-    idle_time_s: float = Field(0.0, ge=0)
-    sample_rate_hz: float = Field(10e6, gt=0)
-    num_chirps: int = Field(256, ge=4)
-    complex_sampling: bool = True
-    tx_power_dbm: float = 12.0
-    antenna_gain_dbi: float = 10.0
-    noise_figure_db: float = 12.0
-    frame_period_s: float | None = Field(None, gt=0)
-
-    _tx_power = field_validator("tx_power_dbm")(
-        lambda v: _in_range(v, TX_POWER_DBM_RANGE, "dBm", "a transmit power"))
-    _gain = field_validator("antenna_gain_dbi")(
-        lambda v: _in_range(v, ANTENNA_GAIN_DBI_RANGE, "dBi", "an antenna gain"))
-    _noise_figure = field_validator("noise_figure_db")(
-        lambda v: _in_range(v, NOISE_FIGURE_DB_RANGE, "dB", "a noise figure"))
 
 
 # ----------------------------------------------------------------------- array
@@ -179,31 +136,35 @@ class SceneSection(_Section):
     ``kind = "points"`` with ``[[scene.targets]]``; ``kind = "bundled"`` with
     ``name`` one of ``raysim.echoes.rt.scenes.SCENES``; ``kind = "mesh"`` with
     ``path`` to a Mitsuba XML scene or a mesh file (relative paths are taken
-    from the scenario file's folder). ``kind`` may be omitted: it is inferred
-    from which key is given.
+    from the scenario file's folder); ``kind = "meshes"`` with ``[[scene.meshes]]``
+    (users' mesh files, :mod:`raysim.io.scenario_meshes`). ``kind`` may be omitted:
+    it is inferred from which key is given.
     """
 
-    kind: Literal["points", "bundled", "mesh"] | None = None
+    kind: Literal["points", "bundled", "mesh", "meshes"] | None = None
     targets: list[TargetSpec] = Field(default_factory=list)
     name: str | None = None
     path: str | None = None
+    meshes: list[MeshSpec] = Field(default_factory=list)
     max_depth: int = Field(3, ge=0, le=10)
 
     @model_validator(mode="after")
     def _infer_kind(self) -> SceneSection:
         given = {"points": bool(self.targets), "bundled": self.name is not None,
-                 "mesh": self.path is not None}
+                 "mesh": self.path is not None, "meshes": bool(self.meshes)}
         kind = self.kind
         if kind is None:
             chosen = [k for k, v in given.items() if v]
             if len(chosen) > 1:
-                raise ValueError(f"give only one of targets / name / path, got {chosen}")
+                raise ValueError(f"give only one of targets / name / path / meshes, got {chosen}")
             kind = chosen[0] if chosen else "points"
             object.__setattr__(self, "kind", kind)
         if kind == "points" and not self.targets:
             raise ValueError("kind 'points' needs at least one [[scene.targets]] entry")
         if kind == "bundled" and not self.name:
             raise ValueError("kind 'bundled' needs name (see `raysim scenes list`)")
+        if kind == "meshes" and not self.meshes:
+            raise ValueError("kind 'meshes' needs at least one [[scene.meshes]] entry")
         if kind == "mesh" and not self.path:
             raise ValueError("kind 'mesh' needs path (a Mitsuba XML or mesh file)")
         return self
@@ -458,8 +419,9 @@ class Scenario(_Section):
             chirp_duration=r.chirp_duration_s, idle_time=r.idle_time_s,
             sample_rate=r.sample_rate_hz, num_chirps=r.num_chirps, num_frames=self.frames,
             complex_sampling=r.complex_sampling, tx_power_dbm=r.tx_power_dbm,
-            antenna_gain_dbi=r.antenna_gain_dbi, noise_figure_db=r.noise_figure_db,
-            frame_period=r.frame_period_s, num_tx_slots=slots)
+            antenna_gain_dbi=r.element_gain_dbi, noise_figure_db=r.noise_figure_db,
+            frame_period=r.frame_period_s, num_tx_slots=slots,
+            element_pattern=r.element_pattern)
 
     def virtual_array(self):
         """The :class:`~raysim.radar.arrays.VirtualArray` (positions in metres, frame A)."""
@@ -638,10 +600,15 @@ def loads_scenario(text: str, source: str = "scenario", base_dir: Path | None = 
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{source}: not valid TOML: {exc}") from None
-    if base_dir is not None and isinstance(data.get("scene"), dict):
-        p = data["scene"].get("path")
-        if isinstance(p, str) and not Path(p).is_absolute():
-            data["scene"]["path"] = str((Path(base_dir) / p).resolve())
+    for sec, key in (("scene", "path"), ("radar", "element_pattern")):   # files: relative paths
+        p = data[sec].get(key) if isinstance(data.get(sec), dict) else None
+        if base_dir is not None and isinstance(p, str) and not Path(p).is_absolute() \
+                and (key == "path" or p.lower().endswith(".csv")):
+            data[sec][key] = str((Path(base_dir) / p).resolve())
+    scene = data.get("scene") if isinstance(data.get("scene"), dict) else {}
+    for m in scene.get("meshes") or [] if base_dir is not None else []:
+        if isinstance(m, dict) and isinstance(m.get("file"), str):
+            m["file"] = str((Path(base_dir) / m["file"]).resolve())
     return validate_scenario(data, source)
 
 

@@ -98,7 +98,7 @@ _RADAR_FIELDS = {  # RadarConfig field -> attribute suffix (unit in the name)
     "num_frames": "num_frames", "complex_sampling": "complex_sampling",
     "tx_power_dbm": "tx_power_dbm", "antenna_gain_dbi": "antenna_gain_dbi",
     "noise_figure_db": "noise_figure_db", "frame_period": "frame_period_s",
-    "num_tx_slots": "num_tx_slots",
+    "num_tx_slots": "num_tx_slots", "element_pattern": "element_pattern",
 }
 
 
@@ -121,7 +121,7 @@ def radar_attrs(config: RadarConfig) -> dict:
             continue
         if isinstance(v, bool):
             v = int(v)
-        out[f"radar_{key}"] = v if isinstance(v, int) else float(v)
+        out[f"radar_{key}"] = v if isinstance(v, (int, str)) else float(v)
     return out
 
 
@@ -136,9 +136,13 @@ def config_from_attrs(attrs: dict) -> RadarConfig:
                 v = int(v)
             elif field == "complex_sampling":
                 v = bool(int(v))
+            elif field == "element_pattern":
+                v = str(v)
             else:
                 v = float(v)
             kw[field] = v
+        elif field == "element_pattern":
+            kw[field] = "constant"      # stores from before element patterns: constant gain
         elif field != "frame_period":
             raise ValueError(f"dataset attribute {name!r} is missing: not a raysim frame store")
     return RadarConfig(**kw)

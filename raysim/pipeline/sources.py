@@ -63,8 +63,13 @@ def _rt_scene(scenario: Scenario):
     target = scenario.scene.name if scenario.scene.kind == "bundled" else scenario.scene.path
     if scenario.scene.kind == "mesh" and not str(target).endswith(".xml"):
         raise ValueError(f"scene.path: got {target!r}, expected a Mitsuba .xml scene file "
-                         f"(convert other meshes with scenes/generate.py as a model)")
+                         f"(give mesh files as [[scene.meshes]] entries)")
     cfg = scenario.radar_config()
+    if scenario.scene.kind == "meshes":
+        from raysim.echoes.rt.user_meshes import convert_user_meshes
+
+        target = convert_user_meshes([m.placement() for m in scenario.scene.meshes],
+                                     frequency=cfg.carrier_frequency).xml_path
     try:
         scene = load_scene(target, frequency=cfg.carrier_frequency)
     except ValueError:

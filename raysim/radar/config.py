@@ -81,8 +81,9 @@ class RadarConfig:
         Transmit power per active transmitter [dBm], within
         :data:`TX_POWER_DBM_RANGE` (-100 to 60 dBm).
     antenna_gain_dbi : float
-        Gain of one transmit and one receive element [dBi] (same for both),
-        within :data:`ANTENNA_GAIN_DBI_RANGE` (-30 to 50 dBi).
+        Peak gain of one transmit and one receive element [dBi] (same for both),
+        within :data:`ANTENNA_GAIN_DBI_RANGE` (-30 to 50 dBi); must agree with the
+        peak of ``element_pattern`` (:func:`raysim.radar.pattern.check_peak_gain`).
     noise_figure_db : float
         Receiver noise figure [dB], used when thermal noise is switched on,
         within :data:`NOISE_FIGURE_DB_RANGE` (0 to 50 dB).
@@ -93,6 +94,11 @@ class RadarConfig:
         Transmitters fired one after another (TDM MIMO) within one slow-time
         step. One cube ``chirp`` is then a loop of ``num_tx_slots`` ramps and the
         slow-time period is ``num_tx_slots * (T_c + idle)``.
+    element_pattern : str
+        Power pattern of every transmit and receive element
+        (:func:`raysim.radar.pattern.element_pattern`): ``"patch"`` (default,
+        ``cos^4``, 10 dBi), ``"cos^q"`` (``q`` from ``antenna_gain_dbi``),
+        ``"cos^<q>"``, ``"tr38901"``, ``"constant"`` or a CSV file path.
     """
 
     carrier_frequency: float = 77e9
@@ -108,6 +114,7 @@ class RadarConfig:
     noise_figure_db: float = 12.0
     frame_period: float | None = None
     num_tx_slots: int = 1
+    element_pattern: str = "patch"
 
     def __post_init__(self) -> None:
         _positive("carrier_frequency", self.carrier_frequency)
@@ -133,6 +140,9 @@ class RadarConfig:
                 f"bandwidth {self.bandwidth} Hz must be below carrier_frequency "
                 f"{self.carrier_frequency} Hz"
             )
+        from raysim.radar.pattern import check_peak_gain
+
+        check_peak_gain(self.pattern, self.antenna_gain_dbi)
         if self.frame_period is not None and self.frame_period < self.frame_duration:
             raise ValueError(
                 f"frame_period {self.frame_period} s is shorter than one frame "
@@ -140,6 +150,13 @@ class RadarConfig:
             )
 
     # ------------------------------------------------------------------ derived
+    @property
+    def pattern(self):
+        """The element power pattern (:class:`raysim.radar.pattern.ElementPattern`)."""
+        from raysim.radar.pattern import element_pattern
+
+        return element_pattern(self.element_pattern, self.antenna_gain_dbi)
+
     @property
     def wavelength(self) -> float:
         """Carrier wavelength ``lambda = c / f_c`` [m]."""

@@ -24,7 +24,9 @@ def test_plans_of_bundled_scenes_are_deterministic_and_sensible():
         assert a.summary() == b.summary()
         assert a.samples_per_src == b.samples_per_src
         assert MIN_SAMPLES <= a.samples_per_src <= MAX_SAMPLES
-        assert 0 < a.dropped_triangles < a.num_triangles   # FoV cuts the ground corners
+        assert a.dropped_triangles < a.num_triangles
+        # the pruning cone is where the default patch element's gain is 40 dB down
+        assert a.fov_half_angle == CFG.pattern.cull_angle(a.pattern_floor_db)
         assert name in a.summary() and "max_depth" in a.summary()
         depths[name] = a.max_depth
     assert depths == {"flat_reflectors": 1, "parking_lot": 2, "rough_terrain": 1}
@@ -65,9 +67,10 @@ def test_objects_beyond_range_or_behind_fov_are_dropped(tmp_path):
     assert set(plan.removed_shapes) == {"far", "above"}
     text = plan.summary()
     assert "far: removed" in text and "beyond 89.9 m" in text
-    assert "above: removed" in text and "outside the 70 deg cone" in text
-    # past the range window the box (84 deg off nadir) still leaves the 70 deg cone ...
-    wide = plan_trace(tmp_path / "extras.xml", CFG, ARR, hover_altitude=15.0, max_range=200.0)
+    assert "above: removed" in text and "outside the 84 deg cone" in text
+    # past the range window the box (84 deg off nadir) still leaves a 70 deg cone ...
+    wide = plan_trace(tmp_path / "extras.xml", CFG, ARR, hover_altitude=15.0, max_range=200.0,
+                      fov_half_angle=math.radians(70.0))
     assert wide.shape("far").fov_triangles == 12 and wide.shape("far").range_triangles == 0
     # ... and a wider cone keeps it
     assert not plan_trace(tmp_path / "extras.xml", CFG, ARR, hover_altitude=15.0,

@@ -31,9 +31,13 @@ CUBE_TOL_DB = -40.0
 
 
 def ref_radar_equation(config: RadarConfig, r: np.ndarray, rcs_dbsm) -> np.ndarray:
-    """``sqrt(P_t G^2 lambda^2 sigma / ((4 pi)^3 R^4))`` [sqrt(W)]."""
+    """``sqrt(P_t G^2 lambda^2 sigma / ((4 pi)^3 R^4))`` [sqrt(W)] with isotropic elements.
+
+    A traced ``PathSet`` carries 0 dBi elements (``G = 1``); the element
+    pattern is applied at re-projection.
+    """
     pt = 1e-3 * 10 ** (config.tx_power_dbm / 10)
-    g = 10 ** (config.antenna_gain_dbi / 10)
+    g = 1.0
     sigma = 10 ** (np.asarray(rcs_dbsm) / 10)
     return np.sqrt(pt * g**2 * config.wavelength**2 * sigma / ((4 * np.pi) ** 3 * r**4))
 
@@ -50,13 +54,14 @@ def ref_ground_echo(config: RadarConfig, height: float, eps: complex,
 
     The image of the radar lies ``2 h`` away: free-space transfer
     ``lambda / (4 pi 2 h)`` times the Fresnel coefficient, times
-    ``sqrt(P_t) G`` (no ``exp(-j k 2h)``: the IF phase is added at synthesis).
+    ``sqrt(P_t)`` with isotropic elements (``G = 1``; the pattern is applied at
+    re-projection) (no ``exp(-j k 2h)``: the IF phase is added at synthesis).
     A rough surface that scatters a share ``S`` of the reflected amplitude
     diffusely keeps ``sqrt(1 - S^2)`` of it in the specular direction (energy
     split of Sionna's reflection model, Degli-Esposti et al. 2007).
     """
     pt = 1e-3 * 10 ** (config.tx_power_dbm / 10)
-    g = 10 ** (config.antenna_gain_dbi / 10)
+    g = 1.0
     return (np.sqrt(pt) * g * ref_fresnel_nadir(eps) * np.sqrt(1 - scattering_coefficient**2)
             * config.wavelength / (4 * np.pi * 2 * height))
 
@@ -139,7 +144,7 @@ def test_cross_model_target_vs_point_target_oracle(warm_kernels):
                             tracer=MonostaticTracer(specular=False, diffuse=False))
     oracle = simulate_point_targets(config, array, [PointTarget(tgt.position, tgt.velocity,
                                                                 tgt.rcs_dbsm)], motion,
-                                    lever_arm=lever)
+                                    lever_arm=lever, pattern=config.pattern)
     err = np.linalg.norm(rt_frame.data - oracle.data) / np.linalg.norm(oracle.data)
     assert 20 * np.log10(err) < CUBE_TOL_DB
     r1, v1, u1, a1 = _peak_metrics(rt_frame, array, config)

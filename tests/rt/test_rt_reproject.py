@@ -72,7 +72,8 @@ def test_if_band_cull_and_taper():
     """Paths whose beat frequency leaves [0, f_s) are culled or tapered, never aliased."""
     from raysim.echoes.rt.reproject import if_band_weight, reproject
 
-    config = RadarConfig(num_chirps=16)
+    # unit element gain (constant 0 dBi): the taper weight is the amplitude itself
+    config = RadarConfig(num_chirps=16, element_pattern="constant", antenna_gain_dbi=0.0)
     array = upa(2, 2, wavelength=config.wavelength)
     r_max = config.max_range
     # one path well inside, one that crosses max_range during the frame (receding platform)

@@ -4,8 +4,10 @@
 decides, before any ray is shot,
 
 * which triangles lie outside the radar's **range window** (closest point
-  beyond ``max_range``) or outside its **field-of-view cone** (half-angle
-  ``fov_half_angle`` around boresight), per shape;
+  beyond ``max_range``) or outside its **element-pattern cone** (half-angle
+  ``fov_half_angle`` around boresight: by default the angle beyond which the
+  element's one-way gain stays ``pattern_floor_db`` below its peak,
+  :meth:`raysim.radar.pattern.ElementPattern.cull_angle`), per shape;
 * how many rays (``samples_per_src``) sample the illuminated area inside the
   window at a stated number of rays per resolution cell;
 * the bounce depth (``max_depth``): 1 or 2, from the surfaces inside the window.
@@ -23,8 +25,11 @@ Why pruning does not change the kept paths
   (each vertex ``v`` gives ``length >= 2 |v - radar|`` by the triangle
   inequality), whatever its depth. Removing such triangles removes only paths
   the tracer would cull anyway.
-* Field of view: the tracer drops every path whose first or last leg leaves
-  the cone. For ``max_depth <= 2`` every vertex is a first or last vertex, so
+* Element pattern: the tracer drops every path whose two-way element gain
+  lies more than ``pattern_floor_db`` below its peak. Outside the cone the
+  one-way gain of that leg is already below the floor, and the other leg's
+  factor is at most 1, so a path with a first or last leg outside the cone is
+  dropped. For ``max_depth <= 2`` every vertex is a first or last vertex, so
   a triangle wholly outside the cone takes part in no kept path. For deeper
   traces interior vertices may lie outside the cone; the field-of-view pruning
   is then switched off (``prune_fov=False``).
@@ -61,9 +66,8 @@ from raysim.echoes.rt.scenes import (
 )
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
+from raysim.radar.pattern import PATTERN_FLOOR_DB
 
-#: Default field-of-view half-angle [rad] (the tracer's default).
-DEFAULT_FOV_HALF_ANGLE = math.radians(70.0)
 #: Default average rays per resolution cell of the illuminated area.
 DEFAULT_RAYS_PER_CELL = 4.0
 #: Ray count bounds: below ``MIN_SAMPLES`` Sionna's sampling of small areas gets
@@ -146,7 +150,10 @@ class TracePlan:
     max_range : float
         Range window [m].
     fov_half_angle : float
-        FoV cone half-angle [rad].
+        Pruning cone half-angle [rad] (from the element pattern unless given).
+    pattern_floor_db : float
+        Element-pattern floor the cone was derived from [dB] (``nan`` when the
+        cone was given explicitly).
     margin : float
         Safety distance added to both tests [m].
     prune_fov : bool
@@ -195,6 +202,7 @@ class TracePlan:
     depth_reason: str
     keep: dict = field(repr=False)
     _cache: dict = field(default_factory=dict, repr=False)
+    pattern_floor_db: float = math.nan
 
     # --------------------------------------------------------------- accounting
     @property
@@ -241,8 +249,10 @@ class TracePlan:
         lines = [
             f"trace plan for {self.scene!r}: radar at W "
             f"{np.round(self.radar_position_w, 3).tolist()} m, range window "
-            f"{self.max_range:.1f} m, FoV half-angle {deg:.1f} deg, margin "
-            f"{self.margin:g} m",
+            f"{self.max_range:.1f} m, cone half-angle {deg:.1f} deg"
+            + (f" (one-way element gain {self.pattern_floor_db:g} dB below peak beyond it)"
+               if math.isfinite(self.pattern_floor_db) else " (given)")
+            + f", margin {self.margin:g} m",
             f"  kept {self.num_triangles - self.dropped_triangles} of {self.num_triangles} "
             f"triangles; dropped {self.dropped_triangles} ({self.dropped_area:.1f} m^2)",
         ]
@@ -257,7 +267,7 @@ class TracePlan:
             state = "removed" if s.removed else f"{s.kept_triangles}/{s.num_triangles} kept"
             lines.append(f"  - {s.name}: {state}" + (f" ({'; '.join(why)})" if why else ""))
         if not self.prune_fov:
-            lines.append("  FoV pruning off (depth > 2: interior vertices may leave the cone)")
+            lines.append("  cone pruning off (depth > 2: interior vertices may leave the cone)")
         lines.append(
             f"  rays: {self.samples_per_src:,} = {self.rays_per_cell:g} rays/cell x "
             f"{self.num_cells:,.0f} cells (dR {self.range_resolution * 100:.1f} cm x "
@@ -374,7 +384,8 @@ def _solid_angles(tri: np.ndarray) -> np.ndarray:
 
 def plan_trace(scene: str | os.PathLike | SceneDescriptor | RadarScene, config: RadarConfig,
                array: VirtualArray, *, radar_position_w=None, boresight_w=None,
-               fov_half_angle: float = DEFAULT_FOV_HALF_ANGLE,
+               fov_half_angle: float | None = None,
+               pattern_floor_db: float = PATTERN_FLOOR_DB,
                rays_per_cell: float = DEFAULT_RAYS_PER_CELL, max_range: float | None = None,
                margin: float = 0.5, prune_fov: bool = True,
                min_vertical_area: float = DEFAULT_MIN_VERTICAL_AREA,
@@ -427,8 +438,13 @@ def plan_trace(scene: str | os.PathLike | SceneDescriptor | RadarScene, config: 
         Radar phase centre in W [m]; default the hover point ``(0, 0, 0)``.
     boresight_w : array_like, shape ``[3]``, optional
         Boresight in W; default straight down ``(0, 0, 1)`` (nominal attitude).
-    fov_half_angle : float
-        FoV half-angle [rad], in (0, pi].
+    fov_half_angle : float, optional
+        Cone half-angle [rad], in (0, pi]; default
+        ``config.pattern.cull_angle(pattern_floor_db)`` (84.4 deg for the
+        default ``patch`` element at -40 dB).
+    pattern_floor_db : float
+        Two-way element-gain floor of the tracer [dB], < 0 (default
+        :data:`raysim.radar.pattern.PATTERN_FLOOR_DB`).
     rays_per_cell : float
         Average rays per resolution cell, > 0.
     max_range : float, optional
@@ -457,6 +473,15 @@ def plan_trace(scene: str | os.PathLike | SceneDescriptor | RadarScene, config: 
         raise ValueError(f"config must be a RadarConfig, got {type(config)}")
     if not isinstance(array, VirtualArray):
         raise ValueError(f"array must be a VirtualArray, got {type(array)}")
+    if not isinstance(pattern_floor_db, (int, float)) or math.isnan(pattern_floor_db) \
+            or pattern_floor_db >= 0:
+        raise ValueError(f"pattern_floor_db must be a level below the peak (< 0 dB), "
+                         f"got {pattern_floor_db!r}")
+    if fov_half_angle is None:
+        fov_half_angle = (config.pattern.cull_angle(pattern_floor_db)
+                          if math.isfinite(pattern_floor_db) else math.pi)
+    else:
+        pattern_floor_db = math.nan
     if not (math.isfinite(fov_half_angle) and 0 < fov_half_angle <= math.pi):
         raise ValueError(f"fov_half_angle must be in (0, pi] rad, got {fov_half_angle!r}")
     if not (math.isfinite(rays_per_cell) and rays_per_cell > 0):
@@ -556,4 +581,5 @@ def plan_trace(scene: str | os.PathLike | SceneDescriptor | RadarScene, config: 
     return TracePlan(desc.name, scene_file, radar, bore, float(r_max), float(fov_half_angle),
                      float(margin), bool(prune_fov), float(d_r), float(d_theta),
                      float(rays_per_cell), tuple(shapes), float(n_cells), float(omega),
-                     uncapped, samples, depth, reason, keep_masks)
+                     uncapped, samples, depth, reason, keep_masks,
+                     pattern_floor_db=float(pattern_floor_db))

@@ -11,8 +11,11 @@ centre (origin of frame A) at the nominal pose of the trace instant, and runs
 
 Everything Sionna returns is converted to NumPy in the world frame W (NED,
 docs/conventions.md) and scaled to IF amplitudes [sqrt(W)] with the radar's
-transmit power and element gains, so that ``|amplitude|^2`` is the received
-power of each path.
+transmit power for isotropic (0 dBi) elements, so that ``|amplitude|^2`` is
+the received power of each path with such elements. The element pattern is
+applied once, at re-projection (:mod:`raysim.echoes.rt.reproject`), for every
+path source. Paths whose two-way element gain at the trace pose lies more than
+``pattern_floor_db`` below its peak are culled here.
 
 Polarisation
 ------------
@@ -50,6 +53,7 @@ from scipy.spatial.transform import Rotation
 from raysim.echoes.rt.scenes import ENU_FROM_NED, RadarScene
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
+from raysim.radar.pattern import PATTERN_FLOOR_DB, two_way_gain
 
 #: Sionna interaction-type bits (``sionna.rt.constants.InteractionType``).
 SPECULAR, DIFFUSE, REFRACTION, DIFFRACTION, SENSING = 1, 2, 4, 8, 16
@@ -76,8 +80,9 @@ class PathSet:
     length : ndarray, shape ``[path]``
         Total path length tx -> ... -> rx at trace time [m] (float64, from the vertices).
     amplitude : ndarray, shape ``[path]``, complex128
-        IF amplitude [sqrt(W)] without the propagation phase ``exp(-j 2 pi f tau)``;
-        ``|amplitude|^2`` is the received power.
+        IF amplitude [sqrt(W)] without the propagation phase ``exp(-j 2 pi f tau)``
+        for isotropic (0 dBi) elements: ``|amplitude|^2`` is the received power
+        before the two-way element gain, which re-projection applies.
     velocity : ndarray, shape ``[path, 3]``
         Velocity of the scattering point(s) in W [m/s] (zero for static geometry).
     doppler : ndarray, shape ``[path]``
@@ -96,7 +101,11 @@ class PathSet:
     trace_time : float
         Time of the pose the trace used [s].
     dropped : dict
-        Paths removed by each cull: ``"invalid"``, ``"range"``, ``"fov"``.
+        Paths removed by each cull: ``"invalid"``, ``"range"``, ``"pattern"``
+        (two-way element gain below the floor), and ``"pattern_power_w"``: the
+        power [W] the pattern-culled paths would have carried with their
+        element gains at the trace pose, and ``"beam_power_w"`` the same for the
+        kept paths (not a cull: the denominator of :func:`pattern_culled_share`).
     """
 
     first_vertex: np.ndarray
@@ -225,9 +234,11 @@ class MonostaticTracer:
         (``RCSSolver``); 1 = direct legs only, 2 adds one specular bounce per leg.
     targets : bool
         Trace the scene's discrete targets.
-    fov_half_angle : float
-        Half-angle of the radar's field of view around boresight ``+Z_A`` [rad];
-        paths whose first or last leg leaves it are dropped.
+    pattern_floor_db : float
+        Floor of the two-way element gain ``G_t(u_dep) G_r(u_arr) / G_peak^2``
+        at the trace pose [dB] (default
+        :data:`raysim.radar.pattern.PATTERN_FLOOR_DB`, -40 dB); paths below it
+        are dropped and counted in ``PathSet.dropped``. ``-inf`` keeps all.
     min_range : float
         Smallest kept one-way equivalent range ``length / 2`` [m].
     max_range : float or None
@@ -237,12 +248,13 @@ class MonostaticTracer:
     diffuse_phase : {"random", "none"}
         Phase given to diffuse paths (whose sign Sionna's model does not fix).
     link_budget : bool
-        Scale amplitudes by ``sqrt(P_t) G`` (config's power and element gain) so
-        that they are IF amplitudes [sqrt(W)]; otherwise leave Sionna's
-        isotropic-antenna transfer coefficients (unitless).
+        Scale amplitudes by ``sqrt(P_t)`` (config's transmit power) so that they
+        are IF amplitudes [sqrt(W)] of isotropic elements; otherwise leave
+        Sionna's isotropic-antenna transfer coefficients (unitless). Element
+        gains are applied at re-projection.
     plan : raysim.echoes.rt.budget.TracePlan or None
         When given, scene geometry is traced on the plan's pruned copy of the
-        scene (triangles outside the range window / FoV removed, see
+        scene (triangles outside the range window / pattern cone removed, see
         :meth:`for_scene`); ``None`` traces the scene as loaded.
     """
 
@@ -252,7 +264,7 @@ class MonostaticTracer:
     samples_per_src: int = 100_000
     target_depth: int = 1
     targets: bool = True
-    fov_half_angle: float = math.radians(70.0)
+    pattern_floor_db: float = PATTERN_FLOOR_DB
     min_range: float = 0.0
     max_range: float | None = None
     seed: int = 42
@@ -270,8 +282,10 @@ class MonostaticTracer:
         _check_int("target_depth", self.target_depth, 1)
         _check_int("samples_per_src", self.samples_per_src, 1)
         _check_int("seed", self.seed, 0)
-        if not 0 < self.fov_half_angle <= math.pi:
-            raise ValueError(f"fov_half_angle must be in (0, pi] rad, got {self.fov_half_angle!r}")
+        if not isinstance(self.pattern_floor_db, (int, float)) \
+                or math.isnan(self.pattern_floor_db) or self.pattern_floor_db >= 0:
+            raise ValueError(f"pattern_floor_db must be a level below the peak (< 0 dB, -inf "
+                             f"keeps all paths), got {self.pattern_floor_db!r}")
         if self.min_range < 0 or (self.max_range is not None
                                   and not self.max_range > self.min_range):
             raise ValueError(f"range window must satisfy 0 <= min_range < max_range, got "
@@ -288,11 +302,12 @@ class MonostaticTracer:
         """A tracer sized for ``scene`` by :func:`raysim.echoes.rt.budget.plan_trace`.
 
         The plan sets ``max_depth`` and ``samples_per_src`` and prunes the
-        geometry outside the range window and the field of view (triangle by
-        triangle; shapes with nothing left are removed). ``overrides`` are
-        other tracer parameters and win over the plan; ``fov_half_angle`` and
-        ``max_range`` are also used by the plan. With ``max_depth > 2`` the
-        field-of-view pruning is switched off (see :mod:`raysim.echoes.rt.budget`).
+        geometry outside the range window and the element-pattern cone (triangle
+        by triangle; shapes with nothing left are removed). ``overrides`` are
+        other tracer parameters and win over the plan; ``pattern_floor_db`` and
+        ``max_range`` are also used by the plan (the pruning cone is where the
+        one-way element gain falls below the floor). With ``max_depth > 2`` the
+        cone pruning is switched off (see :mod:`raysim.echoes.rt.budget`).
 
         Parameters
         ----------
@@ -319,10 +334,10 @@ class MonostaticTracer:
         """
         from raysim.echoes.rt.budget import DEFAULT_RAYS_PER_CELL, plan_trace
 
-        fov = overrides.get("fov_half_angle", cls.fov_half_angle)
+        floor = overrides.get("pattern_floor_db", cls.pattern_floor_db)
         depth = overrides.get("max_depth")
         plan = plan_trace(scene, config, array, radar_position_w=radar_position_w,
-                          fov_half_angle=fov, max_range=overrides.get("max_range"),
+                          pattern_floor_db=floor, max_range=overrides.get("max_range"),
                           rays_per_cell=(DEFAULT_RAYS_PER_CELL if rays_per_cell is None
                                          else rays_per_cell),
                           margin=margin, prune_fov=depth is None or depth <= 2)
@@ -493,8 +508,8 @@ class MonostaticTracer:
             amp[is_diffuse] *= np.exp(1j * table[np.abs(h) % table.size])
         scale = 1.0
         if self.link_budget:
-            pt = 10 ** (config.tx_power_dbm / 10) * 1e-3
-            scale = math.sqrt(pt) * 10 ** (config.antenna_gain_dbi / 10)
+            # isotropic elements: the element pattern is applied at re-projection
+            scale = math.sqrt(10 ** (config.tx_power_dbm / 10) * 1e-3)
         velocity = np.zeros((n, 3))
         if np.any(kind & SENSING) and scene.targets:
             tpos = np.stack([t.position for t in scene.targets])
@@ -505,21 +520,34 @@ class MonostaticTracer:
             pts = verts[j, sens]
             nearest = np.argmin(np.linalg.norm(pts[:, None, :] - tpos[None], axis=-1), axis=1)
             velocity[sens] = tvel[nearest]
-        # culls: range window and field of view
+        # culls: range window and the two-way element gain at the trace pose
         r_max = config.max_range if self.max_range is None else self.max_range
         in_range = (0.5 * length >= self.min_range) & (0.5 * length < r_max)
-        boresight = r_wb[:, 2]
-        cos_fov = math.cos(self.fov_half_angle)
-        d1 = first - radar_w
-        d2 = last - radar_w
-        in_fov = ((d1 @ boresight) >= cos_fov * np.linalg.norm(d1, axis=-1)) & (
-            (d2 @ boresight) >= cos_fov * np.linalg.norm(d2, axis=-1))
+        pattern = config.pattern
+        g2 = two_way_gain(pattern, (first - radar_w) @ r_wb, (last - radar_w) @ r_wb)
+        in_beam = g2 >= pattern.peak_gain ** 2 * 10 ** (self.pattern_floor_db / 10)
+        culled = in_range & ~in_beam
         dropped["range"] = int(np.sum(~in_range))
-        dropped["fov"] = int(np.sum(in_range & ~in_fov))
-        ok = in_range & in_fov
+        dropped["pattern"] = int(np.sum(culled))
+        ok = in_range & in_beam
+        power = np.abs(scale * amp) ** 2 * g2
+        dropped["pattern_power_w"] = float(np.sum(power[culled]))
+        dropped["beam_power_w"] = float(np.sum(power[ok]))
         return PathSet(first[ok], last[ok], length[ok], scale * amp[ok], velocity[ok],
                        doppler[ok], np.ascontiguousarray(inter[ok]), kind[ok], scale * pol[ok],
                        tau[ok], np.array(radar_w), np.array(radar_w), float(time), dropped)
+
+
+def pattern_culled_share(paths: PathSet) -> float:
+    """Estimated share of the traced power that the pattern floor culled.
+
+    ``dropped["pattern_power_w"] / (dropped["pattern_power_w"] +
+    dropped["beam_power_w"])``: culled and kept power of the trace, both with
+    the two-way element gain at the trace pose; 0 when nothing was traced.
+    """
+    lost = float(paths.dropped.get("pattern_power_w", 0.0))
+    total = lost + float(paths.dropped.get("beam_power_w", 0.0))
+    return lost / total if total > 0 else 0.0
 
 
 def _empty(radar_w, time) -> PathSet:

@@ -143,8 +143,16 @@ class ReportSettings:
             raise ValueError(f"nufft_eps must lie in [1e-7, 1), got {self.nufft_eps!r}")
 
     def radar(self) -> RadarConfig:
-        """Paper waveform (77 GHz, 1 GHz, 60 us, 10 MHz, 600 samples) with these chirps."""
-        return RadarConfig(num_chirps=int(self.num_chirps), idle_time=float(self.idle_time))
+        """Paper waveform (77 GHz, 1 GHz, 60 us, 10 MHz, 600 samples) with these chirps.
+
+        Elements of constant gain (``element_pattern="constant"``, 10 dBi in every
+        direction): the report's entropy margins were set for them. With the
+        default patch element the wide-angle clutter is 20-40 dB weaker and the
+        hover spreads the QUICK maps by at most 0.10 nats, below
+        ``ENTROPY_MARGIN_NATS``.
+        """
+        return RadarConfig(num_chirps=int(self.num_chirps), idle_time=float(self.idle_time),
+                           element_pattern="constant")
 
     def array(self) -> VirtualArray:
         """Half-wavelength ``array_size x array_size`` virtual UPA (x major, y minor)."""
