@@ -97,8 +97,9 @@ class RadarConfig:
     element_pattern : str
         Power pattern of every transmit and receive element
         (:func:`raysim.radar.pattern.element_pattern`): ``"patch"`` (default,
-        ``cos^4``, 10 dBi), ``"cos^q"`` (``q`` from ``antenna_gain_dbi``),
-        ``"cos^<q>"``, ``"tr38901"``, ``"constant"`` or a CSV file path.
+        ``cos^q`` with ``q`` from ``antenna_gain_dbi``: ``cos^4`` at 10 dBi),
+        ``"cos^<q>"``, ``"tr38901"``, ``"constant"`` or a CSV file path. The
+        point-target oracle ignores it unless asked (its elements are isotropic).
     """
 
     carrier_frequency: float = 77e9
@@ -140,9 +141,12 @@ class RadarConfig:
                 f"bandwidth {self.bandwidth} Hz must be below carrier_frequency "
                 f"{self.carrier_frequency} Hz"
             )
-        from raysim.radar.pattern import check_peak_gain
+        if self.element_pattern != "patch":
+            # "patch" follows the stated gain; its q >= 0 is checked where it is used
+            # (a scene render), so a low-gain config stays valid for the oracle.
+            from raysim.radar.pattern import check_peak_gain
 
-        check_peak_gain(self.pattern, self.antenna_gain_dbi)
+            check_peak_gain(self.pattern, self.antenna_gain_dbi)
         if self.frame_period is not None and self.frame_period < self.frame_duration:
             raise ValueError(
                 f"frame_period {self.frame_period} s is shorter than one frame "

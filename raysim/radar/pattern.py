@@ -20,12 +20,15 @@ and ``q`` are tied by ``G_0 = 10^{G_{dBi} / 10} = 2 (q + 1)``: 10 dBi is ``q = 4
 
 Patterns (:func:`element_pattern` parses their names):
 
-* ``"patch"`` (default): ``cos^4``, 10.0 dBi, half-power beamwidth 65.5 deg.
-  A microstrip patch radiates into its front half space with E- and H-plane
-  beamwidths of about 65-90 deg (Balanis, ch. 14); 3GPP TR 38.901 Table 7.3-1
-  models such an element with a 65 deg beamwidth. ``cos^4`` has that
-  beamwidth, is lossless, and keeps the project's 10 dBi element gain.
-* ``"cos^q"`` (``q`` from ``antenna_gain_dbi``) or ``"cos^<q>"`` (e.g. ``"cos^6"``).
+* ``"patch"`` (default): ``cos^q`` with ``q`` from the stated gain
+  ``antenna_gain_dbi`` (``q = G_0 / 2 - 1``); at the default 10 dBi that is
+  ``cos^4``, half-power beamwidth 65.5 deg. A microstrip patch radiates into
+  its front half space with E- and H-plane beamwidths of about 65-90 deg
+  (Balanis, ch. 14); 3GPP TR 38.901 Table 7.3-1 models such an element with a
+  65 deg beamwidth. ``cos^4`` has that beamwidth, is lossless, and keeps the
+  project's 10 dBi element gain. A gain below 3.01 dBi (``q < 0``) is no
+  front-facing element and is refused when the pattern is used.
+* ``"cos^<q>"`` (e.g. ``"cos^6"``): a fixed ``q``; its gain is ``2 (q + 1)``.
 * ``"tr38901"``: 3GPP TR 38.901 Table 7.3-1, exactly Sionna RT's ``tr38901``
   pattern (8 dBi peak, 65 deg, 30 dB front-to-back). Its sphere integral is
   0.657 (Sionna's ``compute_gain``: directivity 9.83 dB, efficiency 65.7 %).
@@ -52,7 +55,7 @@ import numpy as np
 
 #: Default element pattern of the radar (see the module docstring).
 DEFAULT_ELEMENT_PATTERN = "patch"
-#: ``q`` of the default ``"patch"`` element: ``2 (q + 1) = 10`` (10.0 dBi), 65.5 deg HPBW.
+#: ``q`` of the ``"patch"`` element at the default 10 dBi: ``2 (q + 1) = 10``, 65.5 deg HPBW.
 PATCH_Q = 4.0
 #: Default floor of the two-way element gain relative to its peak [dB]; paths below it are culled.
 PATTERN_FLOOR_DB = -40.0
@@ -64,7 +67,7 @@ MAX_EFFICIENCY = 1.03
 #: Quadrature grid of sphere integrals: ``[theta, phi]`` midpoints.
 _QUAD = (720, 720)
 #: Names accepted by :func:`element_pattern` besides ``cos^<q>`` and a CSV path.
-PATTERN_NAMES = ("patch", "cos^q", "tr38901", "constant")
+PATTERN_NAMES = ("patch", "tr38901", "constant")
 
 
 def direction_angles(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -327,18 +330,17 @@ _COS_RE = re.compile(r"^cos\^\s*([0-9.eE+-]+)$")
 
 @functools.lru_cache(maxsize=32)
 def _cached(spec: str, gain_dbi: float, stamp: float) -> ElementPattern:
-    if spec == "patch":
-        return CosinePattern("patch", PATCH_Q)
     if spec == "tr38901":
         return Tr38901Pattern("tr38901")
     if spec == "constant":
         return ConstantGain("constant", gain_dbi)
-    if spec == "cos^q":
+    if spec == "patch":
         q = 10 ** (gain_dbi / 10) / 2.0 - 1.0
         if q < 0:
-            raise ValueError(f"element_pattern 'cos^q' needs antenna_gain_dbi >= 3.01 dBi "
-                             f"(q = G0 / 2 - 1 >= 0), got {gain_dbi!r} dBi")
-        return CosinePattern(f"cos^{q:g}", q)
+            raise ValueError(f"element_pattern 'patch' (cos^q, q = G0 / 2 - 1) needs "
+                             f"antenna_gain_dbi >= 3.01 dBi, got {gain_dbi!r} dBi; choose "
+                             f"element_pattern = 'constant' for a direction-free gain")
+        return CosinePattern("patch", q)
     m = _COS_RE.match(spec)
     if m:
         try:
@@ -358,10 +360,10 @@ def element_pattern(spec: str, gain_dbi: float | None = None) -> ElementPattern:
     Parameters
     ----------
     spec : str
-        ``"patch"``, ``"cos^q"``, ``"cos^<q>"``, ``"tr38901"``, ``"constant"`` or a CSV path.
+        ``"patch"``, ``"cos^<q>"``, ``"tr38901"``, ``"constant"`` or a CSV path.
     gain_dbi : float, optional
-        The stated element gain [dBi]: sets ``q`` for ``"cos^q"`` and the level of
-        ``"constant"``; required by those two.
+        The stated element gain [dBi]: sets ``q`` of ``"patch"`` (default 10 dBi,
+        ``q = 4``) and the level of ``"constant"`` (required there).
 
     Returns
     -------
@@ -370,8 +372,10 @@ def element_pattern(spec: str, gain_dbi: float | None = None) -> ElementPattern:
     if not isinstance(spec, str) or not spec.strip():
         raise ValueError(f"element_pattern must be a non-empty string, got {spec!r}")
     spec = spec.strip()
-    if spec in ("cos^q", "constant") and gain_dbi is None:
+    if spec == "constant" and gain_dbi is None:
         raise ValueError(f"element_pattern {spec!r} needs the element gain antenna_gain_dbi")
+    if spec == "patch" and gain_dbi is None:
+        gain_dbi = 10 * math.log10(2 * (PATCH_Q + 1))
     stamp = 0.0
     if spec.lower().endswith(".csv"):
         try:
@@ -407,12 +411,12 @@ def resolve_element_gain(spec: str, gain_dbi: float, given: bool) -> float:
     """The element gain [dBi] a scenario means: ``gain_dbi`` if ``given``, else the pattern's peak.
 
     An explicit gain is checked against the pattern (:func:`check_peak_gain`);
-    ``"constant"`` and ``"cos^q"`` take ``gain_dbi`` (they are defined by it).
+    ``"constant"`` and ``"patch"`` take ``gain_dbi`` (they are defined by it).
     """
     pattern = element_pattern(spec, gain_dbi)
     if given:
         check_peak_gain(pattern, gain_dbi)
-    if given or isinstance(pattern, ConstantGain) or spec.strip() == "cos^q":
+    if given or isinstance(pattern, ConstantGain) or spec.strip() == "patch":
         return float(gain_dbi)
     return round(pattern.peak_gain_dbi, 6)
 

@@ -71,8 +71,8 @@ def test_default_patch_element_and_gain_relation():
     assert cfg.pattern.peak_gain_dbi == pytest.approx(cfg.antenna_gain_dbi, abs=1e-12)
     assert math.degrees(cfg.pattern.half_power_beamwidth()) == pytest.approx(
         math.degrees(2 * math.acos(2 ** -0.25)), abs=1e-6)     # 65.5 deg
-    # "cos^q" takes q from the stated gain: G0 = 2 (q + 1)
-    assert RadarConfig(element_pattern="cos^q", antenna_gain_dbi=13.0).pattern.q == \
+    # "patch" takes q from the stated gain: G0 = 2 (q + 1)
+    assert RadarConfig(antenna_gain_dbi=13.0).pattern.q == \
         pytest.approx(10 ** 1.3 / 2 - 1, rel=1e-12)
 
 
@@ -81,10 +81,10 @@ def test_default_patch_element_and_gain_relation():
     ({"element_pattern": "tr38901"}, ("antenna_gain_dbi", "8.00", "tr38901")),
     ({"element_pattern": "horn"}, ("element_pattern", "'horn'")),
     ({"element_pattern": "cos^-1", "antenna_gain_dbi": 3.0}, ("q", "-1")),
-    ({"element_pattern": "cos^q", "antenna_gain_dbi": 1.0}, ("cos^q", "3.01")),
     ({"element_pattern": "missing.csv"}, ("missing.csv",)),
 ])
 def test_inconsistent_or_bad_patterns_are_refused(kwargs, words):
+    # refused when the configuration is made
     with pytest.raises(ValueError) as err:
         RadarConfig(**kwargs)
     for w in words:
@@ -257,3 +257,12 @@ def test_bad_pattern_floor_is_refused(floor):
     with pytest.raises(ValueError, match="pattern_floor_db"):
         plan_trace("flat_reflectors", cfg, upa(2, 2, wavelength=cfg.wavelength),
                    pattern_floor_db=floor)
+
+
+def test_low_gain_patch_is_refused_where_used_not_where_made():
+    # a 0 dBi configuration stays valid for the isotropic oracle; a patch cannot have it
+    cfg = RadarConfig(antenna_gain_dbi=0.0)
+    with pytest.raises(ValueError) as err:
+        cfg.pattern
+    for w in ("patch", "3.01", "constant"):
+        assert w in str(err.value)
