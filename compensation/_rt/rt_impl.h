@@ -30,13 +30,17 @@ constexpr int64_t CH = 256;  // directions per work item (buffers ~25 KB, in L1/
 constexpr double INV_2PI = 0.15915494309189535;
 constexpr double TWO_PI = 6.283185307179586;
 
-// exp(j phase) as float (c, s): phase / 2 pi reduced in float64 to a quarter
-// turn q and a rest x in [-pi/4, pi/4]; Taylor sin (degree 9) and cos (degree 10)
-// of x in float32 (truncation < 2e-9, below float32 rounding); rotated by j^q.
-static inline void expj(double phase, float& c, float& s) {
+// exp(j phase) in two steps, so that the float32 polynomial runs at full vector
+// width: reduce (float64) gives the quarter turn q and the rest x in [-pi/4, pi/4]
+// of phase / 2 pi; rotate (float32) evaluates Taylor sin (degree 9) and cos
+// (degree 10) of x (truncation < 2e-9, below float32 rounding) and turns by j^q.
+static inline void reduce(double phase, float& x, int32_t& q) {
     const double r4 = std::rint(4.0 * INV_2PI * phase);
-    const float x = (float)(phase - (0.25 * TWO_PI) * r4);
-    const int q = (int)r4 & 3;
+    x = (float)(phase - (0.25 * TWO_PI) * r4);
+    q = (int32_t)r4;
+}
+
+static inline void rotate(float x, int32_t q, float& c, float& s) {
     const float x2 = x * x;
     const float sn = x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040
                      + x2 * (1.0f / 362880)))));
@@ -47,6 +51,13 @@ static inline void expj(double phase, float& c, float& s) {
     const float sg = (q & 2) ? -1.0f : 1.0f;
     c = sg * c1;
     s = sg * s1;
+}
+
+static inline void expj(double phase, float& c, float& s) {
+    float x;
+    int32_t q;
+    reduce(phase, x, q);
+    rotate(x, q, c, s);
 }
 
 // Per-gate phase -2 k (rho_g - rho_mid) = a dr (1 + (t + t_g) / (L + L_g)) / (L_g + t_g)
@@ -152,7 +163,8 @@ static void project(const rt::Params& P) {
 #pragma omp parallel num_threads((int)P.threads)
     {
         std::vector<double> dbuf(7 * CH);
-        std::vector<float> fbuf(14 * CH + 2 * Mm * CH);
+        std::vector<float> fbuf(16 * CH + 2 * Mm * CH);
+        std::vector<int32_t> qbuf((2 + Mm) * CH);   // quarter turns of reduce
         std::vector<float> acc(2 * G * CH);   // beams of the item, planar [gate][re, im][CH]
         std::vector<double> rp(3 * Mm + 3), dp(Mm + 1);
         double* dq = dbuf.data();
@@ -177,6 +189,11 @@ static void project(const rt::Params& P) {
         float* acci = accr + CH;
         float* sr = acci + CH;
         float* si = sr + Mm * CH;
+        float* xa = si + Mm * CH;   // reduced phases (float32 rest)
+        float* xb = xa + CH;
+        int32_t* qa = qbuf.data();
+        int32_t* qb = qa + CH;
+        int32_t* qm = qb + CH;      // [m][CH] per-channel quarter turns
         const Focus F{dq, de, dt, dL, dA, fq, fe, ft, fL, fA};
 #pragma omp for schedule(dynamic, 1)
         for (int64_t it = 0; it < items; ++it) {
@@ -218,11 +235,12 @@ static void project(const rt::Params& P) {
                         e = e > 0.0 ? e : 0.0;
                         const double t = r - q;
                         const double L = std::sqrt(t * t + e);
-                        const double h = e / (L + t);
+                        const double w = 1.0 / (L * (L + t));   // one division for h and k / L
+                        const double h = e * L * w;
                         dq[j] = q; de[j] = e; dt[j] = t; dL[j] = L;
                         dh[j] = h;
                         dA[j] = -2.0 * k * h;
-                        dinv[j] = k / L;
+                        dinv[j] = k * (L + t) * w;
                         fq[j] = (float)q; fe[j] = (float)e; ft[j] = (float)t; fL[j] = (float)L;
                         fA[j] = (float)dA[j];
                     }
@@ -236,8 +254,12 @@ static void project(const rt::Params& P) {
                                                 * dinv[j] + rng;
                             const double alpha = (r * (ux[j] * bx + uy[j] * by + uz[j] * bz) - b0)
                                                  * dinv[j];
-                            expj(phi0, br[j], bi[j]);
-                            expj(alpha, zr[j], zi[j]);
+                            reduce(phi0, xa[j], qa[j]);
+                            reduce(alpha, xb[j], qb[j]);
+                        }
+                        for (int64_t j = 0; j < nd; ++j) {
+                            rotate(xa[j], qa[j], br[j], bi[j]);
+                            rotate(xb[j], qb[j], zr[j], zi[j]);
                         }
                     } else {
                         for (int64_t i = 0; i < m; ++i) {
@@ -248,8 +270,10 @@ static void project(const rt::Params& P) {
                             for (int64_t j = 0; j < nd; ++j) {
                                 const double ph = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0)
                                                   * dinv[j] + 2.0 * k * (dq[j] - dh[j]);
-                                expj(ph, sri[j], sii[j]);
+                                reduce(ph, sri[j], qm[i * CH + j]);
                             }
+                            for (int64_t j = 0; j < nd; ++j)
+                                rotate(sri[j], qm[i * CH + j], sri[j], sii[j]);
                         }
                     }
                     for (int64_t g = P.block_start[b]; g < P.block_start[b + 1]; ++g) {
