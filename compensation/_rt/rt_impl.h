@@ -32,8 +32,10 @@ constexpr double TWO_PI = 6.283185307179586;
 
 // exp(j phase) in two steps, so that the float32 polynomial runs at full vector
 // width: reduce (float64) gives the quarter turn q and the rest x in [-pi/4, pi/4]
-// of phase / 2 pi; rotate (float32) evaluates Taylor sin (degree 9) and cos
-// (degree 10) of x (truncation < 2e-9, below float32 rounding) and turns by j^q.
+// of phase / 2 pi; rotate (float32) evaluates sin (degree 7) and cos (degree 8)
+// of x with the minimax coefficients of Cephes' sinf/cosf (S. L. Moshier,
+// "Methods and Programs for Mathematical Functions", 1989; error about one
+// float32 ulp on [-pi/4, pi/4]) and turns by j^q.
 static inline void reduce(double phase, float& x, int32_t& q) {
     const double r4 = std::rint(4.0 * INV_2PI * phase);
     x = (float)(phase - (0.25 * TWO_PI) * r4);
@@ -42,10 +44,11 @@ static inline void reduce(double phase, float& x, int32_t& q) {
 
 static inline void rotate(float x, int32_t q, float& c, float& s) {
     const float x2 = x * x;
-    const float sn = x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040
-                     + x2 * (1.0f / 362880)))));
-    const float cs = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320
-                     + x2 * (-1.0f / 3628800)))));
+    const float sn = x + x * x2 * ((-1.9515295891e-4f * x2 + 8.3321608736e-3f) * x2
+                                   - 1.6666654611e-1f);
+    const float cs = 1.0f - 0.5f * x2 + x2 * x2 * ((2.443315711809948e-5f * x2
+                                                     - 1.388731625493765e-3f) * x2
+                                                    + 4.166664568298827e-2f);
     const float c1 = (q & 1) ? -sn : cs;
     const float s1 = (q & 1) ? cs : sn;
     const float sg = (q & 2) ? -1.0f : 1.0f;
@@ -78,9 +81,16 @@ static inline void expj_small(float ph, float& c, float& s) {
 
 // Geometry of one (chirp, slot, gate block, direction chunk), per direction.
 struct Focus {
-    const double *q, *e, *t, *L, *a;     // float64 (large-phase path)
-    const float *fq, *fe, *ft, *fL, *fa;  // float32 copies
+    const double *q, *e;                  // float64 (large-phase path)
+    const float *fq, *fe, *ft, *fL, *fa;  // float32: q, e, t, L, a
 };
+
+// Per-gate phase in float64 from q and e (directions where it is not small).
+static inline double large_phase(double rg, double r, double k, double q, double e) {
+    const double t = r - q, tg = rg - q;
+    const double L = std::sqrt(t * t + e), lg = std::sqrt(tg * tg + e);
+    return ((t + tg) / (L + lg) + 1.0) * (-2.0 * k * e / (L + t)) / (lg + tg) * (r - rg);
+}
 
 // One gate of a slot on a line with MC channels, fused: per direction the small
 // phase, exp(j .) by Taylor, the channel sum by Horner's rule in z, times the
@@ -113,7 +123,7 @@ static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus&
 
 // Directions of a fused line gate whose phase exceeded `small`: replace the
 // Taylor exp(j .) by the float64 phase and expj (scalar; rare).
-static void fix_large(int64_t nd, double rg, double r, float small, const Focus& F,
+static void fix_large(int64_t nd, double rg, double r, double k, float small, const Focus& F,
                       const float* br, const float* bi, const float* zr, const float* zi,
                       const float* xg, int64_t xstride, int64_t m, float* gr, float* gi) {
     const float rgf = (float)rg, drf = (float)(r - rg);
@@ -122,9 +132,7 @@ static void fix_large(int64_t nd, double rg, double r, float small, const Focus&
         if (!(std::fabs(ph) > small)) continue;
         float c, s, ec, es;
         expj_small(ph, c, s);
-        const double tg = rg - F.q[j];
-        const double lg = std::sqrt(tg * tg + F.e[j]);
-        expj(((F.t[j] + tg) / (F.L[j] + lg) + 1.0) * F.a[j] / (lg + tg) * (r - rg), ec, es);
+        expj(large_phase(rg, r, k, F.q[j], F.e[j]), ec, es);
         float ar = xg[xstride * (m - 1)], ai = xg[xstride * (m - 1) + 1];
         for (int64_t i = m - 2; i >= 0; --i) {
             const float nr = ar * zr[j] - ai * zi[j] + xg[xstride * i];
@@ -162,17 +170,14 @@ static void project(const rt::Params& P) {
     const int64_t G = P.G, D = P.D, Mm = std::max<int64_t>(P.M_max, 1);
 #pragma omp parallel num_threads((int)P.threads)
     {
-        std::vector<double> dbuf(7 * CH);
+        std::vector<double> dbuf(4 * CH);
         std::vector<float> fbuf(16 * CH + 2 * Mm * CH);
         std::vector<int32_t> qbuf((2 + Mm) * CH);   // quarter turns of reduce
         std::vector<float> acc(2 * G * CH);   // beams of the item, planar [gate][re, im][CH]
         std::vector<double> rp(3 * Mm + 3), dp(Mm + 1);
         double* dq = dbuf.data();
         double* de = dq + CH;
-        double* dt = de + CH;
-        double* dL = dt + CH;
-        double* dA = dL + CH;
-        double* dh = dA + CH;
+        double* dh = de + CH;
         double* dinv = dh + CH;
         float* fq = fbuf.data();
         float* fe = fq + CH;
@@ -194,7 +199,7 @@ static void project(const rt::Params& P) {
         int32_t* qa = qbuf.data();
         int32_t* qb = qa + CH;
         int32_t* qm = qb + CH;      // [m][CH] per-channel quarter turns
-        const Focus F{dq, de, dt, dL, dA, fq, fe, ft, fL, fA};
+        const Focus F{dq, de, fq, fe, ft, fL, fA};
 #pragma omp for schedule(dynamic, 1)
         for (int64_t it = 0; it < items; ++it) {
             const int64_t n = it / nchunk;
@@ -228,32 +233,29 @@ static void project(const rt::Params& P) {
                 const float* xs = P.x + 2 * (n * P.M + m0) * G;   // [m, G] complex
                 for (int64_t b = 0; b < P.NB; ++b) {
                     const double r = P.block_r[b];
-                    // focal geometry per direction (float64)
-                    for (int64_t j = 0; j < nd; ++j) {
-                        const double q = ux[j] * dx + uy[j] * dy + uz[j] * dz;
-                        double e = dd - q * q;
-                        e = e > 0.0 ? e : 0.0;
-                        const double t = r - q;
-                        const double L = std::sqrt(t * t + e);
-                        const double w = 1.0 / (L * (L + t));   // one division for h and k / L
-                        const double h = e * L * w;
-                        dq[j] = q; de[j] = e; dt[j] = t; dL[j] = L;
-                        dh[j] = h;
-                        dA[j] = -2.0 * k * h;
-                        dinv[j] = k * (L + t) * w;
-                        fq[j] = (float)q; fe[j] = (float)e; ft[j] = (float)t; fL[j] = (float)L;
-                        fA[j] = (float)dA[j];
-                    }
-                    // steering x range phase: exp(j phi(p_0)) and z, or one per channel
+                    // focal geometry per direction (float64); for a slot on a line the
+                    // phases of p_0 and of the step a, reduced, in the same pass
+                    const double ax = rp[0], ay = rp[1], az = rp[2], a0 = dp[0];
+                    const double bx = rp[3], by = rp[4], bz = rp[5], b0 = dp[1];
+#define RT_GEOMETRY                                                                      \
+    const double q = ux[j] * dx + uy[j] * dy + uz[j] * dz;                               \
+    double e = dd - q * q;                                                               \
+    e = e > 0.0 ? e : 0.0;                                                               \
+    const double t = r - q;                                                              \
+    const double L = std::sqrt(t * t + e);                                               \
+    const double w = 1.0 / (L * (L + t)); /* one division for h and k / L */            \
+    const double h = e * L * w;                                                          \
+    const double inv = k * (L + t) * w;                                                  \
+    dq[j] = q; de[j] = e;                                                                \
+    fq[j] = (float)q; fe[j] = (float)e; ft[j] = (float)t; fL[j] = (float)L;              \
+    fA[j] = (float)(-2.0 * k * h);
                     if (line) {
-                        const double ax = rp[0], ay = rp[1], az = rp[2], bx = rp[3], by = rp[4],
-                                     bz = rp[5], a0 = dp[0], b0 = dp[1];
                         for (int64_t j = 0; j < nd; ++j) {
-                            const double rng = 2.0 * k * (dq[j] - dh[j]);
+                            RT_GEOMETRY
                             const double phi0 = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0)
-                                                * dinv[j] + rng;
+                                                * inv + 2.0 * k * (q - h);
                             const double alpha = (r * (ux[j] * bx + uy[j] * by + uz[j] * bz) - b0)
-                                                 * dinv[j];
+                                                 * inv;
                             reduce(phi0, xa[j], qa[j]);
                             reduce(alpha, xb[j], qb[j]);
                         }
@@ -262,6 +264,12 @@ static void project(const rt::Params& P) {
                             rotate(xb[j], qb[j], zr[j], zi[j]);
                         }
                     } else {
+                        for (int64_t j = 0; j < nd; ++j) {
+                            RT_GEOMETRY
+                            dh[j] = h;
+                            dinv[j] = inv;
+                        }
+#undef RT_GEOMETRY
                         for (int64_t i = 0; i < m; ++i) {
                             const double ax = rp[3 * i], ay = rp[3 * i + 1], az = rp[3 * i + 2],
                                          a0 = dp[i];
@@ -285,7 +293,7 @@ static void project(const rt::Params& P) {
                         if (line && m <= FUSED_MAX) {
                             if (gate_line_fused(m, nd, rgf, drf, small, F, br, bi, zr, zi, xg,
                                                 2 * G, gr, gi))
-                                fix_large(nd, P.rg[g], r, small, F, br, bi, zr, zi, xg, 2 * G, m,
+                                fix_large(nd, P.rg[g], r, k, small, F, br, bi, zr, zi, xg, 2 * G, m,
                                           gr, gi);
                             continue;
                         }
@@ -302,10 +310,7 @@ static void project(const rt::Params& P) {
                                 const float ph = gate_phase(rgf, drf, fq[j], fe[j], ft[j], fL[j],
                                                             fA[j]);
                                 if (!(std::fabs(ph) > small)) continue;
-                                const double tg = P.rg[g] - dq[j];
-                                const double lg = std::sqrt(tg * tg + de[j]);
-                                expj(((dt[j] + tg) / (dL[j] + lg) + 1.0) * dA[j] / (lg + tg)
-                                     * (r - P.rg[g]), cr[j], ci[j]);
+                                expj(large_phase(P.rg[g], r, k, dq[j], de[j]), cr[j], ci[j]);
                             }
                         }
                         if (line) {   // Horner: sum_i x_i z^i, times exp(j phi(p_0))
