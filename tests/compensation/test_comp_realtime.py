@@ -178,3 +178,19 @@ def test_without_extension_auto_is_the_numpy_engine(monkeypatch):
         with pytest.raises(ValueError, match=f"engine='{engine}' needs the compiled extension"):
             RealtimeProjector(p, engine=engine, **kw)
     assert set(ENGINES) == {"auto", "compiled", "portable", "numpy"}
+
+
+def test_bench_doppler_power_is_the_power_of_the_beams_doppler_spectrum():
+    """The benchmark's lean Doppler step gives |BeamCube.doppler()|^2 (float32 rounding)."""
+    from raysim.studies.bench_realtime import doppler_power
+
+    rng = np.random.default_rng(8)
+    p, slot = _ti_positions()
+    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM, range_axis=np.arange(5.0) + 5,
+                             azimuth=[0.0, 0.2, 0.4], elevation=[0.0, 0.1], range_gates=[1, 3])
+    beams = proj.project(_cube(rng, 16, 12, 5), _motion(rng, 48))
+    ref = np.abs(beams.doppler()) ** 2
+    power = doppler_power(beams.data, threads=2)
+    assert power.shape == ref.shape == (16, 2, 3, 2) and power.dtype == np.float32
+    assert np.abs(power - ref).max() < RT_TOL * ref.max()
+    assert np.argmax(power.sum(axis=(1, 2, 3))) == np.argmax(ref.sum(axis=(1, 2, 3)))
