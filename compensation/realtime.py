@@ -117,8 +117,9 @@ class RealtimeProjector:
         Gates sharing one steering direction (at their mean range), as in
         :func:`compensation.projection.beam_projection` (same default, 8).
     chirp_block : int
-        Chirps per work item (bounds the temporaries: about ``chirp_block *
-        direction * 60`` bytes per thread).
+        Chirps per work item of the NumPy engine (bounds the temporaries: about
+        ``chirp_block * direction * 60`` bytes per thread); the compiled kernel
+        takes one chirp and 256 directions per item.
     threads : int, optional
         Worker threads (default: the CPUs this process may use, at most 8).
     engine : str
