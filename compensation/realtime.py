@@ -267,25 +267,7 @@ class RealtimeProjector:
         rot = motion.attitude.reshape(n_chirp, self.num_slots, 3, 3)
         disp = motion.radar_displacement.reshape(n_chirp, self.num_slots, 3)
         out = np.empty((n_chirp, self.gates.size, self.num_directions), dtype=np.complex64)
-        if self._engine != "numpy":
-            self._compiled(xg, rot, disp, out)
-            return BeamCube(out.reshape(n_chirp, self.gates.size, self.azimuth.size,
-                                        self.elevation.size), motion.time[::self.num_slots],
-                            self.range, self.azimuth, self.elevation, self.wavelength,
-                            motion.warnings)
-        blocks = [(n0, min(n0 + self.chirp_block, n_chirp))
-                  for n0 in range(0, n_chirp, self.chirp_block)]
-
-        def work(b):
-            n0, n1 = b
-            out[n0:n1] = self._block(xg[n0:n1], rot[n0:n1], disp[n0:n1])
-
-        if self.threads == 1 or len(blocks) == 1:
-            for b in blocks:
-                work(b)
-        else:
-            with ThreadPoolExecutor(self.threads) as pool:
-                list(pool.map(work, blocks))
+        (self._numpy if self._engine == "numpy" else self._compiled)(xg, rot, disp, out)
         return BeamCube(out.reshape(n_chirp, self.gates.size, self.azimuth.size,
                                     self.elevation.size), motion.time[::self.num_slots],
                         self.range, self.azimuth, self.elevation, self.wavelength,
@@ -307,6 +289,24 @@ class RealtimeProjector:
         # the arrays above stay referenced until the call returns
         _ext.project(ints.ctypes.data, ptrs.ctypes.data, tb["dbls"].ctypes.data,
                      int(self._engine == "portable"))
+
+    def _numpy(self, xg: np.ndarray, rot: np.ndarray, disp: np.ndarray,
+               out: np.ndarray) -> None:
+        """Fill ``out [N, G, D]`` by the NumPy engine, chirp blocks on worker threads."""
+        n_chirp = xg.shape[0]
+        blocks = [(n0, min(n0 + self.chirp_block, n_chirp))
+                  for n0 in range(0, n_chirp, self.chirp_block)]
+
+        def work(b):
+            n0, n1 = b
+            out[n0:n1] = self._block(xg[n0:n1], rot[n0:n1], disp[n0:n1])
+
+        if self.threads == 1 or len(blocks) == 1:
+            for b in blocks:
+                work(b)
+        else:
+            with ThreadPoolExecutor(self.threads) as pool:
+                list(pool.map(work, blocks))
 
     def _block(self, xg: np.ndarray, rot: np.ndarray, disp: np.ndarray) -> np.ndarray:
         """Beams ``[c, G, D]`` of one chirp block (``xg [c, M, G]``, poses ``[c, S, ...]``)."""
