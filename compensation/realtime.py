@@ -26,7 +26,7 @@ frames with the same geometry:
 
 Two engines compute this: the compiled kernel ``compensation._rt._ext``
 (``engine="compiled"``, the default where it is built: one fused pass per
-chirp, slot and direction chunk, OpenMP threads over chirps, ``exp(j .)`` by a
+chirp, slot and direction chunk, OpenMP threads over those items, ``exp(j .)`` by a
 float32 polynomial after reduction to a quarter turn in float64, AVX2+FMA copy
 chosen at run time) and the NumPy engine (``engine="numpy"``, the fallback
 where the extension is not built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow
