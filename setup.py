@@ -1,9 +1,11 @@
-"""Build of the optional compiled synthesis kernel (``raysim.synthesis._kernel._ext``).
+"""Build of the optional compiled kernels: synthesis (``raysim.synthesis._kernel._ext``) and
+real-time projection (``compensation._rt._ext``).
 
 Everything else is in pyproject.toml. The extension is plain C++ on the Python
 C API (no binding library), compiled with OpenMP for the x86-64-v2 baseline
 plus an AVX2+FMA copy chosen at run time. If it cannot be built (no compiler),
-set ``RAYSIM_NO_KERNEL=1``: raysim then falls back to FINUFFT.
+set ``RAYSIM_NO_KERNEL=1``: raysim then falls back to FINUFFT and
+``compensation.realtime`` to its NumPy engine.
 """
 
 import os
@@ -24,4 +26,13 @@ ext = Extension(
     extra_link_args=["-fopenmp"],
     language="c++",
 )
-setup(ext_modules=[] if os.environ.get("RAYSIM_NO_KERNEL") else [ext])
+RT = "compensation/_rt/"
+rt_ext = Extension(
+    "compensation._rt._ext",
+    sources=[RT + "module.cpp", RT + "rt_portable.cpp", RT + "rt_avx2.cpp"],
+    depends=[RT + "rt_impl.h", RT + "rt_params.h"],
+    extra_compile_args=flags,
+    extra_link_args=["-fopenmp"],
+    language="c++",
+)
+setup(ext_modules=[] if os.environ.get("RAYSIM_NO_KERNEL") else [ext, rt_ext])

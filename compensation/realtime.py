@@ -24,6 +24,14 @@ frames with the same geometry:
 * chirp blocks run on ``threads`` worker threads (NumPy releases the GIL in
   its array loops).
 
+Two engines compute this: the compiled kernel ``compensation._rt._ext``
+(``engine="compiled"``, the default where it is built: one fused pass per
+chirp, slot and direction chunk, OpenMP threads over those items, ``exp(j .)`` by a
+float32 polynomial after reduction to a quarter turn in float64, AVX2+FMA copy
+chosen at run time) and the NumPy engine (``engine="numpy"``, the fallback
+where the extension is not built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow
+the steps above and give the same beams within float32 rounding.
+
 Cost per frame: ``chirp * slot * direction * (2 sincos + ~40 flops) + chirp *
 slot * gate * direction * (2 sincos + ~20 flops)``.
 """
@@ -41,10 +49,24 @@ from .geometry import grid_directions
 from .projection import BeamCube
 from .strapdown import PlatformMotion
 
+try:   # optional compiled kernel (setup.py); without it the NumPy engine runs
+    from ._rt import _ext
+except ImportError:  # pragma: no cover - depends on the build
+    _ext = None
+
 #: Largest deviation of a slot's elements from an equally spaced line for the
 #: Horner form [m]; beyond it the channel sum is a matrix product.
 LINE_TOL = 1e-9
 _TWO_PI = 2.0 * np.pi
+#: Engines of :class:`RealtimeProjector`: ``"auto"`` (compiled where built, else
+#: NumPy), ``"compiled"`` (best instruction set), ``"portable"`` (compiled,
+#: x86-64-v2 copy), ``"numpy"``.
+ENGINES = ("auto", "compiled", "portable", "numpy")
+
+
+def compiled_isa() -> str:
+    """Instruction set of the compiled kernel here: ``"avx2"``, ``"portable"`` or ``"missing"``."""
+    return "missing" if _ext is None else _ext.isa()
 
 
 def _line(p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -95,10 +117,14 @@ class RealtimeProjector:
         Gates sharing one steering direction (at their mean range), as in
         :func:`compensation.projection.beam_projection` (same default, 8).
     chirp_block : int
-        Chirps per work item (bounds the temporaries: about ``chirp_block *
-        direction * 60`` bytes per thread).
+        Chirps per work item of the NumPy engine (bounds the temporaries: about
+        ``chirp_block * direction * 60`` bytes per thread); the compiled kernel
+        takes one chirp and 256 directions per item.
     threads : int, optional
         Worker threads (default: the CPUs this process may use, at most 8).
+    engine : str
+        One of :data:`ENGINES`; ``"compiled"`` and ``"portable"`` need the
+        extension ``compensation._rt._ext``.
 
     Examples
     --------
@@ -114,7 +140,8 @@ class RealtimeProjector:
 
     def __init__(self, element_positions, *, wavelength: float, range_axis, azimuth, elevation,
                  range_gates, channel_slot=None, weights=None, gate_block: int = 8,
-                 chirp_block: int = 8, threads: int | None = None) -> None:
+                 chirp_block: int = 8, threads: int | None = None,
+                 engine: str = "auto") -> None:
         p = finite_array("element_positions", element_positions, ndim=2)
         if p.shape[1] != 3 or p.shape[0] < 1:
             raise ValueError(f"element_positions must have shape [channel, 3], got {p.shape}")
@@ -161,6 +188,46 @@ class RealtimeProjector:
                             for i in range(0, gates.size, gb)]
         self.chirp_block = max(1, int(chirp_block))
         self.threads = _default_threads() if threads is None else max(1, int(threads))
+        if engine not in ENGINES:
+            raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+        if engine in ("compiled", "portable") and _ext is None:
+            raise ValueError(f"engine={engine!r} needs the compiled extension "
+                             "compensation._rt._ext, which is not built here (run `python "
+                             "setup.py build_ext --inplace`), or use engine='numpy'")
+        if engine == "auto":
+            engine = "numpy" if _ext is None else "compiled"
+        self._engine = engine
+        if engine != "numpy":
+            self._tables = self._compiled_tables(p, w)
+
+    @property
+    def engine(self) -> str:
+        """Engine in use: ``"avx2"`` or ``"portable"`` (compiled kernel), or ``"numpy"``."""
+        if self._engine == "compiled":
+            return _ext.isa()
+        return self._engine
+
+    def _compiled_tables(self, p: np.ndarray, w: np.ndarray) -> dict:
+        """Geometry of the compiled kernel: channels ordered slot after slot (see rt_params.h)."""
+        order = np.concatenate([sl.channels for sl in self.slots])
+        sizes = [sl.channels.size for sl in self.slots]
+        blocks = [int(gb[0]) for gb in self.gate_blocks] + [int(self.gates.size)]
+        return {
+            "order": order,
+            "weight": np.concatenate([sl.weight for sl in self.slots]),   # float32
+            "ints": np.array([len(self.slots), self.num_slots, self.num_directions,
+                              self.gates.size, len(self.gate_blocks), order.size, max(sizes)],
+                             dtype=np.int64),
+            "slot_index": np.array([sl.index for sl in self.slots], dtype=np.int64),
+            "slot_off": np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
+            "slot_line": np.array([sl.line is not None for sl in self.slots], dtype=np.int64),
+            "block_start": np.array(blocks, dtype=np.int64),
+            "pos": np.ascontiguousarray(p[order], dtype=np.float64),
+            "u": [np.ascontiguousarray(self.u[:, i]) for i in range(3)],
+            "rg": np.ascontiguousarray(self.range, dtype=np.float64),
+            "block_r": np.array([float(self.range[gb].mean()) for gb in self.gate_blocks]),
+            "dbls": np.array([self.k, SMALL_PHASE], dtype=np.float64),
+        }
 
     @property
     def num_directions(self) -> int:
@@ -200,6 +267,33 @@ class RealtimeProjector:
         rot = motion.attitude.reshape(n_chirp, self.num_slots, 3, 3)
         disp = motion.radar_displacement.reshape(n_chirp, self.num_slots, 3)
         out = np.empty((n_chirp, self.gates.size, self.num_directions), dtype=np.complex64)
+        (self._numpy if self._engine == "numpy" else self._compiled)(xg, rot, disp, out)
+        return BeamCube(out.reshape(n_chirp, self.gates.size, self.azimuth.size,
+                                    self.elevation.size), motion.time[::self.num_slots],
+                        self.range, self.azimuth, self.elevation, self.wavelength,
+                        motion.warnings)
+
+    def _compiled(self, xg: np.ndarray, rot: np.ndarray, disp: np.ndarray,
+                  out: np.ndarray) -> None:
+        """Fill ``out [N, G, D]`` by the kernel (``xg [N, M, G]``, poses ``[N, S, ...]``)."""
+        tb = self._tables
+        # weighted data, channels slot after slot, as the NumPy engine weights them (complex64)
+        xw = np.ascontiguousarray(xg[:, tb["order"]] * tb["weight"][None, :, None],
+                                  dtype=np.complex64)
+        rot = np.ascontiguousarray(rot, dtype=np.float64)
+        disp = np.ascontiguousarray(disp, dtype=np.float64)
+        ints = np.array([xg.shape[0], *tb["ints"], self.threads], dtype=np.int64)
+        arrays = (tb["slot_index"], tb["slot_off"], tb["slot_line"], tb["block_start"],
+                  tb["pos"], rot, disp, *tb["u"], tb["rg"], tb["block_r"], xw, out)
+        ptrs = np.array([a.ctypes.data for a in arrays], dtype=np.uint64)
+        # the arrays above stay referenced until the call returns
+        _ext.project(ints.ctypes.data, ptrs.ctypes.data, tb["dbls"].ctypes.data,
+                     int(self._engine == "portable"))
+
+    def _numpy(self, xg: np.ndarray, rot: np.ndarray, disp: np.ndarray,
+               out: np.ndarray) -> None:
+        """Fill ``out [N, G, D]`` by the NumPy engine, chirp blocks on worker threads."""
+        n_chirp = xg.shape[0]
         blocks = [(n0, min(n0 + self.chirp_block, n_chirp))
                   for n0 in range(0, n_chirp, self.chirp_block)]
 
@@ -213,10 +307,6 @@ class RealtimeProjector:
         else:
             with ThreadPoolExecutor(self.threads) as pool:
                 list(pool.map(work, blocks))
-        return BeamCube(out.reshape(n_chirp, self.gates.size, self.azimuth.size,
-                                    self.elevation.size), motion.time[::self.num_slots],
-                        self.range, self.azimuth, self.elevation, self.wavelength,
-                        motion.warnings)
 
     def _block(self, xg: np.ndarray, rot: np.ndarray, disp: np.ndarray) -> np.ndarray:
         """Beams ``[c, G, D]`` of one chirp block (``xg [c, M, G]``, poses ``[c, S, ...]``)."""

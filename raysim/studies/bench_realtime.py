@@ -1,24 +1,28 @@
 """Real-time compensation benchmark: a TI-size TDM frame compensated and processed.
 
 :func:`bench_realtime` (key ``realtime_compensation`` of ``raysim bench`` and
-``benchmarks/bench_compensation.py``) times, in wall-clock seconds
-(``time.perf_counter``) with the CPU seconds of the process next to them, the
-chain a radar would run on every frame:
+``realtime`` of ``benchmarks/bench_compensation.py``) times, in wall-clock
+seconds (``time.perf_counter``) with the CPU seconds of the process
+(``time.process_time``, all threads) next to them, the chain a radar would run
+on every frame:
 
 1. Hann range FFT of the IF cube ``[128 chirps, 12 channels, 256 samples]``
-   (TI-style 3 Tx x 4 Rx TDM, 51.2 us ramps, frame 19.66 ms);
+   (complex64, as a 16-bit ADC delivers it; TI-style 3 Tx x 4 Rx TDM, 51.2 us
+   ramps, frame 19.66 ms);
 2. strapdown integration of a 1 kHz IMU record to the pose of every transmit
    slot (``128 x 3`` poses, lever arm 10 cm);
 3. exact rigid-body projection of the gated range cells onto a 61 x 61
    azimuth x elevation grid (30 deg half width), each slot with its own pose
-   (:class:`compensation.realtime.RealtimeProjector`; its set-up, once per
-   geometry, is timed apart);
-4. Hann Doppler FFT of the beams and their power.
+   (:class:`compensation.realtime.RealtimeProjector`, compiled engine where
+   built; its set-up, once per geometry, is timed apart);
+4. Hann Doppler FFT of the beams and their power (:func:`doppler_power`, the
+   values of ``abs(BeamCube.doppler()) ** 2`` in fewer passes).
 
 It reports frames per second against the radar's frame rate for 1, 3 and 8
-gated cells, the threads used, the same chain with the direct engine
-(:func:`compensation.rigid_body_projection`, ``method="direct"``) and the
-largest difference of the beams from it relative to their peak.
+gated cells, the threads and engine used, the per-stage split (wall and CPU),
+the projection with the NumPy engine and with the direct engine
+(:func:`compensation.rigid_body_projection`, ``method="direct"``), and the
+largest difference of the beams from the direct engine relative to their peak.
 """
 
 from __future__ import annotations
@@ -79,6 +83,39 @@ def best_clocks(fn, repeat: int) -> tuple[float, float, object]:
     return float(wall), float(cpu), out
 
 
+def doppler_power(data: np.ndarray, *, threads: int = 1) -> np.ndarray:
+    """Power of the Hann Doppler spectrum of beams, as ``abs(BeamCube.doppler()) ** 2``.
+
+    Parameters
+    ----------
+    data : ndarray, shape ``[chirp, ...]``, complex64
+        Beams (``BeamCube.data``).
+    threads : int
+        FFT workers.
+
+    Returns
+    -------
+    ndarray, shape ``[doppler, ...]``, float32
+        fft-shifted along the first axis, window normalised to unit sum.
+    """
+    import scipy.fft
+    from scipy.signal import get_window
+
+    n = data.shape[0]
+    w = get_window("hann", n, fftbins=True)
+    w = (w / w.sum()).astype(np.float32).reshape((n,) + (1,) * (data.ndim - 1))
+    spec = scipy.fft.fft(data * w, axis=0, workers=threads, overwrite_x=True)
+    power = np.square(spec.real)
+    power += np.square(spec.imag)
+    return np.fft.fftshift(power, axes=0)
+
+
+def _stage(fn, rep: int) -> dict:
+    """Best wall and CPU seconds of ``repeat`` calls as a dict."""
+    wall, cpu, _ = best_clocks(fn, rep)
+    return {"wall_s": wall, "cpu_s": cpu}
+
+
 def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int | None = None,
                    repeat: int | None = None) -> dict:
     """Frames per second of the compensated TI-size chain against its frame rate.
@@ -86,11 +123,12 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
     Parameters
     ----------
     quick : bool
-        Fewer repeats (3 instead of 7) and the direct engine timed once.
+        Fewer repeats (5 instead of 15).
     gate_counts : sequence of int
         Numbers of gated range cells (consecutive, centred on the target).
     threads : int, optional
-        Worker threads of the projector (default: the CPUs of this process).
+        Worker threads of the projector and the Doppler FFT (default: the CPUs
+        of this process, at most 8).
     repeat : int, optional
         Timed repeats (best kept); default from ``quick``.
 
@@ -100,15 +138,16 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
         JSON-ready; ``cases`` has one entry per gate count with ``wall_s``,
         ``cpu_s``, ``fps``, ``frame_rate_hz``, ``realtime_factor`` (frame
         duration / wall time, > 1 is faster than real time), the per-stage
-        split and the agreement with the direct engine.
+        split (wall and CPU) and the agreement with the direct engine.
     """
     import compensation
-    from compensation.realtime import RealtimeProjector
+    from compensation.realtime import RealtimeProjector, compiled_isa
     from raysim.processing.maps import range_compress
 
-    rep = (3 if quick else 7) if repeat is None else max(1, int(repeat))
+    rep = (5 if quick else 15) if repeat is None else max(1, int(repeat))
     s = ti_setup()
-    cfg, arr, cube = s["config"], s["array"], s["cube"]
+    cfg, arr = s["config"], s["array"]
+    cube = s["cube"].astype(np.complex64)
     lam, r_axis = cfg.center_wavelength, cfg.range_axis()
 
     def strapdown():
@@ -118,20 +157,23 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
 
     rc = range_compress(cube)
     motion = strapdown()
-    t_range = best_clocks(lambda: range_compress(cube), rep)[0]
-    t_strap = best_clocks(strapdown, rep)[0]
+    load_before = list(os.getloadavg())
+    t_range = _stage(lambda: range_compress(cube), rep)
+    t_strap = _stage(strapdown, rep)
     out = {
         "frame_shape": list(cube.shape), "tdm_slots": cfg.num_tx_slots,
         "frame_duration_s": cfg.frame_duration, "frame_rate_hz": 1.0 / cfg.frame_duration,
         "grid": [int(s["azimuth"].size), int(s["elevation"].size)],
-        "clock": "wall (time.perf_counter), best of repeats; cpu_s = time.process_time",
-        "repeat": rep, "load_average": list(os.getloadavg()),
-        "included": ["Hann range FFT of the whole cube", "strapdown of the IMU to 384 slot poses",
+        "clock": "wall (time.perf_counter), best of repeats; cpu_s = time.process_time "
+                 "(all threads of the process)",
+        "repeat": rep, "cpu_count": os.cpu_count(), "compiled_kernel": compiled_isa(),
+        "included": ["Hann range FFT of the whole complex64 cube",
+                     "strapdown of the IMU to 384 slot poses",
                      "exact projection of the gated cells (per-slot poses, near focus)",
                      "Hann Doppler FFT of the beams and |.|^2"],
         "excluded": ["projector set-up (once per geometry, setup_s)",
-                     "IF synthesis and IMU simulation (inputs)"],
-        "range_fft_s": t_range, "strapdown_s": t_strap, "cases": [],
+                     "IF synthesis and IMU simulation (inputs)", "detection and tracking"],
+        "range_fft": t_range, "strapdown": t_strap, "cases": [],
     }
     for n_gate in gate_counts:
         g0 = s["target_gate"] - n_gate // 2
@@ -142,15 +184,22 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
         proj = RealtimeProjector(arr.virtual_positions, channel_slot=arr.tx_slot,
                                  threads=threads, **kw)
         setup_s = time.perf_counter() - w0
+        numpy_proj = RealtimeProjector(arr.virtual_positions, channel_slot=arr.tx_slot,
+                                       threads=proj.threads, engine="numpy", **kw)
 
         def chain(proj=proj):
             beams = proj.project(range_compress(cube), strapdown())
-            return np.abs(beams.doppler()) ** 2
+            return doppler_power(beams.data, threads=proj.threads)
 
         chain()                                                      # warm-up
         wall, cpu, _ = best_clocks(chain, rep)
-        t_proj, _, beams = best_clocks(lambda proj=proj: proj.project(rc, motion), rep)
-        t_dopp = best_clocks(lambda beams=beams: np.abs(beams.doppler()) ** 2, rep)[0]
+        t_proj = _stage(lambda proj=proj: proj.project(rc, motion), rep)
+        beams = proj.project(rc, motion)
+        t_dopp = _stage(lambda b=beams, p=proj: doppler_power(b.data,
+                                                                         threads=p.threads), rep)
+        t_numpy = _stage(lambda p=numpy_proj: p.project(rc, motion), max(1, rep // 3))
+        ref_power = np.abs(beams.doppler()) ** 2
+        power_err = float(np.abs(doppler_power(beams.data) - ref_power).max() / ref_power.max())
 
         def direct(kw=kw):
             return compensation.rigid_body_projection(
@@ -160,13 +209,16 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
         t_direct, cpu_direct, ref = best_clocks(direct, 1)
         err = float(np.abs(beams.data - ref.data).max() / np.abs(ref.data).max())
         out["cases"].append({
-            "gates": int(n_gate), "threads": proj.threads, "setup_s": setup_s,
-            "wall_s": wall, "cpu_s": cpu, "fps": 1.0 / wall,
+            "gates": int(n_gate), "threads": proj.threads, "engine": proj.engine,
+            "setup_s": setup_s, "wall_s": wall, "cpu_s": cpu, "fps": 1.0 / wall,
             "realtime_factor": cfg.frame_duration / wall,
-            "split_wall_s": {"range_fft": t_range, "strapdown": t_strap, "projection": t_proj,
-                             "doppler_and_power": t_dopp},
+            "split": {"range_fft": t_range, "strapdown": t_strap, "projection": t_proj,
+                      "doppler_and_power": t_dopp},
+            "numpy_engine_projection": t_numpy,
+            "projection_speedup_vs_numpy_engine": t_numpy["cpu_s"] / t_proj["cpu_s"],
             "direct_projection_wall_s": t_direct, "direct_projection_cpu_s": cpu_direct,
-            "projection_speedup_vs_direct": t_direct / t_proj,
-            "max_error_vs_direct": err,
+            "projection_speedup_vs_direct": t_direct / t_proj["wall_s"],
+            "max_error_vs_direct": err, "doppler_power_max_diff": power_err,
         })
+    out["load_average"] = {"before": load_before, "after": list(os.getloadavg())}
     return out

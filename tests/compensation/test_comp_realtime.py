@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from compensation import rigid_body_projection
-from compensation.realtime import SMALL_PHASE, RealtimeProjector
+from compensation.realtime import ENGINES, SMALL_PHASE, RealtimeProjector, compiled_isa
 from compensation.strapdown import PlatformMotion
 
 LAM = 3.8685e-3
@@ -38,11 +38,20 @@ def _cube(rng, n, m, r):
         np.complex64)
 
 
-def _compare(rc, p, motion, *, slot=None, weights=None, gate_block=8, threads=2, **kw):
+#: The compiled kernel's copies where the extension is built; the NumPy engine always.
+BUILT = compiled_isa() != "missing"
+ENGINE_CASES = ["numpy"] + [pytest.param(e, marks=pytest.mark.skipif(
+    not BUILT, reason="extension compensation._rt._ext not built")) for e in ("compiled",
+                                                                               "portable")]
+
+
+def _compare(rc, p, motion, *, slot=None, weights=None, gate_block=8, threads=2,
+             engine="auto", **kw):
     ref = rigid_body_projection(rc, p, motion, channel_slot=slot, method="direct",
                                 weights=weights, gate_block=gate_block, **kw)
     proj = RealtimeProjector(p, channel_slot=slot, weights=weights, gate_block=gate_block,
-                             chirp_block=5, threads=threads, **kw)
+                             chirp_block=5, threads=threads, engine=engine, **kw)
+    assert proj.engine == (compiled_isa() if engine == "compiled" else engine)
     out = proj.project(rc, motion)
     assert out.data.shape == ref.data.shape and out.data.dtype == np.complex64
     np.testing.assert_allclose(out.chirp_time, ref.chirp_time)
@@ -53,8 +62,9 @@ def _compare(rc, p, motion, *, slot=None, weights=None, gate_block=8, threads=2,
     return err
 
 
+@pytest.mark.parametrize("engine", ENGINE_CASES)
 @pytest.mark.parametrize("threads", [1, 2])
-def test_tdm_ti_layout_equals_direct_engine(threads):
+def test_tdm_ti_layout_equals_direct_engine(threads, engine):
     """3 slots on lines (Horner form), own pose per slot, two gate blocks, ranges 2-14 m."""
     rng = np.random.default_rng(4)
     p, slot = _ti_positions()
@@ -65,10 +75,11 @@ def test_tdm_ti_layout_equals_direct_engine(threads):
     el = np.deg2rad(np.linspace(-20, 25, 7))
     _compare(_cube(rng, n, 12, r), p, motion, slot=slot, wavelength=LAM, range_axis=r_axis,
              azimuth=az, elevation=el, range_gates=[8, 9, 10, 50, 51, 88], gate_block=3,
-             threads=threads)
+             threads=threads, engine=engine)
 
 
-def test_grid_layout_with_taper_and_large_motion_equals_direct_engine():
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_grid_layout_with_taper_and_large_motion_equals_direct_engine(engine):
     """8 x 8 UPA in one slot (matrix-product form), taper, 10 cm displacements at 1-3 m
     (per-gate phases beyond the Taylor range, so the sin/cos path is used too)."""
     rng = np.random.default_rng(5)
@@ -82,18 +93,20 @@ def test_grid_layout_with_taper_and_large_motion_equals_direct_engine():
     assert np.abs(d).max() > 0.05
     _compare(_cube(rng, n, 64, r), p, motion, weights=np.outer(taper, taper).ravel(),
              wavelength=LAM, range_axis=r_axis, azimuth=np.deg2rad([-30.0, 0.0, 12.0]),
-             elevation=np.deg2rad([-10.0, 5.0]), range_gates=np.arange(0, 40, 5), gate_block=8)
+             elevation=np.deg2rad([-10.0, 5.0]), range_gates=np.arange(0, 40, 5), gate_block=8,
+             engine=engine)
     assert SMALL_PHASE < 2 * 2 * np.pi / LAM * 0.1 * 0.1 / 1.0
 
 
-def test_static_platform_unit_echo_gives_one():
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_static_platform_unit_echo_gives_one(engine):
     p, slot = _ti_positions()
     t = np.arange(3 * 4) * 51.2e-6
     z = np.zeros((t.size, 3))
     motion = PlatformMotion(t, np.broadcast_to(np.eye(3), (t.size, 3, 3)).copy(), z, z.copy(),
                             z.copy(), np.zeros(3))
     proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM, range_axis=[10.0, 10.15],
-                             azimuth=[0.0], elevation=[0.0], range_gates=[0, 1])
+                             azimuth=[0.0], elevation=[0.0], range_gates=[0, 1], engine=engine)
     out = proj.project(np.ones((4, 12, 2), np.complex64), motion)
     np.testing.assert_allclose(np.abs(out.data), 1.0, atol=1e-6)
 
@@ -106,6 +119,7 @@ def test_static_platform_unit_echo_gives_one():
     (dict(weights=np.zeros(12)), "weights"),
     (dict(azimuth=[]), "azimuth"),
     (dict(azimuth=np.arange(-30.0, 31.0, 1.0)), r"azimuth must be angles in radians.*degrees\?"),
+    (dict(engine="gpu"), "engine must be one of"),
 ])
 def test_bad_setup_is_refused(kwargs, match):
     p, slot = _ti_positions()
@@ -134,6 +148,36 @@ def test_bad_frame_is_refused():
         proj.project(bad, _motion(rng, 12))
     with pytest.raises(ValueError, match="PlatformMotion"):
         proj.project(rc, "motion")
+
+
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_grid_across_direction_chunks_equals_direct_engine(engine):
+    """17 x 19 = 323 directions (more than the kernel's chunk of 256), TDM slots, 8 cm
+    displacements at 1.2-2 m (per-gate phases beyond the Taylor range in part of the grid)."""
+    rng = np.random.default_rng(7)
+    p, slot = _ti_positions()
+    n, r = 6, 30
+    motion = _motion(rng, 3 * n, disp_m=0.08, angle_rad=0.2)
+    _compare(_cube(rng, n, 12, r), p, motion, slot=slot, wavelength=LAM,
+             range_axis=np.linspace(1.2, 2.0, r), azimuth=np.deg2rad(np.linspace(-60, 60, 17)),
+             elevation=np.deg2rad(np.linspace(-45, 45, 19)), range_gates=[0, 3, 4, 5, 29],
+             gate_block=4, engine=engine)
+
+
+def test_without_extension_auto_is_the_numpy_engine(monkeypatch):
+    """Fallback: no extension -> engine 'auto' runs NumPy; asking for the kernel is refused."""
+    import compensation.realtime as rt
+
+    p, slot = _ti_positions()
+    kw = dict(channel_slot=slot, wavelength=LAM, range_axis=np.arange(5.0) + 5,
+              azimuth=[0.0, 0.1], elevation=[0.0], range_gates=[1, 2])
+    monkeypatch.setattr(rt, "_ext", None)
+    assert rt.compiled_isa() == "missing"
+    assert RealtimeProjector(p, **kw).engine == "numpy"
+    for engine in ("compiled", "portable"):
+        with pytest.raises(ValueError, match=f"engine='{engine}' needs the compiled extension"):
+            RealtimeProjector(p, engine=engine, **kw)
+    assert set(ENGINES) == {"auto", "compiled", "portable", "numpy"}
 
 
 def test_bench_doppler_power_is_the_power_of_the_beams_doppler_spectrum():

@@ -1,0 +1,73 @@
+// Python binding of the real-time projection kernel: compensation._rt._ext.
+//
+// project(ints, ptrs, dbls, isa): three addresses of contiguous NumPy arrays
+// (int64 sizes, uint64 array addresses, float64 scalars) laid out as
+// rt::Params; the Python wrapper (compensation/realtime.py) builds and checks
+// them and keeps the arrays alive. isa: 0 = best available, 1 = portable.
+// Releases the GIL.
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <cstdint>
+#include "rt_params.h"
+
+namespace rt {
+void project_portable(const Params& P);
+void project_avx2(const Params& P);
+bool avx2_compiled();
+}
+
+static bool have_avx2() {
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+    __builtin_cpu_init();
+    return rt::avx2_compiled() && __builtin_cpu_supports("avx2") &&
+           __builtin_cpu_supports("fma");
+#else
+    return false;
+#endif
+}
+
+static PyObject* py_project(PyObject*, PyObject* args) {
+    unsigned long long pi, pp, pd;
+    int isa;
+    if (!PyArg_ParseTuple(args, "KKKi", &pi, &pp, &pd, &isa)) return nullptr;
+    const int64_t* I = reinterpret_cast<const int64_t*>(pi);
+    const uint64_t* A = reinterpret_cast<const uint64_t*>(pp);
+    const double* F = reinterpret_cast<const double*>(pd);
+    rt::Params P;
+    P.N = I[0]; P.S = I[1]; P.n_tdm = I[2]; P.D = I[3]; P.G = I[4]; P.NB = I[5];
+    P.M = I[6]; P.M_max = I[7]; P.threads = I[8];
+    P.slot_index = reinterpret_cast<const int64_t*>(A[0]);
+    P.slot_off = reinterpret_cast<const int64_t*>(A[1]);
+    P.slot_line = reinterpret_cast<const int64_t*>(A[2]);
+    P.block_start = reinterpret_cast<const int64_t*>(A[3]);
+    P.pos = reinterpret_cast<const double*>(A[4]);
+    P.rot = reinterpret_cast<const double*>(A[5]);
+    P.disp = reinterpret_cast<const double*>(A[6]);
+    P.ux = reinterpret_cast<const double*>(A[7]);
+    P.uy = reinterpret_cast<const double*>(A[8]);
+    P.uz = reinterpret_cast<const double*>(A[9]);
+    P.rg = reinterpret_cast<const double*>(A[10]);
+    P.block_r = reinterpret_cast<const double*>(A[11]);
+    P.x = reinterpret_cast<const float*>(A[12]);
+    P.out = reinterpret_cast<float*>(A[13]);
+    P.k = F[0]; P.small = F[1];
+    const bool avx2 = isa == 0 && have_avx2();
+    Py_BEGIN_ALLOW_THREADS
+    if (avx2) rt::project_avx2(P); else rt::project_portable(P);
+    Py_END_ALLOW_THREADS
+    Py_RETURN_NONE;
+}
+
+static PyObject* py_isa(PyObject*, PyObject*) {
+    return PyUnicode_FromString(have_avx2() ? "avx2" : "portable");
+}
+
+static PyMethodDef methods[] = {
+    {"project", py_project, METH_VARARGS, "Exact beams of one frame (see realtime.py)."},
+    {"isa", py_isa, METH_NOARGS, "Instruction set the kernel uses on this CPU."},
+    {nullptr, nullptr, 0, nullptr}};
+
+static PyModuleDef moddef = {PyModuleDef_HEAD_INIT, "_ext",
+                             "Real-time exact projection kernel (C++).", -1, methods};
+
+PyMODINIT_FUNC PyInit__ext(void) { return PyModule_Create(&moddef); }

@@ -1,0 +1,17 @@
+// AVX2 + FMA copy of the kernel, used when the CPU reports both at run time.
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#pragma GCC target("avx2,fma")
+#define RT_HAVE_AVX2 1
+#endif
+#define RT_NS avx2
+#include "rt_impl.h"
+namespace rt {
+bool avx2_compiled() {
+#ifdef RT_HAVE_AVX2
+    return true;
+#else
+    return false;
+#endif
+}
+void project_avx2(const Params& P) { avx2::project(P); }
+}

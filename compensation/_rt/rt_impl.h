@@ -1,0 +1,361 @@
+// Real-time exact rigid-body projection kernel (the model of
+// compensation.realtime.RealtimeProjector, whose NumPy engine is the reference).
+// Included once per instruction set with RT_NS defined (see rt_*.cpp); each copy
+// is compiled for its own target (portable x86-64-v2, or AVX2+FMA) and
+// dispatched at run time.
+//
+// One work item = (chirp n, chunk of CH directions); OpenMP threads take items.
+// For each TDM slot s (pose R_n,s, displacement d_n,s) and gate block (focal
+// range r), per direction u (float64):
+//   q = u . d, e = max(|d|^2 - q^2, 0), t = r - q, L = sqrt(t^2 + e) = |r u - d|
+//   range phase 2 k (q - e / (L + t)), steering phase k (r u . R p - d . R p) / L,
+//   exp(j .) of both by expj (float64 reduction to a quarter turn, float32
+//   polynomial); for a slot on a line p_i = p_0 + i a only exp(j phi(p_0)) and
+//   z = exp(j k v . a), otherwise one exp(j .) per channel;
+// then per gate g (float32, small phase):
+//   -2 k (rho_g - rho_mid) = a (r - R_g) (1 + (t + t_g) / (L + L_g)) / (L_g + t_g),
+//   a = -2 k e / (L + t), t_g = R_g - q, L_g = sqrt(t_g^2 + e)   (no cancellation),
+//   exp(j .) by its Taylor series while |phase| <= small, else in float64 by expj;
+//   channel sum by Horner's rule in z (line) or a sum of steering x data;
+//   accumulated over slots into out[n, g, direction].
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+#include "rt_params.h"
+
+namespace RT_NS {
+
+constexpr int64_t CH = 256;  // directions per work item (buffers ~25 KB, in L1/L2)
+constexpr double INV_2PI = 0.15915494309189535;
+constexpr double TWO_PI = 6.283185307179586;
+
+// exp(j phase) in two steps, so that the float32 polynomial runs at full vector
+// width: reduce (float64) gives the quarter turn q and the rest x in [-pi/4, pi/4]
+// of phase / 2 pi; rotate (float32) evaluates sin (degree 7) and cos (degree 8)
+// of x with the minimax coefficients of Cephes' sinf/cosf (S. L. Moshier,
+// "Methods and Programs for Mathematical Functions", 1989; error about one
+// float32 ulp on [-pi/4, pi/4]) and turns by j^q.
+static inline void reduce(double phase, float& x, int32_t& q) {
+    const double r4 = std::rint(4.0 * INV_2PI * phase);
+    x = (float)(phase - (0.25 * TWO_PI) * r4);
+    q = (int32_t)r4;
+}
+
+static inline void rotate(float x, int32_t q, float& c, float& s) {
+    const float x2 = x * x;
+    const float sn = x + x * x2 * ((-1.9515295891e-4f * x2 + 8.3321608736e-3f) * x2
+                                   - 1.6666654611e-1f);
+    const float cs = 1.0f - 0.5f * x2 + x2 * x2 * ((2.443315711809948e-5f * x2
+                                                     - 1.388731625493765e-3f) * x2
+                                                    + 4.166664568298827e-2f);
+    const float c1 = (q & 1) ? -sn : cs;
+    const float s1 = (q & 1) ? cs : sn;
+    const float sg = (q & 2) ? -1.0f : 1.0f;
+    c = sg * c1;
+    s = sg * s1;
+}
+
+static inline void expj(double phase, float& c, float& s) {
+    float x;
+    int32_t q;
+    reduce(phase, x, q);
+    rotate(x, q, c, s);
+}
+
+// Per-gate phase -2 k (rho_g - rho_mid) = a dr (1 + (t + t_g) / (L + L_g)) / (L_g + t_g)
+// in float32 (one division), t_g = R_g - q, L_g = sqrt(t_g^2 + e).
+static inline float gate_phase(float rgf, float drf, float q, float e, float t, float L, float a) {
+    const float tg = rgf - q;
+    const float lg = std::sqrt(tg * tg + e);
+    const float ll = L + lg;
+    return (ll + t + tg) * a * drf / (ll * (lg + tg));
+}
+
+// exp(j ph) by its Taylor series (degree 4 and 5; error < 4e-11 for |ph| <= 0.05)
+static inline void expj_small(float ph, float& c, float& s) {
+    const float x2 = ph * ph;
+    c = (x2 * (1.0f / 24) - 0.5f) * x2 + 1.0f;
+    s = ((x2 * (1.0f / 120) - 1.0f / 6) * x2 + 1.0f) * ph;
+}
+
+// Geometry of one (chirp, slot, gate block, direction chunk), per direction.
+struct Focus {
+    const double *q, *e;                  // float64 (large-phase path)
+    const float *fq, *fe, *ft, *fL, *fa;  // float32: q, e, t, L, a
+};
+
+// Per-gate phase in float64 from q and e (directions where it is not small).
+static inline double large_phase(double rg, double r, double k, double q, double e) {
+    const double t = r - q, tg = rg - q;
+    const double L = std::sqrt(t * t + e), lg = std::sqrt(tg * tg + e);
+    return ((t + tg) / (L + lg) + 1.0) * (-2.0 * k * e / (L + t)) / (lg + tg) * (r - rg);
+}
+
+// One gate of a slot on a line with MC channels, fused: per direction the small
+// phase, exp(j .) by Taylor, the channel sum by Horner's rule in z, times the
+// slot's exp(j phi(p_0)), accumulated into (gr, gi). Returns the number of
+// directions whose phase exceeds `small` (fixed afterwards by fix_large).
+template <int MC>
+static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus& F,
+                     const float* br, const float* bi, const float* zr, const float* zi,
+                     const float* xg, int64_t xstride, float* gr, float* gi) {
+    float xr[MC], xi[MC];
+    for (int i = 0; i < MC; ++i) { xr[i] = xg[xstride * i]; xi[i] = xg[xstride * i + 1]; }
+    int large = 0;
+    for (int64_t j = 0; j < nd; ++j) {
+        const float ph = gate_phase(rgf, drf, F.fq[j], F.fe[j], F.ft[j], F.fL[j], F.fa[j]);
+        float c, s;
+        expj_small(ph, c, s);
+        float ar = xr[MC - 1], ai = xi[MC - 1];
+        for (int i = MC - 2; i >= 0; --i) {
+            const float nr = ar * zr[j] - ai * zi[j] + xr[i];
+            ai = ar * zi[j] + ai * zr[j] + xi[i];
+            ar = nr;
+        }
+        const float vr = ar * br[j] - ai * bi[j], vi = ar * bi[j] + ai * br[j];
+        gr[j] += vr * c - vi * s;
+        gi[j] += vr * s + vi * c;
+        large += std::fabs(ph) > small;
+    }
+    return large;
+}
+
+// Directions of a fused line gate whose phase exceeded `small`: replace the
+// Taylor exp(j .) by the float64 phase and expj (scalar; rare).
+static void fix_large(int64_t nd, double rg, double r, double k, float small, const Focus& F,
+                      const float* br, const float* bi, const float* zr, const float* zi,
+                      const float* xg, int64_t xstride, int64_t m, float* gr, float* gi) {
+    const float rgf = (float)rg, drf = (float)(r - rg);
+    for (int64_t j = 0; j < nd; ++j) {
+        const float ph = gate_phase(rgf, drf, F.fq[j], F.fe[j], F.ft[j], F.fL[j], F.fa[j]);
+        if (!(std::fabs(ph) > small)) continue;
+        float c, s, ec, es;
+        expj_small(ph, c, s);
+        expj(large_phase(rg, r, k, F.q[j], F.e[j]), ec, es);
+        float ar = xg[xstride * (m - 1)], ai = xg[xstride * (m - 1) + 1];
+        for (int64_t i = m - 2; i >= 0; --i) {
+            const float nr = ar * zr[j] - ai * zi[j] + xg[xstride * i];
+            ai = ar * zi[j] + ai * zr[j] + xg[xstride * i + 1];
+            ar = nr;
+        }
+        const float vr = ar * br[j] - ai * bi[j], vi = ar * bi[j] + ai * br[j];
+        const float dc = ec - c, ds = es - s;
+        gr[j] += vr * dc - vi * ds;
+        gi[j] += vr * ds + vi * dc;
+    }
+}
+
+// Largest slot size with a fused (compile-time) Horner loop.
+constexpr int64_t FUSED_MAX = 8;
+
+static int gate_line_fused(int64_t m, int64_t nd, float rgf, float drf, float small,
+                           const Focus& F, const float* br, const float* bi, const float* zr,
+                           const float* zi, const float* xg, int64_t xstride, float* gr,
+                           float* gi) {
+#define RT_CASE(MC) case MC: return gate_line<MC>(nd, rgf, drf, small, F, br, bi, zr, zi, xg, \
+                                                   xstride, gr, gi);
+    switch (m) {
+        RT_CASE(1) RT_CASE(2) RT_CASE(3) RT_CASE(4) RT_CASE(5) RT_CASE(6) RT_CASE(7) RT_CASE(8)
+        default: return -1;
+    }
+#undef RT_CASE
+}
+
+static void project(const rt::Params& P) {
+    const int64_t nchunk = (P.D + CH - 1) / CH;
+    const int64_t items = P.N * nchunk;
+    const double k = P.k;
+    const float small = (float)P.small;
+    const int64_t G = P.G, D = P.D, Mm = std::max<int64_t>(P.M_max, 1);
+#pragma omp parallel num_threads((int)P.threads)
+    {
+        std::vector<double> dbuf(4 * CH);
+        std::vector<float> fbuf(16 * CH + 2 * Mm * CH);
+        std::vector<int32_t> qbuf((2 + Mm) * CH);   // quarter turns of reduce
+        std::vector<float> acc(2 * G * CH);   // beams of the item, planar [gate][re, im][CH]
+        std::vector<double> rp(3 * Mm + 3), dp(Mm + 1);
+        double* dq = dbuf.data();
+        double* de = dq + CH;
+        double* dh = de + CH;
+        double* dinv = dh + CH;
+        float* fq = fbuf.data();
+        float* fe = fq + CH;
+        float* ft = fe + CH;
+        float* fL = ft + CH;
+        float* fA = fL + CH;
+        float* br = fA + CH;
+        float* bi = br + CH;
+        float* zr = bi + CH;
+        float* zi = zr + CH;
+        float* cr = zi + CH;
+        float* ci = cr + CH;
+        float* accr = ci + CH;
+        float* acci = accr + CH;
+        float* sr = acci + CH;
+        float* si = sr + Mm * CH;
+        float* xa = si + Mm * CH;   // reduced phases (float32 rest)
+        float* xb = xa + CH;
+        int32_t* qa = qbuf.data();
+        int32_t* qb = qa + CH;
+        int32_t* qm = qb + CH;      // [m][CH] per-channel quarter turns
+        const Focus F{dq, de, fq, fe, ft, fL, fA};
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t it = 0; it < items; ++it) {
+            const int64_t n = it / nchunk;
+            const int64_t j0 = (it % nchunk) * CH;
+            const int64_t nd = std::min(CH, D - j0);
+            const double* ux = P.ux + j0;
+            const double* uy = P.uy + j0;
+            const double* uz = P.uz + j0;
+            std::fill(acc.begin(), acc.end(), 0.0f);
+            for (int64_t s = 0; s < P.S; ++s) {
+                const int64_t pose = n * P.n_tdm + P.slot_index[s];
+                const double* R = P.rot + 9 * pose;
+                const double* d = P.disp + 3 * pose;
+                const int64_t m0 = P.slot_off[s], m = P.slot_off[s + 1] - m0;
+                const bool line = P.slot_line[s] != 0;
+                const double dx = d[0], dy = d[1], dz = d[2];
+                const double dd = dx * dx + dy * dy + dz * dz;
+                // rotated positions R p and d . R p: (p_0, a) on a line, else every channel
+                const int64_t nv = line ? 2 : m;
+                for (int64_t i = 0; i < nv; ++i) {
+                    double v[3];
+                    const double* p = P.pos + 3 * (m0 + i);
+                    for (int c = 0; c < 3; ++c)
+                        v[c] = (line && i == 1) ? (m > 1 ? P.pos[3 * (m0 + 1) + c] - P.pos[3 * m0 + c]
+                                                         : 0.0)
+                                                : p[c];
+                    for (int c = 0; c < 3; ++c)
+                        rp[3 * i + c] = R[3 * c] * v[0] + R[3 * c + 1] * v[1] + R[3 * c + 2] * v[2];
+                    dp[i] = dx * rp[3 * i] + dy * rp[3 * i + 1] + dz * rp[3 * i + 2];
+                }
+                const float* xs = P.x + 2 * (n * P.M + m0) * G;   // [m, G] complex
+                for (int64_t b = 0; b < P.NB; ++b) {
+                    const double r = P.block_r[b];
+                    // focal geometry per direction (float64); for a slot on a line the
+                    // phases of p_0 and of the step a, reduced, in the same pass
+                    const double ax = rp[0], ay = rp[1], az = rp[2], a0 = dp[0];
+                    const double bx = rp[3], by = rp[4], bz = rp[5], b0 = dp[1];
+#define RT_GEOMETRY                                                                      \
+    const double q = ux[j] * dx + uy[j] * dy + uz[j] * dz;                               \
+    double e = dd - q * q;                                                               \
+    e = e > 0.0 ? e : 0.0;                                                               \
+    const double t = r - q;                                                              \
+    const double L = std::sqrt(t * t + e);                                               \
+    const double w = 1.0 / (L * (L + t)); /* one division for h and k / L */            \
+    const double h = e * L * w;                                                          \
+    const double inv = k * (L + t) * w;                                                  \
+    dq[j] = q; de[j] = e;                                                                \
+    fq[j] = (float)q; fe[j] = (float)e; ft[j] = (float)t; fL[j] = (float)L;              \
+    fA[j] = (float)(-2.0 * k * h);
+                    if (line) {
+                        for (int64_t j = 0; j < nd; ++j) {
+                            RT_GEOMETRY
+                            const double phi0 = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0)
+                                                * inv + 2.0 * k * (q - h);
+                            const double alpha = (r * (ux[j] * bx + uy[j] * by + uz[j] * bz) - b0)
+                                                 * inv;
+                            reduce(phi0, xa[j], qa[j]);
+                            reduce(alpha, xb[j], qb[j]);
+                        }
+                        for (int64_t j = 0; j < nd; ++j) {
+                            rotate(xa[j], qa[j], br[j], bi[j]);
+                            rotate(xb[j], qb[j], zr[j], zi[j]);
+                        }
+                    } else {
+                        for (int64_t j = 0; j < nd; ++j) {
+                            RT_GEOMETRY
+                            dh[j] = h;
+                            dinv[j] = inv;
+                        }
+#undef RT_GEOMETRY
+                        for (int64_t i = 0; i < m; ++i) {
+                            const double ax = rp[3 * i], ay = rp[3 * i + 1], az = rp[3 * i + 2],
+                                         a0 = dp[i];
+                            float* sri = sr + i * CH;
+                            float* sii = si + i * CH;
+                            for (int64_t j = 0; j < nd; ++j) {
+                                const double ph = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0)
+                                                  * dinv[j] + 2.0 * k * (dq[j] - dh[j]);
+                                reduce(ph, sri[j], qm[i * CH + j]);
+                            }
+                            for (int64_t j = 0; j < nd; ++j)
+                                rotate(sri[j], qm[i * CH + j], sri[j], sii[j]);
+                        }
+                    }
+                    for (int64_t g = P.block_start[b]; g < P.block_start[b + 1]; ++g) {
+                        const float rgf = (float)P.rg[g];
+                        const float drf = (float)(r - P.rg[g]);
+                        const float* xg = xs + 2 * g;
+                        float* gr = acc.data() + 2 * g * CH;
+                        float* gi = gr + CH;
+                        if (line && m <= FUSED_MAX) {
+                            if (gate_line_fused(m, nd, rgf, drf, small, F, br, bi, zr, zi, xg,
+                                                2 * G, gr, gi))
+                                fix_large(nd, P.rg[g], r, k, small, F, br, bi, zr, zi, xg, 2 * G, m,
+                                          gr, gi);
+                            continue;
+                        }
+                        // per-gate phase (float32, Taylor; float64 and expj where large)
+                        int large = 0;
+                        for (int64_t j = 0; j < nd; ++j) {
+                            const float ph = gate_phase(rgf, drf, fq[j], fe[j], ft[j], fL[j],
+                                                        fA[j]);
+                            expj_small(ph, cr[j], ci[j]);
+                            large += std::fabs(ph) > small;
+                        }
+                        if (large) {
+                            for (int64_t j = 0; j < nd; ++j) {
+                                const float ph = gate_phase(rgf, drf, fq[j], fe[j], ft[j], fL[j],
+                                                            fA[j]);
+                                if (!(std::fabs(ph) > small)) continue;
+                                expj(large_phase(P.rg[g], r, k, dq[j], de[j]), cr[j], ci[j]);
+                            }
+                        }
+                        if (line) {   // Horner: sum_i x_i z^i, times exp(j phi(p_0))
+                            const float xr = xg[2 * G * (m - 1)], xi = xg[2 * G * (m - 1) + 1];
+                            for (int64_t j = 0; j < nd; ++j) { accr[j] = xr; acci[j] = xi; }
+                            for (int64_t i = m - 2; i >= 0; --i) {
+                                const float yr = xg[2 * G * i], yi = xg[2 * G * i + 1];
+                                for (int64_t j = 0; j < nd; ++j) {
+                                    const float ar = accr[j], ai = acci[j];
+                                    accr[j] = ar * zr[j] - ai * zi[j] + yr;
+                                    acci[j] = ar * zi[j] + ai * zr[j] + yi;
+                                }
+                            }
+                            for (int64_t j = 0; j < nd; ++j) {
+                                const float ar = accr[j] * br[j] - acci[j] * bi[j];
+                                const float ai = accr[j] * bi[j] + acci[j] * br[j];
+                                accr[j] = ar; acci[j] = ai;
+                            }
+                        } else {      // sum_i steer_i x_i
+                            for (int64_t j = 0; j < nd; ++j) { accr[j] = 0.0f; acci[j] = 0.0f; }
+                            for (int64_t i = 0; i < m; ++i) {
+                                const float yr = xg[2 * G * i], yi = xg[2 * G * i + 1];
+                                const float* sri = sr + i * CH;
+                                const float* sii = si + i * CH;
+                                for (int64_t j = 0; j < nd; ++j) {
+                                    accr[j] += sri[j] * yr - sii[j] * yi;
+                                    acci[j] += sri[j] * yi + sii[j] * yr;
+                                }
+                            }
+                        }
+                        for (int64_t j = 0; j < nd; ++j) {
+                            gr[j] += accr[j] * cr[j] - acci[j] * ci[j];
+                            gi[j] += accr[j] * ci[j] + acci[j] * cr[j];
+                        }
+                    }
+                }
+            }
+            for (int64_t g = 0; g < G; ++g) {   // interleave into out[n, g, j0:j0+nd]
+                const float* gr = acc.data() + 2 * g * CH;
+                const float* gi = gr + CH;
+                float* o = P.out + 2 * ((n * G + g) * D + j0);
+                for (int64_t j = 0; j < nd; ++j) { o[2 * j] = gr[j]; o[2 * j + 1] = gi[j]; }
+            }
+        }
+    }
+}
+
+}  // namespace RT_NS
