@@ -177,7 +177,7 @@ def apply_velocity(motions: Sequence[PlatformMotion], times, corrections,
 
 def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
                       range_axis, azimuth, elevation, range_gates=None, count: int = 8,
-                      dynamic_range_db: float = 25.0, chirps: int = 8,
+                      dynamic_range_db: float = 25.0, chirps: int = 4,
                       **options) -> list[Scatterer]:
     """Strongest local maxima of a frame's compensated range-angle power.
 
@@ -190,7 +190,9 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     count : int
         Most scatterers returned.
     dynamic_range_db : float
-        Only maxima within this many dB of the strongest [dB].
+        Only maxima within this many dB of the strongest [dB]; the search
+        beams are tapered (Hamming over the aperture) so that sidelobes stay
+        below it. Each maximum is refined on a local grid of a quarter step.
     chirps : int
         Chirps (spread over the frame) whose powers are averaged.
 
@@ -205,9 +207,11 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     pick = np.unique(np.linspace(0, n - 1, min(int(chirps), n)).round().astype(int))
     sel = motion.num_chirps // n
     mo = motion.select(np.concatenate([np.arange(k * sel, (k + 1) * sel) for k in pick]))
+    taper = options.pop("weights", None)
+    taper = _taper(element_positions) if taper is None else taper
     beams = rigid_body_projection(rc[pick], element_positions, mo, wavelength=wavelength,
                                   range_axis=range_axis, azimuth=azimuth, elevation=elevation,
-                                  range_gates=range_gates, **options)
+                                  range_gates=range_gates, weights=taper, **options)
     power = np.mean(np.abs(beams.data) ** 2, axis=0)          # [range, az, el]
     peak = maximum_filter(power, size=3, mode="nearest") == power
     level = power.max() * 10 ** (-positive("dynamic_range_db", dynamic_range_db) / 10)
@@ -215,8 +219,31 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     order = np.argsort(power[tuple(idx.T)])[::-1][:int(count)]
     gates = np.arange(len(range_axis)) if range_gates is None else np.asarray(range_gates)
     az, el = np.asarray(azimuth, dtype=float), np.asarray(elevation, dtype=float)
-    return [Scatterer(int(gates[idx[i, 0]]), float(az[idx[i, 1]]), float(el[idx[i, 2]]))
-            for i in order]
+    step = float(np.median(np.abs(np.diff(az)))) if az.size > 1 else DIRECTION_STEP
+    proj = dict(options, wavelength=wavelength, range_axis=range_axis)
+    found = []
+    for i in order:
+        s = Scatterer(int(gates[idx[i, 0]]), float(az[idx[i, 1]]), float(el[idx[i, 2]]))
+        pk = _peak(rc, element_positions, motion, s, proj, 2 * step, step / 4)
+        if pk is not None:                    # refined to a fraction of the coarse step
+            found.append(Scatterer(s.gate, *pk))
+    return found
+
+
+def _taper(positions) -> np.ndarray:
+    """Hamming taper over the aperture along x and y, ``[channel]`` (sidelobes about -40 dB).
+
+    Detection on a tapered beam keeps a scatterer's sidelobes (-13 dB untapered)
+    from being taken for scatterers of their own.
+    """
+    p = np.asarray(positions, dtype=float)
+    w = np.ones(p.shape[0])
+    for axis in (0, 1):
+        span = np.ptp(p[:, axis])
+        if span > 0:
+            x = (p[:, axis] - p[:, axis].min()) / span
+            w = w * (0.54 - 0.46 * np.cos(2 * np.pi * x))
+    return w
 
 
 def _gate(rc, s: Scatterer, options) -> tuple[np.ndarray, dict]:
@@ -260,24 +287,34 @@ def _clock_tracks(y, motions, scatterers, wavelength: float) -> list:
     return tracks
 
 
+def _peak(rc, positions, m: PlatformMotion, s: Scatterer, options, half: float, step: float
+          ) -> tuple[float, float] | None:
+    """Interpolated (az, el) [rad] of the power peak on a local grid around ``s``.
+
+    ``None`` when the peak lies on the grid's edge (another scatterer's lobe).
+    """
+    offs = np.arange(-half, half + step / 2, step)
+    az, el = s.azimuth + offs, s.elevation + offs
+    x, opts = _gate(rc, s, options)
+    b = rigid_body_projection(x, positions, m, azimuth=az, elevation=el, **opts)
+    p = np.mean(np.abs(b.data[:, 0]) ** 2, axis=0)             # [az, el]
+    i, e = np.unravel_index(int(np.argmax(p)), p.shape)
+    if not (0 < i < az.size - 1 and 0 < e < el.size - 1):
+        return None
+    db = 10 * np.log10(p)
+    fa = _vertex(db[i - 1, e], db[i, e], db[i + 1, e])
+    fe = _vertex(db[i, e - 1], db[i, e], db[i, e + 1])
+    return float(az[i] + fa * step), float(el[e] + fe * step)
+
+
 def _directions(rcs, positions, motions, scatterers, options) -> np.ndarray:
     """Apparent direction of each scatterer in each frame, ``[frame, scatterer, 3]``."""
-    half, step = DIRECTION_HALF_WIDTH, DIRECTION_STEP
-    offs = np.arange(-half, half + step / 2, step)
     out = np.full((len(rcs), len(scatterers), 3), np.nan)
     for k, (rc, m) in enumerate(zip(rcs, motions, strict=True)):
         for j, s in enumerate(scatterers):
-            az, el = s.azimuth + offs, s.elevation + offs
-            x, opts = _gate(rc, s, options)
-            b = rigid_body_projection(x, positions, m, azimuth=az, elevation=el, **opts)
-            p = np.mean(np.abs(b.data[:, 0]) ** 2, axis=0)     # [az, el]
-            i, e = np.unravel_index(int(np.argmax(p)), p.shape)
-            if not (0 < i < az.size - 1 and 0 < e < el.size - 1):
-                continue                                      # peak at the edge: not this one
-            db = 10 * np.log10(p)
-            fa = _vertex(db[i - 1, e], db[i, e], db[i + 1, e])
-            fe = _vertex(db[i, e - 1], db[i, e], db[i, e + 1])
-            out[k, j] = direction(az[i] + fa * step, el[e] + fe * step)
+            pk = _peak(rc, positions, m, s, options, DIRECTION_HALF_WIDTH, DIRECTION_STEP)
+            if pk is not None:
+                out[k, j] = direction(*pk)
     return out
 
 
