@@ -28,6 +28,10 @@ import numpy as np
 
 from ._checks import finite_array
 
+#: Share of the predicted phase-rate energy left after removing a line per track
+#: below which the offset counts as unobservable [1].
+UNOBSERVABLE_FRACTION = 1e-10
+
 
 @dataclass(frozen=True)
 class ClockOffset:
@@ -127,7 +131,8 @@ def fit_time_shift(tracks, *, drift: bool = False, reference_time: float | None 
     yv = np.concatenate(y)
     wv = np.concatenate(w)
     normal = x.T @ (x * wv[:, None])
-    if np.linalg.cond(normal) > 1e12 or np.all(normal == 0):
+    raw = sum(float(np.sum(wt * r ** 2)) for t, wt, r in rows)
+    if np.linalg.cond(normal) > 1e12 or np.trace(normal) <= UNOBSERVABLE_FRACTION * raw:
         raise ValueError("the predicted phase rates are straight lines in every track: the "
                          "clock offset is unobservable (no vibration or acceleration change "
                          "within a frame)")

@@ -171,7 +171,7 @@ def fit_ego_velocity(directions, radial_velocity, sigma=None, *, threshold: floa
         return np.concatenate([(a @ v - b) * w, v / prior])
 
     sol = least_squares(residual, np.zeros(3), loss="huber", f_scale=float(np.median(
-        thr * w)), method="trf")
+        thr * w)), method="trf", xtol=1e-14, ftol=1e-14, gtol=1e-14)
     jac = np.vstack([a * w[:, None], np.eye(3) / prior])
     cov = np.linalg.inv(jac.T @ jac)
     res = a @ sol.x - b
