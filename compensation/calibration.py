@@ -329,7 +329,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
                    estimate: Sequence[str] = ESTIMATES, time_offset: float = 0.0,
                    iterations: int = ITERATIONS, drift: bool = False,
                    offset_search: float = OFFSET_SEARCH_HALF_WIDTH,
-                   detect_grid=None, **options) -> CalibrationResult:
+                   detect_grid=None, detect_gates=None, **options) -> CalibrationResult:
     """Estimate the clock offset, gyro bias and velocity of a record from its radar data.
 
     Parameters
@@ -350,7 +350,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     scatterers : sequence of Scatterer, optional
         Stationary scatterers to use; default :func:`detect_scatterers` on the
         first frame over ``detect_grid`` (``(azimuth, elevation)`` [rad],
-        default -60..60 deg in 2 deg steps).
+        default -60..60 deg in 2 deg steps) and the range bins ``detect_gates``
+        (default all).
     estimate : sequence of str
         Subset of :data:`ESTIMATES`.
     time_offset : float
@@ -401,7 +402,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     if scatterers is None:
         grid = detect_grid if detect_grid is not None else (DETECT_AXIS, DETECT_AXIS)
         scatterers = detect_scatterers(rcs[0], positions, motions[0], azimuth=grid[0],
-                                       elevation=grid[1], **proj)
+                                       elevation=grid[1], range_gates=detect_gates, **proj)
     scatterers = tuple(scatterers)
     if not scatterers:
         raise ValueError("scatterers: none given and none detected; nothing to calibrate on")

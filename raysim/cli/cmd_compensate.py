@@ -47,6 +47,7 @@ no IMU log needed).
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 
@@ -136,9 +137,13 @@ def register(subparsers) -> None:
     p.add_argument("--el-deg", default="-60:60:1", metavar="LO:HI:STEP")
     p.add_argument("--lever-arm", default=None, metavar="X,Y,Z",
                    help="r_IR in B [m] (default: from the cube, else 0,0,0)")
-    p.add_argument("--time-offset", type=float, default=0.0,
-                   help="IMU clock minus radar clock [s]")
-    p.add_argument("--velocity", choices=("hover", "given"), default="hover")
+    p.add_argument("--time-offset", default="0", metavar="SECONDS|auto",
+                   help="IMU clock minus radar clock [s]; 'auto': estimated from the radar "
+                   "(residual slow-time phase of stationary scatterers against the IMU)")
+    p.add_argument("--velocity", choices=("hover", "given", "radar"), default="hover",
+                   help="initial velocity: zero-mean over the record (hover), "
+                   "--initial-velocity (given), or estimated from the Doppler of stationary "
+                   "scatterers (radar, ego-velocity fit)")
     p.add_argument("--initial-velocity", default=None, metavar="VN,VE,VD",
                    help="body velocity in W at the first chirp [m/s] (--velocity given)")
     p.add_argument("--initial-attitude-deg", default="0,0,0", metavar="YAW,PITCH,ROLL",
@@ -217,6 +222,66 @@ def _load_imu(path: str) -> np.ndarray:
     return np.column_stack([s.time, s.gyro, s.accel])
 
 
+def _time_offset(text: str) -> float | None:
+    """``--time-offset`` value [s]; ``None`` for ``auto``."""
+    if text.strip() == "auto":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"--time-offset must be a number of seconds or 'auto', got "
+                         f"{text!r}") from None
+    if not np.isfinite(value):
+        raise ValueError(f"--time-offset must be finite, got {text!r}")
+    return value
+
+
+def _self_calibrate(args, cube: dict, imu: np.ndarray, offset: float | None, lam: float,
+                    options: dict):
+    """Motion with the clock offset and/or velocity estimated from the cube, and the report.
+
+    One frame: the gyro bias (a drift over frames) is not estimated. Scatterers
+    are detected on the selected range cells.
+    """
+    from compensation.calibration import self_calibrate
+    from raysim.processing.maps import range_compress
+
+    estimate = (("time_offset",) if offset is None else ()) + (
+        ("velocity",) if args.velocity == "radar" else ())
+    n = cube["data"].shape[-1]
+    r_axis = _range_axis(cube, n)
+    r_lo, r_hi = span_option(args.range_m, "--range-m", False)
+    gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
+    grid = tuple(int(v) for v in cube["grid_shape"]) if "grid_shape" in cube else None
+    res = self_calibrate([range_compress(cube["data"])], [np.asarray(cube["chirp_times"],
+                                                                     dtype=float)],
+                         cube["element_positions"], imu[:, 0], imu[:, 1:4], imu[:, 4:7],
+                         wavelength=lam, range_axis=r_axis, estimate=estimate,
+                         time_offset=0.0 if offset is None else offset, grid_shape=grid,
+                         detect_gates=gates if gates.size else None, **options)
+    return res.motions[0], res.report()
+
+
+def _range_axis(cube: dict, n_samples: int) -> np.ndarray:
+    """Range of each bin of the unpadded range FFT [m]."""
+    bw, tc, fs = (float(cube[k]) for k in ("bandwidth", "chirp_duration", "sample_rate"))
+    return SPEED_OF_LIGHT * np.arange(n_samples) * fs / n_samples / (2.0 * bw / tc)
+
+
+def _calibration_text(report: dict) -> str:
+    """One line per estimate, with its one-sigma uncertainty."""
+    lines = ["self-calibration (estimate +- one sigma):"]
+    if report.get("time_offset_sigma_s") is not None:
+        lines.append(f"  time offset {1e3 * report['time_offset_s']:.4f} +- "
+                     f"{1e3 * report['time_offset_sigma_s']:.4f} ms")
+    if report.get("frame_velocity_correction_mps"):
+        v, s = report["initial_velocity_mps"], report["initial_velocity_sigma_mps"]
+        lines.append("  initial velocity [m/s] (N, E, D) " + ", ".join(
+            f"{a:.4f} +- {b:.4f}" for a, b in zip(v, s, strict=True)))
+    lines.append(f"  scatterers used: {report['scatterers']}")
+    return "\n".join(lines)
+
+
 def run(args) -> int:
     """Execute ``raysim compensate``; returns the exit code."""
     from dataclasses import replace
@@ -242,7 +307,7 @@ def run(args) -> int:
             raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target "
                              f"direction)")
         u = direction(*np.deg2rad(_floats(args.direction_deg, 2, "--direction-deg")))
-    motion = None
+    motion = calibration = None
     if spec.compensated:
         if args.imu is not None and args.imu_positional is not None:
             raise ValueError(f"give the IMU log once: --imu {args.imu!r} and the positional "
@@ -266,9 +331,15 @@ def run(args) -> int:
             if args.initial_velocity is None:
                 raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
             kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
-        motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], cube["chirp_times"],
-                               lever_arm=lever, time_offset=args.time_offset,
-                               initial_attitude=attitude, velocity=args.velocity, **kwargs)
+        offset = _time_offset(args.time_offset)
+        kwargs.update(lever_arm=lever, initial_attitude=attitude,
+                      velocity="hover" if args.velocity == "radar" else args.velocity)
+        if offset is None or args.velocity == "radar":
+            motion, calibration = _self_calibrate(args, cube, imu, offset, lam, kwargs)
+        else:
+            motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7],
+                                   [np.asarray(cube["chirp_times"], dtype=float)],
+                                   time_offset=offset, **kwargs)
     n_samples = cube["data"].shape[-1]
     r_axis = SPEED_OF_LIGHT * np.arange(n_samples) * fs / n_samples / (2.0 * bw / tc)
     r_lo, r_hi = span_option(args.range_m, "--range-m", False)
@@ -293,11 +364,15 @@ def run(args) -> int:
                      chirp_times=beams.chirp_time, range_m=beams.range,
                      azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
                      velocity_mps=beams.velocity(), chain=np.array(spec.key),
-                     warnings=np.array(beams.warnings, dtype=str))
+                     warnings=np.array(beams.warnings, dtype=str),
+                     **({} if calibration is None else
+                        {"self_calibration": np.array(json.dumps(calibration))}))
 
     atomic_write(args.out, write)
     for w in beams.warnings:
         print(f"warning: {spec.key}: {w}", file=sys.stderr)
+    if calibration is not None:
+        print(_calibration_text(calibration))
     print(f"wrote {args.out}: beams {beams.data.shape} [chirp, range, azimuth, elevation], "
           f"chain {spec.key}" + (f", {len(beams.warnings)} warning(s)" if beams.warnings
                                  else ""))
