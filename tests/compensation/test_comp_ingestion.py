@@ -59,8 +59,9 @@ def test_timestamp_jitter_is_tolerated_with_a_warning():
     """+-0.3 ms stamp jitter at 1 kHz (the spline follows the stamps) warns, no error."""
     t, w, f = _imu()
     tj = t + np.random.default_rng(0).uniform(-3e-4, 3e-4, t.size)
-    with pytest.warns(CompensationWarning, match="imu jitter"):
+    with pytest.warns(CompensationWarning) as caught:
         m = _given(tj, w, f)
+    assert any(str(c.message).startswith("imu jitter:") for c in caught)
     assert m.num_chirps == CHIRPS.size
 
 
