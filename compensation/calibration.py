@@ -43,6 +43,9 @@ ESTIMATES = ("time_offset", "gyro_bias", "velocity")
 DIRECTION_HALF_WIDTH = float(np.deg2rad(3.0))
 #: Step of that grid [rad].
 DIRECTION_STEP = float(np.deg2rad(0.5))
+#: Smallest aperture along x (y) that resolves azimuth (elevation) [wavelengths]
+#: (a 3 dB beam of about 25 deg).
+MIN_APERTURE_WAVELENGTHS = 2.0
 #: Smallest range-rate spread given to the ego-velocity fit [m/s] (a noise-free
 #: simulation leaves only rounding in the phase).
 MIN_RANGE_RATE_SIGMA = 1e-6
@@ -203,6 +206,9 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     """
     from scipy.ndimage import maximum_filter
 
+    has_az, has_el = _apertures(element_positions, wavelength)
+    azimuth = azimuth if has_az else np.zeros(1)            # a line array sees one angle
+    elevation = elevation if has_el else np.zeros(1)
     n = rc.shape[0]
     pick = np.unique(np.linspace(0, n - 1, min(int(chirps), n)).round().astype(int))
     sel = motion.num_chirps // n
@@ -294,17 +300,30 @@ def _peak(rc, positions, m: PlatformMotion, s: Scatterer, options, half: float, 
     ``None`` when the peak lies on the grid's edge (another scatterer's lobe).
     """
     offs = np.arange(-half, half + step / 2, step)
-    az, el = s.azimuth + offs, s.elevation + offs
+    has_az, has_el = _apertures(positions, options["wavelength"])
+    az = s.azimuth + offs if has_az else np.array([s.azimuth])
+    el = s.elevation + offs if has_el else np.array([s.elevation])
     x, opts = _gate(rc, s, options)
     b = rigid_body_projection(x, positions, m, azimuth=az, elevation=el, **opts)
     p = np.mean(np.abs(b.data[:, 0]) ** 2, axis=0)             # [az, el]
     i, e = np.unravel_index(int(np.argmax(p)), p.shape)
-    if not (0 < i < az.size - 1 and 0 < e < el.size - 1):
+    if (has_az and not 0 < i < az.size - 1) or (has_el and not 0 < e < el.size - 1):
         return None
     db = 10 * np.log10(p)
-    fa = _vertex(db[i - 1, e], db[i, e], db[i + 1, e])
-    fe = _vertex(db[i, e - 1], db[i, e], db[i, e + 1])
+    fa = _vertex(db[i - 1, e], db[i, e], db[i + 1, e]) if has_az else 0.0
+    fe = _vertex(db[i, e - 1], db[i, e], db[i, e + 1]) if has_el else 0.0
     return float(az[i] + fa * step), float(el[e] + fe * step)
+
+
+def _apertures(positions, wavelength: float) -> tuple[bool, bool]:
+    """Whether the array resolves azimuth (extent along x) and elevation (along y).
+
+    An extent below :data:`MIN_APERTURE_WAVELENGTHS` wavelengths gives a beam too
+    wide for a peak on the local grid.
+    """
+    p = np.asarray(positions, dtype=float)
+    lim = MIN_APERTURE_WAVELENGTHS * wavelength
+    return bool(np.ptp(p[:, 0]) >= lim), bool(np.ptp(p[:, 1]) >= lim)
 
 
 def _directions(rcs, positions, motions, scatterers, options) -> np.ndarray:
@@ -353,7 +372,9 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         default -60..60 deg in 2 deg steps) and the range bins ``detect_gates``
         (default all).
     estimate : sequence of str
-        Subset of :data:`ESTIMATES`.
+        Subset of :data:`ESTIMATES`. The gyro bias needs two frames and an
+        array that resolves azimuth and elevation; otherwise it is skipped
+        (``gyro`` of the result is ``None``).
     time_offset : float
         First guess of IMU clock minus radar clock [s].
     offset_search : float
@@ -441,7 +462,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             clock = fit_time_shift(_clock_tracks(y, motions, scatterers, lam), drift=drift)
             tau += clock.offset
             motions = integrate()
-        if "gyro_bias" in estimate and len(frames) >= 2:
+        if "gyro_bias" in estimate and len(frames) >= 2 and all(_apertures(positions, lam)):
             if "velocity" in estimate:     # parallax of a translation error is no rotation
                 motions, _ = radar_velocity(motions)
             dirs = _directions(rcs, positions, motions, scatterers, proj)
