@@ -109,6 +109,8 @@ class CalibrationResult:
     initial_velocity_covariance : ndarray, shape ``[3, 3]``
         Its covariance [m^2/s^2].
     scatterers : tuple of Scatterer
+    notes : tuple of str
+        Estimates asked for but not made, and why.
     """
 
     motions: tuple[PlatformMotion, ...]
@@ -120,6 +122,7 @@ class CalibrationResult:
     initial_velocity: np.ndarray
     initial_velocity_covariance: np.ndarray
     scatterers: tuple[Scatterer, ...] = field(default_factory=tuple)
+    notes: tuple[str, ...] = ()
 
     def report(self) -> dict:
         """Estimates with one-sigma uncertainties as plain numbers (SI units)."""
@@ -132,7 +135,7 @@ class CalibrationResult:
                    self.initial_velocity_covariance)).tolist(),
                "frame_velocity_correction_mps": [v.velocity.tolist() for v in self.velocity],
                "frame_velocity_sigma_mps": [v.sigma.tolist() for v in self.velocity],
-               "scatterers": len(self.scatterers)}
+               "scatterers": len(self.scatterers), "notes": list(self.notes)}
         if self.clock is not None and np.isfinite(self.clock.drift_sigma):
             out["clock_drift"] = self.clock.drift
             out["clock_drift_sigma"] = self.clock.drift_sigma
@@ -475,8 +478,12 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         cov0 = corrections[0].covariance
     else:
         cov0 = np.full((3, 3), np.nan)
+    notes = []
+    if "gyro_bias" in estimate and gb is None:
+        notes.append("gyro_bias: not estimated (needs two frames or more and an array that "
+                     "resolves azimuth and elevation)")
     # a constant correction moves the body origin and the radar phase centre alike
     v0 = motions[0].velocity[0]
     return CalibrationResult(tuple(motions), tau, clock, bias, gb, tuple(corrections),
-                             np.asarray(v0, dtype=float), cov0, scatterers)
+                             np.asarray(v0, dtype=float), cov0, scatterers, tuple(notes))
 
