@@ -22,6 +22,18 @@ Modules
     geometry (tables set up once, threads), equal within float32 rounding.
 ``geometry``
     Direction and angle-grid helpers.
+``multiframe``
+    Records of many frames: :func:`integrate_record` (one integration, split
+    per frame), :func:`project_record`, :func:`accumulate`.
+``ego_velocity``, ``clock_offset``, ``gyro_bias``
+    Estimators from the radar, each with its uncertainty: platform velocity
+    (:func:`fit_ego_velocity`), IMU-radar clock offset and drift
+    (:func:`fit_time_shift`), gyro bias (:func:`fit_gyro_bias`).
+``calibration``
+    :func:`self_calibrate`: the estimators run over a record and an IMU log.
+``ingestion``
+    IMU timing (gaps, jitter, rate against vibration), chirp times per
+    frame, hover window by IMU grade.
 ``guards``
     Checks of the compensation's assumptions: IMU gaps (``ValueError``),
     hover window, levelling, small-angle tilt, published rotation phase
@@ -32,9 +44,14 @@ Axis names: ``chirp, channel, sample`` for IF data, ``range, doppler,
 azimuth, elevation`` for processed data (docs/conventions.md).
 """
 
+from .calibration import CalibrationResult, Scatterer, self_calibrate
+from .clock_offset import ClockOffset, fit_time_shift
+from .ego_velocity import EgoVelocity, fit_ego_velocity
 from .exact import rigid_body_projection
 from .geometry import az_el, direction, grid_directions
 from .guards import CompensationWarning, tilt_residual
+from .gyro_bias import GyroBias, fit_gyro_bias
+from .multiframe import accumulate, integrate_record, project_record
 from .paper import (
     PAPER_STEPS,
     paper_chain,
@@ -50,8 +67,10 @@ from .strapdown import STANDARD_GRAVITY, PlatformMotion, integrate_imu, static_m
 __version__ = "0.1.0"
 
 __all__ = [
-    "BeamCube", "CompensationWarning", "PAPER_STEPS", "PlatformMotion", "RealtimeProjector",
-    "STANDARD_GRAVITY",
+    "BeamCube", "CalibrationResult", "ClockOffset", "CompensationWarning", "EgoVelocity",
+    "GyroBias", "PAPER_STEPS", "PlatformMotion", "RealtimeProjector", "STANDARD_GRAVITY",
+    "Scatterer", "accumulate", "fit_ego_velocity", "fit_gyro_bias", "fit_time_shift",
+    "integrate_record", "project_record", "self_calibrate",
     "az_el", "beam_projection", "direction", "grid_directions", "integrate_imu", "paper_chain",
     "range_change", "rigid_body_projection", "slow_time_correction", "static_motion",
     "tilt_correction", "tilt_residual", "yaw_projection",

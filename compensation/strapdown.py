@@ -20,7 +20,9 @@ Two quantities are not observable from an IMU alone and must be supplied:
   window leaves a constant velocity error, which shifts the Doppler of every
   static scatterer by ``2 (dv . u) / lambda`` but does not broaden it.
 
-An IMU record with a gap raises ``ValueError``; a hover window too short to
+IMU gaps of up to two dropped samples, timestamp jitter and an IMU rate below
+2.5 times the vibration band are tolerated with a warning, larger gaps raise
+``ValueError`` (:mod:`compensation.ingestion`); a hover window too short to
 observe the initial velocity, or a levelling window over which the platform
 was not at rest on average, is reported in :attr:`PlatformMotion.warnings`
 (:mod:`compensation.guards`).
@@ -36,7 +38,15 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
 from ._checks import choice, finite_array, positive, rotation_matrices, strictly_increasing
-from .guards import check_imu_gaps, hover_window_warning, levelling_warning
+from .guards import hover_window_warning, levelling_warning
+from .ingestion import (
+    check_frame_times,
+    check_imu_timing,
+    grade_hover_window,
+    imu_rate_warning,
+    is_frame_list,
+    warn,
+)
 
 #: Standard gravity [m/s^2]; ``g_W = (0, 0, +STANDARD_GRAVITY)`` in NED.
 STANDARD_GRAVITY = 9.80665
@@ -207,21 +217,25 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
                   velocity: Literal["hover", "given"] = "hover", initial_velocity=None,
                   hover_window: tuple[float, float] | None = None,
                   gravity: float = STANDARD_GRAVITY,
-                  max_gap: float | None = None) -> PlatformMotion:
+                  max_gap: float | None = None, imu_grade: str | None = None,
+                  vibration_hz: float | None = None) -> PlatformMotion:
     """Integrate IMU samples to the body pose at the radar's chirp times.
 
     Parameters
     ----------
     imu_time : array_like, shape ``[sample]``
         IMU time stamps on the IMU clock [s], strictly increasing, at least 4,
-        without gaps (no interval above ``max_gap``).
+        without gaps above ``max_gap`` (smaller gaps and jitter: warnings).
     gyro : array_like, shape ``[sample, 3]``
         Body angular rate ``omega_B`` [rad/s].
     accel : array_like, shape ``[sample, 3]``
         Specific force ``f_B = R_WB^T (a_W - g_W)`` [m/s^2].
-    chirp_times : array_like, shape ``[chirp]``
-        Chirp start times on the radar clock [s] (several frames may be
-        concatenated), increasing.
+    chirp_times : array_like ``[chirp]``, or a list of them
+        Times on the radar clock [s]: increasing query times (chirp or TDM
+        slot start times), or a list of frames, each uniform (``ValueError``
+        otherwise), separated by any idle time
+        (:func:`compensation.ingestion.check_frame_times`); the result then
+        holds the frames concatenated.
     lever_arm : array_like, shape ``[3]``
         Radar phase centre ``r_IR`` in B [m].
     time_offset : float
@@ -249,27 +263,40 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     hover_window : (float, float), optional
         Radar-clock interval [s] of the hover assumption (zero mean velocity,
         and for ``initial_attitude="level"`` zero mean acceleration); default
-        the span of the IMU samples. A window shorter than 0.5 s or no longer
+        the span of the IMU samples, or with ``imu_grade`` the grade's window
+        centred on the chirps. A window shorter than 0.5 s or no longer
         than the frame leaves the initial velocity poorly observable: a
         ``"hover window: ..."`` entry in ``warnings``.
     gravity : float
         Magnitude of ``g_W`` [m/s^2].
     max_gap : float, optional
-        Largest tolerated IMU sample interval [s]; default 1.5 times the
-        median interval (:data:`compensation.guards.GAP_FACTOR`).
+        Largest tolerated IMU sample interval [s] (tolerated silently); default
+        3.5 times the median interval with an ``"imu gaps"`` warning above 1.5
+        times (:data:`compensation.ingestion.GAP_LIMIT_FACTOR`).
+    imu_grade : {"ideal", "tactical", "consumer_mems"}, optional
+        Grade of the IMU; sets the default hover window
+        (:data:`compensation.ingestion.HOVER_WINDOW_BY_GRADE`: 1 s for
+        consumer MEMS, whose accelerometer bias makes a long window worse than
+        a short one).
+    vibration_hz : float, optional
+        Upper edge of the vibration band [Hz]; default found in the gyro
+        spectrum. An IMU rate below 2.5 times it gives an ``"imu rate"``
+        warning.
 
     Returns
     -------
     PlatformMotion
         Pose, velocity and rates at ``chirp_times``; ``warnings`` lists the
-        assumptions that did not hold (hover window, levelling).
+        assumptions that did not hold (IMU timing, hover window, levelling),
+        the timing ones also issued as :class:`compensation.CompensationWarning`.
 
     Raises
     ------
     ValueError
-        On NaN/inf samples, unsorted times, a gap in the IMU record,
-        mismatched shapes, or chirp times (shifted by ``time_offset``)
-        outside the IMU record.
+        On NaN/inf samples, unsorted times, a gap in the IMU record above
+        ``max_gap``, chirp times not uniform within a frame, mismatched
+        shapes, or chirp times (shifted by ``time_offset``) outside the IMU
+        record.
 
     Notes
     -----
@@ -310,21 +337,25 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
     strictly_increasing("imu_time", t)
     if t.size < 4:
         raise ValueError(f"imu_time must hold at least 4 samples, got {t.size}")
-    check_imu_gaps(t, None if max_gap is None else float(
-        finite_array("max_gap", max_gap, shape=())))
+    timing = warn(check_imu_timing(t, None if max_gap is None else float(
+        finite_array("max_gap", max_gap, shape=()))))
     w = finite_array("gyro", gyro, shape=(t.size, 3), what="(one row per IMU sample, rad/s)")
     f = finite_array("accel", accel, shape=(t.size, 3),
                      what="(one row per IMU sample, m/s^2)")
-    tc = finite_array("chirp_times", chirp_times, ndim=1)
-    if tc.size < 1:
-        raise ValueError("chirp_times must hold at least one time")
-    if tc.size > 1 and np.any(np.diff(tc) < 0):
-        raise ValueError("chirp_times must be sorted in increasing order")
+    if is_frame_list(chirp_times):
+        tc = np.concatenate(check_frame_times(chirp_times))
+    else:    # query times: any increasing times (the pose at arbitrary instants)
+        tc = finite_array("chirp_times", chirp_times, ndim=1)
+        if tc.size < 1:
+            raise ValueError("chirp_times must hold at least one time")
+        if tc.size > 1 and np.any(np.diff(tc) < 0):
+            raise ValueError("chirp_times must be sorted in increasing order")
     lever = finite_array("lever_arm", lever_arm, shape=(3,))
     offset = float(finite_array("time_offset", time_offset, shape=()))
     choice("velocity", velocity, ("hover", "given"))
     g = positive("gravity", gravity)
     unit_warnings = check_imu_units(w, f, g)
+    timing += warn(imu_rate_warning(t, w, vibration_hz))
 
     tq = tc + offset
     span = (t[0], t[-1])
@@ -372,7 +403,10 @@ def integrate_imu(imu_time, gyro, accel, chirp_times, *, lever_arm=(0.0, 0.0, 0.
         part = Rotation.from_rotvec(_magnus_step(rate, t[k], times)).as_matrix()
         return rel[k] @ part
 
-    warnings: tuple[str, ...] = unit_warnings
+    warnings: tuple[str, ...] = timing + unit_warnings
+    if hover_window is None and imu_grade is not None:
+        hover_window = grade_hover_window(imu_grade, (tc[0], tc[-1]),
+                                          (span[0] - offset, span[1] - offset))
     lo, hi = span if hover_window is None else (
         float(hover_window[0]) + offset, float(hover_window[1]) + offset)
     if velocity == "hover" or level:

@@ -63,6 +63,7 @@ no IMU log needed).
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 
@@ -169,9 +170,13 @@ def register(subparsers) -> None:
     p.add_argument("--el-deg", default="-60:60:1", metavar="LO:HI:STEP")
     p.add_argument("--lever-arm", default=None, metavar="X,Y,Z",
                    help="r_IR in B [m] (default: from the cube, else 0,0,0)")
-    p.add_argument("--time-offset", type=float, default=0.0,
-                   help="IMU clock minus radar clock [s]")
-    p.add_argument("--velocity", choices=("hover", "given"), default="hover")
+    p.add_argument("--time-offset", default="0", metavar="SECONDS|auto",
+                   help="IMU clock minus radar clock [s]; 'auto': estimated from the radar "
+                   "(residual slow-time phase of stationary scatterers against the IMU)")
+    p.add_argument("--velocity", choices=("hover", "given", "radar"), default="hover",
+                   help="initial velocity: zero-mean over the record (hover), "
+                   "--initial-velocity (given), or estimated from the Doppler of stationary "
+                   "scatterers (radar, ego-velocity fit)")
     p.add_argument("--initial-velocity", default=None, metavar="VN,VE,VD",
                    help="body velocity in W at the first chirp [m/s] (--velocity given)")
     p.add_argument("--initial-attitude-deg", default="0,0,0", metavar="YAW,PITCH,ROLL",
@@ -209,6 +214,60 @@ def _load_imu(path: str) -> np.ndarray:
     except ImportError as exc:   # an optional reader (pymavlink for .bin) is missing
         raise ValueError(f"IMU file {path!r}: {exc}") from None
     return np.column_stack([s.time, s.gyro, s.accel])
+
+
+def _time_offset(text: str) -> float | None:
+    """``--time-offset`` value [s]; ``None`` for ``auto``."""
+    if text.strip() == "auto":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"--time-offset must be a number of seconds or 'auto', got "
+                         f"{text!r}") from None
+    if not np.isfinite(value):
+        raise ValueError(f"--time-offset must be finite, got {text!r}")
+    return value
+
+
+def _self_calibrate(args, inp, imu: np.ndarray, offset: float | None, lam: float,
+                    r_axis: np.ndarray, gates: np.ndarray, options: dict):
+    """Per-frame motions with the clock offset and/or velocity estimated from the radar.
+
+    Every selected frame takes part (the gyro bias, a drift over frames, needs
+    two or more); stationary scatterers are detected on the selected range
+    cells of the first frame. Returns ``(motions, report)``.
+    """
+    from compensation.calibration import self_calibrate
+    from raysim.processing.maps import range_compress
+
+    estimate = (("time_offset",) if offset is None else ()) + (
+        ("velocity",) if args.velocity == "radar" else ())
+    if len(inp.frames) > 1:
+        estimate += ("gyro_bias",)
+    rcs = [range_compress(inp.read(k))[..., : r_axis.size] for k in range(len(inp.frames))]
+    times = [inp.slot_times[k].ravel() for k in range(len(inp.frames))]
+    if inp.num_slots > 1:
+        options = dict(options, channel_slot=inp.tx_slot)
+    res = self_calibrate(rcs, times, inp.element_positions, imu[:, 0], imu[:, 1:4],
+                         imu[:, 4:7], wavelength=lam, range_axis=r_axis, estimate=estimate,
+                         time_offset=0.0 if offset is None else offset,
+                         grid_shape=inp.grid_shape, detect_gates=gates, **options)
+    return list(res.motions), res.report()
+
+
+def _calibration_text(report: dict) -> str:
+    """One line per estimate, with its one-sigma uncertainty."""
+    lines = ["self-calibration (estimate +- one sigma):"]
+    if report.get("time_offset_sigma_s") is not None:
+        lines.append(f"  time offset {1e3 * report['time_offset_s']:.4f} +- "
+                     f"{1e3 * report['time_offset_sigma_s']:.4f} ms")
+    if report.get("frame_velocity_correction_mps"):
+        v, s = report["initial_velocity_mps"], report["initial_velocity_sigma_mps"]
+        lines.append("  initial velocity [m/s] (N, E, D) " + ", ".join(
+            f"{a:.4f} +- {b:.4f}" for a, b in zip(v, s, strict=True)))
+    lines.append(f"  scatterers used: {report['scatterers']}")
+    return "\n".join(lines)
 
 
 def run(args) -> int:
@@ -250,7 +309,14 @@ def run(args) -> int:
                              f"direction)")
         u = direction(*np.deg2rad(_floats(args.direction_deg, 2, "--direction-deg")))
     slots = inp.num_slots
-    motion = None
+    n_samples = inp.read(0).shape[-1]
+    r_axis = cfg.bin_ranges(n_samples if cfg.complex_sampling else n_samples // 2)
+    r_lo, r_hi = span_option(args.range_m, "--range-m", False)
+    gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
+    if gates.size == 0:
+        raise ValueError(f"--range-m {args.range_m} selects no range cell; cells span "
+                         f"0 .. {r_axis[-1]:.2f} m")
+    motions = calibration = None
     if spec.compensated:
         if args.imu is not None and args.imu_positional is not None:
             raise ValueError(f"give the IMU log once: --imu {args.imu!r} and the positional "
@@ -274,20 +340,21 @@ def run(args) -> int:
             if args.initial_velocity is None:
                 raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
             kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
-        # one integration over every slot of every selected frame, chirp major, slot minor
-        motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], inp.slot_times.ravel(),
-                               lever_arm=lever, time_offset=args.time_offset,
-                               initial_attitude=attitude, velocity=args.velocity, **kwargs)
-    n_samples = inp.read(0).shape[-1]
-    r_axis = cfg.bin_ranges(n_samples if cfg.complex_sampling else n_samples // 2)
-    r_lo, r_hi = span_option(args.range_m, "--range-m", False)
-    gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
-    if gates.size == 0:
-        raise ValueError(f"--range-m {args.range_m} selects no range cell; cells span "
-                         f"0 .. {r_axis[-1]:.2f} m")
+        offset = _time_offset(args.time_offset)
+        kwargs.update(lever_arm=lever, initial_attitude=attitude,
+                      velocity="hover" if args.velocity == "radar" else args.velocity)
+        if offset is None or args.velocity == "radar":
+            motions, calibration = _self_calibrate(args, inp, imu, offset, lam, r_axis, gates,
+                                                   kwargs)
+        else:
+            # one integration over every slot of every selected frame, chirp major, slot minor
+            motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], inp.slot_times.ravel(),
+                                   time_offset=offset, **kwargs)
+            per_frame = inp.slot_times[0].size
+            motions = [motion.select(slice(k * per_frame, (k + 1) * per_frame))
+                       for k in range(len(inp.frames))]
     az = np.deg2rad(span_grid(args.az_deg, "--az-deg"))
     el = np.deg2rad(span_grid(args.el_deg, "--el-deg"))
-    per_frame = inp.slot_times[0].size
     results, found = [], []
     frames = range(len(inp.frames))
     if len(inp.frames) > 1 and not args.no_progress:
@@ -295,34 +362,40 @@ def run(args) -> int:
 
         frames = tqdm(frames, unit="frame", desc="compensate", file=sys.stderr)
     for k in frames:
-        mot = None if motion is None else motion.select(slice(k * per_frame,
-                                                               (k + 1) * per_frame))
+        mot = None if motions is None else motions[k]
         # TDM: every slot's channels with the pose of their own ramp
         channel_slot = inp.tx_slot if mot is not None and slots > 1 else None
         rc = range_compress(inp.read(k))[..., : r_axis.size]
         beams = project(spec, rc, inp.element_positions, wavelength=lam, range_axis=r_axis,
                         azimuth=az, elevation=el, motion=mot, direction=u,
                         grid_shape=inp.grid_shape, range_gates=gates, channel_slot=channel_slot)
-        if motion is None:   # the conventional beamformer carries chirp indices, not times
+        if mot is None:   # the conventional beamformer carries chirp indices, not times
             beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
         found.extend(w for w in beams.warnings if w not in found)
         results.append(beams)
     if as_npz:
-        _write_npz(args.out, results[0], spec.key, az, el)
+        _write_npz(args.out, results[0], spec.key, az, el, calibration)
     else:
+        attrs = {"velocity": args.velocity}
+        if calibration is not None:
+            attrs["self_calibration"] = json.dumps(calibration)
+        if spec.compensated:   # the offset applied: given, or estimated ('auto')
+            attrs["time_offset_s"] = float(calibration["time_offset_s"] if offset is None
+                                           else offset)
         write_compensated_store(args.out, inp, results, chain=spec.key, warnings=found,
                                 azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
-                                extra_attrs={"time_offset_s": float(args.time_offset),
-                                             "velocity": args.velocity})
+                                extra_attrs=attrs)
     for w in found:
         print(f"warning: {spec.key}: {w}", file=sys.stderr)
+    if calibration is not None:
+        print(_calibration_text(calibration))
     shape = (len(results),) + results[0].data.shape
     print(f"wrote {args.out}: beams {shape} [frame, chirp, range, azimuth, elevation], "
           f"chain {spec.key}" + (f", {len(found)} warning(s)" if found else ""))
     return 0
 
 
-def _write_npz(path: str, beams, chain: str, az, el) -> None:
+def _write_npz(path: str, beams, chain: str, az, el, calibration: dict | None) -> None:
     """The single-frame ``.npz`` output (keys in the module docstring)."""
     doppler = beams.doppler()
 
@@ -333,6 +406,8 @@ def _write_npz(path: str, beams, chain: str, az, el) -> None:
                      chirp_times=beams.chirp_time, range_m=beams.range,
                      azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
                      velocity_mps=beams.velocity(), chain=np.array(chain),
-                     warnings=np.array(beams.warnings, dtype=str))
+                     warnings=np.array(beams.warnings, dtype=str),
+                     **({} if calibration is None else
+                        {"self_calibration": np.array(json.dumps(calibration))}))
 
     atomic_write(path, write)

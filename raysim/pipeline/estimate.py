@@ -10,7 +10,25 @@ import numpy as np
 
 from raysim.io.scenario import Scenario
 
-__all__ = ["VELOCITY_MODES", "estimate_motion", "scenario_motion"]
+__all__ = ["VELOCITY_MODES", "estimate_motion", "scenario_motion", "split_frames"]
+
+#: An interval above this multiple of the median chirp interval starts a new frame.
+FRAME_GAP_FACTOR = 1.5
+
+
+def split_frames(chirp_times) -> list[np.ndarray]:
+    """Concatenated chirp times ``[chirp]`` [s] split into frames at idle gaps.
+
+    A run's frames follow each other with idle time (``frame_period``) between
+    them; :func:`compensation.integrate_imu` wants them as separate frames, each
+    uniform.
+    """
+    t = np.asarray(chirp_times, dtype=float).ravel()
+    if t.size < 3:
+        return [t]
+    d = np.diff(t)
+    cut = np.flatnonzero(d > FRAME_GAP_FACTOR * float(np.median(d))) + 1
+    return np.split(t, cut)
 
 #: Initial-velocity handling: ``given`` takes the truth (the flight controller's
 #: state), ``hover`` assumes the velocity averages to zero over the IMU record.
@@ -56,13 +74,14 @@ def estimate_motion(imu_time, gyro, accel, chirp_times, *, lever_arm, trajectory
         raise ValueError(f"velocity: got {velocity!r}, expected one of {list(VELOCITY_MODES)}")
     t = np.asarray(chirp_times, dtype=float).ravel()
     t_ref = float(t[0])
+    frames = split_frames(t)
     if velocity == "given":
         options.setdefault("initial_velocity", trajectory.velocity([t_ref])[0])
     if "initial_attitude" not in options:
         options["initial_attitude"] = trajectory.attitude([t_ref]).as_matrix()[0]
     if "initial_position" not in options:
         options["initial_position"] = trajectory.position([t_ref])[0]
-    return integrate_imu(np.asarray(imu_time), np.asarray(gyro), np.asarray(accel), t,
+    return integrate_imu(np.asarray(imu_time), np.asarray(gyro), np.asarray(accel), frames,
                          lever_arm=lever_arm, time_offset=time_offset, reference_time=t_ref,
                          velocity=velocity, **options)
 

@@ -1,0 +1,489 @@
+"""Self-calibration of a record: the unknowns of the IMU estimated from the radar itself.
+
+Over a record of frames and an IMU log, stationary scatterers give:
+
+* the IMU-radar clock offset (and drift), from their residual slow-time
+  phase against the IMU-predicted phase rate (:mod:`compensation.clock_offset`);
+* the gyro bias, from their apparent angular drift over the frames
+  (:mod:`compensation.gyro_bias`);
+* the platform velocity, from their residual range rates in each frame
+  (:mod:`compensation.ego_velocity`): the IMU's relative motion is kept, the
+  unknown velocity (initial velocity, accelerometer bias, tilt error) is
+  replaced frame by frame.
+
+The clock offset and the gyro bias change the integration itself and are
+iterated (integrate, project, estimate, integrate again); the velocity is
+applied last to the final integration. Every estimate carries its
+uncertainty.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._checks import finite_array, positive
+from .clock_offset import ClockOffset, fit_time_shift, phase_misfit
+from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
+from .exact import rigid_body_projection
+from .geometry import direction
+from .gyro_bias import GyroBias, fit_gyro_bias
+from .ingestion import check_frame_times
+from .multiframe import integrate_record
+from .strapdown import PlatformMotion
+
+__all__ = ["ESTIMATES", "CalibrationResult", "Scatterer", "apply_velocity", "detect_scatterers",
+           "self_calibrate"]
+
+#: Quantities :func:`self_calibrate` can estimate.
+ESTIMATES = ("time_offset", "gyro_bias", "velocity")
+#: Half-width of the local angle grid that measures a scatterer's direction [rad].
+DIRECTION_HALF_WIDTH = float(np.deg2rad(3.0))
+#: Step of that grid [rad].
+DIRECTION_STEP = float(np.deg2rad(0.5))
+#: Smallest aperture along x (y) that resolves azimuth (elevation) [wavelengths]
+#: (a 3 dB beam of about 25 deg).
+MIN_APERTURE_WAVELENGTHS = 2.0
+#: Smallest range-rate spread given to the ego-velocity fit [m/s] (a noise-free
+#: simulation leaves only rounding in the phase).
+MIN_RANGE_RATE_SIGMA = 1e-6
+#: Half-width of the coarse clock-offset search around the first guess [s].
+OFFSET_SEARCH_HALF_WIDTH = 10e-3
+#: Step of that search [s]: within the reach of the linearised fit (a quarter of
+#: the shortest vibration period of 1-2 ms).
+OFFSET_SEARCH_STEP = 0.5e-3
+#: Azimuth and elevation axis of the default scatterer search [rad] (-60..60 deg).
+DETECT_AXIS = np.deg2rad(np.arange(-60.0, 60.5, 2.0))
+#: Frames of the coarse search (the first ones; the fit then uses all).
+SEARCH_FRAMES = 3
+#: Default number of integrate-estimate passes for the clock offset and gyro bias.
+ITERATIONS = 3
+
+
+@dataclass(frozen=True)
+class Scatterer:
+    """A stationary scatterer used for calibration: range gate and global direction.
+
+    Attributes
+    ----------
+    gate : int
+        Range bin of the range-compressed cube.
+    azimuth, elevation : float
+        Direction in W [rad].
+    """
+
+    gate: int
+    azimuth: float
+    elevation: float
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Unit vector in W, shape ``[3]``."""
+        return direction(self.azimuth, self.elevation)
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Corrected motion of a record and the estimates, each with its uncertainty.
+
+    Attributes
+    ----------
+    motions : tuple of PlatformMotion
+        Per-frame motion from the calibrated integration, velocity corrected.
+    time_offset : float
+        IMU clock minus radar clock used for the final integration [s].
+    clock : ClockOffset or None
+        Last clock-offset update (``offset`` is the remaining correction,
+        ``offset_sigma`` the uncertainty of ``time_offset``); ``None`` when
+        not estimated.
+    gyro_bias : ndarray, shape ``[3]``
+        Gyro bias removed from the samples [rad/s] (body frame).
+    gyro : GyroBias or None
+        Last gyro-bias update (``covariance`` the uncertainty of ``gyro_bias``).
+    velocity : tuple of EgoVelocity
+        Per-frame velocity correction added to the IMU velocity [m/s] (W).
+    initial_velocity : ndarray, shape ``[3]``
+        Body velocity in W at the record's first chirp after correction [m/s].
+    initial_velocity_covariance : ndarray, shape ``[3, 3]``
+        Its covariance [m^2/s^2].
+    scatterers : tuple of Scatterer
+    notes : tuple of str
+        Estimates asked for but not made, and why.
+    """
+
+    motions: tuple[PlatformMotion, ...]
+    time_offset: float
+    clock: ClockOffset | None
+    gyro_bias: np.ndarray
+    gyro: GyroBias | None
+    velocity: tuple[EgoVelocity, ...]
+    initial_velocity: np.ndarray
+    initial_velocity_covariance: np.ndarray
+    scatterers: tuple[Scatterer, ...] = field(default_factory=tuple)
+    notes: tuple[str, ...] = ()
+
+    def report(self) -> dict:
+        """Estimates with one-sigma uncertainties as plain numbers (SI units)."""
+        out = {"time_offset_s": self.time_offset,
+               "time_offset_sigma_s": None if self.clock is None else self.clock.offset_sigma,
+               "gyro_bias_rad_s": self.gyro_bias.tolist(),
+               "gyro_bias_sigma_rad_s": None if self.gyro is None else self.gyro.sigma.tolist(),
+               "initial_velocity_mps": self.initial_velocity.tolist(),
+               "initial_velocity_sigma_mps": np.sqrt(np.diag(
+                   self.initial_velocity_covariance)).tolist(),
+               "frame_velocity_correction_mps": [v.velocity.tolist() for v in self.velocity],
+               "frame_velocity_sigma_mps": [v.sigma.tolist() for v in self.velocity],
+               "scatterers": len(self.scatterers), "notes": list(self.notes)}
+        if self.clock is not None and np.isfinite(self.clock.drift_sigma):
+            out["clock_drift"] = self.clock.drift
+            out["clock_drift_sigma"] = self.clock.drift_sigma
+        return out
+
+
+def apply_velocity(motions: Sequence[PlatformMotion], times, corrections,
+                   reference_time: float) -> list[PlatformMotion]:
+    """Motions with a velocity correction interpolated between frames, integrated to position.
+
+    Parameters
+    ----------
+    motions : sequence of PlatformMotion
+        Per-frame motions of one integration.
+    times : array_like, shape ``[frame]``
+        Times of the corrections (frame centres) [s], increasing.
+    corrections : array_like, shape ``[frame, 3]``
+        Velocity to add at those times [m/s] (W).
+    reference_time : float
+        Time at which the position is known (no position change) [s].
+
+    Returns
+    -------
+    list of PlatformMotion
+        Velocity plus ``c(t)``, piecewise linear through the corrections
+        (linear beyond the ends, constant for one frame); position plus
+        ``int_{t_ref}^t c``, so the displacement within and between frames
+        follows the corrected velocity.
+    """
+    from scipy.interpolate import make_interp_spline
+
+    tm = finite_array("times", times, ndim=1)
+    dv = finite_array("corrections", corrections, shape=(tm.size, 3))
+    spline = make_interp_spline(tm, dv, k=min(1, tm.size - 1), axis=0)
+    integral = spline.antiderivative()
+    t_ref = float(reference_time)
+    out = []
+    for m in motions:
+        out.append(PlatformMotion(m.time, m.attitude,
+                                  m.position + integral(m.time) - integral(t_ref),
+                                  m.velocity + spline(m.time), m.angular_rate, m.lever_arm,
+                                  m.warnings))
+    return out
+
+
+def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
+                      range_axis, azimuth, elevation, range_gates=None, count: int = 8,
+                      dynamic_range_db: float = 25.0, chirps: int = 4,
+                      **options) -> list[Scatterer]:
+    """Strongest local maxima of a frame's compensated range-angle power.
+
+    Parameters
+    ----------
+    rc : ndarray, shape ``[chirp, channel, range]``
+        One range-compressed frame.
+    element_positions, motion, wavelength, range_axis, azimuth, elevation, range_gates
+        As for :func:`compensation.rigid_body_projection`; ``motion`` of this frame.
+    count : int
+        Most scatterers returned.
+    dynamic_range_db : float
+        Only maxima within this many dB of the strongest [dB]; the search
+        beams are tapered (Hamming over the aperture) so that sidelobes stay
+        below it. Each maximum is refined on a local grid of a quarter step.
+    chirps : int
+        Chirps (spread over the frame) whose powers are averaged.
+
+    Returns
+    -------
+    list of Scatterer
+        Strongest first.
+    """
+    from scipy.ndimage import maximum_filter
+
+    has_az, has_el = _apertures(element_positions, wavelength)
+    azimuth = azimuth if has_az else np.zeros(1)            # a line array sees one angle
+    elevation = elevation if has_el else np.zeros(1)
+    n = rc.shape[0]
+    pick = np.unique(np.linspace(0, n - 1, min(int(chirps), n)).round().astype(int))
+    sel = motion.num_chirps // n
+    mo = motion.select(np.concatenate([np.arange(k * sel, (k + 1) * sel) for k in pick]))
+    taper = options.pop("weights", None)
+    taper = _taper(element_positions) if taper is None else taper
+    beams = rigid_body_projection(rc[pick], element_positions, mo, wavelength=wavelength,
+                                  range_axis=range_axis, azimuth=azimuth, elevation=elevation,
+                                  range_gates=range_gates, weights=taper, **options)
+    power = np.mean(np.abs(beams.data) ** 2, axis=0)          # [range, az, el]
+    peak = maximum_filter(power, size=3, mode="nearest") == power
+    level = power.max() * 10 ** (-positive("dynamic_range_db", dynamic_range_db) / 10)
+    idx = np.argwhere(peak & (power >= level))
+    order = np.argsort(power[tuple(idx.T)])[::-1][:int(count)]
+    gates = np.arange(len(range_axis)) if range_gates is None else np.asarray(range_gates)
+    az, el = np.asarray(azimuth, dtype=float), np.asarray(elevation, dtype=float)
+    step = float(np.median(np.abs(np.diff(az)))) if az.size > 1 else DIRECTION_STEP
+    proj = dict(options, wavelength=wavelength, range_axis=range_axis)
+    found = []
+    for i in order:
+        s = Scatterer(int(gates[idx[i, 0]]), float(az[idx[i, 1]]), float(el[idx[i, 2]]))
+        pk = _peak(rc, element_positions, motion, s, proj, 2 * step, step / 4)
+        if pk is not None:                    # refined to a fraction of the coarse step
+            found.append(Scatterer(s.gate, *pk))
+    return found
+
+
+def _taper(positions) -> np.ndarray:
+    """Hamming taper over the aperture along x and y, ``[channel]`` (sidelobes about -40 dB).
+
+    Detection on a tapered beam keeps a scatterer's sidelobes (-13 dB untapered)
+    from being taken for scatterers of their own.
+    """
+    p = np.asarray(positions, dtype=float)
+    w = np.ones(p.shape[0])
+    for axis in (0, 1):
+        span = np.ptp(p[:, axis])
+        if span > 0:
+            x = (p[:, axis] - p[:, axis].min()) / span
+            w = w * (0.54 - 0.46 * np.cos(2 * np.pi * x))
+    return w
+
+
+def _gate(rc, s: Scatterer, options) -> tuple[np.ndarray, dict]:
+    """The scatterer's range gate alone (the projection then checks and reads no more)."""
+    opts = dict(options, range_axis=np.asarray(options["range_axis"])[s.gate:s.gate + 1])
+    return np.ascontiguousarray(rc[:, :, s.gate:s.gate + 1]), opts
+
+
+def _beams(rcs, positions, motions, scatterers, options) -> np.ndarray:
+    """Slow-time beam of every scatterer in every frame, ``[frame, scatterer, chirp]``."""
+    out = []
+    for rc, m in zip(rcs, motions, strict=True):
+        rows = []
+        for s in scatterers:
+            x, opts = _gate(rc, s, options)
+            b = rigid_body_projection(x, positions, m, azimuth=[s.azimuth],
+                                      elevation=[s.elevation], **opts)
+            rows.append(b.data[:, 0, 0, 0].astype(complex))
+        out.append(rows)
+    return np.asarray(out)
+
+
+def _loop_motion(m: PlatformMotion, n_chirps: int) -> PlatformMotion:
+    """One pose per chirp loop (the first slot) of a per-slot motion."""
+    return m.select(slice(0, None, m.num_chirps // n_chirps))
+
+
+def _clock_tracks(y, motions, scatterers, wavelength: float) -> list:
+    tracks = []
+    for k, m in enumerate(motions):
+        mo = _loop_motion(m, y.shape[2])
+        for j, s in enumerate(scatterers):
+            yk = y[k, j]
+            t = mo.time
+            # derotate the residual Doppler so the phase unwraps chirp to chirp
+            f0 = np.fft.fftfreq(t.size * 16, d=float(np.median(np.diff(t))))[
+                int(np.argmax(np.abs(np.fft.fft(yk, t.size * 16))))]
+            z = yk * np.exp(-2j * np.pi * f0 * (t - t[0]))
+            rate = -(4 * np.pi / wavelength) * (mo.radar_velocity @ s.direction)
+            tracks.append((t, np.unwrap(np.angle(z)), rate, np.abs(yk) ** 2))
+    return tracks
+
+
+def _peak(rc, positions, m: PlatformMotion, s: Scatterer, options, half: float, step: float
+          ) -> tuple[float, float] | None:
+    """Interpolated (az, el) [rad] of the power peak on a local grid around ``s``.
+
+    ``None`` when the peak lies on the grid's edge (another scatterer's lobe).
+    """
+    offs = np.arange(-half, half + step / 2, step)
+    has_az, has_el = _apertures(positions, options["wavelength"])
+    az = s.azimuth + offs if has_az else np.array([s.azimuth])
+    el = s.elevation + offs if has_el else np.array([s.elevation])
+    x, opts = _gate(rc, s, options)
+    b = rigid_body_projection(x, positions, m, azimuth=az, elevation=el, **opts)
+    p = np.mean(np.abs(b.data[:, 0]) ** 2, axis=0)             # [az, el]
+    i, e = np.unravel_index(int(np.argmax(p)), p.shape)
+    if (has_az and not 0 < i < az.size - 1) or (has_el and not 0 < e < el.size - 1):
+        return None
+    db = 10 * np.log10(p)
+    fa = _vertex(db[i - 1, e], db[i, e], db[i + 1, e]) if has_az else 0.0
+    fe = _vertex(db[i, e - 1], db[i, e], db[i, e + 1]) if has_el else 0.0
+    return float(az[i] + fa * step), float(el[e] + fe * step)
+
+
+def _apertures(positions, wavelength: float) -> tuple[bool, bool]:
+    """Whether the array resolves azimuth (extent along x) and elevation (along y).
+
+    An extent below :data:`MIN_APERTURE_WAVELENGTHS` wavelengths gives a beam too
+    wide for a peak on the local grid.
+    """
+    p = np.asarray(positions, dtype=float)
+    lim = MIN_APERTURE_WAVELENGTHS * wavelength
+    return bool(np.ptp(p[:, 0]) >= lim), bool(np.ptp(p[:, 1]) >= lim)
+
+
+def _directions(rcs, positions, motions, scatterers, options) -> np.ndarray:
+    """Apparent direction of each scatterer in each frame, ``[frame, scatterer, 3]``."""
+    out = np.full((len(rcs), len(scatterers), 3), np.nan)
+    for k, (rc, m) in enumerate(zip(rcs, motions, strict=True)):
+        for j, s in enumerate(scatterers):
+            pk = _peak(rc, positions, m, s, options, DIRECTION_HALF_WIDTH, DIRECTION_STEP)
+            if pk is not None:
+                out[k, j] = direction(*pk)
+    return out
+
+
+def _vertex(lo: float, mid: float, hi: float) -> float:
+    """Vertex offset in steps of the parabola through three samples."""
+    den = lo - 2.0 * mid + hi
+    return 0.0 if den >= 0 else float(np.clip(0.5 * (lo - hi) / den, -0.5, 0.5))
+
+
+def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_time, gyro,
+                   accel, *, wavelength: float, range_axis, scatterers=None,
+                   estimate: Sequence[str] = ESTIMATES, time_offset: float = 0.0,
+                   iterations: int = ITERATIONS, drift: bool = False,
+                   offset_search: float = OFFSET_SEARCH_HALF_WIDTH,
+                   detect_grid=None, detect_gates=None, **options) -> CalibrationResult:
+    """Estimate the clock offset, gyro bias and velocity of a record from its radar data.
+
+    Parameters
+    ----------
+    rcs : sequence of ndarray, each shape ``[chirp, channel, range]``
+        Range-compressed frames.
+    frame_times : sequence of array_like, each shape ``[chirp]`` (or ``[chirp * slot]``)
+        Times of every chirp (TDM: every slot, chirp major) of each frame [s,
+        radar clock], uniform within a frame.
+    element_positions : array_like, shape ``[channel, 3]``
+        Virtual element positions in A [m].
+    imu_time, gyro, accel
+        IMU log (:func:`compensation.integrate_imu`).
+    wavelength : float
+        Mid-chirp wavelength [m].
+    range_axis : array_like, shape ``[range]``
+        Range of each bin [m].
+    scatterers : sequence of Scatterer, optional
+        Stationary scatterers to use; default :func:`detect_scatterers` on the
+        first frame over ``detect_grid`` (``(azimuth, elevation)`` [rad],
+        default -60..60 deg in 2 deg steps) and the range bins ``detect_gates``
+        (default all).
+    estimate : sequence of str
+        Subset of :data:`ESTIMATES`. The gyro bias needs two frames and an
+        array that resolves azimuth and elevation; otherwise it is skipped
+        (``gyro`` of the result is ``None``).
+    time_offset : float
+        First guess of IMU clock minus radar clock [s].
+    offset_search : float
+        Half-width of the coarse clock-offset search around ``time_offset``
+        [s] (phase misfit on a grid of :data:`OFFSET_SEARCH_STEP`); 0 skips
+        it (the first guess is then within about 1 ms).
+    iterations : int
+        Integrate-estimate passes for the clock offset and gyro bias.
+    drift : bool
+        Also estimate the clock drift (reported; the offset is applied).
+    **options
+        For :func:`compensation.integrate_imu` (``lever_arm``,
+        ``initial_attitude``, ``initial_position``, ``velocity``,
+        ``initial_velocity``, ``hover_window``, ``imu_grade`` ...) and
+        :func:`compensation.rigid_body_projection` (``grid_shape``,
+        ``channel_slot``, ``method``, ``focus``).
+
+    Returns
+    -------
+    CalibrationResult
+    """
+    bad = [e for e in estimate if e not in ESTIMATES]
+    if bad:
+        raise ValueError(f"estimate: got {bad}, expected names of {ESTIMATES}")
+    if len(rcs) != len(frame_times) or len(rcs) < 1:
+        raise ValueError(f"rcs holds {len(rcs)} frames and frame_times {len(frame_times)}; "
+                         f"expected the same number, at least one")
+    frames = check_frame_times(list(frame_times))
+    positions = finite_array("element_positions", element_positions, ndim=2)
+    lam = positive("wavelength", wavelength)
+    proj_keys = ("grid_shape", "channel_slot", "method", "focus")
+    proj = {k: options.pop(k) for k in proj_keys if k in options}
+    proj.update(wavelength=lam, range_axis=range_axis)
+    # a few directions: a NUFFT plan per chirp costs more than the lattice sums
+    proj.setdefault("method", "lattice" if proj.get("grid_shape") is not None else "direct")
+    gyro = finite_array("gyro", gyro, ndim=2)
+    tau = float(finite_array("time_offset", time_offset, shape=()))
+    bias = np.zeros(3)
+    clock = gb = None
+
+    def integrate():
+        return integrate_record(imu_time, gyro - bias, accel, frames, time_offset=tau,
+                                **options)
+
+    motions = integrate()
+    if scatterers is None:
+        grid = detect_grid if detect_grid is not None else (DETECT_AXIS, DETECT_AXIS)
+        scatterers = detect_scatterers(rcs[0], positions, motions[0], azimuth=grid[0],
+                                       elevation=grid[1], range_gates=detect_gates, **proj)
+    scatterers = tuple(scatterers)
+    if not scatterers:
+        raise ValueError("scatterers: none given and none detected; nothing to calibrate on")
+    mids = np.array([0.5 * (f[0] + f[-1]) for f in frames])
+    t_ref = float(options.get("reference_time", frames[0][0]))
+    u = np.stack([sc.direction for sc in scatterers])
+    corrections: list[EgoVelocity] = []
+
+    def radar_velocity(ms):
+        """Per-frame ego-velocity fits and the motions corrected with them."""
+        y = _beams(rcs, positions, ms, scatterers, proj)
+        fits = []
+        for k, m in enumerate(ms):
+            t = _loop_motion(m, y.shape[2]).time
+            vr = [slow_time_velocity(y[k, j], t, lam) for j in range(len(scatterers))]
+            v, sig = (np.array(a) for a in zip(*vr, strict=True))
+            fits.append(fit_ego_velocity(u, v, np.maximum(sig, MIN_RANGE_RATE_SIGMA)))
+        dv = np.stack([f.velocity for f in fits])
+        return apply_velocity(ms, mids, dv, t_ref), fits
+
+    if "time_offset" in estimate and offset_search > 0:
+        grid = tau + np.arange(-offset_search, offset_search + OFFSET_SEARCH_STEP / 2,
+                               OFFSET_SEARCH_STEP)
+        cost = []
+        few = slice(0, SEARCH_FRAMES)
+        for cand in grid:
+            ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand,
+                                  **options)
+            y = _beams(rcs[few], positions, ms, scatterers, proj)
+            cost.append(phase_misfit(_clock_tracks(y, ms, scatterers, lam)))
+        tau = float(grid[int(np.argmin(cost))])
+        motions = integrate()
+    for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):
+        if "time_offset" in estimate:
+            y = _beams(rcs, positions, motions, scatterers, proj)
+            clock = fit_time_shift(_clock_tracks(y, motions, scatterers, lam), drift=drift)
+            tau += clock.offset
+            motions = integrate()
+        if "gyro_bias" in estimate and len(frames) >= 2 and all(_apertures(positions, lam)):
+            if "velocity" in estimate:     # parallax of a translation error is no rotation
+                motions, _ = radar_velocity(motions)
+            dirs = _directions(rcs, positions, motions, scatterers, proj)
+            att = np.stack([m.attitude[m.num_chirps // 2] for m in motions])
+            gb = fit_gyro_bias(mids, dirs, att)
+            bias = bias + gb.bias
+            motions = integrate()
+    if "velocity" in estimate:
+        motions, corrections = radar_velocity(motions)
+        cov0 = corrections[0].covariance
+    else:
+        cov0 = np.full((3, 3), np.nan)
+    notes = []
+    if "gyro_bias" in estimate and gb is None:
+        notes.append("gyro_bias: not estimated (needs two frames or more and an array that "
+                     "resolves azimuth and elevation)")
+    # a constant correction moves the body origin and the radar phase centre alike
+    v0 = motions[0].velocity[0]
+    return CalibrationResult(tuple(motions), tau, clock, bias, gb, tuple(corrections),
+                             np.asarray(v0, dtype=float), cov0, scatterers, tuple(notes))
+

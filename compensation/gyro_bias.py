@@ -1,0 +1,128 @@
+"""Gyro bias from the apparent angular drift of stationary scatterers over a record.
+
+With a gyro bias ``b`` (body frame) the integrated attitude is
+``R_est = R (I + [eps]_x)`` with ``eps' = b - omega x eps``, i.e.
+``eps(t) ~= b (t - t_0)`` for a record short against the attitude changes
+(Titterton & Weston, Strapdown Inertial Navigation Technology, 2nd ed., eq.
+11.6 with the rotation term dropped). The exact chain steers with ``R_est``,
+so a scatterer in the world direction ``u`` appears at
+``u_app = R_est R^T u = u + (R eps) x u``: it drifts on the sky by
+``-[u]_x R b (t - t_0)``. Fitting that drift over frames and scatterers (a
+free initial direction per scatterer) gives ``b``. One scatterer observes the
+two components across its line of sight; directions the record does not
+observe keep a zero-mean prior (estimate zero, the prior's spread).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._checks import finite_array, positive
+
+#: Smallest eigenvalue of the normal matrix, relative to the largest, of a bias
+#: direction counted as observed; below it (e.g. the rotation about the line of
+#: sight of a single scatterer) the estimate keeps the prior (zero).
+OBSERVABLE_RCOND = 1e-2
+#: Default spread of the zero-mean prior on each bias component [rad/s] (3 deg/s,
+#: six times the turn-on bias of a consumer MEMS gyroscope).
+BIAS_PRIOR_SIGMA = float(np.deg2rad(3.0))
+
+
+@dataclass(frozen=True)
+class GyroBias:
+    """Gyro bias estimate.
+
+    Attributes
+    ----------
+    bias : ndarray, shape ``[3]``
+        ``b`` in the body frame B [rad/s]; subtract it from the gyro samples.
+    covariance : ndarray, shape ``[3, 3]``
+        Its covariance [rad^2/s^2].
+    residual_rms : float
+        RMS of the direction residual [rad].
+    """
+
+    bias: np.ndarray
+    covariance: np.ndarray
+    residual_rms: float
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """One-sigma uncertainty of each component, shape ``[3]`` [rad/s]."""
+        return np.sqrt(np.diag(self.covariance))
+
+
+def _skew(u: np.ndarray) -> np.ndarray:
+    """``[u]_x`` for ``u [..., 3]``, shape ``[..., 3, 3]``."""
+    z = np.zeros(u.shape[:-1])
+    return np.stack([np.stack([z, -u[..., 2], u[..., 1]], -1),
+                     np.stack([u[..., 2], z, -u[..., 0]], -1),
+                     np.stack([-u[..., 1], u[..., 0], z], -1)], -2)
+
+
+def fit_gyro_bias(times, directions, attitude, *, sigma: float | None = None,
+                  prior_sigma: float = BIAS_PRIOR_SIGMA) -> GyroBias:
+    """Least-squares gyro bias from scatterer directions measured frame after frame.
+
+    Parameters
+    ----------
+    times : array_like, shape ``[frame]``
+        Time of each measurement (frame centre) [s].
+    directions : array_like, shape ``[frame, detection, 3]``
+        Apparent unit directions in W of the same stationary scatterers after
+        compensation with the biased attitude [1]; NaN where a scatterer was
+        not measured.
+    attitude : array_like, shape ``[frame, 3, 3]``
+        ``R_WB`` at each measurement [1].
+    sigma : float, optional
+        One-sigma spread of one direction component [rad]; default from the
+        residual.
+    prior_sigma : float
+        Spread of the zero-mean prior [rad/s] of a bias direction that is not
+        observed (:data:`OBSERVABLE_RCOND`).
+
+    Returns
+    -------
+    GyroBias
+
+    Raises
+    ------
+    ValueError
+        Fewer than two frames, or shapes that disagree.
+    """
+    t = finite_array("times", times, ndim=1)
+    u = np.asarray(directions, dtype=float)
+    if u.ndim != 3 or u.shape[0] != t.size or u.shape[2] != 3:
+        raise ValueError(f"directions must have shape [frame={t.size}, detection, 3], got "
+                         f"{u.shape}")
+    att = finite_array("attitude", attitude, shape=(t.size, 3, 3))
+    if t.size < 2:
+        raise ValueError(f"times must hold at least 2 frames to see a drift, got {t.size}")
+    prior = positive("prior_sigma", prior_sigma)
+    rows, ys = [], []
+    for j in range(u.shape[1]):
+        ok = np.all(np.isfinite(u[:, j]), axis=1)
+        if ok.sum() < 2:
+            continue
+        uj = u[ok, j]
+        mean_u = uj.mean(axis=0)
+        mean_u /= np.linalg.norm(mean_u)
+        a = -_skew(mean_u) @ att[ok] * (t[ok] - t[0])[:, None, None]   # [frame, 3, 3]
+        rows.append((a - a.mean(axis=0)).reshape(-1, 3))
+        ys.append((uj - uj.mean(axis=0)).ravel())
+    if not rows:
+        raise ValueError("directions: no scatterer measured in at least 2 frames")
+    a = np.vstack(rows)
+    y = np.concatenate(ys)
+    lam, vec = np.linalg.eigh(a.T @ a)
+    seen = lam >= OBSERVABLE_RCOND * lam.max()
+    proj = vec[:, seen].T @ (a.T @ y)
+    coef = vec[:, seen] @ (proj / lam[seen])
+    res = y - a @ coef
+    dof = max(y.size - 2 * len(rows) - int(seen.sum()), 1)
+    s2 = float(np.sum(res ** 2) / dof) if sigma is None else positive("sigma", sigma) ** 2
+    cov = (vec[:, seen] * (s2 / lam[seen])) @ vec[:, seen].T
+    cov += (vec[:, ~seen] * prior ** 2) @ vec[:, ~seen].T
+    return GyroBias(coef, cov, float(np.sqrt(np.mean(res ** 2))))

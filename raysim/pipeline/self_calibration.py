@@ -1,0 +1,115 @@
+"""Self-calibration stage: frames + IMU log -> corrected motion and a report of the estimates.
+
+The unknowns an IMU cannot give (the platform velocity, the IMU-radar clock
+offset, the gyro bias) are estimated from the radar frames themselves by
+:func:`compensation.calibration.self_calibrate`; this module feeds it the
+frames of a run (range compression, array geometry, TDM slot times) and turns
+the result into the motion the chains use and a report with units.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from raysim.processing.maps import range_compress
+from raysim.synthesis.frame import RadarFrame
+
+__all__ = ["SelfCalibration", "calibrate_frames"]
+
+
+@dataclass(frozen=True)
+class SelfCalibration:
+    """Corrected motion of a run and the estimates.
+
+    Attributes
+    ----------
+    motion : compensation.PlatformMotion
+        Pose at every chirp (every TDM slot, chirp major) of all frames, in
+        order, as :func:`raysim.pipeline.estimate.estimate_motion` returns it.
+    result : compensation.calibration.CalibrationResult
+        Per-frame motions and estimator outputs.
+    report : dict
+        Estimates with one-sigma uncertainties (SI units, keys with units).
+    """
+
+    motion: object
+    result: object
+    report: dict
+
+
+def _slot_times(frame: RadarFrame) -> np.ndarray:
+    """Transmit time of every slot of every chirp of a frame, chirp major [s]."""
+    offsets = np.arange(frame.array.num_slots) * frame.config.slot_interval
+    return (np.asarray(frame.chirp_times, dtype=float)[:, None] + offsets[None, :]).ravel()
+
+
+def calibrate_frames(frames: Sequence[RadarFrame], imu_time, gyro, accel, *,
+                     time_offset: float = 0.0, estimate=None, trajectory=None,
+                     **options) -> SelfCalibration:
+    """Estimate velocity, clock offset and gyro bias from frames and an IMU log.
+
+    Parameters
+    ----------
+    frames : sequence of RadarFrame
+        The record, in time order (one geometry).
+    imu_time : array_like, shape ``[sample]``
+        IMU time stamps [s, IMU clock].
+    gyro, accel : array_like, shape ``[sample, 3]``
+        Angular rate [rad/s] and specific force [m/s^2] in B.
+    time_offset : float
+        First guess of IMU clock minus radar clock [s].
+    estimate : sequence of str, optional
+        Subset of :data:`compensation.calibration.ESTIMATES` (default all;
+        the gyro bias needs two frames or more).
+    trajectory : raysim.platform.motion.Trajectory, optional
+        Truth of a simulation: the initial attitude and position at the first
+        chirp come from it (an aligned navigation solution), as in
+        :func:`raysim.pipeline.estimate.estimate_motion`. The velocity never
+        does.
+    **options
+        For :func:`compensation.calibration.self_calibrate` (``scatterers``,
+        ``iterations``, ``drift``, ``offset_search``, ``imu_grade``,
+        ``hover_window``, ``initial_attitude`` ...).
+
+    Returns
+    -------
+    SelfCalibration
+    """
+    from compensation.calibration import ESTIMATES, self_calibrate
+
+    if len(frames) < 1:
+        raise ValueError("frames must hold at least one frame")
+    first = frames[0]
+    cfg, arr = first.config, first.array
+    times = [_slot_times(fr) for fr in frames]
+    t0 = float(times[0][0])
+    if trajectory is not None:
+        options.setdefault("initial_attitude", trajectory.attitude([t0]).as_matrix()[0])
+        options.setdefault("initial_position", trajectory.position([t0])[0])
+    options.setdefault("velocity", "hover")
+    options.setdefault("lever_arm", np.asarray(first.lever_arm, dtype=float))
+    if arr.num_slots > 1:
+        options.setdefault("channel_slot", arr.tx_slot)
+    if arr.grid_shape is not None and arr.num_slots == 1:
+        options.setdefault("grid_shape", arr.grid_shape)
+    if estimate is None:
+        estimate = ESTIMATES if len(frames) > 1 else tuple(e for e in ESTIMATES
+                                                          if e != "gyro_bias")
+    rcs = [range_compress(np.asarray(fr.data)) for fr in frames]
+    res = self_calibrate(rcs, times, arr.virtual_positions, imu_time, gyro, accel,
+                         wavelength=cfg.center_wavelength, range_axis=cfg.range_axis(),
+                         estimate=tuple(estimate), time_offset=time_offset,
+                         reference_time=t0, **options)
+    from compensation import PlatformMotion
+
+    ms = res.motions
+    motion = PlatformMotion(np.concatenate([m.time for m in ms]),
+                            np.concatenate([m.attitude for m in ms]),
+                            np.concatenate([m.position for m in ms]),
+                            np.concatenate([m.velocity for m in ms]),
+                            np.concatenate([m.angular_rate for m in ms]), ms[0].lever_arm,
+                            ms[0].warnings)
+    return SelfCalibration(motion, res, res.report())
