@@ -45,3 +45,25 @@ def tone_frequency(signal: np.ndarray, sample_interval: float, *, pad: int = 64)
 def range_profile(cube: np.ndarray) -> np.ndarray:
     """Hann-windowed range FFT over the last axis (no normalisation)."""
     return np.fft.fft(cube * np.hanning(cube.shape[-1]), axis=-1)
+
+
+def write_flat_scene(folder, material, size: float = 60.0, n: int = 6) -> str:
+    """A Mitsuba scene of one flat ground of ``material`` (a MaterialSpec) in ``folder``.
+
+    Frame S (ENU, ground at ``z = 0``) as the bundled scenes; returns the XML path.
+    """
+    import trimesh
+
+    mesh = grid_ground(size, n, 0.0)
+    (folder / "meshes").mkdir(exist_ok=True)
+    trimesh.Trimesh(mesh.vertices, mesh.faces[:, ::-1], process=False).export(
+        folder / "meshes" / "ground.ply")
+    xml = ('<scene version="2.1.0">\n' + material.to_xml()
+           + '    <shape type="ply" id="mesh-ground">\n'
+           '        <string name="filename" value="meshes/ground.ply"/>\n'
+           '        <boolean name="face_normals" value="true"/>\n'
+           f'        <ref id="{material.name}" name="bsdf"/>\n'
+           '    </shape>\n</scene>\n')
+    path = folder / "ground.xml"
+    path.write_text(xml)
+    return str(path)

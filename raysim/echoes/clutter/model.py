@@ -66,9 +66,16 @@ class GroundClutter:
         self.builds = 0
         self._rays = None
         self._scene_name = None
+        self._wanted = (True, True, True)          # (field, specular, ghosts), see tracer()
 
     def tracer(self, tracer):
-        """The tracer to use with this model: no Sionna diffuse, direct target legs only."""
+        """The tracer to use with this model: no Sionna diffuse, direct target legs only.
+
+        The given tracer's switches say which kinds of path are wanted: the field
+        only where ``tracer.diffuse``, the rough mirror and the ghosts only where
+        ``tracer.specular`` (ghosts also need ``tracer.targets``).
+        """
+        self._wanted = (tracer.diffuse, tracer.specular, tracer.specular and tracer.targets)
         return dataclasses.replace(tracer, diffuse=False,
                                    target_depth=1 if self.ghosts else tracer.target_depth)
 
@@ -120,19 +127,22 @@ class GroundClutter:
         radar_w = trajectory.point_world([time], lever)[0, 0]
         r_wb = trajectory.attitude([time]).as_matrix()[0]
         fov = self.settings.fov_half_angle
+        want_field, want_specular, want_ghosts = self._wanted
         sets = [traced]
-        if self.specular:
+        if self.specular and want_specular:
             sets = [self._drop_ground_mirror(traced)]
             sets.append(rough_specular_path(ground, config, radar_w, r_wb, time=time,
                                             polarisation=self.settings.polarisation,
                                             fov_half_angle=fov))
-        field = self.field_for(config, array, radar_w, r_wb)
-        sets.append(field.paths(config, radar_w, r_wb, time=time, occluders=self._occluders()))
+        if want_field:
+            field = self.field_for(config, array, radar_w, r_wb)
+            sets.append(field.paths(config, radar_w, r_wb, time=time,
+                                    occluders=self._occluders()))
         sets = [s for s in sets if s.num_paths] or [sets[0]]
         paths = PathSet.concatenate(sets) if len(sets) > 1 else sets[0]
         tracks = []
         targets = getattr(scene, "targets", None) or []
-        if self.ghosts and targets:
+        if self.ghosts and want_ghosts and targets:
             tracks.append(ground_ghosts(targets, ground, config, radar_w, r_wb, time=time,
                                         polarisation=self.settings.polarisation,
                                         fov_half_angle=fov))
