@@ -53,6 +53,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from raysim.io.scenario_keys import (
+    ClutterSection,
     did_you_mean,
     dumps_toml,
     format_validation_error,
@@ -188,13 +189,7 @@ class SceneSection(_Section):
     name: str | None = None
     path: str | None = None
     max_depth: int = Field(3, ge=0, le=10)
-    #: Ground clutter of ray-traced scenes: the persistent field (docs/clutter.md),
-    #: Sionna's own diffuse paths, or none.
-    clutter: Literal["field", "sionna", "none"] = "field"
-    clutter_per_cell: float = Field(10.0, gt=0, le=1000)
-    clutter_reuse_m: float = Field(0.5, ge=0, le=100)
-    clutter_max_scatterers: int = Field(200_000, ge=1, le=10_000_000)
-    ghosts: bool = True
+    clutter: ClutterSection = Field(default_factory=ClutterSection)
 
     @model_validator(mode="after")
     def _infer_kind(self) -> SceneSection:

@@ -78,16 +78,15 @@ def _rt_scene(scenario: Scenario):
 
 def _clutter(scenario: Scenario):
     """The clutter of a ray-traced scenario: one GroundClutter shared by all its frames."""
-    s = scenario.scene
-    if s.clutter != "field":
-        return s.clutter
+    c = scenario.scene.clutter
+    if c.mode != "field":
+        return c.mode
     from raysim.echoes.clutter.field import FieldSettings
     from raysim.echoes.clutter.model import GroundClutter
 
-    return GroundClutter(FieldSettings(scatterers_per_cell=s.clutter_per_cell,
-                                       reuse_distance=s.clutter_reuse_m,
-                                       max_scatterers=s.clutter_max_scatterers,
-                                       seed=scenario.seed), ghosts=s.ghosts)
+    return GroundClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
+                                       max_scatterers=c.max_scatterers, seed=scenario.seed),
+                         ghosts=c.ghosts)
 
 
 def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFrame]:
