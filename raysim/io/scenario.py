@@ -53,6 +53,7 @@ import numpy as np
 from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
 
 from raysim.io.scenario_keys import (
+    ClutterSection,
     did_you_mean,
     dumps_toml,
     format_validation_error,
@@ -147,6 +148,7 @@ class SceneSection(_Section):
     path: str | None = None
     meshes: list[MeshSpec] = Field(default_factory=list)
     max_depth: int = Field(3, ge=0, le=10)
+    clutter: ClutterSection = Field(default_factory=ClutterSection)
 
     @model_validator(mode="after")
     def _infer_kind(self) -> SceneSection:

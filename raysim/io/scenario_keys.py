@@ -15,12 +15,12 @@ import math
 import re
 import tomllib
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, Literal
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-__all__ = ["get_key", "set_key", "dumps_toml", "format_validation_error", "parse_value",
-           "parse_assignment", "did_you_mean"]
+__all__ = ["ClutterSection", "get_key", "set_key", "dumps_toml", "format_validation_error",
+           "parse_value", "parse_assignment", "did_you_mean"]
 
 
 def did_you_mean(word: Any, choices: Iterable[str]) -> str:
@@ -248,3 +248,23 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     key = key.strip()
     _split(key)
     return key, parse_value(value.strip())
+
+
+# ------------------------------------------------------------------ sections
+class ClutterSection(BaseModel):
+    """``[scene.clutter]``: ground clutter and multipath of ray-traced scenes (docs/clutter.md).
+
+    ``mode``: the persistent clutter field (``"field"``), Sionna's own diffuse
+    paths (``"sionna"``) or none; ``per_cell`` field scatterers per range x
+    angle cell; ``reuse_m`` [m] the field is re-used while the radar stays this
+    close to the pose it was built for; ``max_scatterers`` cost bound;
+    ``ghosts`` target-ground-radar multipath (image method).
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    mode: Literal["field", "sionna", "none"] = "field"
+    per_cell: float = Field(10.0, gt=0, le=1000)
+    reuse_m: float = Field(0.5, ge=0, le=100)
+    max_scatterers: int = Field(200_000, ge=1, le=10_000_000)
+    ghosts: bool = True

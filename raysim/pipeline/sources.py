@@ -81,6 +81,19 @@ def _rt_scene(scenario: Scenario):
     return scene, tracer, render_scene
 
 
+def _clutter(scenario: Scenario):
+    """The clutter of a ray-traced scenario: one GroundClutter shared by all its frames."""
+    c = scenario.scene.clutter
+    if c.mode != "field":
+        return c.mode
+    from raysim.echoes.clutter.field import FieldSettings
+    from raysim.echoes.clutter.model import GroundClutter
+
+    return GroundClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
+                                       max_scatterers=c.max_scatterers, seed=scenario.seed),
+                         ghosts=c.ghosts)
+
+
 def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFrame]:
     """A callable that renders frame ``f`` of the scenario.
 
@@ -120,10 +133,11 @@ def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFr
         return source
 
     scene, tracer, render_scene = _rt_scene(scenario)
+    clutter = _clutter(scenario)          # one field for every frame (persistent clutter)
 
     def rt_source(f: int) -> RadarFrame:
         return render_scene(scene, cfg, arr, traj, lever, tracer=tracer, frame=f,
-                            noise=scenario.noise, seed=scenario.seed + f)
+                            noise=scenario.noise, seed=scenario.seed + f, clutter=clutter)
 
     rt_source.reference = reference_target(scenario, scene)
     return rt_source

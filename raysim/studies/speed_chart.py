@@ -446,8 +446,10 @@ def measure_rt_knobs(*, quick: bool, log: Callable[[str], None] = print,
         key = (samples, depth, retrace)
         if key not in cache:
             tracer = MonostaticTracer(samples_per_src=samples, max_depth=depth)
+            # clutter="sionna": these knobs act on Sionna's own diffuse paths
             t, f = _cpu(render_scene, scene, cfg, arr, traj, lever, tracer=tracer,
-                        retrace_every=retrace, synthesizer=synth, repeat=REPEAT)
+                        retrace_every=retrace, synthesizer=synth, repeat=REPEAT,
+                        clutter="sionna")
             cache[key] = (t, rd_power_map(f.data), int(f.truth["num_paths"]))
             log(f"    samples {samples}, depth {depth}, retrace {retrace}: {t:.2f} CPU s, "
                 f"{cache[key][2]} paths")

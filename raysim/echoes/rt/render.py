@@ -23,7 +23,7 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
                  if_band: str = "cull", path_chunk: int = 256,
                  hover_altitude: float | None = None, noise: bool = False,
                  seed: int | None = None, synthesizer=None,
-                 specular: str = "image") -> RadarFrame:
+                 specular: str = "image", clutter="field") -> RadarFrame:
     """Simulate one IF frame of a ray-traced scene seen from a moving platform.
 
     The scene is traced once from the radar's pose at the first chirp of the
@@ -72,14 +72,26 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
     specular : {"image", "frozen"}
         Re-projection of single-bounce specular paths: exact image method
         (default) or frozen reflection point (see :mod:`raysim.echoes.rt.reproject`).
+    clutter : {"field", "sionna", "none"} or GroundClutter
+        Ground clutter and multipath: a persistent clutter field with rough-surface
+        specular, target-ground ghosts and moving objects
+        (:class:`raysim.echoes.clutter.model.GroundClutter`; pass one instance to
+        every frame to keep the field across frames; ``"field"`` makes a fresh
+        one), Sionna's own diffuse paths (``"sionna"``), or no diffuse paths.
 
     Returns
     -------
     RadarFrame
         ``data`` [chirp, channel, sample] complex64 [sqrt(W)]; ``truth`` holds
         ``scene``, ``trajectory``, ``paths`` (the first :class:`PathSet`),
-        ``num_traces``, ``num_paths`` and ``dropped`` (counts per cull).
+        ``num_traces``, ``num_paths``, ``dropped`` (counts per cull) and
+        ``clutter`` (the field's report, empty without a field).
     """
+    from dataclasses import replace
+
+    from raysim.echoes.clutter.model import resolve_clutter
+    from raysim.echoes.clutter.tracks import synthesize_tracks
+
     if not isinstance(config, RadarConfig):
         raise ValueError(f"config must be a RadarConfig, got {type(config)}")
     if not isinstance(array, VirtualArray):
@@ -93,6 +105,11 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
                          f"got {retrace_every!r}")
     trajectory = stationary() if trajectory is None else trajectory
     tracer = MonostaticTracer() if tracer is None else tracer
+    model = resolve_clutter(clutter)
+    if model is not None:
+        tracer = model.tracer(tracer)
+    elif clutter == "none":
+        tracer = replace(tracer, diffuse=False)
     if not isinstance(scene, RadarScene):
         scene = load_scene(scene, frequency=config.carrier_frequency,
                            hover_altitude=hover_altitude)
@@ -107,17 +124,25 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
     for c0 in range(0, n, block):
         c1 = min(c0 + block, n)
         paths = tracer(scene, config, trajectory, lever, time=float(chirp_times[c0]))
+        tracks = []
+        if model is not None:
+            paths, tracks = model.paths(scene, paths, config, array, trajectory, lever,
+                                        time=float(chirp_times[c0]))
         first = paths if first is None else first
         num_paths += paths.num_paths
         _, cut = synthesize_paths(paths, config, array, trajectory, lever, out=data[c0:c1],
                                   chirps=np.arange(c0, c1), path_chunk=path_chunk, frame=frame,
                                   t0=t0, if_band=if_band, synthesizer=synthesizer,
                                   specular=specular)
+        cut += synthesize_tracks(tracks, config, array, trajectory, lever, out=data[c0:c1],
+                                 chirps=np.arange(c0, c1), frame=frame, t0=t0, if_band=if_band,
+                                 synthesizer=synthesizer)
         for k, v in paths.dropped.items():
             dropped[k] = dropped.get(k, 0) + v
         dropped["if_band"] = dropped.get("if_band", 0) + cut
     if noise:
         add_noise(data, config, seed)
     truth = {"scene": scene.name, "trajectory": trajectory.name, "paths": first,
-             "num_traces": len(range(0, n, block)), "num_paths": num_paths, "dropped": dropped}
+             "num_traces": len(range(0, n, block)), "num_paths": num_paths, "dropped": dropped,
+             "clutter": {} if model is None else model.summary()}
     return RadarFrame(adc_samples(data, config), config, array, chirp_times, lever, frame, truth)

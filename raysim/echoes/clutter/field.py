@@ -1,0 +1,371 @@
+r"""A persistent clutter field: seeded point scatterers fixed on the ground in W.
+
+Each scatterer ``i`` stands for a ground patch of area ``dA_i`` and is one
+frozen path (``kind = DIFFUSE``) whose complex amplitude is
+
+.. math::
+
+    a_i = z_i \sqrt{\frac{P_t G^2 \lambda^2 \sigma^0(\theta_i) dA_i}{(4\pi)^3 R_i^4}},
+    \qquad z_i \sim \mathcal{CN}(0, 1)
+
+(radar equation, Skolnik, *Radar Handbook*, 3rd ed., eq. 7.1 with
+``sigma = sigma0 dA``), so ``E|a_i|^2`` is the mean clutter power of the patch
+and a resolution cell holding many scatterers has a complex Gaussian sum:
+Rayleigh amplitude (Skolnik, sec. 7.5). Positions, ``dA_i`` and ``z_i`` are
+drawn once (seeded) and kept for every chirp and frame while the radar stays
+within ``reuse_distance`` of the pose the field was built for; what changes
+with the pose is ``R_i``, ``theta_i`` and whether the scatterer is shadowed.
+
+Density
+-------
+Scatterers are a Poisson process of intensity
+``rho(p) = n_cell * clip(P2(p) / P_full, min_pattern, 1) / A_cell(p)``, with
+``P2`` the two-way element pattern relative to its peak
+(:func:`raysim.echoes.clutter.pattern.two_way_pattern`) and ``P_full`` =
+:data:`FULL_DENSITY_DB`: every cell seen within that many dB of the peak gets
+the full ``n_cell`` (Rayleigh cells need about ten scatterers whatever their
+gain), only weaker ones are thinned
+and ``A_cell`` the ground area of one range x angle resolution cell:
+``min(R^2 du dv / (cos b cos theta), (dR / sin theta) R sqrt(du dv))``
+(angular cell footprint near nadir, range ring x angular width away from it).
+Thinning a bounding intensity and weighting each kept point by
+``dA_i = 1 / rho(p_i)`` keeps ``sum_i sigma0 dA_i`` an unbiased estimate of the
+integral of ``sigma0`` over the ground. When the expected count exceeds
+``max_scatterers`` the density is scaled down uniformly and the report says so.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from raysim.echoes.clutter.ground import GroundSurface
+from raysim.echoes.clutter.pattern import two_way_pattern
+from raysim.radar.pattern import PATTERN_FLOOR_DB
+from raysim.echoes.clutter.sigma0 import POLARISATIONS, sigma0
+from raysim.echoes.rt.trace import DIFFUSE, PathSet
+from raysim.radar.arrays import VirtualArray
+from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
+
+#: Two-way element gain relative to its peak [dB] down to which the field keeps its full
+#: density; cells seen weaker than this are thinned in proportion (cost), to ``min_pattern``.
+FULL_DENSITY_DB = -20.0
+
+__all__ = ["FieldSettings", "ClutterField", "angular_resolution", "radar_scale"]
+
+#: Longest edge of a ground facet before sampling [m]; smaller facets bound the density tightly.
+MAX_EDGE = 1.0
+#: Safety factor on the sampled density maximum of a facet.
+BOUND_MARGIN = 1.5
+#: Shortest distance kept before a scatterer on shadowing rays [m].
+SHADOW_EPSILON = 0.01
+
+
+@dataclass(frozen=True)
+class FieldSettings:
+    """Options of a clutter field.
+
+    Attributes
+    ----------
+    scatterers_per_cell : float
+        Scatterers per range x angle resolution cell where the two-way pattern is 1 (> 0).
+    min_pattern : float
+        Pattern value below which the density stops falling, in (0, 1].
+    max_scatterers : int
+        Bound on the expected number of scatterers (cost bound), >= 1.
+    reuse_distance : float
+        Radar displacement from the build pose up to which the field is re-used [m].
+    shadowing : bool
+        Cast a ray from the radar to every scatterer (Mitsuba) and drop the occluded.
+    polarisation : {"VV", "HH"}
+        Channel of ``sigma0``.
+    fov_half_angle : float, optional
+        Field of view around boresight [rad], in (0, pi/2]; default (``None``)
+        the element pattern's cull cone (:meth:`fov`).
+    seed : int
+        Seed of positions and amplitudes.
+    """
+
+    scatterers_per_cell: float = 10.0
+    min_pattern: float = 0.1
+    max_scatterers: int = 200_000
+    reuse_distance: float = 0.5
+    shadowing: bool = True
+    polarisation: str = "VV"
+    fov_half_angle: float | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not self.scatterers_per_cell > 0:
+            raise ValueError(f"scatterers_per_cell must be > 0, got {self.scatterers_per_cell!r}")
+        if not 0 < self.min_pattern <= 1:
+            raise ValueError(f"min_pattern must lie in (0, 1], got {self.min_pattern!r}")
+        if int(self.max_scatterers) != self.max_scatterers or self.max_scatterers < 1:
+            raise ValueError(f"max_scatterers must be an integer >= 1, "
+                             f"got {self.max_scatterers!r}")
+        if not self.reuse_distance >= 0:
+            raise ValueError(f"reuse_distance must be >= 0 m, got {self.reuse_distance!r}")
+        if self.polarisation not in POLARISATIONS:
+            raise ValueError(f"polarisation must be one of {POLARISATIONS}, "
+                             f"got {self.polarisation!r}")
+        if self.fov_half_angle is not None and not 0 < self.fov_half_angle <= math.pi / 2:
+            raise ValueError(f"fov_half_angle must lie in (0, pi/2] rad or be None, "
+                             f"got {self.fov_half_angle!r}")
+        if int(self.seed) != self.seed or self.seed < 0:
+            raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
+
+    def fov(self, config: RadarConfig) -> float:
+        """Half-angle of the cone around boresight the field covers [rad].
+
+        ``fov_half_angle`` if set, else where the element pattern's one-way gain
+        falls :data:`~raysim.radar.pattern.PATTERN_FLOOR_DB` below its peak (the
+        tracer's cull), at most 89 deg (the ground is below the horizon).
+        """
+        if self.fov_half_angle is not None:
+            return float(self.fov_half_angle)
+        return min(config.pattern.cull_angle(PATTERN_FLOOR_DB), math.radians(89.0))
+
+
+def angular_resolution(array: VirtualArray, wavelength: float) -> tuple[float, float]:
+    """Rayleigh resolution ``(du, dv)`` in direction cosines along ``x_A``, ``y_A``.
+
+    ``lambda / (n s)`` for ``n`` distinct two-way phase-centre coordinates
+    ``p_tx + p_rx`` at spacing ``s``; 2 (no resolution) along an axis with one.
+    """
+    p = array.tx_positions + array.rx_positions
+    out = []
+    for axis in (0, 1):
+        u = np.unique(np.round(p[:, axis] / (1e-6 * wavelength)))
+        if u.size < 2:
+            out.append(2.0)
+            continue
+        s = float(np.min(np.diff(u))) * 1e-6 * wavelength
+        out.append(min(2.0, wavelength / (u.size * s)))
+    return out[0], out[1]
+
+
+def radar_scale(config: RadarConfig) -> float:
+    """``P_t lambda^2 / (4 pi)^3`` [W m^2]: received power is this times ``G_t G_r sigma / R^4``.
+
+    0 dBi elements: like every :class:`~raysim.echoes.rt.trace.PathSet`, the
+    clutter paths leave the two-way element gain to the re-projection
+    (:func:`raysim.echoes.rt.reproject.pattern_amplitude`).
+    """
+    pt = 10 ** (config.tx_power_dbm / 10) * 1e-3
+    return pt * config.wavelength**2 / (4 * math.pi) ** 3
+
+
+def _subdivide(tris: np.ndarray, idx: np.ndarray, max_edge: float):
+    """Split triangles into four until no edge exceeds ``max_edge``; keeps the parent index."""
+    out_t, out_i = [], []
+    while len(tris):
+        e = np.max(np.linalg.norm(tris - np.roll(tris, 1, axis=1), axis=-1), axis=1)
+        small = e <= max_edge
+        out_t.append(tris[small])
+        out_i.append(idx[small])
+        t, i = tris[~small], idx[~small]
+        a, b, c = t[:, 0], t[:, 1], t[:, 2]
+        ab, bc, ca = 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)
+        tris = np.concatenate([np.stack(s, axis=1) for s in (
+            (a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+        idx = np.tile(i, 4)
+    return np.concatenate(out_t), np.concatenate(out_i)
+
+
+@dataclass(frozen=True, eq=False)
+class ClutterField:
+    """Seeded ground scatterers fixed in W (build with :meth:`build`).
+
+    Attributes
+    ----------
+    positions : ndarray, shape ``[scatterer, 3]``
+        Positions in W [m].
+    normals : ndarray, shape ``[scatterer, 3]``
+        Upward ground normals there.
+    material : ndarray of str, shape ``[scatterer]``
+        Clutter material ids.
+    area : ndarray, shape ``[scatterer]``
+        Ground area each scatterer stands for, ``dA_i`` [m^2].
+    z : ndarray, complex128, shape ``[scatterer]``
+        Unit complex Gaussian amplitude factors.
+    anchor : ndarray, shape ``[3]``
+        Radar position the field was built for, in W [m].
+    settings : FieldSettings
+    report : dict
+        ``num_scatterers``, ``expected``, ``density_scale`` (1 unless capped),
+        ``cell_area_nadir`` [m^2], ``resolution`` ``(dR, du, dv)``, ``build_s``
+        (wall) and ``build_cpu_s``.
+    """
+
+    positions: np.ndarray
+    normals: np.ndarray
+    material: np.ndarray
+    area: np.ndarray
+    z: np.ndarray
+    anchor: np.ndarray
+    settings: FieldSettings
+    report: dict = field(default_factory=dict)
+
+    @property
+    def num_scatterers(self) -> int:
+        """Number of scatterers."""
+        return int(self.area.shape[0])
+
+    def covers(self, radar_w) -> bool:
+        """Whether a radar at ``radar_w`` [m] is within ``reuse_distance`` of the anchor."""
+        d = np.linalg.norm(np.asarray(radar_w, dtype=float) - self.anchor)
+        return bool(d <= self.settings.reuse_distance)
+
+    # ------------------------------------------------------------------ build
+    @classmethod
+    def build(cls, ground: GroundSurface, config: RadarConfig, array: VirtualArray,
+              radar_w, r_wb, settings: FieldSettings | None = None) -> ClutterField:
+        """Sample the field for a radar at ``radar_w`` with attitude ``r_wb``.
+
+        Parameters
+        ----------
+        ground : GroundSurface
+        config : RadarConfig
+            Range resolution and range window (``max_range``).
+        array : VirtualArray
+            Angular resolution.
+        radar_w : array_like, shape ``[3]``
+            Radar phase centre in W [m].
+        r_wb : array_like, shape ``[3, 3]``
+            Attitude (body to world); boresight is its third column.
+        settings : FieldSettings, optional
+        """
+        if not isinstance(ground, GroundSurface):
+            raise ValueError(f"ground must be a GroundSurface, got {type(ground)}")
+        s = FieldSettings() if settings is None else settings
+        t_wall, t_cpu = _time.perf_counter(), _time.process_time()
+        x0 = np.asarray(radar_w, dtype=float)
+        bore = np.asarray(r_wb, dtype=float)[:, 2]
+        dr = config.range_resolution
+        du, dv = angular_resolution(array, config.wavelength)
+        r_max = config.max_range + s.reuse_distance
+        cos_fov = math.cos(min(s.fov(config) + math.radians(5.0), math.pi / 2))
+        pattern = config.pattern
+        r_wb = np.asarray(r_wb, dtype=float)
+
+        tris = ground.triangles
+        dist = np.linalg.norm(tris - x0, axis=-1)
+        near = dist.min(axis=1) < r_max
+        tris, idx = _subdivide(tris[near], np.nonzero(near)[0], MAX_EDGE)
+        normals = ground.normals[idx]
+
+        def density(p, n):
+            d = p - x0
+            r = np.linalg.norm(d, axis=-1)
+            u = d / r[..., None]
+            cos_b = u @ bore
+            cos_i = np.clip(-np.sum(u * n, axis=-1), 1e-3, 1.0)
+            sin_i = np.sqrt(1.0 - cos_i**2)
+            cb = np.clip(cos_b, 1e-3, 1.0)
+            a_ang = r**2 * du * dv / (cb * cos_i)
+            a_rng = dr / np.maximum(sin_i, 1e-9) * r * math.sqrt(du * dv)
+            rel = two_way_pattern(pattern, u @ r_wb) / 10 ** (FULL_DENSITY_DB / 10)   # u in A
+            w = np.clip(rel, s.min_pattern, 1.0)
+            rho = s.scatterers_per_cell * w / np.minimum(a_ang, a_rng)
+            ok = (r < r_max) & (cos_b >= cos_fov) & (np.sum(u * n, axis=-1) < 0)
+            return np.where(ok, rho, 0.0)
+
+        probes = np.concatenate([tris, 0.5 * (tris + np.roll(tris, 1, axis=1)),
+                                 tris.mean(axis=1, keepdims=True)], axis=1)   # [facet, 7, 3]
+        rho_probe = density(probes, normals[:, None, :])
+        bound = BOUND_MARGIN * rho_probe.max(axis=1)
+        areas = 0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]),
+                                     axis=-1)
+        expected = float(np.sum(rho_probe[:, -1] * areas))
+        scale = min(1.0, s.max_scatterers / expected) if expected > 0 else 1.0
+        rng = np.random.default_rng([s.seed, 0xC1077E])
+        counts = rng.poisson(bound * scale * areas)
+        f = np.repeat(np.arange(len(tris)), counts)
+        r1, r2 = np.sqrt(rng.random(f.size)), rng.random(f.size)
+        t = tris[f]
+        p = ((1 - r1)[:, None] * t[:, 0] + (r1 * (1 - r2))[:, None] * t[:, 1]
+             + (r1 * r2)[:, None] * t[:, 2])
+        rho = scale * density(p, normals[f])
+        keep = rng.random(f.size) * bound[f] * scale < rho
+        p, f, rho = p[keep], f[keep], rho[keep]
+        eff = np.minimum(rho, bound[f] * scale)                     # intensity actually drawn
+        z = (rng.standard_normal(p.shape[0]) + 1j * rng.standard_normal(p.shape[0])) / math.sqrt(2)
+        h = _height_above(ground, x0)
+        nadir = float("nan") if h is None else h**2 * du * dv
+        report = {"num_scatterers": int(p.shape[0]), "expected": expected * scale,
+                  "expected_uncapped": expected, "density_scale": scale,
+                  "cell_area_nadir": float(nadir), "resolution": (dr, du, dv),
+                  "scatterers_per_cell": s.scatterers_per_cell,
+                  "build_s": _time.perf_counter() - t_wall,
+                  "build_cpu_s": _time.process_time() - t_cpu}
+        return cls(p, normals[f], ground.material[idx[f]], 1.0 / eff, z, x0.copy(), s, report)
+
+    # ------------------------------------------------------------------ paths
+    def paths(self, config: RadarConfig, radar_w, r_wb, *, time: float = 0.0,
+              occluders=None, min_range: float = 0.0) -> PathSet:
+        """The scatterers seen from a radar at ``radar_w`` as frozen DIFFUSE paths.
+
+        Parameters
+        ----------
+        config : RadarConfig
+            Power, gain, wavelength and range window.
+        radar_w : array_like, shape ``[3]``
+            Radar phase centre in W [m]; must be within ``reuse_distance`` of ``anchor``.
+        r_wb : array_like, shape ``[3, 3]``
+            Attitude (boresight is its third column).
+        time : float
+            Trace instant stored in the PathSet [s].
+        occluders : raysim.echoes.po.rays.RayScene, optional
+            Geometry for shadowing rays (``settings.shadowing``); None skips them.
+        min_range : float
+            Smallest kept ``length / 2`` [m].
+
+        Returns
+        -------
+        PathSet
+            ``dropped`` counts ``"range"``, ``"fov"``, ``"shadow"``.
+        """
+        x0 = np.asarray(radar_w, dtype=float)
+        if not self.covers(x0):
+            raise ValueError(f"radar_w {x0.tolist()} is more than reuse_distance = "
+                             f"{self.settings.reuse_distance} m from the field's anchor "
+                             f"{self.anchor.tolist()}; build a new field")
+        bore = np.asarray(r_wb, dtype=float)[:, 2]
+        d = self.positions - x0
+        r = np.linalg.norm(d, axis=-1)
+        u = d / r[:, None]
+        cos_i = -np.sum(u * self.normals, axis=-1)
+        in_range = (r >= min_range) & (r < config.max_range)
+        in_fov = (u @ bore >= math.cos(self.settings.fov(config))) & (cos_i > 0)
+        ok = in_range & in_fov
+        dropped = {"range": int(np.sum(~in_range)), "fov": int(np.sum(in_range & ~in_fov))}
+        if occluders is not None and self.settings.shadowing and ok.any():
+            sel = np.nonzero(ok)[0]
+            free = occluders.unoccluded(np.broadcast_to(x0, (sel.size, 3)), u[sel],
+                                        r[sel] - SHADOW_EPSILON)
+            ok[sel[~free]] = False
+            dropped["shadow"] = int(np.sum(~free))
+        pos, r, cos_i = self.positions[ok], r[ok], cos_i[ok]
+        theta = np.arccos(np.clip(cos_i, 0.0, 1.0 - 1e-12))
+        s0 = np.empty(r.size)
+        mats = self.material[ok]
+        for m in np.unique(mats):
+            sel = mats == m
+            s0[sel] = sigma0(theta[sel], str(m), self.settings.polarisation,
+                             wavelength=config.wavelength)
+        amp = self.z[ok] * np.sqrt(radar_scale(config) * s0 * self.area[ok] / r**4)
+        n = amp.size
+        pol = np.zeros((n, 2, 2), complex)
+        pol[:, 0, 0] = amp
+        length = 2.0 * r
+        return PathSet(pos, pos.copy(), length, amp, np.zeros((n, 3)), np.zeros(n),
+                       np.full((n, 1), DIFFUSE, np.uint32), np.full(n, DIFFUSE, np.uint32), pol,
+                       length / SPEED_OF_LIGHT, x0.copy(), x0.copy(), float(time), dropped)
+
+
+def _height_above(ground: GroundSurface, x0: np.ndarray) -> float | None:
+    _, z = ground.locate(x0[None])
+    return None if not np.isfinite(z[0]) else float(z[0] - x0[2])
