@@ -31,10 +31,13 @@ tone sum wins for a handful of paths, the kernel (else the NUFFT) from about
 20 paths per frame on the paper radar. Without the extension ``auto`` falls
 back to FINUFFT.
 
-``decimate`` (``"auto"`` or an integer) computes exact rows on every D-th chirp
-only and interpolates the others along slow time
-(:mod:`raysim.synthesis.decimate`); it applies to ``"kernel"`` and
-``"nufft"`` and is refused (every chirp exact) where its assumptions fail.
+``decimate`` (``"auto"`` or an integer) computes exact rows on a subset of the
+chirps only (every D-th one, plus a few near the edges) and interpolates the
+others along slow time (:mod:`raysim.synthesis.decimate`); with ``"auto"`` the
+paths are split by their own Doppler bound (static scatterers, whose band is
+set by the platform's motion alone, get a much larger factor than moving
+clutter). It applies to ``"kernel"`` and ``"nufft"`` and is refused (every
+chirp exact) where its assumptions fail.
 """
 
 from __future__ import annotations
@@ -183,7 +186,7 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         Threads for the NUFFT and the kernel (default: usable CPUs).
     decimate : "auto" or int, default 1
         Slow-time decimation factor for ``"kernel"`` and ``"nufft"``
-        (:func:`raysim.synthesis.decimate.plan_decimation`, with
+        (:func:`raysim.synthesis.decimate.plan_groups`, with
         ``DECIMATION_EPS_SHARE`` of ``eps``; the row method gets the rest).
         ``1`` renders every chirp exactly; refused (every chirp exact) where
         its assumptions fail.
@@ -231,25 +234,31 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     # decimation needs its row share of eps to stay above the methods' floor
     if method in ("nufft", "kernel") and decimate != 1 and \
             (1.0 - DECIMATION_EPS_SHARE) * eps >= MIN_EPS:
-        from raysim.synthesis.decimate import interpolate, plan_decimation
+        from raysim.synthesis.decimate import plan_groups, scatter_add
 
-        plan = plan_decimation(src, config, len(chirps), DECIMATION_EPS_SHARE * eps, decimate)
-        if plan.factor > 1:
+        groups = plan_groups(src, config, len(chirps), DECIMATION_EPS_SHARE * eps, decimate)
+        if any(plan.factor > 1 for _, plan in groups):
             rows_eps = (1.0 - DECIMATION_EPS_SHARE) * eps
             shape = (len(chirps), src.num_channels, config.num_samples)
             if out is not None and (out.shape != shape or out.dtype != np.complex64):
                 raise ValueError(f"out must be complex64 of shape {shape}, "
                                  f"got {out.dtype} {out.shape}")
-            rows = np.zeros(shape, dtype=np.complex64)
-            exact = np.zeros((plan.exact.size,) + shape[1:], dtype=np.complex64)
-            _render_chirps(src, config, method, rows_eps, chirps.start + plan.exact, exact,
-                           threads)
-            rows[plan.exact] = exact
-            del exact
-            interpolate(rows, plan)
-            if out is None:
-                return rows
-            out += rows
+            target = out if out is not None and out.flags.c_contiguous \
+                else np.zeros(shape, dtype=np.complex64)
+            for members, plan in groups:
+                part = src
+                if members.size < src.num_paths:
+                    mask = np.zeros(src.num_paths, bool)
+                    mask[members] = True
+                    part = src.select(mask)
+                exact = np.zeros((plan.exact.size,) + shape[1:], dtype=np.complex64)
+                _render_chirps(part, config, method, rows_eps, chirps.start + plan.exact,
+                               exact, threads)
+                scatter_add(target, exact, plan)
+                del exact
+            if out is None or target is out:
+                return target
+            out += target
             return out
     if method == "kernel":
         from raysim.synthesis.kernel import synthesize_kernel
