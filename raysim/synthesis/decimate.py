@@ -71,8 +71,9 @@ MAX_GAIN = 1.5
 #: to the prolate matrix's unit diagonal): keeps the weights bounded where the exact chirps
 #: oversample the band, at an error cost of about this fraction of the tolerance.
 RIDGE_SHARE = 0.1
-#: Smallest ridge (float64 eigenvalues of the prolate matrix carry ~1e-16 of rounding).
-RIDGE_FLOOR = 1e-15
+#: Smallest ridge: the prolate matrix is near-singular, and LU in float64 needs a margin
+#: above its ~1e-16 rounding.
+RIDGE_FLOOR = 1e-14
 #: Frequencies per oscillation of ``|E(f)|`` at which each chirp's error is evaluated.
 ERROR_GRID = 12
 #: Safety factor on the error maximum read off that grid (|E| is smooth between points).
@@ -173,11 +174,8 @@ def _weights_for(off: np.ndarray, band: float, tol: float):
     modelled error (largest ``|E(f)|`` over ``|f| <= band``) and l2 gain."""
     two_b = 2.0 * band
     gram = np.sinc(two_b * (off[:, :, None] - off[:, None, :]))
-    # ridge solve through the eigenvectors (the prolate matrix is near-singular)
-    lam, vec = np.linalg.eigh(gram)
-    ridge = max((RIDGE_SHARE * tol) ** 2, RIDGE_FLOOR)
-    proj = np.einsum("pkj,pk->pj", vec, np.sinc(two_b * off)) / (np.maximum(lam, 0.0) + ridge)
-    w = np.einsum("pkj,pj->pk", vec, proj)
+    gram += max((RIDGE_SHARE * tol) ** 2, RIDGE_FLOOR) * np.eye(off.shape[1])
+    w = np.linalg.solve(gram, np.sinc(two_b * off)[..., None])[..., 0]
     # |E(f)| oscillates at most band * max|off| times over [0, band]: sample each period
     # ERROR_GRID times (|E(-f)| = |E(f)| for real weights)
     n_f = int(ERROR_GRID * (1.0 + band * float(np.abs(off).max(initial=0.0))))
