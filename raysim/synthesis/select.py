@@ -22,6 +22,12 @@ Three ways to evaluate the same stop-and-hop tone sum
     chirp, channel) on one thread at ``eps = 1e-5``; error model
     :func:`raysim.synthesis.kernel.kernel_error`.
 
+``"drjit"``
+    :func:`raysim.synthesis.drjit_kernel.synthesize_drjit`, the same kernel written
+    in Dr.Jit (CUDA where a GPU is present, else LLVM; :class:`PathDelays` only;
+    float64 grid, same error model). Only on request: ``"auto"`` does not pick it,
+    and ``decimate`` does not apply to it.
+
 ``method="auto"`` picks ``"direct"`` when ``eps < 1e-6`` (below what complex64
 output carries) and otherwise the cheapest of ``"tones"`` (only where
 :func:`tones_error` is below ``eps``), ``"kernel"`` (only for a
@@ -59,8 +65,8 @@ from raysim.synthesis.nufft import (
 )
 from raysim.synthesis.tones import synthesize_if, synthesize_if_direct
 
-Method = Literal["auto", "nufft", "tones", "direct", "kernel"]
-METHODS = ("auto", "nufft", "tones", "direct", "kernel")
+Method = Literal["auto", "nufft", "tones", "direct", "kernel", "drjit"]
+METHODS = ("auto", "nufft", "tones", "direct", "kernel", "drjit")
 
 #: Cost-model constants [s], measured on 2 cores (see docs/speed.md).
 COST_DIRECT_PER_TERM = 22e-9
@@ -173,7 +179,7 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         Complex IF amplitudes [sqrt(W)] without the propagation phase;
         ``None`` with a ``PathDelays``.
     config : RadarConfig
-    method : {"auto", "nufft", "tones", "direct", "kernel"}
+    method : {"auto", "nufft", "tones", "direct", "kernel", "drjit"}
         See the module docstring.
     eps : float
         Requested relative l2 error of the result. ``"nufft"`` needs
@@ -217,6 +223,13 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     if method == "auto":
         method = choose_method(src.num_paths, len(chirps), src.num_channels,
                                config.num_samples, eps, compact=isinstance(src, PathDelays))
+    if method == "drjit":
+        from raysim.synthesis.drjit_kernel import synthesize_drjit
+
+        if not isinstance(src, PathDelays):
+            raise ValueError("method 'drjit' needs a PathDelays (it computes the delays from "
+                             "the geometry); use method='nufft' for arrays of delays")
+        return synthesize_drjit(src, config, eps=eps, out=out, chirps=chirps)
     if method == "kernel" and not isinstance(src, PathDelays):
         raise ValueError("method 'kernel' needs a PathDelays (it computes the delays from the "
                          "geometry); use method='nufft' for arrays of delays")
