@@ -364,8 +364,9 @@ def plan_groups(src: PathDelays, config: RadarConfig, num_chirps: int, eps: floa
     if src.num_paths == 0:
         return [(everything, plan_decimation(src, config, n_local, eps, decimate))]
     bound = path_doppler(src, config)
-    lo, hi = float(bound.min()), float(bound.max())
-    if decimate != "auto" or hi <= 2.0 * lo or lo <= 0.0:
+    hi = float(bound.max())
+    lo = max(float(bound.min()), hi * 2.0**-10)    # a still platform: static bounds are 0
+    if decimate != "auto" or hi <= 2.0 * lo:
         return [(everything, _plan_band(n_local, hi, eps, decimate))]
     n_lev = int(math.ceil(math.log(hi / lo) / math.log(2.0)))
     edges = lo * 2.0 ** np.arange(n_lev + 1)
