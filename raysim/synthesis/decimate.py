@@ -13,18 +13,21 @@ for walking-speed clutter, far below the Nyquist limit of every 2nd chirp.
 between chirps, with its second difference as margin, ``2 |v_p| T_chirp`` of a
 moving path, the change of its per-chirp vertices and length).
 :func:`plan_decimation` then picks, for a band ``B``, a factor ``D`` and the
-exact chirps (every D-th chirp, the last one, and any chirp the design below
-cannot reach within tolerance, typically a few at the edges), and for every
-other chirp ``n`` real weights ``w`` on its :data:`TAPS` nearest exact chirps
-``m_i`` that minimise the mean-square error over the band,
+exact chirps (every D-th chirp, the last one, and the midpoints of the gaps
+near the edges where the design below misses the tolerance), and for every
+other chirp ``n`` real weights ``w`` on its nearest exact chirps ``m_i`` (the
+fewest of :data:`TAP_CHOICES` that meet the tolerance mid-frame) that minimise
+the mean-square error over the band,
 ``int_{-B}^{B} |exp(j 2 pi f n) - sum_i w_i exp(j 2 pi f m_i)|^2 df``
-(normal equations with the prolate matrix ``sinc(2 B (m_i - m_j))``). Every
+(normal equations with the prolate matrix ``sinc(2 B (m_i - m_j))`` plus a
+small ridge, Slepian's prolate spheroidal setting). Every
 interpolated chirp carries its own modelled error, the largest
 ``|E(f)| = |1 - sum_i w_i exp(j 2 pi f (m_i - n))|`` over ``|f| <= B``: the
 relative error of interpolating any sum of paths whose slow-time frequencies
-lie in the band. Chirps whose error exceeds the tolerance, or whose weights
-would amplify the exact rows' own error (``||w||_2 >`` :data:`MAX_GAIN`), are
-computed exactly instead.
+lie in the band. Where a chirp's error exceeds the tolerance, or its weights
+would amplify the exact rows' own error (``||w||_2 >`` :data:`MAX_GAIN`), the
+gap around it is halved (its midpoint computed exactly) until every chirp
+passes.
 
 :func:`plan_groups` splits the paths by their own bound (static scatterers
 apart from moving clutter), plans each group with its own factor and keeps the
