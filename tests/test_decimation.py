@@ -125,3 +125,98 @@ def test_decimation_near_the_eps_floor_renders_every_chirp(hover):
     sub = subset(pd, 256, 1)
     got = synthesize(sub, None, cfg, method="nufft", eps=1.05 * MIN_EPS, decimate="auto")
     assert rel_err(got, ref[:, :1]) < 1.05 * MIN_EPS
+
+
+# tolerance of the slow-time interpolation used below (the share of eps=1e-5)
+INTERP_TOL = 1e-6
+
+
+@pytest.mark.parametrize("band, factor", [(0.14, 2), (0.06, 5), (0.008, 32)])
+def test_weights_meet_their_error_on_pure_tones(band, factor):
+    """A slow-time tone exp(j 2 pi f n), |f| <= band, is interpolated within each chirp's
+    modelled error (the max of |E(f)|, module docstring); beyond the decimated Nyquist
+    limit it is not (so the check can fail)."""
+    from raysim.synthesis.decimate import _plan_band, scatter_add
+
+    plan = _plan_band(256, band, INTERP_TOL, factor)
+    assert plan.factor == factor, plan.reason
+    assert plan.error <= INTERP_TOL
+    n = np.arange(256)
+    worst = 0.0
+    for f in np.linspace(-band, band, 41):
+        tone = np.exp(2j * np.pi * f * n).astype(np.complex64)[:, None]
+        got = np.zeros_like(tone)
+        scatter_add(got, np.ascontiguousarray(tone[plan.exact]), plan)
+        np.testing.assert_array_equal(got[plan.exact], tone[plan.exact])
+        worst = max(worst, float(np.abs(got - tone)[plan.missing].max()))
+    # float32 arithmetic: rounding of the weights, of the complex64 samples and of the
+    # sum, each 2^-24 relative, weighted by the l1 norm of a chirp's weights
+    rounding = 3 * 2.0**-24 * float(np.abs(plan.weights).sum(axis=1).max()) + 2.0**-24
+    assert worst <= plan.error + rounding
+    alias = 0.5 / factor + 0.5 * (0.5 / factor - band)            # above decimated Nyquist
+    tone = np.exp(2j * np.pi * alias * n).astype(np.complex64)[:, None]
+    got = np.zeros_like(tone)
+    scatter_add(got, np.ascontiguousarray(tone[plan.exact]), plan)
+    assert float(np.abs(got - tone).max()) > 100 * INTERP_TOL
+
+
+def test_groups_split_static_from_moving():
+    """Static scatterers (platform motion only) get a larger factor than walking clutter
+    once there are enough paths to pay for a group's own rows; every path is in exactly
+    one group, and each group's plan covers its own bound."""
+    from raysim.synthesis.decimate import path_doppler, plan_groups
+
+    cfg, arr, traj, lever = paper_setup()
+    pd = subset(hover_paths(3000, cfg, arr, traj, lever, seed=2), 256, 4)
+    bound = path_doppler(pd, cfg)
+    groups = plan_groups(pd, cfg, 256, INTERP_TOL)
+    members = np.concatenate([g for g, _ in groups])
+    np.testing.assert_array_equal(np.sort(members), np.arange(pd.num_paths))
+    static = np.flatnonzero(~np.any(pd.velocity != 0, axis=1))
+    factors = {}
+    for g, plan in groups:
+        assert bound[g].max() <= plan.doppler * (1 + 1e-12)
+        for p in g:
+            factors[int(p)] = plan.factor
+    moving = np.setdiff1d(np.arange(pd.num_paths), static)
+    assert min(factors[int(p)] for p in static) >= 8
+    assert min(factors[int(p)] for p in static) > max(factors[int(p)] for p in moving)
+    assert doppler_bound(pd, cfg) == pytest.approx(bound.max())
+
+
+def test_scatter_add_checks_its_input(hover):
+    from raysim.synthesis.decimate import scatter_add
+
+    cfg, pd, _ = hover
+    plan = plan_decimation(pd, cfg, 256, INTERP_TOL)
+    out = np.zeros((256, 4), np.complex64)
+    with pytest.raises(ValueError, match="exact_rows"):
+        scatter_add(out, np.zeros((plan.exact.size + 1, 4), np.complex64), plan)
+    with pytest.raises(ValueError, match="complex64"):
+        scatter_add(out.astype(np.complex128), np.zeros((plan.exact.size, 4), np.complex64),
+                    plan)
+
+
+def test_still_platform_static_paths_apart():
+    """A still platform: static paths have a zero band and get their own group (few
+    exact chirps); the moving ones keep theirs. The render stays within eps."""
+    from raysim.radar.arrays import upa
+    from raysim.synthesis.decimate import plan_groups
+
+    cfg = RadarConfig(num_chirps=128, chirp_duration=20e-6)
+    arr = upa(1, 1, wavelength=cfg.wavelength)
+    rng = np.random.default_rng(3)
+    n = 400
+    first = rng.uniform(-5, 5, (n, 3)) + [0, 0, 12]
+    vel = rng.normal(0, 1.0, (n, 3)) * (rng.random((n, 1)) < 0.1)
+    amp = rng.normal(size=n) + 1j * rng.normal(size=n)
+    pd = PathDelays.for_array(first, first, np.zeros(n), amp, cfg, arr, velocity=vel)
+    groups = plan_groups(pd, cfg, 128, 1e-6)
+    assert len(groups) >= 2
+    static = np.flatnonzero(~np.any(vel != 0, axis=1))
+    still = [p for g, p in groups if np.isin(g, static).all()]
+    assert still and still[0].exact.size < 16
+    ref = synthesize(pd, None, cfg, method="direct")
+    method = "kernel" if kernel.available() else "nufft"
+    got = synthesize(pd, None, cfg, method=method, eps=1e-5, decimate="auto")
+    assert rel_err(got, ref) < 1e-5

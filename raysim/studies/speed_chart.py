@@ -212,7 +212,7 @@ def measure_kernel_eps(*, quick: bool) -> dict:
 def measure_decimation(*, quick: bool) -> dict:
     """Slow-time decimation off (reference) and auto, fused kernel at eps 1e-5."""
     from raysim.studies.workloads import hover_paths, paper_setup, subset
-    from raysim.synthesis.decimate import plan_decimation
+    from raysim.synthesis.decimate import plan_groups
     from raysim.synthesis.select import DECIMATION_EPS_SHARE, synthesize
 
     eps = 1e-5
@@ -220,7 +220,8 @@ def measure_decimation(*, quick: bool) -> dict:
     pd = hover_paths(KNOB_PATHS, cfg, arr, traj, lever, seed=11)
     n_ch = 16 if quick else 40
     timed = subset(pd, cfg.num_chirps, n_ch)
-    plan = plan_decimation(timed, cfg, cfg.num_chirps, DECIMATION_EPS_SHARE * eps, "auto")
+    groups = plan_groups(timed, cfg, cfg.num_chirps, DECIMATION_EPS_SHARE * eps, "auto")
+    factors = "/".join(str(p.factor) for _, p in groups)
     best = {1: np.inf, "auto": np.inf}
     for _ in range(max(REPEAT, 2)):
         for d in best:
@@ -232,14 +233,14 @@ def measure_decimation(*, quick: bool) -> dict:
     scale = arr.num_channels / n_ch
     settings = [
         {"setting": "off", "s_per_frame": best[1] * scale, "rel_error": 0.0, "reference": True},
-        {"setting": f"auto (D={plan.factor})", "s_per_frame": best["auto"] * scale,
+        {"setting": f"auto (D={factors})", "s_per_frame": best["auto"] * scale,
          "rel_error": _rel(synthesize(acc, None, cfg, method="kernel", eps=eps,
                                       decimate="auto"), ref)},
     ]
     return _knob("decimation", "slow-time decimation (kernel, eps 1e-5)", settings,
                  f"one thread, all 256 chirps x {n_ch} channels timed, scaled to 400; error on "
                  "256 chirps x 4 channels against decimation off; plan: "
-                 f"factor {plan.factor} ({plan.reason})")
+                 + "; ".join(f"{g.size} paths: {p.reason}" for g, p in groups))
 
 
 def measure_motion(*, quick: bool) -> dict:

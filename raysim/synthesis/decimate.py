@@ -1,48 +1,91 @@
-"""Slow-time decimation: exact rows on every D-th chirp, Kaiser-sinc interpolation between.
+"""Slow-time decimation: exact rows on a subset of chirps, least-squares interpolation between.
 
 For a fixed channel and fast-time sample the IF samples along slow time,
 ``s[n] = sum_p a_p exp(j 2 pi ((f_c + mu t_k) tau_p[n] - mu tau_p[n]^2 / 2))``,
 form a signal whose instantaneous frequency is at most
-``B = max dD/dn / lambda_min`` cycles per chirp, with ``D`` the two-way path
-length and ``lambda_min = c / (f_c + mu T_sweep)`` the shortest wavelength of the
-sweep. On a hovering platform ``B`` is a few hundredths of a cycle per chirp,
-far below the Nyquist limit of every 2nd or 4th chirp. :func:`plan_decimation`
-bounds ``B`` from the geometry (element displacement between chirps, with its
-second difference as margin, and ``|velocity| T_chirp`` of each moving path, or
-the change of per-chirp vertices and lengths), picks the largest factor whose
-Kaiser-windowed-sinc interpolation error (Kaiser's design formula for a
-``TAPS``-tap filter with transition band ``1 - 2 B D`` in decimated units) is
-below its share of ``eps``, and lists the chirps computed exactly: every D-th
-chirp, and every chirp near the edges of the rendered range whose filter would
-reach outside it (margin chirps).
+``B_p = max dD_p/dn / lambda_min`` cycles per chirp for path ``p``, with ``D_p``
+its two-way length and ``lambda_min = c / (f_c + mu T_sweep)`` the shortest
+wavelength of the sweep. On a hovering platform ``B`` is a few hundredths of a
+cycle per chirp for static scatterers (platform motion only) and about 0.15
+for walking-speed clutter, far below the Nyquist limit of every 2nd chirp.
+
+:func:`path_doppler` bounds ``B_p`` from the geometry (element displacement
+between chirps, with its second difference as margin, ``2 |v_p| T_chirp`` of a
+moving path, the change of its per-chirp vertices and length).
+:func:`plan_decimation` then picks, for a band ``B``, a factor ``D`` and the
+exact chirps (every D-th chirp, the last one, and the midpoints of the gaps
+near the edges where the design below misses the tolerance), and for every
+other chirp ``n`` real weights ``w`` on its nearest exact chirps ``m_i`` (the
+fewest of :data:`TAP_CHOICES` that meet the tolerance mid-frame) that minimise
+the mean-square error over the band,
+``int_{-B}^{B} |exp(j 2 pi f n) - sum_i w_i exp(j 2 pi f m_i)|^2 df``
+(normal equations with the prolate matrix ``sinc(2 B (m_i - m_j))`` plus a
+small ridge, Slepian's prolate spheroidal setting). Every
+interpolated chirp carries its own modelled error, the largest
+``|E(f)| = |1 - sum_i w_i exp(j 2 pi f (m_i - n))|`` over ``|f| <= B``: the
+relative error of interpolating any sum of paths whose slow-time frequencies
+lie in the band. Where a chirp's error exceeds the tolerance, or its weights
+would amplify the exact rows' own error (``||w||_2 >`` :data:`MAX_GAIN`), the
+gap around it is halved (its midpoint computed exactly) until every chirp
+passes.
+
+:func:`plan_groups` splits the paths by their own bound (static scatterers
+apart from moving clutter), plans each group with its own factor and keeps the
+split that minimises the modelled cost (paths x exact chirps, plus a per-row
+overhead). Each group's interpolation error is below its tolerance relative to
+that group's signal; paths with independent phases add in power, so the sum is
+too.
 
 Refusal (factor 1, every chirp exact, with the reason in ``plan.reason``):
-fewer chirps than ``MIN_CHIRPS``; amplitudes that vary over chirps (``[path,
-chirp]``, which the bound does not cover); a Doppler band too wide for factor 2;
-or too few chirps saved to be worth it.
+fewer chirps than :data:`MIN_CHIRPS`; amplitudes that vary over chirps
+(``[path, chirp]``, which the bound does not cover); a Doppler band too wide
+for factor 2; or too few chirps saved to be worth it.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.synthesis.paths import PathDelays
 
-__all__ = ["TAPS", "MAX_FACTOR", "MIN_CHIRPS", "DecimationPlan", "doppler_bound",
-           "interpolation_error", "plan_decimation", "interpolate"]
+__all__ = ["TAPS", "TAP_CHOICES", "MAX_FACTOR", "MIN_CHIRPS", "MAX_GAIN", "DecimationPlan",
+           "doppler_bound", "path_doppler", "interpolation_error", "plan_decimation", "plan_groups",
+           "interpolate", "scatter_add"]
 
-#: Taps of the slow-time interpolation filter (half on each side).
+#: Exact chirps each interpolated chirp draws on (its nearest ones): the fewest of these
+#: that meets the tolerance in the middle of the frame.
+TAP_CHOICES = (4, 6, 8, 12, 16, 24, 32, 48, 64)
+#: Default taps of :func:`interpolation_error`.
 TAPS = 24
 #: Largest decimation factor tried by ``"auto"``.
-MAX_FACTOR = 8
+MAX_FACTOR = 32
 #: Fewest chirps with which decimation is attempted.
 MIN_CHIRPS = 64
 #: Smallest fraction of chirps that decimation must save.
 MIN_SAVING = 0.2
+#: Largest l2 norm of one chirp's weights (gain on the exact rows' own error).
+MAX_GAIN = 1.5
+#: Tikhonov term of the normal equations, as a fraction of the tolerance (squared, relative
+#: to the prolate matrix's unit diagonal): keeps the weights bounded where the exact chirps
+#: oversample the band, at an error cost of about this fraction of the tolerance.
+RIDGE_SHARE = 0.1
+#: Smallest ridge: the prolate matrix is near-singular, and LU in float64 needs a margin
+#: above its ~1e-16 rounding.
+RIDGE_FLOOR = 1e-14
+#: Frequencies per oscillation of ``|E(f)|`` at which each chirp's error is evaluated.
+ERROR_GRID = 12
+#: Safety factor on the error maximum read off that grid (|E| is smooth between points).
+GRID_MARGIN = 1.05
+#: Modelled cost of one exact chirp of one group in path-equivalents per channel
+#: (row set-up, FFT, interpolation), used to decide how to split paths into groups.
+ROW_OVERHEAD_PATHS = 1000
+#: Most path groups planned separately.
+MAX_GROUPS = 4
 
 
 @dataclass(frozen=True)
@@ -54,7 +97,7 @@ class DecimationPlan:
     factor : int
         Decimation factor ``D`` (1: every chirp exact).
     exact : ndarray of int, shape ``[n_exact]``
-        Local chirp indices (0 = first rendered chirp) computed exactly.
+        Local chirp indices (0 = first rendered chirp) computed exactly, increasing.
     missing : ndarray of int, shape ``[n_missing]``
         Local chirp indices interpolated.
     weights : ndarray, shape ``[n_missing, n_exact]``, float32
@@ -62,7 +105,7 @@ class DecimationPlan:
     doppler : float
         Bound of the slow-time frequency [cycles per chirp].
     error : float
-        Modelled relative interpolation error.
+        Largest modelled relative interpolation error over the missing chirps.
     reason : str
         Why this factor (or why decimation was refused).
     """
@@ -76,82 +119,153 @@ class DecimationPlan:
     reason: str
 
 
-def _step_bound(v: np.ndarray) -> float:
+def _step_bound(v: np.ndarray, axis_max=None) -> np.ndarray | float:
     """Largest displacement per chirp of positions ``[..., chirp, 3]`` [m], with the
-    largest second difference added as margin for motion between chirps."""
+    largest second difference added as margin for motion between chirps.
+
+    ``axis_max=None``: one float over everything; else the maximum over the chirp
+    axis only (one value per leading index)."""
     if v.shape[-2] < 2:
-        return 0.0
+        return 0.0 if axis_max is None else np.zeros(v.shape[:-2])
     d1 = np.diff(v, axis=-2)
-    step = float(np.linalg.norm(d1, axis=-1).max())
+    step = np.linalg.norm(d1, axis=-1)
+    out = step.max(axis=-1)
     if v.shape[-2] >= 3:
-        step += float(np.linalg.norm(np.diff(d1, axis=-2), axis=-1).max())
-    return step
+        out = out + np.linalg.norm(np.diff(d1, axis=-2), axis=-1).max(axis=-1)
+    return float(np.max(out)) if axis_max is None else out
+
+
+def _top_wavelength(config: RadarConfig) -> float:
+    f_top = config.carrier_frequency + config.chirp_rate * config.num_samples / config.sample_rate
+    return SPEED_OF_LIGHT / f_top
+
+
+def _platform_step(src: PathDelays) -> float:
+    """Largest two-way length change per chirp from the elements' motion [m]."""
+    step = _step_bound(np.swapaxes(src.tx_positions, 0, 1))            # [channel, chirp, 3]
+    return 2.0 * step if src.rx_positions is None \
+        else step + _step_bound(np.swapaxes(src.rx_positions, 0, 1))
+
+
+def path_doppler(src: PathDelays, config: RadarConfig) -> np.ndarray:
+    """Bound of the slow-time frequency of each path [cycles per chirp], shape ``[path]``.
+
+    ``(max step of tx + max step of rx + 2 |velocity_p| T_chirp + steps of the
+    path's per-chirp vertices and length) / lambda_min``, ``lambda_min`` the
+    wavelength at the top of the sweep.
+    """
+    step = np.full(src.num_paths, _platform_step(src))
+    if src.velocity is not None:
+        step += 2.0 * np.linalg.norm(src.velocity, axis=1) * config.chirp_interval
+    for v in (src.first_vertex, src.last_vertex):
+        if v.ndim == 3:
+            step += _step_bound(v, axis_max=True)
+    if src.interior_length.ndim == 2 and src.num_chirps > 1:
+        step += np.abs(np.diff(src.interior_length, axis=1)).max(axis=1)
+    return step / _top_wavelength(config)
 
 
 def doppler_bound(src: PathDelays, config: RadarConfig) -> float:
-    """Bound of the slow-time frequency of every path [cycles per chirp].
+    """Bound of the slow-time frequency of every path [cycles per chirp] (max of
+    :func:`path_doppler`; the platform's part alone without paths)."""
+    return float(path_doppler(src, config).max(
+        initial=_platform_step(src) / _top_wavelength(config)))
 
-    ``(max step of tx + max step of rx + 2 max |velocity| T_chirp + steps of
-    per-chirp vertices and lengths) / lambda_min``, ``lambda_min`` the wavelength
-    at the top of the sweep.
+
+def _weights_for(off: np.ndarray, band: float, tol: float):
+    """Least-squares weights for neighbour offsets ``off`` [pattern, K] (chirps), with their
+    modelled error (largest ``|E(f)|`` over ``|f| <= band``) and l2 gain."""
+    two_b = 2.0 * band
+    gram = np.sinc(two_b * (off[:, :, None] - off[:, None, :]))
+    gram += max((RIDGE_SHARE * tol) ** 2, RIDGE_FLOOR) * np.eye(off.shape[1])
+    w = np.linalg.solve(gram, np.sinc(two_b * off)[..., None])[..., 0]
+    # |E(f)| oscillates at most band * max|off| times over [0, band]: sample each period
+    # ERROR_GRID times (|E(-f)| = |E(f)| for real weights)
+    n_f = int(ERROR_GRID * (1.0 + band * float(np.abs(off).max(initial=0.0))))
+    f = np.linspace(0.0, band, n_f)
+    ph = np.exp((2j * np.pi) * off[:, None, :] * f[None, :, None])    # [pattern, F, K]
+    # einsum, not matmul: stacked small products through BLAS wake its thread pool
+    err = GRID_MARGIN * np.abs(1.0 - np.einsum("pfk,pk->pf", ph, w)).max(axis=1)
+    return w, err, np.linalg.norm(w, axis=1)
+
+
+def _design(n_local: int, exact: np.ndarray, band: float, taps: int, tol: float, memo=None):
+    """Least-squares weights of every non-exact chirp on its nearest exact chirps.
+
+    ``memo`` (dict) keeps the weights of offset patterns already designed.
+    Returns ``(missing [n_miss], cols [n_miss, K] (indices into exact), w [n_miss, K],
+    err [n_miss], gain [n_miss])``.
     """
-    step = _step_bound(np.swapaxes(src.tx_positions, 0, 1))            # [channel, chirp, 3]
-    step += step if src.rx_positions is None \
-        else _step_bound(np.swapaxes(src.rx_positions, 0, 1))
-    if src.velocity is not None and src.num_paths:
-        step += 2.0 * float(np.linalg.norm(src.velocity, axis=1).max()) * config.chirp_interval
-    for v in (src.first_vertex, src.last_vertex):
-        if v.ndim == 3 and src.num_paths:
-            step += _step_bound(v)
-    if src.interior_length.ndim == 2 and src.num_chirps > 1 and src.num_paths:
-        step += float(np.abs(np.diff(src.interior_length, axis=1)).max())
-    f_top = config.carrier_frequency + config.chirp_rate * config.num_samples / config.sample_rate
-    return step * f_top / SPEED_OF_LIGHT
+    is_exact = np.zeros(n_local, bool)
+    is_exact[exact] = True
+    missing = np.flatnonzero(~is_exact)
+    k = min(taps, exact.size)
+    if missing.size == 0:
+        return missing, np.zeros((0, k), np.int64), np.zeros((0, k)), np.zeros(0), np.zeros(0)
+    dist = np.abs(exact[None, :] - missing[:, None])                   # [miss, exact]
+    cols = np.sort(np.argpartition(dist, k - 1, axis=1)[:, :k], axis=1)
+    # chirps with the same pattern of neighbour offsets share their weights
+    pattern, inverse = np.unique(exact[cols] - missing[:, None], axis=0, return_inverse=True)
+    memo = {} if memo is None else memo
+    keys = [p.tobytes() for p in pattern]
+    new = [i for i, key in enumerate(keys) if key not in memo]
+    if new:
+        w, err, gain = _weights_for(pattern[new].astype(np.float64), band, tol)
+        for j, i in enumerate(new):
+            memo[keys[i]] = (w[j], err[j], gain[j])
+    w = np.stack([memo[key][0] for key in keys])
+    err = np.array([memo[key][1] for key in keys])
+    gain = np.array([memo[key][2] for key in keys])
+    inverse = inverse.reshape(-1)
+    return missing, cols, w[inverse], err[inverse], gain[inverse]
 
 
-def _kaiser_attenuation(transition: float, taps: int = TAPS) -> float:
-    """Kaiser's estimate of the stop/pass attenuation [dB] of a ``taps``-tap filter."""
-    return 14.36 * transition * taps + 7.95
+@lru_cache(maxsize=256)
+def _plan_factor(n_local: int, band: float, factor: int, tol: float):
+    """Exact chirps and weights for one factor, or None when the band is too wide.
 
-
-def interpolation_error(doppler: float, factor: int, taps: int = TAPS) -> float:
-    """Modelled relative error of interpolating by ``factor`` a band of ``doppler`` cycles/chirp.
-
-    ``10^(-A/20)`` with Kaiser's attenuation for the transition band
-    ``1 - 2 doppler factor`` (decimated units), floored at 1e-9 (float32 weights
-    on complex64 rows); ``inf`` when the band reaches the decimated Nyquist limit.
+    Starts from every ``factor``-th chirp plus the last one; chirps whose design
+    misses ``tol`` or ``MAX_GAIN`` become exact, until every other chirp meets both.
     """
-    transition = 1.0 - 2.0 * doppler * factor
-    if transition <= 0.05:
+    if 2.0 * band * factor >= 0.95:                                    # decimated Nyquist
+        return None
+    taps = next((k for k in TAP_CHOICES
+                 if interpolation_error(band, factor, k, tol) <= 0.5 * tol), None)
+    if taps is None:
+        return None
+    exact = np.union1d(np.arange(0, n_local, factor), [n_local - 1])
+    memo: dict = {}
+    while True:
+        missing, cols, w, err, gain = _design(n_local, exact, band, taps, tol, memo)
+        bad = missing[(err > tol) | (gain > MAX_GAIN)]
+        if bad.size == 0:
+            break
+        # refine the gaps that hold a failing chirp (near the edges): add their midpoints
+        right = np.searchsorted(exact, bad)
+        exact = np.union1d(exact, (exact[right - 1] + exact[right]) // 2)
+    weights = np.zeros((missing.size, exact.size), np.float32)
+    np.put_along_axis(weights, cols, w.astype(np.float32), axis=1)
+    weights.setflags(write=False)
+    exact.setflags(write=False)
+    missing.setflags(write=False)
+    return exact, missing, weights, float(err.max(initial=0.0))
+
+
+def interpolation_error(doppler: float, factor: int, taps: int = TAPS,
+                        tol: float = 1e-6) -> float:
+    """Modelled relative error of interpolating a band of ``doppler`` cycles/chirp
+    sampled every ``factor`` chirps, in the middle of a long frame.
+
+    The largest ``|E(f)|`` over the band of the least-squares weights on the
+    ``taps`` nearest samples, at the chirp half-way between two of them
+    (ridge set for tolerance ``tol``); ``inf`` when the band reaches the decimated Nyquist limit.
+    """
+    if factor < 2:
+        return 0.0
+    if 2.0 * doppler * factor >= 0.95:
         return math.inf
-    return max(10.0 ** (-_kaiser_attenuation(transition, taps) / 20.0), 1e-9)
-
-
-def _weights(n_local: int, factor: int, taps: int, attenuation: float):
-    half = taps // 2
-    beta = 0.1102 * (attenuation - 8.7) if attenuation > 50 else \
-        0.5842 * (attenuation - 21) ** 0.4 + 0.07886 * (attenuation - 21)
-    grid = np.arange(0, n_local, factor)
-    exact = set(grid.tolist())
-    missing, rows = [], []
-    for n in range(n_local):
-        if n in exact:
-            continue
-        e = n // factor
-        idx = np.arange(e - half + 1, e + half + 1)
-        if idx[0] < 0 or idx[-1] * factor > n_local - 1:
-            exact.add(n)                                   # margin chirp: exact
-            continue
-        x = n / factor - idx
-        win = np.i0(beta * np.sqrt(np.clip(1.0 - (x / half) ** 2, 0.0, None))) / np.i0(beta)
-        missing.append(n)
-        rows.append((idx * factor, np.sinc(x) * win))
-    exact_arr = np.array(sorted(exact), dtype=np.int64)
-    pos = {int(c): i for i, c in enumerate(exact_arr)}
-    w = np.zeros((len(missing), exact_arr.size), dtype=np.float32)
-    for r, (cols, vals) in enumerate(rows):
-        w[r, [pos[int(c)] for c in cols]] = vals
-    return exact_arr, np.array(missing, dtype=np.int64), w
+    off = factor * (np.arange(taps) - taps // 2) + factor // 2 + (factor % 2)
+    return float(_weights_for(off[None, :].astype(np.float64), doppler, tol)[1][0])
 
 
 def _refuse(n_local: int, doppler: float, reason: str) -> DecimationPlan:
@@ -159,56 +273,134 @@ def _refuse(n_local: int, doppler: float, reason: str) -> DecimationPlan:
                           np.zeros((0, n_local), np.float32), doppler, 0.0, reason)
 
 
+def _check_decimate(decimate) -> None:
+    if not (decimate == "auto" or (isinstance(decimate, (int, np.integer))
+                                   and not isinstance(decimate, bool) and decimate >= 1)):
+        raise ValueError(f"decimate must be 'auto' or an integer >= 1, got {decimate!r}")
+
+
+def _plan_band(n_local: int, doppler: float, eps: float, decimate) -> DecimationPlan:
+    """Plan for every path of one band (see :func:`plan_decimation`)."""
+    if decimate == "auto":
+        # the largest factors below the decimated Nyquist limit (smaller ones need more
+        # exact chirps; the edges may favour one a little below the largest)
+        top = min(MAX_FACTOR, max(2, int(math.ceil(0.95 / (2.0 * max(doppler, 1e-9))) - 1)))
+        factors = range(max(2, top - 2), top + 1)
+    else:
+        factors = (int(decimate),)
+    # quantise the band upwards (3 significant digits) so that the design cache is hit
+    band = float(f"{doppler * 1.0005:.3g}") if doppler > 0 else 1e-6
+    band = max(band, doppler)
+    designs = {d: _plan_factor(n_local, band, d, float(eps)) for d in factors}
+    ok = {d: p for d, p in designs.items() if p is not None}
+    if not ok:
+        return _refuse(n_local, doppler, f"Doppler band {doppler:.3g} cycles/chirp too wide for "
+                       f"factor {factors[0]} at eps={eps:g}")
+    # the cheapest factor, not the largest: edge chirps may have to be exact
+    factor = min(ok, key=lambda d: (ok[d][0].size, -d))
+    exact, missing, w, err = ok[factor]
+    if missing.size < MIN_SAVING * n_local:
+        return _refuse(n_local, doppler, f"only {missing.size} of {n_local} chirps would be "
+                       "interpolated")
+    return DecimationPlan(factor, exact, missing, w, doppler, err,
+                          f"Doppler band {doppler:.3g} cycles/chirp, factor {factor}, "
+                          f"{exact.size} of {n_local} chirps exact")
+
+
+def _screen(src, config: RadarConfig, n_local: int, decimate) -> str | None:
+    """Why decimation cannot apply at all (None if it may)."""
+    _check_decimate(decimate)
+    if decimate == 1:
+        return "decimate=1"
+    if not isinstance(src, PathDelays):
+        return "dense delays: no geometry to bound the Doppler band"
+    if n_local < MIN_CHIRPS:
+        return f"too few chirps ({n_local} < {MIN_CHIRPS})"
+    if src.amplitude.ndim == 2:
+        return "amplitudes vary over chirps"
+    return None
+
+
 def plan_decimation(src: PathDelays, config: RadarConfig, num_chirps: int, eps: float,
                     decimate="auto") -> DecimationPlan:
-    """Plan the decimation of ``num_chirps`` consecutive chirps at tolerance ``eps``.
+    """Plan the decimation of ``num_chirps`` consecutive chirps of all paths at tolerance ``eps``.
 
     Parameters
     ----------
     src : PathDelays
     config : RadarConfig
     num_chirps : int
-        Chirps rendered (the edges of this range get exact margin chirps).
+        Chirps rendered (chirps near the edges of this range may have to be exact).
     eps : float
         Error share allowed for interpolation (relative l2).
     decimate : "auto" or int >= 1
         ``"auto"``: of the factors up to :data:`MAX_FACTOR` that meet ``eps``,
-        the one with the fewest exact chirps (edge margins included); an
-        integer: that factor if it meets ``eps``, else refusal.
+        the one with the fewest exact chirps; an integer: that factor if it
+        meets ``eps``, else refusal.
     """
-    if not (decimate == "auto" or (isinstance(decimate, (int, np.integer))
-                                   and not isinstance(decimate, bool) and decimate >= 1)):
-        raise ValueError(f"decimate must be 'auto' or an integer >= 1, got {decimate!r}")
     n_local = int(num_chirps)
-    if decimate == 1:
-        return _refuse(n_local, math.nan, "decimate=1")
-    if not isinstance(src, PathDelays):
-        return _refuse(n_local, math.nan, "dense delays: no geometry to bound the Doppler band")
-    if n_local < MIN_CHIRPS:
-        return _refuse(n_local, math.nan, f"too few chirps ({n_local} < {MIN_CHIRPS})")
-    if src.amplitude.ndim == 2:
-        return _refuse(n_local, math.nan, "amplitudes vary over chirps")
-    doppler = doppler_bound(src, config)
-    factors = range(2, MAX_FACTOR + 1) if decimate == "auto" else (int(decimate),)
-    ok = [d for d in factors if interpolation_error(doppler, d) <= eps]
-    if not ok:
-        return _refuse(n_local, doppler, f"Doppler band {doppler:.3g} cycles/chirp too wide for "
-                       f"factor {factors[0]} at eps={eps:g}")
-    def weights_for(d: int):
-        err = interpolation_error(doppler, d)
-        attenuation = -20.0 * math.log10(max(err, 1e-300)) if err > 1e-9 else \
-            _kaiser_attenuation(1.0 - 2.0 * doppler * d)
-        return err, _weights(n_local, d, TAPS, min(attenuation, 300.0))
+    why = _screen(src, config, n_local, decimate)
+    if why is not None:
+        return _refuse(n_local, math.nan, why)
+    return _plan_band(n_local, doppler_bound(src, config), eps, decimate)
 
-    # the cheapest factor, not the largest: the exact edge margins grow with the factor
-    candidates = {d: weights_for(d) for d in ok}
-    factor = min(ok, key=lambda d: (candidates[d][1][0].size, -d))
-    err, (exact, missing, w) = candidates[factor]
-    if missing.size < MIN_SAVING * n_local:
-        return _refuse(n_local, doppler, f"only {missing.size} of {n_local} chirps would be "
-                       "interpolated (edge margins)")
-    return DecimationPlan(factor, exact, missing, w, doppler, err,
-                          f"Doppler band {doppler:.3g} cycles/chirp, factor {factor}")
+
+def plan_groups(src: PathDelays, config: RadarConfig, num_chirps: int, eps: float,
+                decimate="auto") -> list[tuple[np.ndarray, DecimationPlan]]:
+    """Split the paths by their Doppler bound and plan each group (see the module docstring).
+
+    Candidate bands are the geometric levels ``b_min * 2^j`` up to the largest
+    path bound; a dynamic programme over the sorted levels chooses contiguous
+    groups (at most :data:`MAX_GROUPS`) that minimise ``sum (paths +
+    ROW_OVERHEAD_PATHS) x exact chirps``.
+
+    Returns
+    -------
+    list of (indices [n_g] int, DecimationPlan)
+        Path indices of each group (together every path once) and its plan.
+    """
+    n_local = int(num_chirps)
+    why = _screen(src, config, n_local, decimate)
+    everything = np.arange(src.num_paths)
+    if why is not None:
+        return [(everything, _refuse(n_local, math.nan, why))]
+    if src.num_paths == 0:
+        return [(everything, plan_decimation(src, config, n_local, eps, decimate))]
+    bound = path_doppler(src, config)
+    hi = float(bound.max())
+    lo = max(float(bound.min()), hi * 2.0**-10)    # a still platform: static bounds are 0
+    if decimate != "auto" or hi <= 2.0 * lo:
+        return [(everything, _plan_band(n_local, hi, eps, decimate))]
+    n_lev = int(math.ceil(math.log(hi / lo) / math.log(2.0)))
+    edges = lo * 2.0 ** np.arange(n_lev + 1)
+    edges[-1] = hi
+    level = np.minimum(np.searchsorted(edges, bound, side="left"), n_lev)
+    counts = np.bincount(level, minlength=n_lev + 1)
+    levels = np.flatnonzero(counts)
+    plans = {int(j): _plan_band(n_local, float(edges[j]), eps, decimate) for j in levels}
+    # dp[g][i]: cheapest cost of levels[:i] in g groups; a group ends at its top level
+    cum = np.concatenate([[0], np.cumsum(counts[levels])])
+    n = levels.size
+    inf = math.inf
+    dp = [[inf] * (n + 1) for _ in range(MAX_GROUPS + 1)]
+    back = [[-1] * (n + 1) for _ in range(MAX_GROUPS + 1)]
+    dp[0][0] = 0.0
+    for g in range(1, MAX_GROUPS + 1):
+        for i in range(1, n + 1):
+            rows = plans[int(levels[i - 1])].exact.size
+            for s in range(i):
+                c = dp[g - 1][s] + (cum[i] - cum[s] + ROW_OVERHEAD_PATHS) * rows
+                if c < dp[g][i]:
+                    dp[g][i], back[g][i] = c, s
+    g = min(range(1, MAX_GROUPS + 1), key=lambda k: dp[k][n])
+    groups, i = [], n
+    while g > 0:
+        s = back[g][i]
+        top = int(levels[i - 1])
+        members = np.flatnonzero((level >= levels[s]) & (level <= top))
+        groups.append((members, plans[top]))
+        i, g = s, g - 1
+    return groups[::-1]
 
 
 def interpolate(rows: np.ndarray, plan: DecimationPlan, col_block: int = 1 << 16) -> None:
@@ -230,3 +422,34 @@ def interpolate(rows: np.ndarray, plan: DecimationPlan, col_block: int = 1 << 16
     for c0 in range(0, flat.shape[1], col_block):
         c1 = min(c0 + col_block, flat.shape[1])
         flat[plan.missing, c0:c1] = plan.weights @ flat[plan.exact, c0:c1]
+
+
+def scatter_add(out: np.ndarray, exact_rows: np.ndarray, plan: DecimationPlan,
+                col_block: int = 1 << 16) -> None:
+    """Add the exact chirps and their interpolation into a whole block.
+
+    Parameters
+    ----------
+    out : ndarray, shape ``[chirp, ...]``, complex64, C-contiguous
+        Receives ``exact_rows`` at ``plan.exact`` and ``weights @ exact_rows`` at
+        ``plan.missing`` (added).
+    exact_rows : ndarray, shape ``[n_exact, ...]``, complex64, C-contiguous
+    plan : DecimationPlan
+    col_block : int
+        Columns (float32 values) per matrix product (bounds the temporaries).
+    """
+    for name, a in (("out", out), ("exact_rows", exact_rows)):
+        if a.dtype != np.complex64 or not a.flags.c_contiguous:
+            raise ValueError(f"{name} must be C-contiguous complex64, got {a.dtype}")
+    if exact_rows.shape != (plan.exact.size,) + out.shape[1:]:
+        raise ValueError(f"exact_rows must have shape {(plan.exact.size,) + out.shape[1:]}, "
+                         f"got {exact_rows.shape}")
+    for i, n in enumerate(plan.exact):             # row by row: no copy of the exact block
+        out[n] += exact_rows[i]
+    if plan.missing.size == 0:
+        return
+    src = exact_rows.reshape(exact_rows.shape[0], -1).view(np.float32)
+    dst = out.reshape(out.shape[0], -1).view(np.float32)
+    for c0 in range(0, src.shape[1], col_block):
+        c1 = min(c0 + col_block, src.shape[1])
+        dst[plan.missing, c0:c1] += plan.weights @ src[:, c0:c1]

@@ -22,6 +22,12 @@ Three ways to evaluate the same stop-and-hop tone sum
     chirp, channel) on one thread at ``eps = 1e-5``; error model
     :func:`raysim.synthesis.kernel.kernel_error`.
 
+``"drjit"``
+    :func:`raysim.synthesis.drjit_kernel.synthesize_drjit`, the same kernel written
+    in Dr.Jit (CUDA where a GPU is present, else LLVM; :class:`PathDelays` only;
+    float64 grid, same error model). Only on request: ``"auto"`` does not pick it,
+    and ``decimate`` does not apply to it.
+
 ``method="auto"`` picks ``"direct"`` when ``eps < 1e-6`` (below what complex64
 output carries) and otherwise the cheapest of ``"tones"`` (only where
 :func:`tones_error` is below ``eps``), ``"kernel"`` (only for a
@@ -31,10 +37,13 @@ tone sum wins for a handful of paths, the kernel (else the NUFFT) from about
 20 paths per frame on the paper radar. Without the extension ``auto`` falls
 back to FINUFFT.
 
-``decimate`` (``"auto"`` or an integer) computes exact rows on every D-th chirp
-only and interpolates the others along slow time
-(:mod:`raysim.synthesis.decimate`); it applies to ``"kernel"`` and
-``"nufft"`` and is refused (every chirp exact) where its assumptions fail.
+``decimate`` (``"auto"`` or an integer) computes exact rows on a subset of the
+chirps only (every D-th one, plus a few near the edges) and interpolates the
+others along slow time (:mod:`raysim.synthesis.decimate`); with ``"auto"`` the
+paths are split by their own Doppler bound (static scatterers, whose band is
+set by the platform's motion alone, get a much larger factor than moving
+clutter). It applies to ``"kernel"`` and ``"nufft"`` and is refused (every
+chirp exact) where its assumptions fail.
 """
 
 from __future__ import annotations
@@ -56,8 +65,8 @@ from raysim.synthesis.nufft import (
 )
 from raysim.synthesis.tones import synthesize_if, synthesize_if_direct
 
-Method = Literal["auto", "nufft", "tones", "direct", "kernel"]
-METHODS = ("auto", "nufft", "tones", "direct", "kernel")
+Method = Literal["auto", "nufft", "tones", "direct", "kernel", "drjit"]
+METHODS = ("auto", "nufft", "tones", "direct", "kernel", "drjit")
 
 #: Cost-model constants [s], measured on 2 cores (see docs/speed.md).
 COST_DIRECT_PER_TERM = 22e-9
@@ -170,7 +179,7 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         Complex IF amplitudes [sqrt(W)] without the propagation phase;
         ``None`` with a ``PathDelays``.
     config : RadarConfig
-    method : {"auto", "nufft", "tones", "direct", "kernel"}
+    method : {"auto", "nufft", "tones", "direct", "kernel", "drjit"}
         See the module docstring.
     eps : float
         Requested relative l2 error of the result. ``"nufft"`` needs
@@ -183,7 +192,7 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         Threads for the NUFFT and the kernel (default: usable CPUs).
     decimate : "auto" or int, default 1
         Slow-time decimation factor for ``"kernel"`` and ``"nufft"``
-        (:func:`raysim.synthesis.decimate.plan_decimation`, with
+        (:func:`raysim.synthesis.decimate.plan_groups`, with
         ``DECIMATION_EPS_SHARE`` of ``eps``; the row method gets the rest).
         ``1`` renders every chirp exactly; refused (every chirp exact) where
         its assumptions fail.
@@ -214,6 +223,13 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     if method == "auto":
         method = choose_method(src.num_paths, len(chirps), src.num_channels,
                                config.num_samples, eps, compact=isinstance(src, PathDelays))
+    if method == "drjit":
+        from raysim.synthesis.drjit_kernel import synthesize_drjit
+
+        if not isinstance(src, PathDelays):
+            raise ValueError("method 'drjit' needs a PathDelays (it computes the delays from "
+                             "the geometry); use method='nufft' for arrays of delays")
+        return synthesize_drjit(src, config, eps=eps, out=out, chirps=chirps)
     if method == "kernel" and not isinstance(src, PathDelays):
         raise ValueError("method 'kernel' needs a PathDelays (it computes the delays from the "
                          "geometry); use method='nufft' for arrays of delays")
@@ -231,25 +247,31 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     # decimation needs its row share of eps to stay above the methods' floor
     if method in ("nufft", "kernel") and decimate != 1 and \
             (1.0 - DECIMATION_EPS_SHARE) * eps >= MIN_EPS:
-        from raysim.synthesis.decimate import interpolate, plan_decimation
+        from raysim.synthesis.decimate import plan_groups, scatter_add
 
-        plan = plan_decimation(src, config, len(chirps), DECIMATION_EPS_SHARE * eps, decimate)
-        if plan.factor > 1:
+        groups = plan_groups(src, config, len(chirps), DECIMATION_EPS_SHARE * eps, decimate)
+        if any(plan.factor > 1 for _, plan in groups):
             rows_eps = (1.0 - DECIMATION_EPS_SHARE) * eps
             shape = (len(chirps), src.num_channels, config.num_samples)
             if out is not None and (out.shape != shape or out.dtype != np.complex64):
                 raise ValueError(f"out must be complex64 of shape {shape}, "
                                  f"got {out.dtype} {out.shape}")
-            rows = np.zeros(shape, dtype=np.complex64)
-            exact = np.zeros((plan.exact.size,) + shape[1:], dtype=np.complex64)
-            _render_chirps(src, config, method, rows_eps, chirps.start + plan.exact, exact,
-                           threads)
-            rows[plan.exact] = exact
-            del exact
-            interpolate(rows, plan)
-            if out is None:
-                return rows
-            out += rows
+            target = out if out is not None and out.flags.c_contiguous \
+                else np.zeros(shape, dtype=np.complex64)
+            for members, plan in groups:
+                part = src
+                if members.size < src.num_paths:
+                    mask = np.zeros(src.num_paths, bool)
+                    mask[members] = True
+                    part = src.select(mask)
+                exact = np.zeros((plan.exact.size,) + shape[1:], dtype=np.complex64)
+                _render_chirps(part, config, method, rows_eps, chirps.start + plan.exact,
+                               exact, threads)
+                scatter_add(target, exact, plan)
+                del exact
+            if out is None or target is out:
+                return target
+            out += target
             return out
     if method == "kernel":
         from raysim.synthesis.kernel import synthesize_kernel
