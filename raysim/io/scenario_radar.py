@@ -38,8 +38,8 @@ class RadarSection(_Section):
     ``antenna_gain_dbi`` -30 to 50 dBi, ``noise_figure_db`` 0 to 50 dB.
 
     ``element_pattern``: ``"patch"`` (default, ``cos^q`` with ``q`` from
-    ``antenna_gain_dbi``: ``G0 = 2 (q + 1)``, ``cos^4`` at 10 dBi), ``"cos^<q>"`` (e.g. ``"cos^6"``),
-    ``"tr38901"`` (8 dBi), ``"constant"`` (``antenna_gain_dbi`` in every direction)
+    ``antenna_gain_dbi``: ``G0 = 2 (q + 1)``, ``cos^4`` at 10 dBi), ``"cos^<q>"``
+    (e.g. ``"cos^6"``), ``"tr38901"`` (8 dBi), ``"constant"`` (``antenna_gain_dbi`` in every direction)
     or the path of a CSV pattern file (relative to the scenario file; format in
     :meth:`raysim.radar.pattern.TabulatedPattern.from_csv`). Without an explicit
     ``antenna_gain_dbi`` the gain is the pattern's peak; an explicit gain that

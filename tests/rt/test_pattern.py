@@ -263,6 +263,6 @@ def test_low_gain_patch_is_refused_where_used_not_where_made():
     # a 0 dBi configuration stays valid for the isotropic oracle; a patch cannot have it
     cfg = RadarConfig(antenna_gain_dbi=0.0)
     with pytest.raises(ValueError) as err:
-        cfg.pattern
+        _ = cfg.pattern
     for w in ("patch", "3.01", "constant"):
         assert w in str(err.value)

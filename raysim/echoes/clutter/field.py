@@ -44,11 +44,11 @@ import numpy as np
 
 from raysim.echoes.clutter.ground import GroundSurface
 from raysim.echoes.clutter.pattern import two_way_pattern
-from raysim.radar.pattern import PATTERN_FLOOR_DB
 from raysim.echoes.clutter.sigma0 import POLARISATIONS, sigma0
 from raysim.echoes.rt.trace import DIFFUSE, PathSet
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
+from raysim.radar.pattern import PATTERN_FLOOR_DB
 
 #: Two-way element gain relative to its peak [dB] down to which the field keeps its full
 #: density; cells seen weaker than this are thinned in proportion (cost), to ``min_pattern``.
