@@ -39,7 +39,8 @@ class RadarSection(_Section):
 
     ``element_pattern``: ``"patch"`` (default, ``cos^q`` with ``q`` from
     ``antenna_gain_dbi``: ``G0 = 2 (q + 1)``, ``cos^4`` at 10 dBi), ``"cos^<q>"``
-    (e.g. ``"cos^6"``), ``"tr38901"`` (8 dBi), ``"constant"`` (``antenna_gain_dbi`` in every direction)
+    (e.g. ``"cos^6"``), ``"tr38901"`` (8 dBi), ``"constant"`` (``antenna_gain_dbi`` in every
+    direction)
     or the path of a CSV pattern file (relative to the scenario file; format in
     :meth:`raysim.radar.pattern.TabulatedPattern.from_csv`). Without an explicit
     ``antenna_gain_dbi`` the gain is the pattern's peak; an explicit gain that
