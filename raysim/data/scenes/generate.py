@@ -91,8 +91,10 @@ def write_scene(name: str, shapes: list[tuple[str, trimesh.Trimesh, MaterialSpec
     hover_altitude : float
         Nominal radar height above ``z = 0`` [m].
     targets : list of dict
-        Constant-RCS sensing targets: ``name``, ``position`` (S, m),
-        ``rcs_dbsm``, optional ``velocity`` (S, m/s) and ``size`` (m).
+        Discrete targets: ``name``, ``position`` (S, m), ``rcs_dbsm``, optional
+        ``velocity`` (S, m/s) and ``size`` (m). Geometry targets add ``shape``
+        (the XML shape traced by PO + SBR instead of Sionna), ``mesh`` (its PLY)
+        and ``material``.
     """
     folder = (OUT_ROOT if out_root is None else Path(out_root)) / name
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
@@ -129,23 +131,48 @@ def corner_reflector_rcs_dbsm(edge: float, wavelength: float = 299_792_458.0 / 7
     return float(10 * np.log10(4 * np.pi * edge**4 / (3 * wavelength**2)))
 
 
+def trihedral_on_ground(edge: float, x: float, y: float, aim) -> tuple[trimesh.Trimesh, list]:
+    """Triangular trihedral of ``edge`` [m] aimed at ``aim`` (S, m), standing on the ground.
+
+    Its lowest corner is on ``z = 0`` and its apex above ``(x, y)``. Returns the
+    mesh and the apex (its phase centre) in S [m].
+    """
+    from scipy.spatial.transform import Rotation
+
+    from raysim.echoes.po.targets import trihedral
+
+    local = trihedral(edge)                    # apex at the origin, axis +z
+    apex = np.array([x, y, 0.0])
+    for _ in range(3):                         # the aim depends a little on the apex height
+        axis = np.asarray(aim, dtype=float) - apex
+        rot, _ = Rotation.align_vectors([axis / np.linalg.norm(axis)], [[0.0, 0.0, 1.0]])
+        v = rot.apply(local.vertices)
+        apex = np.array([x, y, 0.0 - v[:, 2].min()])
+    mesh = trimesh.Trimesh(v + apex, local.faces, process=False)
+    return mesh, [float(c) for c in apex]
+
+
 def flat_reflectors() -> Path:
-    """Flat dry-soil ground (100 m x 100 m) plus four calibrated trihedral reflectors."""
-    ground = _grid(11, 11, 50.0, 50.0)
-    targets = [
-        {"name": "cr-nadir", "position": [0.0, 0.0, 0.1], "rcs_dbsm":
-         corner_reflector_rcs_dbsm(0.10)},
-        {"name": "cr-east", "position": [8.0, 2.0, 0.1], "rcs_dbsm":
-         corner_reflector_rcs_dbsm(0.10)},
-        {"name": "cr-north", "position": [-3.0, 12.0, 0.1], "rcs_dbsm":
-         corner_reflector_rcs_dbsm(0.15)},
-        {"name": "cr-far", "position": [-20.0, -15.0, 0.1], "rcs_dbsm":
-         corner_reflector_rcs_dbsm(0.20)},
-    ]
-    return write_scene("flat_reflectors", [("ground", ground, DRY_SOIL)],
-                       hover_altitude=15.0, targets=targets,
-                       description="flat dry-soil ground, four trihedral corner reflectors "
-                                   "(constant-RCS targets) 0-25 m from nadir")
+    """Flat dry-soil ground (100 m x 100 m) plus four metal trihedral reflectors.
+
+    The reflectors are meshes (geometry targets, traced by PO + SBR), aimed at the
+    hover point and standing on a corner; their edges give the closed-form RCS
+    ``4 pi a^4 / (3 lambda^2)`` recorded in the sidecar (14.4, 14.4, 21.5, 26.5 dBsm).
+    """
+    hover = [0.0, 0.0, 15.0]
+    shapes: list[tuple[str, trimesh.Trimesh, MaterialSpec]] = [
+        ("ground", _grid(11, 11, 50.0, 50.0), DRY_SOIL)]
+    targets = []
+    for name, edge, x, y in (("cr-nadir", 0.10, 0.0, 0.0), ("cr-east", 0.10, 8.0, 2.0),
+                             ("cr-north", 0.15, -3.0, 12.0), ("cr-far", 0.20, -20.0, -15.0)):
+        mesh, apex = trihedral_on_ground(edge, x, y, hover)
+        shapes.append((name, mesh, METAL))
+        targets.append({"name": name, "position": apex,
+                        "rcs_dbsm": corner_reflector_rcs_dbsm(edge), "size": edge,
+                        "shape": name, "mesh": f"meshes/{name}.ply", "material": METAL.name})
+    return write_scene("flat_reflectors", shapes, hover_altitude=15.0, targets=targets,
+                       description="flat dry-soil ground, four metal trihedral corner "
+                                   "reflectors (meshes, traced by PO + SBR) 0-25 m from nadir")
 
 
 def parking_lot(seed: int = 7) -> Path:

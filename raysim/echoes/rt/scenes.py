@@ -188,7 +188,13 @@ MATERIALS = {m.name: m for m in (DRY_SOIL, ASPHALT, METAL, CONCRETE, GLASS)}
 # ----------------------------------------------------------------------------- targets
 @dataclass(frozen=True)
 class SceneTarget:
-    """A constant-RCS point scatterer (Sionna ``ConstantRCSSensingTarget``-like).
+    """A discrete target: a constant-RCS point, or a geometry target traced by PO + SBR.
+
+    Without ``mesh`` the target is a constant-RCS point scatterer (Sionna
+    ``ConstantRCSSensingTarget``-like). With ``mesh`` it is a scene object whose
+    return the tracer computes from its geometry (:mod:`raysim.echoes.po.paths`);
+    ``position`` is then its reference point (phase centre) and ``rcs_dbsm``
+    its nominal RCS (closed form), kept for reports and checks only.
 
     Attributes
     ----------
@@ -202,6 +208,10 @@ class SceneTarget:
         Constant velocity in W [m/s].
     size : float
         Edge of the cube that represents the target for occlusion [m].
+    mesh : str or None
+        Mesh file of a geometry target (frame S, as in the scene XML), or ``None``.
+    material : str
+        Scene material of a geometry target's mesh.
     """
 
     name: str
@@ -209,6 +219,13 @@ class SceneTarget:
     rcs_dbsm: float = 10.0
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     size: float = 0.2
+    mesh: str | None = None
+    material: str = "metal"
+
+    @property
+    def is_geometry(self) -> bool:
+        """Whether the tracer computes this target from its mesh."""
+        return self.mesh is not None
 
     def __post_init__(self) -> None:
         for attr in ("position", "velocity"):
@@ -513,6 +530,19 @@ def check_scene_file(path: str | os.PathLike, *, frequency: float | None = None)
     return total
 
 
+def drop_geometry_shapes(sionna_scene, descriptor: SceneDescriptor) -> list[str]:
+    """Remove the shapes of the sidecar's geometry targets from a loaded Sionna scene.
+
+    Geometry targets are traced by PO + SBR (:mod:`raysim.echoes.po.paths`), not by
+    Sionna's geometric optics, so that nothing is counted twice. Returns the removed names.
+    """
+    shapes = [t["shape"] for t in descriptor.metadata().get("targets", []) if t.get("shape")]
+    present = [n for n in shapes if n in sionna_scene.objects]
+    if present:
+        sionna_scene.edit(remove=present)
+    return present
+
+
 def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *,
                frequency: float = 77e9, hover_altitude: float | None = None,
                targets: list[SceneTarget] | None = None, extra_targets=(),
@@ -570,15 +600,22 @@ def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *
     _check_itu_materials(desc.path, root, defaults, f_hz)
     sc = rt.load_scene(str(desc.path), merge_shapes=False)
     sc.frequency = f_hz
+    drop_geometry_shapes(sc, desc)
     placed = RadarScene(desc, sc, altitude, [])
     if targets is None:
         targets = []
         for t in meta.get("targets", []):
+            mesh = t.get("mesh")
+            if mesh is not None:
+                mesh = str(desc.path.parent / mesh)
+                if not Path(mesh).is_file():
+                    raise ValueError(f"scene {desc.name!r}: target {t['name']!r} mesh {mesh} "
+                                     "is missing")
             targets.append(SceneTarget(
                 t["name"], placed.to_world(np.asarray(t["position"], dtype=float)),
                 float(t["rcs_dbsm"]),
                 np.asarray(t.get("velocity", [0.0, 0.0, 0.0]), dtype=float) @ ENU_FROM_NED.T,
-                float(t.get("size", 0.2))))
+                float(t.get("size", 0.2)), mesh, str(t.get("material", "metal"))))
     all_targets = list(targets) + list(extra_targets)
     names = [t.name for t in all_targets]
     if len(set(names)) != len(names):

@@ -372,8 +372,15 @@ class MonostaticTracer:
                 if geometry is not scene:
                     self._prepare(geometry, config, radar_w, r_wb)
             sets.append(self._solve_geometry(geometry, config, radar_w, r_wb, time))
-        if self.targets and scene.targets:
+        if self.targets and _points(scene):
             sets.append(self._solve_targets(scene, config, radar_w, r_wb, time))
+        if self.targets and len(_points(scene)) < len(scene.targets):
+            from raysim.echoes.po.paths import geometry_paths
+
+            sets.append(PathSet(**geometry_paths(
+                scene, [t for t in scene.targets if t.is_geometry], config, radar_w, r_wb, time,
+                fov_half_angle=self.fov_half_angle, min_range=self.min_range,
+                max_range=self.max_range, link_budget=self.link_budget)))
         if not sets:
             return _empty(radar_w, time)
         return PathSet.concatenate(sets) if len(sets) > 1 else sets[0]._sorted()
@@ -411,12 +418,12 @@ class MonostaticTracer:
                 dev.orientation = orient
             else:
                 sc.add(cls(name, position=point, orientation=orient))
-        if (targets and self.targets and scene.targets
+        if (targets and self.targets and _points(scene)
                 and not getattr(scene, "_targets_added", False)):
             _register_cpm()
             from sionna.rt.rcs import ConstantRCS, ScatteringModel, SensingTarget
 
-            for t in scene.targets:
+            for t in _points(scene):
                 model = ScatteringModel(mi.Point3f(0.0, 0.0, 0.0),
                                         rcs=ConstantRCS(10 ** (t.rcs_dbsm / 10)),
                                         cpm=BACKSCATTER_CPM)
@@ -496,9 +503,9 @@ class MonostaticTracer:
             pt = 10 ** (config.tx_power_dbm / 10) * 1e-3
             scale = math.sqrt(pt) * 10 ** (config.antenna_gain_dbi / 10)
         velocity = np.zeros((n, 3))
-        if np.any(kind & SENSING) and scene.targets:
-            tpos = np.stack([t.position for t in scene.targets])
-            tvel = np.stack([t.velocity for t in scene.targets])
+        if np.any(kind & SENSING) and _points(scene):
+            tpos = np.stack([t.position for t in _points(scene)])
+            tvel = np.stack([t.velocity for t in _points(scene)])
             sens = np.nonzero(kind & SENSING)[0]
             # the scattering vertex is the one flagged SENSING
             j = np.argmax(inter[sens] == SENSING, axis=1)
@@ -520,6 +527,11 @@ class MonostaticTracer:
         return PathSet(first[ok], last[ok], length[ok], scale * amp[ok], velocity[ok],
                        doppler[ok], np.ascontiguousarray(inter[ok]), kind[ok], scale * pol[ok],
                        tau[ok], np.array(radar_w), np.array(radar_w), float(time), dropped)
+
+
+def _points(scene: RadarScene) -> list:
+    """The scene's constant-RCS point targets (geometry targets are traced by PO + SBR)."""
+    return [t for t in scene.targets if not t.is_geometry]
 
 
 def _empty(radar_w, time) -> PathSet:
