@@ -15,7 +15,7 @@ import time
 
 from raysim.radar.config import SPEED_OF_LIGHT
 
-__all__ = ["TUBE_DENSITIES", "tube_density_points"]
+__all__ = ["TUBE_DENSITIES", "tube_density_points", "scene_trace_costs"]
 
 #: Default tube densities [tubes per wavelength per transverse axis].
 TUBE_DENSITIES = (0.5, 1.0, 2.0, 4.0, 10.0)
@@ -80,3 +80,52 @@ def tube_density_points(densities=TUBE_DENSITIES, *, edge: float = 0.1,
                        "cpu_seconds": best_cpu, "rcs_dbsm": rcs, "closed_form_dbsm": closed,
                        "error_db": rcs - closed})
     return points
+
+
+def scene_trace_costs(scenes=("flat_reflectors", "parking_lot", "rough_terrain"), *,
+                      threads: int = 2) -> list[dict]:
+    """Time of one trace of each bundled scene and its PO + SBR ray tubes.
+
+    The scene is loaded and traced once to warm the kernels, then traced again
+    and timed (the tracer sized by ``MonostaticTracer.for_scene`` for the default
+    radar and a 4 x 4 array).
+
+    Returns
+    -------
+    list of dict
+        ``scene``, ``seconds`` (wall), ``cpu_seconds``, ``paths``,
+        ``geometry_targets``, ``tubes``, ``po_seconds`` and ``threads``.
+    """
+    from raysim.echoes.rt import backend
+    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.radar.arrays import upa
+    from raysim.radar.config import RadarConfig
+
+    if backend.info() is None:
+        backend.configure("cpu", threads=threads)
+    config = RadarConfig()
+    array = upa(4, 4, wavelength=config.wavelength)
+    out = []
+    for name in scenes:
+        scene = load_scene(name, frequency=config.carrier_frequency)
+        tracer = MonostaticTracer.for_scene(scene, config, array)
+        tracer(scene, config)
+        wall, cpu = time.perf_counter(), time.process_time()
+        paths = tracer(scene, config)
+        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+        stats = getattr(tracer, "geometry_stats", None) or {}
+        out.append({"scene": name, "seconds": wall, "cpu_seconds": cpu,
+                    "paths": paths.num_paths, "geometry_targets": stats.get("targets", 0),
+                    "tubes": stats.get("tubes", 0), "po_seconds": stats.get("seconds", 0.0),
+                    "threads": backend.info().threads})
+    return out
+
+
+if __name__ == "__main__":      # python -m raysim.studies.tube_density
+    import json
+    import os
+
+    print(f"load average {os.getloadavg()}")
+    print(json.dumps({"scenes": scene_trace_costs(), "tube_density": tube_density_points()},
+                     indent=1))

@@ -64,10 +64,8 @@ def ref_ground_echo(config: RadarConfig, height: float, eps: complex,
 def test_constant_rcs_target_follows_radar_equation(warm_kernels, rt_radar):
     """Constant-RCS points where ``flat_reflectors`` has its reflectors (0-25 m off nadir)
     within 0.5 dB, phase 0."""
-    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.scenes import SceneTarget, load_scene
     from raysim.echoes.rt.trace import SENSING, MonostaticTracer
-
-    from raysim.echoes.rt.scenes import SceneTarget
 
     # constant-RCS points at the apexes of the scene's reflectors (which are meshes)
     points = [SceneTarget(t.name, t.position, t.rcs_dbsm)

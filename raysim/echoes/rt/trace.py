@@ -7,7 +7,11 @@ centre (origin of frame A) at the nominal pose of the trace instant, and runs
   reflection up to ``max_depth`` bounces, no line of sight, no refraction), and
 * Sionna's ``RCSSolver`` for the discrete constant-RCS targets (their
   scattering point, with unobstructed legs, plus ground-bounce legs when
-  ``target_depth > 1``).
+  ``target_depth > 1``), and
+* physical optics with shooting and bouncing rays for the geometry targets
+  (targets with a mesh, :mod:`raysim.echoes.po.paths`): one path per
+  scattering centre, kind ``PO_CENTRE``; the tubes and time of the last such
+  trace are in ``tracer.geometry_stats``.
 
 Everything Sionna returns is converted to NumPy in the world frame W (NED,
 docs/conventions.md) and scaled to IF amplitudes [sqrt(W)] with the radar's
@@ -377,10 +381,12 @@ class MonostaticTracer:
         if self.targets and len(_points(scene)) < len(scene.targets):
             from raysim.echoes.po.paths import geometry_paths
 
-            sets.append(PathSet(**geometry_paths(
+            fields = geometry_paths(
                 scene, [t for t in scene.targets if t.is_geometry], config, radar_w, r_wb, time,
                 fov_half_angle=self.fov_half_angle, min_range=self.min_range,
-                max_range=self.max_range, link_budget=self.link_budget)))
+                max_range=self.max_range, link_budget=self.link_budget)
+            self.geometry_stats = fields.pop("stats")       # PO + SBR tubes and time
+            sets.append(PathSet(**fields))
         if not sets:
             return _empty(radar_w, time)
         return PathSet.concatenate(sets) if len(sets) > 1 else sets[0]._sorted()
