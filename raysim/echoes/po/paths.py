@@ -44,13 +44,13 @@ import numpy as np
 
 from raysim.echoes.po.mesh import TriangleMesh, po_material
 from raysim.echoes.po.rays import RayScene
-from raysim.echoes.po.rcs import FRESNEL_FRACTION, MAX_BOUNCES, facet_terms_near
+from raysim.echoes.po.rcs import MAX_BOUNCES, facet_terms_near
 from raysim.echoes.po.sbr import TubeTerms, sbr_contributions
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
-__all__ = ["PO_CENTRE", "CLUSTER_ANGLE", "TUBES_PER_WAVELENGTH", "ScatteringTerms",
-           "scattering_terms", "cluster_terms", "reprojection_error", "geometry_paths",
-           "tube_spacing"]
+__all__ = ["PO_CENTRE", "CLUSTER_ANGLE", "TUBES_PER_WAVELENGTH", "PATHS_FRESNEL_FRACTION",
+           "ScatteringTerms", "scattering_terms", "cluster_terms", "reprojection_error",
+           "geometry_paths", "tube_spacing"]
 
 #: Interaction bit of a PO scattering centre in ``PathSet.interactions`` (above
 #: Sionna's five bits); re-projected like a point scatterer (frozen vertex).
@@ -62,6 +62,12 @@ CLUSTER_ANGLE = math.radians(2.0)
 #: per wavelength (``raysim.studies.tube_density``), at a twenty-fifth of the
 #: tubes of the ``raysim rcs`` default (10).
 TUBES_PER_WAVELENGTH = 2.0
+#: Sub-facet edge of the single-bounce PO at most this share of the Fresnel length
+#: ``sqrt(lambda R)``: the two-way quadratic phase left out over a sub-facet,
+#: ``k s^2 / (4 R)``, is then at most ``pi / 32`` rad (0.1 rad). Coarser than the
+#: ``raysim rcs`` default (0.1, 0.016 rad) to keep scene traces short: the car meshes'
+#: 5 cm facets need no subdivision beyond 16 m.
+PATHS_FRESNEL_FRACTION = 0.25
 #: Largest number of tubes per target: the spacing widens to stay below it
 #: (a car, 5.2 m across, gets 1 cm tubes, 2.6 wavelengths; the tube integral
 #: is exact for the linear phase over a flat footprint, and a trihedral at
@@ -152,7 +158,8 @@ def _parts(mesh_w, material) -> tuple[list, list]:
 def scattering_terms(mesh_w, material, radar_w, reference_w, *,
                      frequency: float, polarisation_w=(1.0, 0.0, 0.0),
                      tubes_per_wavelength: float = TUBES_PER_WAVELENGTH,
-                     max_bounces: int = MAX_BOUNCES, min_bounces: int = 1) -> ScatteringTerms:
+                     max_bounces: int = MAX_BOUNCES, min_bounces: int = 1,
+                     fresnel_fraction: float = PATHS_FRESNEL_FRACTION) -> ScatteringTerms:
     """PO + SBR terms of a mesh seen from a point radar (near field, exact spreading).
 
     Parameters
@@ -175,6 +182,8 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
         Deepest hit (1 = facet PO only).
     min_bounces : int
         Smallest hit kept (2 = multiple bounces only).
+    fresnel_fraction : float
+        Sub-facet edge as a share of ``sqrt(lambda R)`` (see :data:`PATHS_FRESNEL_FRACTION`).
 
     Returns
     -------
@@ -206,7 +215,9 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
     spacing = max(spacing, 2 * local.radius / math.sqrt(MAX_TUBES))
     mats = [po_material(n, frequency) for n in names]
     scene = RayScene(local)
-    fresnel_edge = FRESNEL_FRACTION * math.sqrt(wavelength * range_m)
+    if not (math.isfinite(fresnel_fraction) and 0 < fresnel_fraction <= 1):
+        raise ValueError(f"fresnel_fraction must lie in (0, 1], got {fresnel_fraction!r}")
+    fresnel_edge = fresnel_fraction * math.sqrt(wavelength * range_m)
     f_amp, cent = [], []
     for part, mat in zip(locals_, mats if min_bounces == 1 else [], strict=False):
         a, c = facet_terms_near(scene, part.subdivided(fresnel_edge), mat, u, e_v, k, range_m,
