@@ -187,3 +187,15 @@ def test_parking_lot_facade_ground_dihedral_appears(warm_kernels, rt_radar):
                            samples_per_src=20_000)(scene, rt_radar)
     near = np.linalg.norm(geo.first_vertex[:, [0, 2]] - [29.8, 15.0], axis=1) < 1.0
     assert not np.any(near & (geo.depth == 2))
+
+
+def test_tube_density_points_for_the_speed_chart(rt_backend):
+    """One point per density, tubes growing with density, the trihedral within RCS_TOL_DB."""
+    from raysim.studies.tube_density import tube_density_points
+
+    pts = tube_density_points((1.0, 2.0))
+    assert [p["tubes_per_wavelength"] for p in pts] == [1.0, 2.0]
+    assert pts[1]["tubes"] > 3 * pts[0]["tubes"]
+    assert all(abs(p["error_db"]) < RCS_TOL_DB and p["seconds"] > 0 for p in pts)
+    with pytest.raises(ValueError, match="densities"):
+        tube_density_points([0.0])
