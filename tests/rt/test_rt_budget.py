@@ -46,6 +46,7 @@ def _scene_with_extras(tmp_path):
     above = trimesh.creation.box((4.0, 4.0, 0.2))
     above.apply_translation((0.0, 0.0, 25.0))        # S: 10 m above the radar (behind it)
     above.export(tmp_path / "meshes" / "above.ply")
+    shutil.copy(FLAT_REFLECTORS.sidecar, tmp_path / "extras.json")   # marks geometry targets
     xml = FLAT_REFLECTORS.path.read_text()
     extra = "".join(
         f'    <shape type="ply" id="mesh-{n}">\n'
@@ -105,9 +106,10 @@ def test_bad_input_is_named(kw, match):
 
 
 def _targets(ps):
+    from raysim.echoes.po.paths import PO_CENTRE
     from raysim.echoes.rt.trace import SENSING
 
-    m = (ps.kind & SENSING) != 0
+    m = (ps.kind & (SENSING | PO_CENTRE)) != 0
     return ps.length[m], np.abs(ps.amplitude[m])
 
 
@@ -130,7 +132,8 @@ def test_planned_trace_keeps_reflector_returns_with_fewer_rays(warm_kernels, tmp
         got = planned(scene, CFG)
         t_plan.append(time.perf_counter() - t0)
     (l_ref, a_ref), (l_got, a_got) = _targets(ref), _targets(got)
-    assert l_ref.size == l_got.size == 4
+    # four trihedral apexes plus a weak rim centre of each of the two larger ones
+    assert l_ref.size == l_got.size == 6
     np.testing.assert_allclose(l_got, l_ref, atol=1e-6)
     assert np.max(np.abs(20 * np.log10(a_got / a_ref))) < 0.5
     # ground clutter is still sampled (fewer rays give proportionally fewer paths)

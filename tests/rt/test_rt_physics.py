@@ -67,11 +67,15 @@ def ref_ground_echo(config: RadarConfig, height: float, eps: complex,
 
 
 def test_constant_rcs_target_follows_radar_equation(warm_kernels, rt_radar):
-    """Every reflector of ``flat_reflectors`` (0-25 m off nadir) within 0.5 dB, phase 0."""
-    from raysim.echoes.rt.scenes import load_scene
+    """Constant-RCS points where ``flat_reflectors`` has its reflectors (0-25 m off nadir)
+    within 0.5 dB, phase 0."""
+    from raysim.echoes.rt.scenes import SceneTarget, load_scene
     from raysim.echoes.rt.trace import SENSING, MonostaticTracer
 
-    scene = load_scene("flat_reflectors")
+    # constant-RCS points at the apexes of the scene's reflectors (which are meshes)
+    points = [SceneTarget(t.name, t.position, t.rcs_dbsm)
+              for t in load_scene("flat_reflectors").targets]
+    scene = load_scene("flat_reflectors", targets=points)
     # a tilted radar (roll 8 deg, yaw 30 deg) must not change the co-polarised amplitude
     tilt = Trajectory(sinusoid("roll", np.deg2rad(8.0), 0.0, np.pi / 2).components
                       + sinusoid("yaw", np.deg2rad(30.0), 0.0, np.pi / 2).components)

@@ -110,7 +110,9 @@ def test_scene_frames_and_targets(warm_kernels):
     scene = load_scene("parking_lot")
     assert scene.hover_altitude == 15.0
     # the facade is 30 m north in ENU, i.e. +x (north) in NED; ground is 15 m below (+z)
-    assert {t.name for t in scene.targets} >= {"car0-roof", "lamp-head"}
+    assert {t.name for t in scene.targets} >= {"car0", "lamp-head"}
+    assert ([t.name for t in scene.targets if t.is_geometry]
+            == [f"car{i}" for i in range(6)] + ["facade-corner"])
     np.testing.assert_allclose(scene.to_world([0.0, 30.0, 0.0]), [30.0, 0.0, 15.0])
     np.testing.assert_allclose(scene.to_scene(scene.to_world([1.0, 2.0, 3.0])), [1, 2, 3])
 

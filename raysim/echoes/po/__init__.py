@@ -5,7 +5,9 @@ Modules: :mod:`~raysim.echoes.po.mesh` (meshes, materials, Fresnel),
 currents), :mod:`~raysim.echoes.po.rays` (Mitsuba ray intersection),
 :mod:`~raysim.echoes.po.sbr` (ray tubes), :mod:`~raysim.echoes.po.rcs`
 (monostatic RCS driver), :mod:`~raysim.echoes.po.targets` (canonical meshes and
-closed forms). See ``docs/rcs.md``.
+closed forms), :mod:`~raysim.echoes.po.paths` (geometry targets as frozen
+scattering-centre paths for the tracer), :mod:`~raysim.echoes.po.car` (a car
+mesh). See ``docs/rcs.md`` and ``docs/scattering.md``.
 """
 
 from raysim.echoes.po.mesh import PoMaterial, TriangleMesh, po_material

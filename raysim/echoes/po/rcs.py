@@ -34,8 +34,9 @@ from raysim.echoes.po.rays import RayScene
 from raysim.echoes.po.sbr import sbr_amplitude
 from raysim.radar.config import SPEED_OF_LIGHT
 
-__all__ = ["RcsResult", "monostatic_rcs", "radar_direction", "polarisation_basis",
-           "DEFAULT_FREQUENCY", "RAYS_PER_WAVELENGTH", "FRESNEL_FRACTION", "MAX_BOUNCES"]
+__all__ = ["RcsResult", "monostatic_rcs", "facet_terms_near", "radar_direction",
+           "polarisation_basis", "DEFAULT_FREQUENCY", "RAYS_PER_WAVELENGTH", "FRESNEL_FRACTION",
+           "MAX_BOUNCES"]
 
 #: Default carrier [Hz].
 DEFAULT_FREQUENCY = 77e9
@@ -160,11 +161,32 @@ def _single_far(scene: RayScene, material: PoMaterial, u, e_pol, k, min_edge) ->
     return complex((-1j * k / (4 * np.pi)) * np.sum(co * integral))
 
 
-def _single_near(scene: RayScene, fine: TriangleMesh, material: PoMaterial, u, e_pol, k,
-                 range_m: float, min_edge) -> complex:
+def facet_terms_near(scene: RayScene, fine: TriangleMesh, material: PoMaterial, u, e_pol, k,
+                     range_m: float, min_edge: float) -> tuple[np.ndarray, np.ndarray]:
+    """Single-bounce PO terms of the lit sub-facets for a radar at ``range_m * u``.
+
+    Parameters
+    ----------
+    fine : TriangleMesh
+        The target subdivided to the Fresnel length (see the module docstring).
+    u, e_pol : ndarray, shape ``[3]``
+        Unit direction to the radar and polarisation.
+    k : float
+        Wavenumber [rad/m].
+    min_edge : float
+        Smallest facet split for partial shadow [m].
+
+    Returns
+    -------
+    terms : ndarray of complex, shape ``[facet]``
+        Each sub-facet's share of ``F_co`` [m] (normalised to ``range_m``, phase
+        referred to ``2 range_m``).
+    centroids : ndarray, shape ``[facet, 3]``
+        Sub-facet centroids [m], whose two-way length is the term's delay.
+    """
     tri, n_eff = _lit(scene, fine.triangles, u, range_m, min_edge)
     if len(tri) == 0:
-        return 0j
+        return np.zeros(0, complex), np.zeros((0, 3))
     cent = tri.mean(axis=1)
     to_radar = range_m * u - cent
     ri = np.linalg.norm(to_radar, axis=1)
@@ -175,7 +197,13 @@ def _single_near(scene: RayScene, fine: TriangleMesh, material: PoMaterial, u, e
     w = 2 * k * ui
     local = polygon_phase_integral(tri, w) * np.exp(-1j * np.einsum("fi,fi->f", w, cent))
     amp = (range_m / ri) ** 2 * np.exp(-2j * k * (ri - range_m))
-    return complex((-1j * k / (4 * np.pi)) * np.sum(co * amp * local))
+    return (-1j * k / (4 * np.pi)) * co * amp * local, cent
+
+
+def _single_near(scene: RayScene, fine: TriangleMesh, material: PoMaterial, u, e_pol, k,
+                 range_m: float, min_edge) -> complex:
+    terms, _ = facet_terms_near(scene, fine, material, u, e_pol, k, range_m, min_edge)
+    return complex(np.sum(terms))
 
 
 def _angles(values, name: str) -> np.ndarray:

@@ -21,6 +21,8 @@ of a tube after bounces on flat facets is a spherical wave from the image of
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from raysim.echoes.po.integral import po_vector, reflect
@@ -28,7 +30,7 @@ from raysim.echoes.po.mesh import PoMaterial
 from raysim.echoes.po.rays import RayScene
 from raysim.resources import check_memory
 
-__all__ = ["sbr_amplitude", "launch_grid"]
+__all__ = ["sbr_amplitude", "sbr_contributions", "TubeTerms", "launch_grid"]
 
 
 #: Peak memory per ray tube while tracing [bytes]: about a dozen ``[ray, 3]`` float64 or
@@ -95,8 +97,73 @@ def sbr_amplitude(scene: RayScene, material: PoMaterial, u: np.ndarray, e_pol: n
     complex
         ``F_co`` such that ``sigma = 4 pi |F_co|^2``, from multiple bounces only.
     """
+    terms = sbr_contributions(scene, material, u, e_pol, e_h, e_v, wavelength,
+                              spacing=spacing, max_bounces=max_bounces, range_m=range_m)
+    return complex(np.sum(terms.amplitude))
+
+
+@dataclass(frozen=True)
+class TubeTerms:
+    """Multiple-bounce contributions of single ray tubes (target frame).
+
+    Attributes
+    ----------
+    amplitude : ndarray of complex, shape ``[term]``
+        Each tube's share of ``F_co`` [m] (far field; near field: normalised to
+        the range ``R`` as in :func:`sbr_amplitude`, phase referred to ``2 R``).
+    first, last : ndarray, shape ``[term, 3]``
+        First and last hit points [m].
+    length : ndarray, shape ``[term]``
+        Unfolded two-way length radar -> hits -> radar [m] (near field); far
+        field: the length past the plane ``u.r = 0`` and back to it.
+    back : ndarray, shape ``[term, 3]``
+        Unit direction from the last hit towards the radar.
+    bounces : ndarray of int, shape ``[term]``
+        Hit number of the contribution (2 = double bounce, ...).
+    tubes : int
+        Tubes launched.
+    """
+
+    amplitude: np.ndarray
+    first: np.ndarray
+    last: np.ndarray
+    length: np.ndarray
+    back: np.ndarray
+    bounces: np.ndarray
+    tubes: int
+
+
+def _per_material(materials, which, fn, *arrays):
+    """``fn(material, *arrays)`` evaluated on the rays of each material, shape ``[ray, ...]``."""
+    if which is None:
+        return fn(materials, *arrays)
+    out = None
+    for m, mat in enumerate(materials):
+        sel = which == m
+        if not sel.any():
+            continue
+        res = fn(mat, *(a[sel] for a in arrays))
+        res = res if isinstance(res, tuple) else (res,)
+        if out is None:
+            out = tuple(np.zeros((len(which),) + r.shape[1:], r.dtype) for r in res)
+        for o, r in zip(out, res, strict=True):
+            o[sel] = r
+    return out if len(out) > 1 else out[0]
+
+
+def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarray,
+                      e_h: np.ndarray, e_v: np.ndarray, wavelength: float, *,
+                      spacing: float, max_bounces: int, range_m: float | None = None,
+                      facet_material: np.ndarray | None = None) -> TubeTerms:
+    """The terms of :func:`sbr_amplitude`, one per tube and hit (same parameters).
+
+    ``material`` is one :class:`PoMaterial`, or a sequence of them indexed by
+    ``facet_material`` (shape ``[facet]`` of ``scene.mesh``) for a mesh of parts.
+    """
+    empty = TubeTerms(np.zeros(0, complex), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0),
+                      np.zeros((0, 3)), np.zeros(0, np.int64), 0)
     if max_bounces < 2:
-        return 0j
+        return empty
     k = 2 * np.pi / wavelength
     grid = launch_grid(scene, u, e_h, e_v, spacing, range_m)
     lift = 2 * scene.mesh.radius + 1.0
@@ -116,7 +183,8 @@ def sbr_amplitude(scene: RayScene, material: PoMaterial, u: np.ndarray, e_pol: n
     e = np.broadcast_to(e_pol.astype(complex), grid.shape).copy()
     a = np.broadcast_to(e_h, grid.shape).copy()
     b = np.broadcast_to(e_v, grid.shape).copy()
-    total = 0j
+    first = None
+    out = []
     for hit in range(1, max_bounces + 1):
         t, facet = scene.intersect(o, d)
         keep = facet >= 0
@@ -126,6 +194,7 @@ def sbr_amplitude(scene: RayScene, material: PoMaterial, u: np.ndarray, e_pol: n
         if domega is not None:
             domega = domega[keep]
         x = o + t[:, None] * d
+        first = x if first is None else first[keep]
         path = path + t
         n = scene.normals[facet]
         n = n * -np.sign(np.einsum("ri,ri->r", n, d))[:, None]
@@ -136,6 +205,7 @@ def sbr_amplitude(scene: RayScene, material: PoMaterial, u: np.ndarray, e_pol: n
                 seen = scene.unoccluded(lifted, back)
                 amp = np.exp(-1j * k * path) * np.exp(1j * k * (x @ u))
                 width = spacing
+                total = path - x @ u
             else:
                 to_radar = radar - x
                 r_b = np.linalg.norm(to_radar, axis=1)
@@ -144,13 +214,23 @@ def sbr_amplitude(scene: RayScene, material: PoMaterial, u: np.ndarray, e_pol: n
                 amp = (range_m / path) * (range_m / r_b) * np.exp(-1j * k * (path + r_b
                                                                             - 2 * range_m))
                 width = np.sqrt(domega) * path
-            vec = po_vector(material, d, e, n, back)
+                total = path + r_b
+            which = None if facet_material is None else facet_material[facet]
+            vec = _per_material(material, which, po_vector, d, e, n,
+                                np.ascontiguousarray(np.broadcast_to(back, d.shape)))
             co = vec @ e_pol
             q = k * (back - d)
             foot = _tube_integral(q, a, b, n, d, width)
-            total += (-1j * k / (4 * np.pi)) * np.sum((co * amp * foot)[seen])
-        d_new, e = reflect(material, d, e, n)
+            term = (-1j * k / (4 * np.pi)) * co * amp * foot
+            out.append(TubeTerms(term[seen], first[seen], x[seen], total[seen],
+                                 np.array(back)[seen], np.full(int(seen.sum()), hit), 0))
+        which = None if facet_material is None else facet_material[facet]
+        d_new, e = _per_material(material, which, reflect, d, e, n)
         a = a - 2 * np.einsum("ri,ri->r", a, n)[:, None] * n
         b = b - 2 * np.einsum("ri,ri->r", b, n)[:, None] * n
         d, o = d_new, lifted
-    return total
+    if not out:
+        return TubeTerms(*(getattr(empty, f) for f in ("amplitude", "first", "last", "length",
+                                                        "back", "bounces")), len(grid))
+    return TubeTerms(*(np.concatenate([getattr(t, f) for t in out]) for f in (
+        "amplitude", "first", "last", "length", "back", "bounces")), len(grid))

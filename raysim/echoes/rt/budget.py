@@ -62,6 +62,7 @@ from raysim.echoes.rt.scenes import (
     SceneDescriptor,
     _scene_xml,
     _substitute,
+    drop_geometry_shapes,
     get_scene,
 )
 from raysim.radar.arrays import VirtualArray
@@ -340,6 +341,7 @@ class TracePlan:
             xml = Path(tmp) / "pruned.xml"
             ET.ElementTree(root).write(xml)
             sc = rt.load_scene(str(xml), merge_shapes=False)
+        drop_geometry_shapes(sc, scene.descriptor)
         sc.frequency = float(scene.sionna_scene.frequency[0])
         return RadarScene(scene.descriptor, sc, scene.hover_altitude, list(scene.targets))
 

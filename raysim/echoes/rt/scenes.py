@@ -181,14 +181,25 @@ GLASS = MaterialSpec("glass", itu_type="glass", thickness=0.01, scattering_coeff
                      color=(0.6, 0.8, 0.9))
 """ITU-R P.2040 glass (``eps_r' = 6.31``, ``sigma = 0.0036 f_GHz^1.3394``, valid 0.1-100 GHz)."""
 
+RUBBER = MaterialSpec("rubber", relative_permittivity=3.0, conductivity=0.6, thickness=0.02,
+                      color=(0.1, 0.1, 0.1))
+"""Tyre rubber at 77 GHz: ``eps_r = 3.0 - j 0.14`` (loss tangent 0.05), an assumed value
+typical of carbon-black-filled elastomers at W band; used for the cars' tyres."""
+
 #: Every material above by name.
-MATERIALS = {m.name: m for m in (DRY_SOIL, ASPHALT, METAL, CONCRETE, GLASS)}
+MATERIALS = {m.name: m for m in (DRY_SOIL, ASPHALT, METAL, CONCRETE, GLASS, RUBBER)}
 
 
 # ----------------------------------------------------------------------------- targets
 @dataclass(frozen=True)
 class SceneTarget:
-    """A constant-RCS point scatterer (Sionna ``ConstantRCSSensingTarget``-like).
+    """A discrete target: a constant-RCS point, or a geometry target traced by PO + SBR.
+
+    Without ``mesh`` the target is a constant-RCS point scatterer (Sionna
+    ``ConstantRCSSensingTarget``-like). With ``mesh`` it is a scene object whose
+    return the tracer computes from its geometry (:mod:`raysim.echoes.po.paths`);
+    ``position`` is then its reference point (phase centre) and ``rcs_dbsm``
+    its nominal RCS (closed form), kept for reports and checks only.
 
     Attributes
     ----------
@@ -202,6 +213,14 @@ class SceneTarget:
         Constant velocity in W [m/s].
     size : float
         Edge of the cube that represents the target for occlusion [m].
+    mesh : str, tuple of str, or None
+        Mesh file(s) of a geometry target (frame S, as in the scene XML), or
+        ``None``; several files are parts traced together.
+    material : str or tuple of str
+        Scene material of a geometry target's mesh, or one per part.
+    min_bounces : int
+        Smallest bounce count traced for a geometry target: 2 keeps only its
+        multiple bounces, for surfaces whose single bounce Sionna already traces.
     """
 
     name: str
@@ -209,6 +228,14 @@ class SceneTarget:
     rcs_dbsm: float = 10.0
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     size: float = 0.2
+    mesh: str | tuple[str, ...] | None = None
+    material: str | tuple[str, ...] = "metal"
+    min_bounces: int = 1
+
+    @property
+    def is_geometry(self) -> bool:
+        """Whether the tracer computes this target from its mesh."""
+        return self.mesh is not None
 
     def __post_init__(self) -> None:
         for attr in ("position", "velocity"):
@@ -222,6 +249,9 @@ class SceneTarget:
                              f"got {self.rcs_dbsm!r}")
         if not self.size > 0:
             raise ValueError(f"target {self.name!r}: size must be > 0 m, got {self.size!r}")
+        if self.min_bounces not in (1, 2, 3):
+            raise ValueError(f"target {self.name!r}: min_bounces must be 1, 2 or 3, "
+                             f"got {self.min_bounces!r}")
 
 
 # ------------------------------------------------------------------------------ scenes
@@ -258,16 +288,18 @@ def _descriptor(name: str, description: str) -> SceneDescriptor:
 
 
 FLAT_REFLECTORS = _descriptor(
-    "flat_reflectors", "flat dry-soil ground 100 m x 100 m, four trihedral reflectors")
-"""Flat dry-soil ground (100 m x 100 m, 200 triangles) and four calibrated
-trihedral corner reflectors (constant-RCS targets of 14.4-21.5 dBsm) 0-25 m from
-nadir. Hover altitude 15 m. For amplitude and geometry calibration."""
+    "flat_reflectors", "flat dry-soil ground 100 m x 100 m, four trihedral reflector meshes")
+"""Flat dry-soil ground (100 m x 100 m, 200 triangles) and four metal trihedral
+corner reflectors (meshes of edge 0.10-0.20 m traced by PO + SBR, closed-form
+RCS 14.4-26.5 dBsm, aimed at the hover point) 0-25 m from nadir. Hover
+altitude 15 m. For amplitude and geometry calibration."""
 
 PARKING_LOT = _descriptor(
-    "parking_lot", "asphalt lot, six cars, concrete/glass facade, lamp post")
-"""Asphalt ground 100 m x 100 m, six cars (metal boxes plus a roof scattering
-centre each), a 40 m x 12 m concrete facade with glass windows 30 m north of
-the hover point and a 6 m metal lamp post. Hover altitude 15 m."""
+    "parking_lot", "asphalt lot, six car meshes, concrete/glass facade, lamp post")
+"""Asphalt ground 100 m x 100 m, six car meshes (traced by PO + SBR), a 40 m x
+12 m concrete facade with glass windows 30 m north of the hover point (its
+dihedral with the ground traced by SBR over the facade base and an apron) and a
+6 m metal lamp post. Hover altitude 15 m."""
 
 ROUGH_TERRAIN = _descriptor(
     "rough_terrain", "dry-soil height map 80 m x 80 m, 0.4 m RMS")
@@ -513,6 +545,22 @@ def check_scene_file(path: str | os.PathLike, *, frequency: float | None = None)
     return total
 
 
+def drop_geometry_shapes(sionna_scene, descriptor: SceneDescriptor) -> list[str]:
+    """Remove the shapes of the sidecar's geometry targets from a loaded Sionna scene.
+
+    Geometry targets are traced by PO + SBR (:mod:`raysim.echoes.po.paths`), not by
+    Sionna's geometric optics, so that nothing is counted twice. Returns the removed names.
+    """
+    shapes = []
+    for t in descriptor.metadata().get("targets", []):
+        shape = t.get("shape")
+        shapes += [] if not shape else [shape] if isinstance(shape, str) else list(shape)
+    present = [n for n in shapes if n in sionna_scene.objects]
+    if present:
+        sionna_scene.edit(remove=present)
+    return present
+
+
 def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *,
                frequency: float = 77e9, hover_altitude: float | None = None,
                targets: list[SceneTarget] | None = None, extra_targets=(),
@@ -570,15 +618,26 @@ def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *
     _check_itu_materials(desc.path, root, defaults, f_hz)
     sc = rt.load_scene(str(desc.path), merge_shapes=False)
     sc.frequency = f_hz
+    drop_geometry_shapes(sc, desc)
     placed = RadarScene(desc, sc, altitude, [])
     if targets is None:
         targets = []
         for t in meta.get("targets", []):
+            mesh, material = t.get("mesh"), t.get("material", "metal")
+            if mesh is not None:
+                files = [mesh] if isinstance(mesh, str) else list(mesh)
+                files = [str(desc.path.parent / f) for f in files]
+                for f in files:
+                    if not Path(f).is_file():
+                        raise ValueError(f"scene {desc.name!r}: target {t['name']!r} mesh {f} "
+                                         "is missing")
+                mesh = files[0] if isinstance(t["mesh"], str) else tuple(files)
+                material = material if isinstance(material, str) else tuple(material)
             targets.append(SceneTarget(
                 t["name"], placed.to_world(np.asarray(t["position"], dtype=float)),
                 float(t["rcs_dbsm"]),
                 np.asarray(t.get("velocity", [0.0, 0.0, 0.0]), dtype=float) @ ENU_FROM_NED.T,
-                float(t.get("size", 0.2))))
+                float(t.get("size", 0.2)), mesh, material, int(t.get("min_bounces", 1))))
     all_targets = list(targets) + list(extra_targets)
     names = [t.name for t in all_targets]
     if len(set(names)) != len(names):

@@ -7,7 +7,11 @@ centre (origin of frame A) at the nominal pose of the trace instant, and runs
   reflection up to ``max_depth`` bounces, no line of sight, no refraction), and
 * Sionna's ``RCSSolver`` for the discrete constant-RCS targets (their
   scattering point, with unobstructed legs, plus ground-bounce legs when
-  ``target_depth > 1``).
+  ``target_depth > 1``), and
+* physical optics with shooting and bouncing rays for the geometry targets
+  (targets with a mesh, :mod:`raysim.echoes.po.paths`): one path per
+  scattering centre, kind ``PO_CENTRE``; the tubes and time of the last such
+  trace are in ``tracer.geometry_stats``.
 
 Everything Sionna returns is converted to NumPy in the world frame W (NED,
 docs/conventions.md) and scaled to IF amplitudes [sqrt(W)] with the radar's
@@ -387,8 +391,19 @@ class MonostaticTracer:
                 if geometry is not scene:
                     self._prepare(geometry, config, radar_w, r_wb)
             sets.append(self._solve_geometry(geometry, config, radar_w, r_wb, time))
-        if self.targets and scene.targets:
+        if self.targets and _points(scene):
             sets.append(self._solve_targets(scene, config, radar_w, r_wb, time))
+        if self.targets and len(_points(scene)) < len(scene.targets):
+            from raysim.echoes.po.paths import geometry_paths
+
+            fields = geometry_paths(
+                scene, [t for t in scene.targets if t.is_geometry], config, radar_w, r_wb, time,
+                # the pattern's cull cone: beyond it the two-way gain is below the floor
+                fov_half_angle=config.pattern.cull_angle(self.pattern_floor_db),
+                min_range=self.min_range,
+                max_range=self.max_range, link_budget=self.link_budget)
+            self.geometry_stats = fields.pop("stats")       # PO + SBR tubes and time
+            sets.append(PathSet(**fields))
         if not sets:
             return _empty(radar_w, time)
         return PathSet.concatenate(sets) if len(sets) > 1 else sets[0]._sorted()
@@ -426,12 +441,12 @@ class MonostaticTracer:
                 dev.orientation = orient
             else:
                 sc.add(cls(name, position=point, orientation=orient))
-        if (targets and self.targets and scene.targets
+        if (targets and self.targets and _points(scene)
                 and not getattr(scene, "_targets_added", False)):
             _register_cpm()
             from sionna.rt.rcs import ConstantRCS, ScatteringModel, SensingTarget
 
-            for t in scene.targets:
+            for t in _points(scene):
                 model = ScatteringModel(mi.Point3f(0.0, 0.0, 0.0),
                                         rcs=ConstantRCS(10 ** (t.rcs_dbsm / 10)),
                                         cpm=BACKSCATTER_CPM)
@@ -511,9 +526,9 @@ class MonostaticTracer:
             # isotropic elements: the element pattern is applied at re-projection
             scale = math.sqrt(10 ** (config.tx_power_dbm / 10) * 1e-3)
         velocity = np.zeros((n, 3))
-        if np.any(kind & SENSING) and scene.targets:
-            tpos = np.stack([t.position for t in scene.targets])
-            tvel = np.stack([t.velocity for t in scene.targets])
+        if np.any(kind & SENSING) and _points(scene):
+            tpos = np.stack([t.position for t in _points(scene)])
+            tvel = np.stack([t.velocity for t in _points(scene)])
             sens = np.nonzero(kind & SENSING)[0]
             # the scattering vertex is the one flagged SENSING
             j = np.argmax(inter[sens] == SENSING, axis=1)
@@ -548,6 +563,11 @@ def pattern_culled_share(paths: PathSet) -> float:
     lost = float(paths.dropped.get("pattern_power_w", 0.0))
     total = lost + float(paths.dropped.get("beam_power_w", 0.0))
     return lost / total if total > 0 else 0.0
+
+
+def _points(scene: RadarScene) -> list:
+    """The scene's constant-RCS point targets (geometry targets are traced by PO + SBR)."""
+    return [t for t in scene.targets if not t.is_geometry]
 
 
 def _empty(radar_w, time) -> PathSet:
