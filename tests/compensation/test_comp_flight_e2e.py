@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from raysim.cli import main
 from raysim.io.zarr_store import open_store
@@ -69,3 +70,22 @@ def test_same_files_uncalibrated_miss_the_bounds(tmp_path):
     m = measure_store(tmp_path / "u.zarr", flight)
     assert (np.abs(m[:, 1]).max() > PSEUDO_VELOCITY_BINS or m[:, 2].max() > LEAKAGE_DB
             or m[:, 0].max() > ANGLE_TOL_DEG)
+
+
+def test_flight_prints_the_calibrating_command_first(tmp_path, capsys):
+    """`raysim flight` prints the self-calibrating command (with the IMU grade) before the
+    one with the simulated offset and velocity given; an unknown grade is refused."""
+    import shlex
+
+    assert main(["flight", str(tmp_path / "fl"), "--frames", "1", "--imu", "tactical"]) == 0
+    lines = [ln.strip() for ln in capsys.readouterr().out.splitlines()
+             if ln.strip().startswith("raysim compensate")]
+    assert len(lines) == 2
+    first = shlex.split(lines[0])
+    assert first[first.index("--imu-grade") + 1] == "tactical"
+    assert first[first.index("--time-offset") + 1] == "auto"
+    assert "--initial-velocity" in shlex.split(lines[1])
+    with pytest.raises(SystemExit) as exc:
+        main(first[1:] + ["--imu-grade", "hobby"])
+    assert exc.value.code == 2
+    assert "--imu-grade" in capsys.readouterr().err
