@@ -20,6 +20,7 @@ examples:
   raysim flight flight_dir                      # consumer MEMS IMU, 3 ms clock offset
   raysim flight flight_dir --imu tactical --frames 4 --seed 2
   raysim flight flight_dir --time-offset 0.010 --target 15,10,0
+  raysim flight flight_dir --frames 4 --attitude level   # levelled attitude in the command
 
 exit status: 0 written, 2 invalid input (the message names the option and the value).
 """
