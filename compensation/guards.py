@@ -23,8 +23,9 @@ these stable keys, followed by a colon and the numbers:
     integrated displacement by more than :data:`ROTATION_PHASE_LIMIT` because
     the radial velocity changes over the frame.
 
-An IMU record with a gap is not a warning but a ``ValueError``
-(:func:`check_imu_gaps`): interpolating across it gives a wrong pose.
+IMU gaps are handled at ingestion (:mod:`compensation.ingestion`): short
+ones are interpolated with an ``"imu gaps"`` warning, longer ones raise
+``ValueError`` (interpolating across them would give a wrong pose).
 
 Thresholds are those of the measured failure boundaries (docs/stability.md):
 failure is a residual pseudo-velocity above one Doppler bin or an angle error
@@ -36,7 +37,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-#: Largest tolerated IMU sample interval, as a multiple of the median interval.
+#: IMU sample interval above which ingestion reports a gap, as a multiple of the median
+#: interval (:mod:`compensation.ingestion`).
 GAP_FACTOR = 1.5
 #: Shortest hover window for which the initial velocity counts as observable [s].
 HOVER_MIN_WINDOW = 0.5
@@ -57,32 +59,6 @@ BEAMWIDTH_FACTOR = 0.886
 
 class CompensationWarning(UserWarning):
     """Python warning category for checks of functions that return a bare array."""
-
-
-def check_imu_gaps(t: np.ndarray, max_gap: float | None = None) -> None:
-    """Raise ``ValueError`` when an IMU interval exceeds ``max_gap``.
-
-    Parameters
-    ----------
-    t : ndarray, shape ``[sample]``
-        Strictly increasing IMU time stamps [s].
-    max_gap : float, optional
-        Largest tolerated interval [s]; default :data:`GAP_FACTOR` times the
-        median interval.
-    """
-    d = np.diff(t)
-    if d.size < 2:
-        return
-    med = float(np.median(d))
-    limit = GAP_FACTOR * med if max_gap is None else float(max_gap)
-    if not np.isfinite(limit) or limit <= 0:
-        raise ValueError(f"max_gap must be a finite positive number, got {max_gap!r}")
-    k = int(np.argmax(d))
-    if d[k] > limit:
-        raise ValueError(
-            f"imu_time has a gap of {d[k]:.6g} s at {t[k]:.6g} s (median interval {med:.6g} s, "
-            f"largest tolerated {limit:.6g} s); interpolating across it would give a wrong "
-            f"pose: fill or split the record, or raise max_gap")
 
 
 def hover_window_warning(window: tuple[float, float], frame: tuple[float, float],

@@ -182,6 +182,11 @@ def register(subparsers) -> None:
     p.add_argument("--initial-attitude-deg", default="0,0,0", metavar="YAW,PITCH,ROLL",
                    help="attitude at the first chirp, Z-Y-X Euler angles [deg], or 'level' "
                    "(roll/pitch from accelerometer levelling over the IMU record, heading 0)")
+    p.add_argument("--imu-grade", choices=("ideal", "tactical", "consumer_mems"),
+                   default=None,
+                   help="IMU grade: sets the hover window of --velocity hover/radar and of "
+                   "'level' (1 s centred on the chirps for consumer_mems, 8 s for tactical, "
+                   "the whole record for ideal); left out: the whole record")
     p.add_argument("--chain", default="exact", metavar="CHAIN",
                    help=f"one of {', '.join(CHAINS)} or paper:published")
     p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
@@ -341,7 +346,7 @@ def run(args) -> int:
                 raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
             kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
         offset = _time_offset(args.time_offset)
-        kwargs.update(lever_arm=lever, initial_attitude=attitude,
+        kwargs.update(lever_arm=lever, initial_attitude=attitude, imu_grade=args.imu_grade,
                       velocity="hover" if args.velocity == "radar" else args.velocity)
         if offset is None or args.velocity == "radar":
             motions, calibration = _self_calibrate(args, inp, imu, offset, lam, r_axis, gates,

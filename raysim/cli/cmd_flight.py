@@ -3,7 +3,11 @@
 Writes ``flight.ulg`` (PX4 ULog), ``adc_data.bin`` (DCA1000 capture) and
 ``radar.cfg`` (mmWave SDK configuration) of a point target seen from a
 hovering drone (:func:`raysim.studies.flight.write_flight`) and prints the one
-``raysim compensate`` command that compensates them.
+``raysim compensate`` command that compensates them with what a user has (IMU
+grade, lever arm, the flight controller's attitude at the first ramp or
+levelling), the initial velocity and the clock offset estimated from the radar
+(``--velocity radar --time-offset auto``), and the command with the simulated
+offset and velocity given instead.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ examples:
   raysim flight flight_dir                      # consumer MEMS IMU, 3 ms clock offset
   raysim flight flight_dir --imu tactical --frames 4 --seed 2
   raysim flight flight_dir --time-offset 0.010 --target 15,10,0
+  raysim flight flight_dir --frames 4 --attitude level   # levelled attitude in the command
 
 exit status: 0 written, 2 invalid input (the message names the option and the value).
 """
@@ -36,6 +41,10 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the jitter and IMU errors")
     p.add_argument("--target", default="11.3,20,0", metavar="R,AZ,EL",
                    help="target range [m], azimuth and elevation [deg]")
+    p.add_argument("--attitude", choices=("flight_controller", "level"),
+                   default="flight_controller",
+                   help="initial attitude in the printed command: the flight controller's "
+                   "estimate at the first ramp (numbers) or accelerometer levelling")
     p.set_defaults(func=run)
 
 
@@ -61,7 +70,9 @@ def run(args) -> int:
                      target=target)
     out = f"{args.folder.rstrip('/')}/compensated.zarr"
     print(f"wrote {f.imu_log}, {f.capture}, {f.radar_config}")
-    print("compensate with:")
-    print("  raysim " + shlex.join(f.command(out, "--range-m", f"{target[0] - 0.5}:"
-                                            f"{target[0] + 0.5}", "--el-deg", "0:0:1")))
+    cells = ("--range-m", f"{target[0] - 0.5}:{target[0] + 0.5}", "--el-deg", "0:0:1")
+    print("compensate with (velocity and clock offset estimated from the radar):")
+    print("  raysim " + shlex.join(f.calibrating_command(out, *cells, attitude=args.attitude)))
+    print("or with the simulated clock offset and initial velocity given:")
+    print("  raysim " + shlex.join(f.command(out, *cells)))
     return 0

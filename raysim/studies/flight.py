@@ -23,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FlightFiles", "write_flight", "FLIGHT_RADAR"]
+__all__ = ["FlightFiles", "write_flight", "FLIGHT_RADAR", "measure_store",
+           "calibrated_flight_table"]
 
 #: Waveform of the flight: TI 3 Tx x 4 Rx TDM (TX0, TX2, TX1), 64 loops, 150 samples.
 FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_period=0.05)
@@ -57,6 +58,8 @@ class FlightFiles:
         ``r_IR`` in B [m].
     target : tuple of float
         ``(range_m, az_deg, el_deg)`` of the point target from the nominal pose.
+    imu : str
+        IMU preset (grade) of the log.
     """
 
     capture: Path
@@ -70,6 +73,7 @@ class FlightFiles:
     initial_position: np.ndarray
     lever_arm: np.ndarray
     target: tuple
+    imu: str = "consumer_mems"
 
     def apparent_direction(self, frame: int = 0) -> tuple[float, float]:
         """``(az, el)`` [deg] of the target from the radar at the hover point, the platform
@@ -98,6 +102,33 @@ class FlightFiles:
                 ",".join(repr(float(x)) for x in self.initial_attitude_deg[k]), "--lever-arm",
                 ",".join(repr(float(x)) for x in self.lever_arm), "--out", str(out), *sel,
                 *extra]
+
+
+    def calibrating_command(self, out: str | Path, *extra: str,
+                            attitude: str = "flight_controller") -> list[str]:
+        """``raysim compensate`` arguments that compensate every frame with only what a user
+        has: the IMU grade, the lever arm and the initial attitude; the initial velocity and
+        the clock offset are estimated from the radar (``--velocity radar --time-offset
+        auto``, :func:`compensation.calibration.self_calibrate`).
+
+        ``attitude`` ``"flight_controller"``: the attitude at the first ramp as the flight
+        controller's estimate (PX4 logs it as ``vehicle_attitude``); here its value is the
+        simulated one, the estimator's own error is not modelled. ``"level"``: roll and
+        pitch levelled from the accelerometer over the record, heading 0 (a consumer
+        accelerometer bias of 20 mg tilts it by about 1 deg).
+        """
+        if attitude == "flight_controller":
+            att = ",".join(repr(float(x)) for x in self.initial_attitude_deg[0])
+        elif attitude == "level":
+            att = "level"
+        else:
+            raise ValueError(f"attitude: got {attitude!r}, expected 'flight_controller' or "
+                             f"'level'")
+        return ["compensate", str(self.capture), "--radar-config", str(self.radar_config),
+                "--imu", str(self.imu_log), "--capture-t0", repr(self.start),
+                "--imu-grade", self.imu, "--velocity", "radar", "--time-offset", "auto",
+                "--initial-attitude-deg", att, "--lever-arm",
+                ",".join(repr(float(x)) for x in self.lever_arm), "--out", str(out), *extra]
 
 
 def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_mems",
@@ -174,4 +205,103 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     return FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,
                        float(time_offset), np.asarray(traj.velocity(starts), dtype=float),
                        np.rad2deg(np.asarray(traj.euler(starts), dtype=float)),
-                       np.asarray(traj.position(starts), dtype=float), lever, (r, az, el))
+                       np.asarray(traj.position(starts), dtype=float), lever, (r, az, el),
+                       imu)
+
+
+#: Azimuth step [deg] of the beams measured by :func:`measure_store` (peaks interpolated
+#: by a parabola on dB).
+MEASURE_STEP_DEG = 0.25
+
+
+def measure_store(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
+    """Per frame of a compensated store: azimuth error [deg], pseudo-velocity [bin] and
+    Doppler power outside +-1 bin of the peak [dB], at the zero-Doppler beam peak.
+
+    The store holds one elevation (the 3 Tx x 4 Rx array resolves azimuth only) and an
+    azimuth grid around the target; ``first`` is the flight frame of its first frame
+    (the reference of :meth:`FlightFiles.apparent_direction`).
+
+    Returns
+    -------
+    ndarray, shape ``[frame, 3]``
+    """
+    from raysim.io.mmwave_config import read_mmwave_config
+    from raysim.io.zarr_store import open_store
+    from raysim.processing.metrics import parabolic_offset, pseudo_velocity
+
+    ds = open_store(store)
+    cfg = read_mmwave_config(flight.radar_config).config
+    az_true = flight.apparent_direction(first)[0]
+    step = float(np.diff(ds.azimuth.values[:2])[0])
+    out = []
+    for b in ds["beams"].values[..., 0]:                         # [chirp, range, azimuth]
+        zero = np.abs(b.astype(np.complex128).sum(axis=0)) ** 2   # [range, azimuth]
+        g, a = np.unravel_index(np.argmax(zero), zero.shape)
+        if not 0 < a < zero.shape[1] - 1:
+            raise ValueError(f"the beam peak lies on the edge of the azimuth grid "
+                             f"({ds.azimuth.values[a]:.2f} deg); expected it inside")
+        db = 10 * np.log10(zero[g])
+        az = ds.azimuth.values[a] + step * parabolic_offset(*db[a - 1:a + 2])
+        slow = b[:, g, a]
+        pv = pseudo_velocity(slow, cfg.chirp_interval, cfg.center_wavelength)
+        spec = np.abs(np.fft.fft(slow * np.hanning(slow.size))) ** 2
+        k = int(np.argmax(spec))
+        near = spec[[(k - 1) % spec.size, k, (k + 1) % spec.size]].sum()
+        leak = 10 * np.log10(max(spec.sum() - near, 1e-30 * spec.sum()) / spec.sum())
+        out.append((abs(az - az_true), pv / cfg.velocity_resolution, leak))
+    return np.array(out)
+
+
+def calibrated_flight_table(folder: str | Path, seeds=range(4), *, frames: int = 4,
+                            attitude: str = "flight_controller", **flight) -> list[dict]:
+    """Write a flight per seed, compensate it with one self-calibrating ``raysim compensate``
+    (:meth:`FlightFiles.calibrating_command`) and measure every frame.
+
+    Returns
+    -------
+    list of dict
+        Per seed: ``seed``, worst ``angle_deg``, ``pseudo_velocity_bin`` (absolute),
+        ``leakage_db`` over the frames, ``offset_error_ms`` (estimated minus true),
+        ``cpu_s`` of the compensate command (``time.process_time``).
+    """
+    import json
+    import time
+
+    from raysim.cli import main
+    from raysim.io.zarr_store import open_store
+
+    rows = []
+    for seed in seeds:
+        f = write_flight(Path(folder) / f"seed{seed}", seed=seed, frames=frames, **flight)
+        out = Path(folder) / f"seed{seed}" / "compensated.zarr"
+        r, az, _ = f.target
+        cpu = time.process_time()
+        code = main(f.calibrating_command(
+            out, "--range-m", f"{r - 0.5}:{r + 0.5}", "--az-deg",
+            f"{az - 6}:{az + 6}:{MEASURE_STEP_DEG}", "--el-deg", "0:0:1", "--no-progress",
+            attitude=attitude))
+        cpu = time.process_time() - cpu
+        if code != 0:
+            raise RuntimeError(f"raysim compensate exited with {code} on seed {seed}")
+        m = measure_store(out, f)
+        cal = json.loads(open_store(out).attrs["self_calibration"])
+        rows.append(dict(seed=int(seed), angle_deg=float(m[:, 0].max()),
+                         pseudo_velocity_bin=float(np.abs(m[:, 1]).max()),
+                         leakage_db=float(m[:, 2].max()),
+                         offset_error_ms=1e3 * (cal["time_offset_s"] - f.time_offset),
+                         cpu_s=cpu))
+    return rows
+
+
+if __name__ == "__main__":     # python -m raysim.studies.flight FOLDER [SEEDS] [FRAMES]
+    import sys
+
+    seeds_ = range(int(sys.argv[2]) if len(sys.argv) > 2 else 6)
+    table = calibrated_flight_table(sys.argv[1], seeds_,
+                                    frames=int(sys.argv[3]) if len(sys.argv) > 3 else 4)
+    print("| seed | angle [deg] | pseudo-velocity [bin] | leakage [dB] | offset error [ms] "
+          "| CPU [s] |\n|---|---|---|---|---|---|")
+    for row in table:
+        print(f"| {row['seed']} | {row['angle_deg']:.3f} | {row['pseudo_velocity_bin']:.4f} | "
+              f"{row['leakage_db']:.1f} | {row['offset_error_ms']:+.3f} | {row['cpu_s']:.1f} |")
