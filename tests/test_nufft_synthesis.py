@@ -264,7 +264,7 @@ def test_chart_default_on_pareto_front(monkeypatch, tmp_path):
     else:
         assert names == ["nufft_eps", "motion", "geometry", "chirp_block"]
         assert "kernel not built" in measured["not_measured"]["kernel_eps_decimation"]
-    assert "tube density" in measured["not_measured"]["tube_density"]
+    assert "tube-density" in measured["not_measured"]["rt_samples_depth_retrace"]
     for k in measured["knobs"]:
         assert k["default_on_front"], k
         assert sum(s["default"] for s in k["settings"]) == 1, k["knob"]

@@ -497,6 +497,28 @@ def measure_rt_knobs(*, quick: bool, log: Callable[[str], None] = print,
     return knobs
 
 
+def measure_tube_density(*, quick: bool) -> dict:
+    """SBR ray-tube density on a 0.1 m trihedral at 15 m against Knott's closed form.
+
+    Time: CPU seconds of one PO + SBR trace of the reflector (best of two);
+    error: relative RCS error ``|sigma / sigma_closed - 1|`` (power). The
+    engine's default is :data:`raysim.echoes.po.paths.TUBES_PER_WAVELENGTH`.
+    """
+    from raysim.echoes.po.paths import TUBES_PER_WAVELENGTH
+    from raysim.studies.tube_density import TUBE_DENSITIES, tube_density_points
+
+    densities = (0.5, 1.0, 2.0, 4.0) if quick else TUBE_DENSITIES
+    settings = [{"setting": f"{p['tubes_per_wavelength']:g}/lambda",
+                 "s_per_frame": p["cpu_seconds"], "tubes": p["tubes"],
+                 "rel_error": abs(10 ** (p["error_db"] / 10) - 1.0)}
+                for p in tube_density_points(densities, repeats=2)]
+    return _knob("tube_density", "SBR tube density (0.1 m trihedral at 15 m)", settings,
+                 "one PO + SBR trace of the reflector; error of its RCS against "
+                 "4 pi a^4 / (3 lambda^2) (Knott, table 6.1)",
+                 default=f"{TUBES_PER_WAVELENGTH:g}/lambda",
+                 time_label="CPU s per trace of the reflector")
+
+
 def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print,
                   rt: bool = True) -> dict:
     """Measure every knob; returns ``{"knobs": [...], "not_measured": {...}}``.
@@ -514,22 +536,23 @@ def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print,
         not_measured["kernel_eps_decimation"] = (
             "fused kernel not built (pip install -e . or python setup.py build_ext --inplace); "
             "kernel tolerance and decimation panels skipped")
-    not_measured["tube_density"] = "no scattering engine with a tube density exists yet"
     for fn in fns:
         log(f"  chart knob: {fn.__name__.removeprefix('measure_')}")
         knobs.append(fn(quick=quick))
     if rt:
         from raysim.echoes.rt.backend import BackendError
 
-        log("  chart knobs: rt_samples, rt_depth, rt_retrace")
+        log("  chart knobs: rt_samples, rt_depth, rt_retrace, tube_density")
         try:
             knobs.extend(measure_rt_knobs(quick=quick, log=log))
+            knobs.append(measure_tube_density(quick=quick))
         except BackendError as err:
             not_measured["rt_samples_depth_retrace"] = (
-                f"Sionna RT unavailable, ray-tracing panels skipped: {err}")
+                f"Sionna RT unavailable, ray-tracing and tube-density panels skipped: {err}")
             log(f"  {not_measured['rt_samples_depth_retrace']}")
     else:
-        not_measured["rt_samples_depth_retrace"] = "ray-tracing knobs not requested"
+        not_measured["rt_samples_depth_retrace"] = ("ray-tracing and tube-density knobs not "
+                                                    "requested")
     return {"quick": bool(quick), "time_tolerance": TIME_TOLERANCE, "knobs": knobs,
             "not_measured": not_measured,
             "time_unit": "CPU seconds per 256-chirp paper frame (extrapolated from the "

@@ -39,3 +39,18 @@ def test_rt_knobs_measured_and_drawn(warm_kernels, monkeypatch, tmp_path):
     png = tmp_path / "rt_chart.png"
     sa.draw_chart(measured, png)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_tube_density_knob(rt_backend):
+    """SBR tube density as a chart knob: tubes grow with density, one default, RCS in 1 dB."""
+    import raysim.studies.speed_chart as sa
+    from raysim.echoes.po.paths import TUBES_PER_WAVELENGTH
+
+    knob = sa.measure_tube_density(quick=True)
+    assert knob["knob"] == "tube_density"
+    tubes = [s["tubes"] for s in knob["settings"]]
+    assert tubes == sorted(tubes) and tubes[0] < tubes[-1]
+    (default,) = [s for s in knob["settings"] if s["default"]]
+    assert default["setting"] == f"{TUBES_PER_WAVELENGTH:g}/lambda"
+    # 1 dB on the closed form (the engine's canonical-target tolerance), as a power ratio
+    assert all(s["rel_error"] < 10 ** 0.1 - 1 for s in knob["settings"])
