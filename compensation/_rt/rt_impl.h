@@ -96,7 +96,7 @@ static inline double large_phase(double rg, double r, double k, double q, double
 // phase, exp(j .) by Taylor, the channel sum by Horner's rule in z, times the
 // slot's exp(j phi(p_0)), accumulated into (gr, gi). Returns the number of
 // directions whose phase exceeds `small` (fixed afterwards by fix_large).
-template <int MC>
+template <int MC, bool FOCAL>
 static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus& F,
                      const float* br, const float* bi, const float* zr, const float* zi,
                      const float* xg, int64_t xstride, float* gr, float* gi) {
@@ -104,9 +104,11 @@ static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus&
     for (int i = 0; i < MC; ++i) { xr[i] = xg[xstride * i]; xi[i] = xg[xstride * i + 1]; }
     int large = 0;
     for (int64_t j = 0; j < nd; ++j) {
-        const float ph = gate_phase(rgf, drf, F.fq[j], F.fe[j], F.ft[j], F.fL[j], F.fa[j]);
-        float c, s;
-        expj_small(ph, c, s);
+        // a gate at the block's focal range has a zero phase: no correction
+        const float ph = FOCAL ? 0.0f
+                               : gate_phase(rgf, drf, F.fq[j], F.fe[j], F.ft[j], F.fL[j], F.fa[j]);
+        float c = 1.0f, s = 0.0f;
+        if (!FOCAL) expj_small(ph, c, s);
         float ar = xr[MC - 1], ai = xi[MC - 1];
         for (int i = MC - 2; i >= 0; --i) {
             const float nr = ar * zr[j] - ai * zi[j] + xr[i];
@@ -114,9 +116,14 @@ static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus&
             ar = nr;
         }
         const float vr = ar * br[j] - ai * bi[j], vi = ar * bi[j] + ai * br[j];
-        gr[j] += vr * c - vi * s;
-        gi[j] += vr * s + vi * c;
-        large += std::fabs(ph) > small;
+        if (FOCAL) {
+            gr[j] += vr;
+            gi[j] += vi;
+        } else {
+            gr[j] += vr * c - vi * s;
+            gi[j] += vr * s + vi * c;
+            large += std::fabs(ph) > small;
+        }
     }
     return large;
 }
@@ -153,8 +160,9 @@ static int gate_line_fused(int64_t m, int64_t nd, float rgf, float drf, float sm
                            const Focus& F, const float* br, const float* bi, const float* zr,
                            const float* zi, const float* xg, int64_t xstride, float* gr,
                            float* gi) {
-#define RT_CASE(MC) case MC: return gate_line<MC>(nd, rgf, drf, small, F, br, bi, zr, zi, xg, \
-                                                   xstride, gr, gi);
+#define RT_CASE(MC) case MC: return drf == 0.0f                                               \
+    ? gate_line<MC, true>(nd, rgf, drf, small, F, br, bi, zr, zi, xg, xstride, gr, gi)          \
+    : gate_line<MC, false>(nd, rgf, drf, small, F, br, bi, zr, zi, xg, xstride, gr, gi);
     switch (m) {
         RT_CASE(1) RT_CASE(2) RT_CASE(3) RT_CASE(4) RT_CASE(5) RT_CASE(6) RT_CASE(7) RT_CASE(8)
         default: return -1;
@@ -353,6 +361,37 @@ static void project(const rt::Params& P) {
                 const float* gi = gr + CH;
                 float* o = P.out + 2 * ((n * G + g) * D + j0);
                 for (int64_t j = 0; j < nd; ++j) { o[2 * j] = gr[j]; o[2 * j + 1] = gi[j]; }
+            }
+        }
+    }
+}
+
+// Gated range transform: out[r, g] = sum_k x[r, k] W[g, k] for rows r of complex
+// samples x [R, K] (complex64, interleaved) and the window-weighted DFT rows
+// W [G, K] given planar (wr, wi, float32). Each thread de-interleaves one row
+// into (xr, xi) so that the G dot products run at full vector width.
+static void gated_dft(const float* x, const float* wr, const float* wi, float* out, int64_t R,
+                      int64_t K, int64_t G, int64_t threads) {
+#pragma omp parallel num_threads((int)threads)
+    {
+        std::vector<float> buf(2 * K);
+        float* xr = buf.data();
+        float* xi = xr + K;
+#pragma omp for schedule(static)
+        for (int64_t r = 0; r < R; ++r) {
+            const float* row = x + 2 * r * K;
+            for (int64_t k = 0; k < K; ++k) { xr[k] = row[2 * k]; xi[k] = row[2 * k + 1]; }
+            for (int64_t g = 0; g < G; ++g) {
+                const float* a = wr + g * K;
+                const float* b = wi + g * K;
+                float sr = 0.0f, si = 0.0f;
+#pragma omp simd reduction(+ : sr, si)
+                for (int64_t k = 0; k < K; ++k) {
+                    sr += xr[k] * a[k] - xi[k] * b[k];
+                    si += xr[k] * b[k] + xi[k] * a[k];
+                }
+                out[2 * (r * G + g)] = sr;
+                out[2 * (r * G + g) + 1] = si;
             }
         }
     }

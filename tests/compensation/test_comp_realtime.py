@@ -194,3 +194,68 @@ def test_bench_doppler_power_is_the_power_of_the_beams_doppler_spectrum():
     assert power.shape == ref.shape == (16, 2, 3, 2) and power.dtype == np.float32
     assert np.abs(power - ref).max() < RT_TOL * ref.max()
     assert np.argmax(power.sum(axis=(1, 2, 3))) == np.argmax(ref.sum(axis=(1, 2, 3)))
+
+
+#: Largest difference of the gated range transform from the range FFT relative to
+#: the peak bin: float32 rounding of a 256-term sum.
+RANGE_TOL = 1e-6
+
+
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+@pytest.mark.parametrize("real", [False, True])
+def test_gated_range_transform_is_the_range_fft_at_the_gates(engine, real):
+    """DFT of the gated bins = range_compress(...)[..., gates] (Hann, /sum; real: doubled half)."""
+    from raysim.processing.maps import range_compress
+
+    rng = np.random.default_rng(9)
+    p, slot = _ti_positions()
+    k = 64
+    n = np.arange(k)
+    # two tones (bins 5 and 40.3) plus noise: the gated bins hold leakage and peaks
+    tone = 3.0 * np.exp(2j * np.pi * 5 * n / k) + np.exp(2j * np.pi * 40.3 * n / k)
+    x = tone[None, None] * np.exp(1j * rng.uniform(0, 6.3, (6, 12, 1))) + \
+        0.1 * rng.standard_normal((6, 12, k))
+    x = (x.real if real else x).astype(np.float32 if real else np.complex64)
+    gates = [0, 5, 6, 31] if real else [0, 5, 6, 40, 63]
+    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM, range_axis=2.0 + np.arange(k) * 0.1,
+                             azimuth=[0.0], elevation=[0.0], range_gates=gates, engine=engine)
+    ref = range_compress(x)[:, :, gates]
+    got = proj.gated_range_transform(x)
+    assert got.shape == ref.shape and got.dtype == np.complex64
+    assert np.abs(got - ref).max() < RANGE_TOL * np.abs(ref).max()
+    # same beams through the gated path as through the whole range-compressed cube
+    motion = _motion(rng, 18)
+    full = proj.project(range_compress(x), motion).data
+    out = np.empty_like(full)
+    beams = proj.project(got, motion, gated=True, out=out)
+    assert beams.data is out
+    assert np.abs(out - full).max() < RT_TOL * np.abs(full).max()
+    with pytest.raises(ValueError, match="samples must be an IF cube"):
+        proj.gated_range_transform(x[:, :5])
+    with pytest.raises(ValueError, match="rc must be a complex cube"):
+        proj.project(got[:, :, :2], motion, gated=True)
+    with pytest.raises(ValueError, match="out must be a C-contiguous complex64"):
+        proj.project(got, motion, gated=True, out=np.empty(full.shape, np.complex128))
+    with pytest.raises(ValueError, match="not a scipy.signal window name"):
+        proj.gated_range_transform(x, window="no-such-window")
+
+
+def test_bench_doppler_power_buffers_follow_each_frame():
+    """DopplerPower reuses its buffers: each call gives that frame's power (even and odd N)."""
+    from scipy.signal import get_window
+
+    from raysim.studies.bench_realtime import DopplerPower
+
+    rng = np.random.default_rng(10)
+    for n in (16, 15):
+        dop = DopplerPower((n, 2, 3), threads=2)
+        for _ in range(2):
+            x = (rng.standard_normal((n, 2, 3)) + 1j * rng.standard_normal((n, 2, 3))).astype(
+                np.complex64)
+            w = get_window("hann", n, fftbins=True)
+            ref = np.abs(np.fft.fftshift(np.fft.fft(x * (w / w.sum())[:, None, None], axis=0),
+                                         axes=0)) ** 2
+            got = dop(x)
+            assert np.abs(got - ref).max() < RT_TOL * ref.max()
+        with pytest.raises(ValueError, match="data must have shape"):
+            dop(x[1:])
