@@ -170,6 +170,38 @@ static int gate_line_fused(int64_t m, int64_t nd, float rgf, float drf, float sm
 #undef RT_CASE
 }
 
+// Phases of a slot on a line for a gate block whose gates all lie at its focal
+// range (no per-gate phase): the geometry of project() without the per-gate
+// arrays, then exp(j .) of phi(p_0) into (br, bi) and of the step into (zr, zi).
+// Kept out of line so that the general loops keep their vector code.
+__attribute__((noinline)) static void focal_phases(
+    int64_t nd, const double* __restrict__ ux, const double* __restrict__ uy,
+    const double* __restrict__ uz, double dx, double dy, double dz, double dd, double r,
+    double k, double ax, double ay, double az, double a0, double bx, double by, double bz,
+    double b0, float* __restrict__ xa, int32_t* __restrict__ qa, float* __restrict__ xb,
+    int32_t* __restrict__ qb, float* __restrict__ br, float* __restrict__ bi,
+    float* __restrict__ zr, float* __restrict__ zi) {
+    for (int64_t j = 0; j < nd; ++j) {
+        const double q = ux[j] * dx + uy[j] * dy + uz[j] * dz;
+        double e = dd - q * q;
+        e = e > 0.0 ? e : 0.0;
+        const double t = r - q;
+        const double L = std::sqrt(t * t + e);
+        const double w = 1.0 / (L * (L + t));
+        const double h = e * L * w;
+        const double inv = k * (L + t) * w;
+        const double phi0 = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0) * inv
+                            + 2.0 * k * (q - h);
+        const double alpha = (r * (ux[j] * bx + uy[j] * by + uz[j] * bz) - b0) * inv;
+        reduce(phi0, xa[j], qa[j]);
+        reduce(alpha, xb[j], qb[j]);
+    }
+    for (int64_t j = 0; j < nd; ++j) {
+        rotate(xa[j], qa[j], br[j], bi[j]);
+        rotate(xb[j], qb[j], zr[j], zi[j]);
+    }
+}
+
 static void project(const rt::Params& P) {
     const int64_t nchunk = (P.D + CH - 1) / CH;
     const int64_t items = P.N * nchunk;
@@ -257,7 +289,15 @@ static void project(const rt::Params& P) {
     dq[j] = q; de[j] = e;                                                                \
     fq[j] = (float)q; fe[j] = (float)e; ft[j] = (float)t; fL[j] = (float)L;              \
     fA[j] = (float)(-2.0 * k * h);
-                    if (line) {
+                    // every gate of the block at its focal range (a block of one gate):
+                    // no per-gate phase, so only the two phases per direction
+                    bool focal = line && m <= FUSED_MAX;
+                    for (int64_t g = P.block_start[b]; g < P.block_start[b + 1]; ++g)
+                        focal = focal && (float)(r - P.rg[g]) == 0.0f;
+                    if (focal) {
+                        focal_phases(nd, ux, uy, uz, dx, dy, dz, dd, r, k, ax, ay, az, a0, bx, by,
+                                     bz, b0, xa, qa, xb, qb, br, bi, zr, zi);
+                    } else if (line) {
                         for (int64_t j = 0; j < nd; ++j) {
                             RT_GEOMETRY
                             const double phi0 = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0)

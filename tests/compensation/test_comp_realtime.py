@@ -63,9 +63,13 @@ def _compare(rc, p, motion, *, slot=None, weights=None, gate_block=8, threads=2,
 
 
 @pytest.mark.parametrize("engine", ENGINE_CASES)
-@pytest.mark.parametrize("threads", [1, 2])
-def test_tdm_ti_layout_equals_direct_engine(threads, engine):
-    """3 slots on lines (Horner form), own pose per slot, two gate blocks, ranges 2-14 m."""
+@pytest.mark.parametrize("threads, gate_block", [(1, 3), (2, 3), (2, 5)])
+def test_tdm_ti_layout_equals_direct_engine(threads, gate_block, engine):
+    """3 slots on lines (Horner form), own pose per slot, two gate blocks, ranges 2-14 m.
+
+    ``gate_block=5`` leaves the last gate alone in its block, at its focal range
+    (no per-gate phase: the kernel's shorter path), next to a block of five.
+    """
     rng = np.random.default_rng(4)
     p, slot = _ti_positions()
     n, r = 24, 90
@@ -74,8 +78,8 @@ def test_tdm_ti_layout_equals_direct_engine(threads, engine):
     az = np.deg2rad(np.linspace(-40, 40, 9))
     el = np.deg2rad(np.linspace(-20, 25, 7))
     _compare(_cube(rng, n, 12, r), p, motion, slot=slot, wavelength=LAM, range_axis=r_axis,
-             azimuth=az, elevation=el, range_gates=[8, 9, 10, 50, 51, 88], gate_block=3,
-             threads=threads, engine=engine)
+             azimuth=az, elevation=el, range_gates=[8, 9, 10, 50, 51, 88],
+             gate_block=gate_block, threads=threads, engine=engine)
 
 
 @pytest.mark.parametrize("engine", ENGINE_CASES)
@@ -217,8 +221,9 @@ def test_gated_range_transform_is_the_range_fft_at_the_gates(engine, real):
         0.1 * rng.standard_normal((6, 12, k))
     x = (x.real if real else x).astype(np.float32 if real else np.complex64)
     gates = [0, 5, 6, 31] if real else [0, 5, 6, 40, 63]
-    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM, range_axis=2.0 + np.arange(k) * 0.1,
-                             azimuth=[0.0], elevation=[0.0], range_gates=gates, engine=engine)
+    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM,
+                             range_axis=2.0 + np.arange(k) * 0.1, azimuth=[0.0],
+                             elevation=[0.0], range_gates=gates, engine=engine)
     ref = range_compress(x)[:, :, gates]
     got = proj.gated_range_transform(x)
     assert got.shape == ref.shape and got.dtype == np.complex64
