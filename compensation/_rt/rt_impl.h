@@ -120,16 +120,21 @@ static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus&
             gr[j] += vr;
             gi[j] += vi;
         } else {
+            // a large phase adds nothing here (its Taylor value can be huge and would be
+            // lost to float32 rounding when taken out again); fix_large adds it
+            const bool big = std::fabs(ph) > small;
+            c = big ? 0.0f : c;
+            s = big ? 0.0f : s;
             gr[j] += vr * c - vi * s;
             gi[j] += vr * s + vi * c;
-            large += std::fabs(ph) > small;
+            large += big;
         }
     }
     return large;
 }
 
-// Directions of a fused line gate whose phase exceeded `small`: replace the
-// Taylor exp(j .) by the float64 phase and expj (scalar; rare).
+// Directions of a fused line gate whose phase exceeded `small` (gate_line added
+// nothing for them): add their term with the float64 phase and expj (scalar; rare).
 static void fix_large(int64_t nd, double rg, double r, double k, float small, const Focus& F,
                       const float* br, const float* bi, const float* zr, const float* zi,
                       const float* xg, int64_t xstride, int64_t m, float* gr, float* gi) {
@@ -137,8 +142,7 @@ static void fix_large(int64_t nd, double rg, double r, double k, float small, co
     for (int64_t j = 0; j < nd; ++j) {
         const float ph = gate_phase(rgf, drf, F.fq[j], F.fe[j], F.ft[j], F.fL[j], F.fa[j]);
         if (!(std::fabs(ph) > small)) continue;
-        float c, s, ec, es;
-        expj_small(ph, c, s);
+        float ec, es;
         expj(large_phase(rg, r, k, F.q[j], F.e[j]), ec, es);
         float ar = xg[xstride * (m - 1)], ai = xg[xstride * (m - 1) + 1];
         for (int64_t i = m - 2; i >= 0; --i) {
@@ -147,9 +151,8 @@ static void fix_large(int64_t nd, double rg, double r, double k, float small, co
             ar = nr;
         }
         const float vr = ar * br[j] - ai * bi[j], vi = ar * bi[j] + ai * br[j];
-        const float dc = ec - c, ds = es - s;
-        gr[j] += vr * dc - vi * ds;
-        gi[j] += vr * ds + vi * dc;
+        gr[j] += vr * ec - vi * es;
+        gi[j] += vr * es + vi * ec;
     }
 }
 

@@ -200,6 +200,23 @@ def test_bench_doppler_power_is_the_power_of_the_beams_doppler_spectrum():
     assert np.argmax(power.sum(axis=(1, 2, 3))) == np.argmax(ref.sum(axis=(1, 2, 3)))
 
 
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_wide_gate_block_with_large_gate_phases_equals_direct_engine(engine):
+    """One block spanning 0.3-14 m: per-gate phases of many rad take the float64 path.
+
+    The near gates' phases are far beyond ``SMALL_PHASE`` (their Taylor values are
+    huge), so an engine that adds a Taylor term and takes it out again loses the
+    beam to float32 rounding (1e-4 of the peak), far outside ``RT_TOL``.
+    """
+    rng = np.random.default_rng(12)
+    p, slot = _ti_positions()
+    n = 12
+    _compare(_cube(rng, n, 12, 90), p, _motion(rng, 3 * n), slot=slot, wavelength=LAM,
+             range_axis=np.linspace(0.3, 14.0, 90), azimuth=np.deg2rad(np.linspace(-40, 40, 9)),
+             elevation=np.deg2rad(np.linspace(-20, 25, 7)), range_gates=[0, 1, 60, 89],
+             engine=engine)
+
+
 #: Largest difference of the gated range transform from the range FFT relative to
 #: the peak bin: float32 rounding of a 256-term sum.
 RANGE_TOL = 1e-6
