@@ -33,7 +33,14 @@ where the extension is not built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow
 the steps above and give the same beams within float32 rounding.
 
 Cost per frame: ``chirp * slot * direction * (2 sincos + ~40 flops) + chirp *
-slot * gate * direction * (2 sincos + ~20 flops)``.
+slot * gate * direction * (2 sincos + ~20 flops)``; a gate block whose gates
+all lie at its focal range (a block of one gate) has no per-gate phase.
+
+For a stream of frames: :meth:`RealtimeProjector.gated_range_transform` gives
+the range transform of the IF samples at the gated bins only (a DFT of those
+bins, ``[chirp * channel, sample] x [sample, gate]``), which
+:meth:`RealtimeProjector.project` takes with ``gated=True``; ``out=`` reuses
+one beam buffer frame after frame.
 """
 
 from __future__ import annotations
