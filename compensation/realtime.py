@@ -293,7 +293,7 @@ class RealtimeProjector:
         return out
 
     def project(self, rc, motion: PlatformMotion, *, gated: bool = False,
-                out: np.ndarray | None = None) -> BeamCube:
+                out: np.ndarray | None = None, chirp_weights=None) -> BeamCube:
         """Beams of one frame.
 
         Parameters
@@ -309,6 +309,10 @@ class RealtimeProjector:
             C-contiguous buffer for the beams (reused frame after frame, it saves
             the allocation and the first-touch page faults of a new one); the
             returned cube's ``data`` is then ``out``.
+        chirp_weights : array_like, shape ``[chirp]``, optional
+            Real factor of each chirp's beams (e.g. a slow-time window for the
+            Doppler FFT), applied to the gated data at no extra pass; the beams
+            are then the weighted beams.
 
         Returns
         -------
@@ -333,6 +337,10 @@ class RealtimeProjector:
                                   dtype=np.complex64)                        # [N, M, G]
         if not np.isfinite(xg.view(np.float32)).all():
             raise ValueError("rc holds NaN or infinite values in the gated cells")
+        if chirp_weights is not None:
+            cw = finite_array("chirp_weights", chirp_weights, shape=(n_chirp,),
+                              what="(one real factor per chirp)")
+            xg = xg * cw.astype(np.float32)[:, None, None]
         rot = motion.attitude.reshape(n_chirp, self.num_slots, 3, 3)
         disp = motion.radar_displacement.reshape(n_chirp, self.num_slots, 3)
         shape = (n_chirp, self.gates.size, self.azimuth.size, self.elevation.size)

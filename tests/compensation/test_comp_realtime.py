@@ -281,3 +281,27 @@ def test_bench_doppler_power_buffers_follow_each_frame():
             assert np.abs(got - ref).max() < RT_TOL * ref.max()
         with pytest.raises(ValueError, match="data must have shape"):
             dop(x[1:])
+
+
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_chirp_weights_carry_the_doppler_window(engine):
+    """project(chirp_weights=w) = w[n] * beams; DopplerPower(weighted=True) then = its power."""
+    from raysim.studies.bench_realtime import DopplerPower
+
+    rng = np.random.default_rng(13)
+    p, slot = _ti_positions()
+    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM, range_axis=np.arange(5.0) + 5,
+                             azimuth=[0.0, 0.2, 0.4], elevation=[0.0, 0.1], range_gates=[1, 3],
+                             engine=engine)
+    rc, motion = _cube(rng, 16, 12, 5), _motion(rng, 48)
+    beams = proj.project(rc, motion).data
+    dop = DopplerPower(beams.shape, threads=2)
+    ref = dop(beams).copy()
+    weighted = proj.project(rc, motion, chirp_weights=dop.chirp_weights).data
+    wref = beams * dop.chirp_weights[:, None, None, None]
+    assert np.abs(weighted - wref).max() < RT_TOL * np.abs(wref).max()
+    assert np.abs(dop(weighted, weighted=True) - ref).max() < RT_TOL * ref.max()
+    with pytest.raises(ValueError, match="chirp_weights must have shape"):
+        proj.project(rc, motion, chirp_weights=np.ones(15))
+    with pytest.raises(ValueError, match="weighted data must be C-contiguous complex64"):
+        dop(beams.astype(np.complex128), weighted=True)
