@@ -15,11 +15,11 @@ Prints one JSON object with the timings (wall clock, ``time.perf_counter``,
 best of ``--repeat`` interleaved runs; NumPy/SciPy/BLAS default threads, i.e.
 all CPUs of the process) and the ratio, plus (key ``realtime``, unless
 ``--no-realtime``) :func:`raysim.studies.bench_realtime.bench_realtime`: a
-TI-size TDM frame compensated and processed (range FFT, strapdown, exact
-projection with the compiled real-time kernel, Doppler FFT and power), frames
-per second against its frame rate, wall and CPU seconds, for 1, 3 and 8 gated
-cells (``--realtime-threads`` worker threads; ``--realtime-only`` skips the
-paper-frame ratio).
+TI-size TDM frame compensated and processed (range transform of the gated
+cells, strapdown, exact projection with the compiled real-time kernel, Doppler
+FFT and power), frames per second against its frame rate, wall and CPU seconds
+per frame and per stage, for 1, 3 and 8 gated cells (``--realtime-threads``
+worker threads; ``--realtime-only`` skips the paper-frame ratio).
 
 This ratio is not the ``processing.compensated_over_bare`` of ``raysim bench``:
 that one times the paper chain (four steps, static motion, 121 x 31 beams, 20

@@ -33,7 +33,14 @@ where the extension is not built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow
 the steps above and give the same beams within float32 rounding.
 
 Cost per frame: ``chirp * slot * direction * (2 sincos + ~40 flops) + chirp *
-slot * gate * direction * (2 sincos + ~20 flops)``.
+slot * gate * direction * (2 sincos + ~20 flops)``; a gate block whose gates
+all lie at its focal range (a block of one gate) has no per-gate phase.
+
+For a stream of frames: :meth:`RealtimeProjector.gated_range_transform` gives
+the range transform of the IF samples at the gated bins only (a DFT of those
+bins, ``[chirp * channel, sample] x [sample, gate]``), which
+:meth:`RealtimeProjector.project` takes with ``gated=True``; ``out=`` reuses
+one beam buffer frame after frame.
 """
 
 from __future__ import annotations
@@ -197,6 +204,7 @@ class RealtimeProjector:
         if engine == "auto":
             engine = "numpy" if _ext is None else "compiled"
         self._engine = engine
+        self._dft_key, self._dft = None, None
         if engine != "numpy":
             self._tables = self._compiled_tables(p, w)
 
@@ -234,15 +242,77 @@ class RealtimeProjector:
         """Directions of the grid ``azimuth * elevation``."""
         return int(self.u.shape[0])
 
-    def project(self, rc, motion: PlatformMotion) -> BeamCube:
+    def gated_range_transform(self, samples, *, window: str | None = "hann") -> np.ndarray:
+        """Range transform of the IF samples at the gated bins only.
+
+        The bins ``range_gates`` of the windowed range FFT (window divided by its
+        sum; for real samples the positive-frequency bins doubled), i.e. of
+        ``raysim.processing.maps.range_compress`` without zero padding, as one
+        complex64 matrix product ``[chirp * channel, sample] x [sample, gate]``
+        (a DFT of the gated bins: ``sample * gate`` complex products per channel
+        instead of a whole FFT). The matrix is built once per sample count.
+
+        Parameters
+        ----------
+        samples : ndarray, shape ``[chirp, channel, sample]``, complex or real
+            IF samples.
+        window : str or None
+            ``scipy.signal.get_window`` name (periodic), or None for none.
+
+        Returns
+        -------
+        ndarray, shape ``[chirp, channel, gate]``, complex64
+            Input of :meth:`project` with ``gated=True``.
+        """
+        x = np.asarray(samples)
+        real = not np.iscomplexobj(x)
+        bins = x.shape[-1] // 2 if real and x.ndim == 3 else (x.shape[-1] if x.ndim == 3 else 0)
+        if x.ndim != 3 or x.shape[1] != self.num_channels or bins <= self.gates.max():
+            raise ValueError(f"samples must be an IF cube [chirp, {self.num_channels}, sample] "
+                             f"with more than {self.gates.max()} range bins, got {x.dtype} "
+                             f"array of shape {x.shape}")
+        key = (x.shape[-1], window, real)
+        if self._dft_key != key:
+            self._dft = _gated_dft(x.shape[-1], self.gates, window, real)
+            self._dft_planar = (np.ascontiguousarray(self._dft.real.T),
+                                np.ascontiguousarray(self._dft.imag.T))   # [G, K] float32
+            self._dft_key = key
+        n_gate = self.gates.size
+        if real or self._engine == "numpy":
+            x = x.astype(np.float32 if real else np.complex64, copy=False)
+            return (x.reshape(-1, x.shape[-1]) @ self._dft).reshape(*x.shape[:2], n_gate)
+        # compiled, one thread: no BLAS call and no thread barrier (thread pools busy-wait
+        # at their barriers, which costs several times this small product's CPU time on a
+        # loaded machine)
+        x = np.ascontiguousarray(x, dtype=np.complex64)
+        out = np.empty((*x.shape[:2], n_gate), dtype=np.complex64)
+        wr, wi = self._dft_planar
+        _ext.gated_dft(x.ctypes.data, wr.ctypes.data, wi.ctypes.data, out.ctypes.data,
+                       x.shape[0] * x.shape[1], x.shape[2], n_gate, 1,
+                       int(self._engine == "portable"))
+        return out
+
+    def project(self, rc, motion: PlatformMotion, *, gated: bool = False,
+                out: np.ndarray | None = None, chirp_weights=None) -> BeamCube:
         """Beams of one frame.
 
         Parameters
         ----------
         rc : ndarray, shape ``[chirp, channel, range]``, complex
-            Range-compressed cube.
+            Range-compressed cube; with ``gated=True`` only the gated bins,
+            ``[chirp, channel, gate]`` (as :meth:`gated_range_transform` gives them).
         motion : PlatformMotion
             Pose per chirp (``chirp * slots`` poses, chirp major, with TDM slots).
+        gated : bool
+            ``rc`` holds the gated bins only.
+        out : ndarray, shape ``[chirp, gate, azimuth, elevation]``, complex64, optional
+            C-contiguous buffer for the beams (reused frame after frame, it saves
+            the allocation and the first-touch page faults of a new one); the
+            returned cube's ``data`` is then ``out``.
+        chirp_weights : array_like, shape ``[chirp]``, optional
+            Real factor of each chirp's beams (e.g. a slow-time window for the
+            Doppler FFT), applied to the gated data at no extra pass; the beams
+            are then the weighted beams.
 
         Returns
         -------
@@ -251,25 +321,39 @@ class RealtimeProjector:
             ``motion``.
         """
         x = np.asarray(rc)
+        need = self.gates.size if gated else self.gates.max() + 1
         if x.ndim != 3 or not np.iscomplexobj(x) or x.shape[1] != self.num_channels or \
-                x.shape[2] <= self.gates.max():
-            raise ValueError(f"rc must be a complex cube [chirp, {self.num_channels}, range > "
-                             f"{self.gates.max()}], got {x.dtype} array of shape {x.shape}")
+                x.shape[2] < need or (gated and x.shape[2] != need):
+            what = f"{need}" if gated else f"> {self.gates.max()}"
+            raise ValueError(f"rc must be a complex cube [chirp, {self.num_channels}, range "
+                             f"{what}], got {x.dtype} array of shape {x.shape}")
         if not isinstance(motion, PlatformMotion):
             raise ValueError(f"motion must be a compensation.PlatformMotion, got {type(motion)!r}")
         n_chirp = x.shape[0]
         if motion.num_chirps != n_chirp * self.num_slots:
             raise ValueError(f"motion must hold chirp * slots = {n_chirp} * {self.num_slots} "
                              f"poses (chirp major), got {motion.num_chirps}")
-        xg = np.ascontiguousarray(x[:, :, self.gates], dtype=np.complex64)   # [N, M, G]
+        xg = np.ascontiguousarray(x if gated else x[:, :, self.gates],
+                                  dtype=np.complex64)                        # [N, M, G]
         if not np.isfinite(xg.view(np.float32)).all():
             raise ValueError("rc holds NaN or infinite values in the gated cells")
+        if chirp_weights is not None:
+            cw = finite_array("chirp_weights", chirp_weights, shape=(n_chirp,),
+                              what="(one real factor per chirp)")
+            xg = xg * cw.astype(np.float32)[:, None, None]
         rot = motion.attitude.reshape(n_chirp, self.num_slots, 3, 3)
         disp = motion.radar_displacement.reshape(n_chirp, self.num_slots, 3)
-        out = np.empty((n_chirp, self.gates.size, self.num_directions), dtype=np.complex64)
+        shape = (n_chirp, self.gates.size, self.azimuth.size, self.elevation.size)
+        if out is None:
+            out = np.empty(shape, dtype=np.complex64)
+        elif not isinstance(out, np.ndarray) or out.shape != shape or \
+                out.dtype != np.complex64 or not out.flags.c_contiguous:
+            raise ValueError(f"out must be a C-contiguous complex64 array of shape {shape}, got "
+                             f"{getattr(out, 'dtype', type(out))} {getattr(out, 'shape', '')}")
+        beams = out
+        out = out.reshape(n_chirp, self.gates.size, self.num_directions)
         (self._numpy if self._engine == "numpy" else self._compiled)(xg, rot, disp, out)
-        return BeamCube(out.reshape(n_chirp, self.gates.size, self.azimuth.size,
-                                    self.elevation.size), motion.time[::self.num_slots],
+        return BeamCube(beams, motion.time[::self.num_slots],
                         self.range, self.azimuth, self.elevation, self.wavelength,
                         motion.warnings)
 
@@ -368,6 +452,27 @@ class RealtimeProjector:
                     acc *= corr
                     y[:, gi] += acc
         return y
+
+
+def _gated_dft(n: int, gates: np.ndarray, window: str | None, real: bool) -> np.ndarray:
+    """``[sample, gate]`` complex64 matrix: window / sum times ``exp(-2 pi j k g / n)``.
+
+    Doubled for real samples (the positive-frequency half, as for a real tone).
+    """
+    if window is None:
+        w = np.ones(n)
+    else:
+        from scipy.signal import get_window
+
+        try:
+            w = get_window(window, n, fftbins=True)
+        except ValueError as exc:
+            raise ValueError(f"window {window!r} is not a scipy.signal window name: "
+                             f"{exc}") from None
+    w = w / w.sum() * (2.0 if real else 1.0)
+    # exact integer product k g modulo n keeps the phase of large bins exact
+    kg = np.outer(np.arange(n), gates) % n
+    return (w[:, None] * np.exp(-2j * np.pi * kg / n)).astype(np.complex64)
 
 
 def _gate_phase(r_g: float, r: float, q, e, t, L, a) -> np.ndarray:

@@ -4,6 +4,7 @@
 // (int64 sizes, uint64 array addresses, float64 scalars) laid out as
 // rt::Params; the Python wrapper (compensation/realtime.py) builds and checks
 // them and keeps the arrays alive. isa: 0 = best available, 1 = portable.
+// gated_dft(...): the range transform at the gated bins (see rt_impl.h).
 // Releases the GIL.
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -14,6 +15,10 @@ namespace rt {
 void project_portable(const Params& P);
 void project_avx2(const Params& P);
 bool avx2_compiled();
+void gated_dft_portable(const float*, const float*, const float*, float*, int64_t, int64_t,
+                        int64_t, int64_t);
+void gated_dft_avx2(const float*, const float*, const float*, float*, int64_t, int64_t, int64_t,
+                    int64_t);
 }
 
 static bool have_avx2() {
@@ -58,12 +63,33 @@ static PyObject* py_project(PyObject*, PyObject* args) {
     Py_RETURN_NONE;
 }
 
+// gated_dft(x, wr, wi, out, rows, K, G, threads, isa): addresses of contiguous
+// arrays x [rows, K] complex64, wr / wi [G, K] float32, out [rows, G] complex64.
+static PyObject* py_gated_dft(PyObject*, PyObject* args) {
+    unsigned long long px, pr, pi, po;
+    long long rows, K, G, threads;
+    int isa;
+    if (!PyArg_ParseTuple(args, "KKKKLLLLi", &px, &pr, &pi, &po, &rows, &K, &G, &threads, &isa))
+        return nullptr;
+    const float* x = reinterpret_cast<const float*>(px);
+    const float* wr = reinterpret_cast<const float*>(pr);
+    const float* wi = reinterpret_cast<const float*>(pi);
+    float* out = reinterpret_cast<float*>(po);
+    const bool avx2 = isa == 0 && have_avx2();
+    Py_BEGIN_ALLOW_THREADS
+    if (avx2) rt::gated_dft_avx2(x, wr, wi, out, rows, K, G, threads);
+    else rt::gated_dft_portable(x, wr, wi, out, rows, K, G, threads);
+    Py_END_ALLOW_THREADS
+    Py_RETURN_NONE;
+}
+
 static PyObject* py_isa(PyObject*, PyObject*) {
     return PyUnicode_FromString(have_avx2() ? "avx2" : "portable");
 }
 
 static PyMethodDef methods[] = {
     {"project", py_project, METH_VARARGS, "Exact beams of one frame (see realtime.py)."},
+    {"gated_dft", py_gated_dft, METH_VARARGS, "Range transform at the gated bins."},
     {"isa", py_isa, METH_NOARGS, "Instruction set the kernel uses on this CPU."},
     {nullptr, nullptr, 0, nullptr}};
 

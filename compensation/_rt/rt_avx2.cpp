@@ -14,4 +14,8 @@ bool avx2_compiled() {
 #endif
 }
 void project_avx2(const Params& P) { avx2::project(P); }
+void gated_dft_avx2(const float* x, const float* wr, const float* wi, float* out, int64_t R,
+                    int64_t K, int64_t G, int64_t threads) {
+    avx2::gated_dft(x, wr, wi, out, R, K, G, threads);
+}
 }

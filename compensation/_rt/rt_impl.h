@@ -96,7 +96,7 @@ static inline double large_phase(double rg, double r, double k, double q, double
 // phase, exp(j .) by Taylor, the channel sum by Horner's rule in z, times the
 // slot's exp(j phi(p_0)), accumulated into (gr, gi). Returns the number of
 // directions whose phase exceeds `small` (fixed afterwards by fix_large).
-template <int MC>
+template <int MC, bool FOCAL>
 static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus& F,
                      const float* br, const float* bi, const float* zr, const float* zi,
                      const float* xg, int64_t xstride, float* gr, float* gi) {
@@ -104,9 +104,11 @@ static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus&
     for (int i = 0; i < MC; ++i) { xr[i] = xg[xstride * i]; xi[i] = xg[xstride * i + 1]; }
     int large = 0;
     for (int64_t j = 0; j < nd; ++j) {
-        const float ph = gate_phase(rgf, drf, F.fq[j], F.fe[j], F.ft[j], F.fL[j], F.fa[j]);
-        float c, s;
-        expj_small(ph, c, s);
+        // a gate at the block's focal range has a zero phase: no correction
+        const float ph = FOCAL ? 0.0f
+                               : gate_phase(rgf, drf, F.fq[j], F.fe[j], F.ft[j], F.fL[j], F.fa[j]);
+        float c = 1.0f, s = 0.0f;
+        if (!FOCAL) expj_small(ph, c, s);
         float ar = xr[MC - 1], ai = xi[MC - 1];
         for (int i = MC - 2; i >= 0; --i) {
             const float nr = ar * zr[j] - ai * zi[j] + xr[i];
@@ -114,15 +116,25 @@ static int gate_line(int64_t nd, float rgf, float drf, float small, const Focus&
             ar = nr;
         }
         const float vr = ar * br[j] - ai * bi[j], vi = ar * bi[j] + ai * br[j];
-        gr[j] += vr * c - vi * s;
-        gi[j] += vr * s + vi * c;
-        large += std::fabs(ph) > small;
+        if (FOCAL) {
+            gr[j] += vr;
+            gi[j] += vi;
+        } else {
+            // a large phase adds nothing here (its Taylor value can be huge and would be
+            // lost to float32 rounding when taken out again); fix_large adds it
+            const bool big = std::fabs(ph) > small;
+            c = big ? 0.0f : c;
+            s = big ? 0.0f : s;
+            gr[j] += vr * c - vi * s;
+            gi[j] += vr * s + vi * c;
+            large += big;
+        }
     }
     return large;
 }
 
-// Directions of a fused line gate whose phase exceeded `small`: replace the
-// Taylor exp(j .) by the float64 phase and expj (scalar; rare).
+// Directions of a fused line gate whose phase exceeded `small` (gate_line added
+// nothing for them): add their term with the float64 phase and expj (scalar; rare).
 static void fix_large(int64_t nd, double rg, double r, double k, float small, const Focus& F,
                       const float* br, const float* bi, const float* zr, const float* zi,
                       const float* xg, int64_t xstride, int64_t m, float* gr, float* gi) {
@@ -130,8 +142,7 @@ static void fix_large(int64_t nd, double rg, double r, double k, float small, co
     for (int64_t j = 0; j < nd; ++j) {
         const float ph = gate_phase(rgf, drf, F.fq[j], F.fe[j], F.ft[j], F.fL[j], F.fa[j]);
         if (!(std::fabs(ph) > small)) continue;
-        float c, s, ec, es;
-        expj_small(ph, c, s);
+        float ec, es;
         expj(large_phase(rg, r, k, F.q[j], F.e[j]), ec, es);
         float ar = xg[xstride * (m - 1)], ai = xg[xstride * (m - 1) + 1];
         for (int64_t i = m - 2; i >= 0; --i) {
@@ -140,9 +151,8 @@ static void fix_large(int64_t nd, double rg, double r, double k, float small, co
             ar = nr;
         }
         const float vr = ar * br[j] - ai * bi[j], vi = ar * bi[j] + ai * br[j];
-        const float dc = ec - c, ds = es - s;
-        gr[j] += vr * dc - vi * ds;
-        gi[j] += vr * ds + vi * dc;
+        gr[j] += vr * ec - vi * es;
+        gi[j] += vr * es + vi * ec;
     }
 }
 
@@ -153,13 +163,46 @@ static int gate_line_fused(int64_t m, int64_t nd, float rgf, float drf, float sm
                            const Focus& F, const float* br, const float* bi, const float* zr,
                            const float* zi, const float* xg, int64_t xstride, float* gr,
                            float* gi) {
-#define RT_CASE(MC) case MC: return gate_line<MC>(nd, rgf, drf, small, F, br, bi, zr, zi, xg, \
-                                                   xstride, gr, gi);
+#define RT_CASE(MC) case MC: return drf == 0.0f                                               \
+    ? gate_line<MC, true>(nd, rgf, drf, small, F, br, bi, zr, zi, xg, xstride, gr, gi)          \
+    : gate_line<MC, false>(nd, rgf, drf, small, F, br, bi, zr, zi, xg, xstride, gr, gi);
     switch (m) {
         RT_CASE(1) RT_CASE(2) RT_CASE(3) RT_CASE(4) RT_CASE(5) RT_CASE(6) RT_CASE(7) RT_CASE(8)
         default: return -1;
     }
 #undef RT_CASE
+}
+
+// Phases of a slot on a line for a gate block whose gates all lie at its focal
+// range (no per-gate phase): the geometry of project() without the per-gate
+// arrays, then exp(j .) of phi(p_0) into (br, bi) and of the step into (zr, zi).
+// Kept out of line so that the general loops keep their vector code.
+__attribute__((noinline)) static void focal_phases(
+    int64_t nd, const double* __restrict__ ux, const double* __restrict__ uy,
+    const double* __restrict__ uz, double dx, double dy, double dz, double dd, double r,
+    double k, double ax, double ay, double az, double a0, double bx, double by, double bz,
+    double b0, float* __restrict__ xa, int32_t* __restrict__ qa, float* __restrict__ xb,
+    int32_t* __restrict__ qb, float* __restrict__ br, float* __restrict__ bi,
+    float* __restrict__ zr, float* __restrict__ zi) {
+    for (int64_t j = 0; j < nd; ++j) {
+        const double q = ux[j] * dx + uy[j] * dy + uz[j] * dz;
+        double e = dd - q * q;
+        e = e > 0.0 ? e : 0.0;
+        const double t = r - q;
+        const double L = std::sqrt(t * t + e);
+        const double w = 1.0 / (L * (L + t));
+        const double h = e * L * w;
+        const double inv = k * (L + t) * w;
+        const double phi0 = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0) * inv
+                            + 2.0 * k * (q - h);
+        const double alpha = (r * (ux[j] * bx + uy[j] * by + uz[j] * bz) - b0) * inv;
+        reduce(phi0, xa[j], qa[j]);
+        reduce(alpha, xb[j], qb[j]);
+    }
+    for (int64_t j = 0; j < nd; ++j) {
+        rotate(xa[j], qa[j], br[j], bi[j]);
+        rotate(xb[j], qb[j], zr[j], zi[j]);
+    }
 }
 
 static void project(const rt::Params& P) {
@@ -249,7 +292,15 @@ static void project(const rt::Params& P) {
     dq[j] = q; de[j] = e;                                                                \
     fq[j] = (float)q; fe[j] = (float)e; ft[j] = (float)t; fL[j] = (float)L;              \
     fA[j] = (float)(-2.0 * k * h);
-                    if (line) {
+                    // every gate of the block at its focal range (a block of one gate):
+                    // no per-gate phase, so only the two phases per direction
+                    bool focal = line && m <= FUSED_MAX;
+                    for (int64_t g = P.block_start[b]; g < P.block_start[b + 1]; ++g)
+                        focal = focal && (float)(r - P.rg[g]) == 0.0f;
+                    if (focal) {
+                        focal_phases(nd, ux, uy, uz, dx, dy, dz, dd, r, k, ax, ay, az, a0, bx, by,
+                                     bz, b0, xa, qa, xb, qb, br, bi, zr, zi);
+                    } else if (line) {
                         for (int64_t j = 0; j < nd; ++j) {
                             RT_GEOMETRY
                             const double phi0 = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0)
@@ -353,6 +404,37 @@ static void project(const rt::Params& P) {
                 const float* gi = gr + CH;
                 float* o = P.out + 2 * ((n * G + g) * D + j0);
                 for (int64_t j = 0; j < nd; ++j) { o[2 * j] = gr[j]; o[2 * j + 1] = gi[j]; }
+            }
+        }
+    }
+}
+
+// Gated range transform: out[r, g] = sum_k x[r, k] W[g, k] for rows r of complex
+// samples x [R, K] (complex64, interleaved) and the window-weighted DFT rows
+// W [G, K] given planar (wr, wi, float32). Each thread de-interleaves one row
+// into (xr, xi) so that the G dot products run at full vector width.
+static void gated_dft(const float* x, const float* wr, const float* wi, float* out, int64_t R,
+                      int64_t K, int64_t G, int64_t threads) {
+#pragma omp parallel num_threads((int)threads)
+    {
+        std::vector<float> buf(2 * K);
+        float* xr = buf.data();
+        float* xi = xr + K;
+#pragma omp for schedule(static)
+        for (int64_t r = 0; r < R; ++r) {
+            const float* row = x + 2 * r * K;
+            for (int64_t k = 0; k < K; ++k) { xr[k] = row[2 * k]; xi[k] = row[2 * k + 1]; }
+            for (int64_t g = 0; g < G; ++g) {
+                const float* a = wr + g * K;
+                const float* b = wi + g * K;
+                float sr = 0.0f, si = 0.0f;
+#pragma omp simd reduction(+ : sr, si)
+                for (int64_t k = 0; k < K; ++k) {
+                    sr += xr[k] * a[k] - xi[k] * b[k];
+                    si += xr[k] * b[k] + xi[k] * a[k];
+                }
+                out[2 * (r * G + g)] = sr;
+                out[2 * (r * G + g) + 1] = si;
             }
         }
     }

@@ -63,9 +63,13 @@ def _compare(rc, p, motion, *, slot=None, weights=None, gate_block=8, threads=2,
 
 
 @pytest.mark.parametrize("engine", ENGINE_CASES)
-@pytest.mark.parametrize("threads", [1, 2])
-def test_tdm_ti_layout_equals_direct_engine(threads, engine):
-    """3 slots on lines (Horner form), own pose per slot, two gate blocks, ranges 2-14 m."""
+@pytest.mark.parametrize("threads, gate_block", [(1, 3), (2, 3), (2, 5)])
+def test_tdm_ti_layout_equals_direct_engine(threads, gate_block, engine):
+    """3 slots on lines (Horner form), own pose per slot, two gate blocks, ranges 2-14 m.
+
+    ``gate_block=5`` leaves the last gate alone in its block, at its focal range
+    (no per-gate phase: the kernel's shorter path), next to a block of five.
+    """
     rng = np.random.default_rng(4)
     p, slot = _ti_positions()
     n, r = 24, 90
@@ -74,8 +78,8 @@ def test_tdm_ti_layout_equals_direct_engine(threads, engine):
     az = np.deg2rad(np.linspace(-40, 40, 9))
     el = np.deg2rad(np.linspace(-20, 25, 7))
     _compare(_cube(rng, n, 12, r), p, motion, slot=slot, wavelength=LAM, range_axis=r_axis,
-             azimuth=az, elevation=el, range_gates=[8, 9, 10, 50, 51, 88], gate_block=3,
-             threads=threads, engine=engine)
+             azimuth=az, elevation=el, range_gates=[8, 9, 10, 50, 51, 88],
+             gate_block=gate_block, threads=threads, engine=engine)
 
 
 @pytest.mark.parametrize("engine", ENGINE_CASES)
@@ -194,3 +198,110 @@ def test_bench_doppler_power_is_the_power_of_the_beams_doppler_spectrum():
     assert power.shape == ref.shape == (16, 2, 3, 2) and power.dtype == np.float32
     assert np.abs(power - ref).max() < RT_TOL * ref.max()
     assert np.argmax(power.sum(axis=(1, 2, 3))) == np.argmax(ref.sum(axis=(1, 2, 3)))
+
+
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_wide_gate_block_with_large_gate_phases_equals_direct_engine(engine):
+    """One block spanning 0.3-14 m: per-gate phases of many rad take the float64 path.
+
+    The near gates' phases are far beyond ``SMALL_PHASE`` (their Taylor values are
+    huge), so an engine that adds a Taylor term and takes it out again loses the
+    beam to float32 rounding (1e-4 of the peak), far outside ``RT_TOL``.
+    """
+    rng = np.random.default_rng(12)
+    p, slot = _ti_positions()
+    n = 12
+    _compare(_cube(rng, n, 12, 90), p, _motion(rng, 3 * n), slot=slot, wavelength=LAM,
+             range_axis=np.linspace(0.3, 14.0, 90), azimuth=np.deg2rad(np.linspace(-40, 40, 9)),
+             elevation=np.deg2rad(np.linspace(-20, 25, 7)), range_gates=[0, 1, 60, 89],
+             engine=engine)
+
+
+#: Largest difference of the gated range transform from the range FFT relative to
+#: the peak bin: float32 rounding of a 256-term sum.
+RANGE_TOL = 1e-6
+
+
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+@pytest.mark.parametrize("real", [False, True])
+def test_gated_range_transform_is_the_range_fft_at_the_gates(engine, real):
+    """DFT of the gated bins = range_compress(...)[..., gates] (Hann, /sum; real: doubled half)."""
+    from raysim.processing.maps import range_compress
+
+    rng = np.random.default_rng(9)
+    p, slot = _ti_positions()
+    k = 64
+    n = np.arange(k)
+    # two tones (bins 5 and 40.3) plus noise: the gated bins hold leakage and peaks
+    tone = 3.0 * np.exp(2j * np.pi * 5 * n / k) + np.exp(2j * np.pi * 40.3 * n / k)
+    x = tone[None, None] * np.exp(1j * rng.uniform(0, 6.3, (6, 12, 1))) + \
+        0.1 * rng.standard_normal((6, 12, k))
+    x = (x.real if real else x).astype(np.float32 if real else np.complex64)
+    gates = [0, 5, 6, 31] if real else [0, 5, 6, 40, 63]
+    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM,
+                             range_axis=2.0 + np.arange(k) * 0.1, azimuth=[0.0],
+                             elevation=[0.0], range_gates=gates, engine=engine)
+    ref = range_compress(x)[:, :, gates]
+    got = proj.gated_range_transform(x)
+    assert got.shape == ref.shape and got.dtype == np.complex64
+    assert np.abs(got - ref).max() < RANGE_TOL * np.abs(ref).max()
+    # same beams through the gated path as through the whole range-compressed cube
+    motion = _motion(rng, 18)
+    full = proj.project(range_compress(x), motion).data
+    out = np.empty_like(full)
+    beams = proj.project(got, motion, gated=True, out=out)
+    assert beams.data is out
+    assert np.abs(out - full).max() < RT_TOL * np.abs(full).max()
+    with pytest.raises(ValueError, match="samples must be an IF cube"):
+        proj.gated_range_transform(x[:, :5])
+    with pytest.raises(ValueError, match="rc must be a complex cube"):
+        proj.project(got[:, :, :2], motion, gated=True)
+    with pytest.raises(ValueError, match="out must be a C-contiguous complex64"):
+        proj.project(got, motion, gated=True, out=np.empty(full.shape, np.complex128))
+    with pytest.raises(ValueError, match="not a scipy.signal window name"):
+        proj.gated_range_transform(x, window="no-such-window")
+
+
+def test_bench_doppler_power_buffers_follow_each_frame():
+    """DopplerPower reuses its buffers: each call gives that frame's power (even and odd N)."""
+    from scipy.signal import get_window
+
+    from raysim.studies.bench_realtime import DopplerPower
+
+    rng = np.random.default_rng(10)
+    for n in (16, 15):
+        dop = DopplerPower((n, 2, 3), threads=2)
+        for _ in range(2):
+            x = (rng.standard_normal((n, 2, 3)) + 1j * rng.standard_normal((n, 2, 3))).astype(
+                np.complex64)
+            w = get_window("hann", n, fftbins=True)
+            ref = np.abs(np.fft.fftshift(np.fft.fft(x * (w / w.sum())[:, None, None], axis=0),
+                                         axes=0)) ** 2
+            got = dop(x)
+            assert np.abs(got - ref).max() < RT_TOL * ref.max()
+        with pytest.raises(ValueError, match="data must have shape"):
+            dop(x[1:])
+
+
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_chirp_weights_carry_the_doppler_window(engine):
+    """project(chirp_weights=w) = w[n] * beams; DopplerPower(weighted=True) then = its power."""
+    from raysim.studies.bench_realtime import DopplerPower
+
+    rng = np.random.default_rng(13)
+    p, slot = _ti_positions()
+    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM, range_axis=np.arange(5.0) + 5,
+                             azimuth=[0.0, 0.2, 0.4], elevation=[0.0, 0.1], range_gates=[1, 3],
+                             engine=engine)
+    rc, motion = _cube(rng, 16, 12, 5), _motion(rng, 48)
+    beams = proj.project(rc, motion).data
+    dop = DopplerPower(beams.shape, threads=2)
+    ref = dop(beams).copy()
+    weighted = proj.project(rc, motion, chirp_weights=dop.chirp_weights).data
+    wref = beams * dop.chirp_weights[:, None, None, None]
+    assert np.abs(weighted - wref).max() < RT_TOL * np.abs(wref).max()
+    assert np.abs(dop(weighted, weighted=True) - ref).max() < RT_TOL * ref.max()
+    with pytest.raises(ValueError, match="chirp_weights must have shape"):
+        proj.project(rc, motion, chirp_weights=np.ones(15))
+    with pytest.raises(ValueError, match="weighted data must be C-contiguous complex64"):
+        dop(beams.astype(np.complex128), weighted=True)
