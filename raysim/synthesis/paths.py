@@ -178,7 +178,11 @@ class PathDelays:
         points, first and last legs re-measured from the moving elements,
         ``interior_length = length - |v_f - x_tx,0| - |v_l - x_rx,0|``, moving
         scattering points at each channel's transmit instant), without
-        materialising ``[path, chirp, channel]``.
+        materialising ``[path, chirp, channel]``. The two-way element gain
+        (``config.pattern``) is taken at the pose of the frame's middle chirp:
+        the compact form keeps one amplitude per path, where ``reproject``
+        evaluates it at every chirp (under hover jitter of ``d theta`` a
+        ``cos^q`` element changes it by about ``q tan(theta) d theta``).
 
         Parameters
         ----------
@@ -197,7 +201,9 @@ class PathDelays:
                 - np.linalg.norm(last - paths.rx_position, axis=-1))
         base = np.maximum(base, 0.0)
         vel = np.asarray(paths.velocity, dtype=np.float64)
-        pd = cls.for_array(first, last, base, paths.amplitude, config, array, trajectory,
+        amplitude = paths.amplitude * _mid_frame_gain(paths, config, array, trajectory,
+                                                       lever_arm, frame, t0)
+        pd = cls.for_array(first, last, base, amplitude, config, array, trajectory,
                            lever_arm=lever_arm, frame=frame, t0=t0,
                            velocity=vel if np.any(vel) else None,
                            reference_time=float(paths.trace_time))
@@ -426,3 +432,23 @@ def element_positions(config: RadarConfig, array: VirtualArray, trajectory=None,
     return tx, element_world_positions(trajectory, times, array.rx_positions, lever_arm)
 
 
+def _mid_frame_gain(paths, config: RadarConfig, array: VirtualArray, trajectory, lever_arm,
+                    frame: int, t0: float) -> np.ndarray:
+    """``sqrt(G_t G_r)`` of every path at the middle chirp's pose, shape ``[path]``.
+
+    The same directions as :func:`raysim.echoes.rt.reproject.pattern_amplitude`
+    (radar phase centre to the first and last vertex, in frame A).
+    """
+    from raysim.echoes.oracle import element_times
+    from raysim.platform.motion import stationary
+    from raysim.radar.pattern import two_way_gain
+
+    trajectory = stationary() if trajectory is None else trajectory
+    t = float(element_times(config, array, frame, t0)[config.num_chirps // 2, 0])
+    pos, rot = trajectory.pose(np.array([t]))
+    mat = rot.as_matrix()[0]                                           # A -> W
+    origin = pos[0] + mat @ np.asarray(lever_arm, dtype=float)
+    shift = np.asarray(paths.velocity, dtype=float) * (t - paths.trace_time)
+    u_dep = (np.asarray(paths.first_vertex, dtype=float) + shift - origin) @ mat
+    u_arr = (np.asarray(paths.last_vertex, dtype=float) + shift - origin) @ mat
+    return np.sqrt(two_way_gain(config.pattern, u_dep, u_arr))
