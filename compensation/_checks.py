@@ -113,3 +113,13 @@ def angle_axis(name: str, value) -> np.ndarray:
         raise ValueError(f"{name} must be angles in radians within +-pi/2, got {worst!r}"
                          f"{hint}")
     return a
+
+
+def channel_slots(value, n_channel: int) -> np.ndarray:
+    """TDM slot of every channel: ``[channel]`` non-negative integers, else ``ValueError``."""
+    slot = np.asarray(value)
+    if slot.shape != (n_channel,) or not np.issubdtype(slot.dtype, np.integer) or \
+            slot.min() < 0:
+        raise ValueError(f"channel_slot must hold one non-negative integer slot per channel "
+                         f"({n_channel}), got {value!r}")
+    return slot

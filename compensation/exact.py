@@ -16,6 +16,7 @@ from typing import Literal
 
 import numpy as np
 
+from ._checks import channel_slots
 from .projection import BeamCube, beam_projection
 from .strapdown import PlatformMotion
 
@@ -94,11 +95,7 @@ def rigid_body_projection(rc, element_positions, motion: PlatformMotion, *, wave
                                **common).with_warnings(motion.warnings)
     x = np.asarray(rc)
     p = np.asarray(element_positions, dtype=float)
-    slot = np.asarray(channel_slot)
-    if slot.shape != (x.shape[1],) or not np.issubdtype(slot.dtype, np.integer) or \
-            slot.min() < 0:
-        raise ValueError(f"channel_slot must hold one non-negative integer slot per channel "
-                         f"({x.shape[1]}), got {channel_slot!r}")
+    slot = channel_slots(channel_slot, x.shape[1])
     n_slot = int(slot.max()) + 1
     if motion.num_chirps != n_chirp * n_slot:
         raise ValueError(f"with {n_slot} TDM slots motion must hold chirp * slots = "

@@ -45,7 +45,7 @@ from typing import Literal
 
 import numpy as np
 
-from ._checks import choice, finite_array, positive
+from ._checks import channel_slots, choice, finite_array, positive
 from .geometry import euler_zyx, yaw_matrices
 from .guards import CompensationWarning, merge, rotation_phase_warnings, small_angle_warnings
 from .projection import BeamCube, beam_projection
@@ -362,11 +362,7 @@ def _paper_chain_slots(x, element_positions, motion: PlatformMotion, channel_slo
     if x.ndim != 3:
         raise ValueError(f"rc must have shape [chirp, channel, range], got {x.shape}")
     p = finite_array("element_positions", element_positions, shape=(x.shape[1], 3))
-    slot = np.asarray(channel_slot)
-    if slot.shape != (x.shape[1],) or not np.issubdtype(slot.dtype, np.integer) or \
-            slot.min() < 0:
-        raise ValueError(f"channel_slot must hold one non-negative integer slot per channel "
-                         f"({x.shape[1]}), got {channel_slot!r}")
+    slot = channel_slots(channel_slot, x.shape[1])
     n_slot = int(slot.max()) + 1
     if not isinstance(motion, PlatformMotion) or motion.num_chirps != x.shape[0] * n_slot:
         raise ValueError(f"with {n_slot} TDM slots motion must be a PlatformMotion with "

@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import angle_axis, finite_array, positive
+from ._checks import angle_axis, channel_slots, finite_array, positive
 from .geometry import grid_directions
 from .projection import BeamCube
 from .strapdown import PlatformMotion
@@ -176,11 +176,7 @@ class RealtimeProjector:
         if channel_slot is None:
             slot = np.zeros(n_chan, dtype=np.intp)
         else:
-            slot = np.asarray(channel_slot)
-            if slot.shape != (n_chan,) or not np.issubdtype(slot.dtype, np.integer) or \
-                    slot.min() < 0:
-                raise ValueError(f"channel_slot must hold one non-negative integer slot per "
-                                 f"channel ({n_chan}), got {channel_slot!r}")
+            slot = channel_slots(channel_slot, n_chan)
         self.num_slots = int(slot.max()) + 1
         self.num_channels = n_chan
         self.slots = []

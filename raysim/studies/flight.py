@@ -230,7 +230,7 @@ def measure_store(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
     from raysim.io.zarr_store import open_store
     from raysim.processing.metrics import parabolic_offset, pseudo_velocity
 
-    ds = open_store(store)
+    ds = store if hasattr(store, "data_vars") else open_store(store)   # a path or a Dataset
     cfg = read_mmwave_config(flight.radar_config).config
     az_true = flight.apparent_direction(first)[0]
     step = float(np.diff(ds.azimuth.values[:2])[0])

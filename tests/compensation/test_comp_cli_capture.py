@@ -16,7 +16,7 @@ from raysim.cli import main
 from raysim.io.mmwave_config import read_mmwave_config
 from raysim.io.zarr_store import open_store
 from raysim.platform.motion import sinusoid
-from raysim.processing.metrics import parabolic_offset, pseudo_velocity
+from raysim.processing.metrics import parabolic_offset
 from raysim.studies.flight import write_flight
 
 #: Largest exact-chain azimuth error [deg] of the TDM case with per-slot poses.
@@ -42,29 +42,16 @@ def _run(flight, out, chain="exact", *extra, frame=None):
 
 def _measure(ds, flight, first=0):
     """Per frame: azimuth error [deg] of the zero-Doppler beam peak, pseudo-velocity [bin]
-    and Doppler power outside +-1 bin of the peak [dB] in the beam at the peak.
+    and Doppler power outside +-1 bin of the peak [dB] in the beam at the peak
+    (:func:`raysim.studies.flight.measure_store`).
 
     Azimuth only: the 3 Tx x 4 Rx array has one lambda/2 step of elevation aperture (TX1
     raised), a beam some 100 deg wide in elevation, so the targets sit at elevation 0 and
     the beams are formed in that cut.
     """
-    cfg = read_mmwave_config(flight.radar_config).config
-    az_true = flight.apparent_direction(first)[0]
-    out = []
-    for b in ds["beams"].values[..., 0]:                        # [chirp, range, azimuth]
-        zero = np.abs(b.astype(np.complex128).sum(axis=0)) ** 2  # [range, azimuth]
-        g, a = np.unravel_index(np.argmax(zero), zero.shape)
-        db = 10 * np.log10(zero[g])
-        assert 0 < a < db.size - 1, "the peak must lie inside the azimuth grid"
-        az = ds.azimuth.values[a] + GRID_STEP_DEG * parabolic_offset(*db[a - 1:a + 2])
-        slow = b[:, g, a]
-        pv = pseudo_velocity(slow, cfg.chirp_interval, cfg.center_wavelength)
-        spec = np.abs(np.fft.fft(slow * np.hanning(slow.size))) ** 2
-        k = int(np.argmax(spec))
-        near = spec[[(k - 1) % spec.size, k, (k + 1) % spec.size]].sum()
-        leak = 10 * np.log10(max(spec.sum() - near, 1e-30 * spec.sum()) / spec.sum())
-        out.append((abs(az - az_true), pv / cfg.velocity_resolution, leak))
-    return out
+    from raysim.studies.flight import measure_store
+
+    return [tuple(row) for row in measure_store(ds, flight, first)]
 
 
 def _tdm_flight(tmp_path):
