@@ -88,6 +88,7 @@ def test_field_is_rayleigh_where_sionna_clutter_is_not(asphalt):
 
 def test_render_replaces_ground_mirror_and_reports(scene):
     """Default render: one rough ground mirror, field paths, targets kept, report in truth."""
+    from raysim.echoes.po.paths import PO_CENTRE
     from raysim.echoes.rt.render import render_scene
     from raysim.echoes.rt.trace import DIFFUSE, SENSING, SPECULAR, MonostaticTracer
 
@@ -101,7 +102,10 @@ def test_render_replaces_ground_mirror_and_reports(scene):
     n_diffuse = np.count_nonzero(paths.kind & DIFFUSE)      # field paths only (Sionna's off)
     assert 0.8 * frame.truth["clutter"]["num_scatterers"] < n_diffuse
     assert n_diffuse <= frame.truth["clutter"]["num_scatterers"]
-    assert np.count_nonzero(paths.kind & SENSING) == len(scene.targets)
+    # point targets give one SENSING path each, geometry targets (meshes) PO centres
+    points = [t for t in scene.targets if not t.is_geometry]
+    assert np.count_nonzero(paths.kind & SENSING) == len(points)
+    assert np.count_nonzero(paths.kind & PO_CENTRE) >= len(scene.targets) - len(points)
     assert frame.truth["clutter"]["builds"] == 1
     with pytest.raises(ValueError, match="clutter"):
         render_scene(scene, config, array, tracer=tracer, clutter="lambert")

@@ -190,10 +190,13 @@ def test_reprojected_paths_carry_the_oracle_pattern_gain():
 @pytest.mark.sionna
 def test_tracer_culls_below_the_pattern_floor(warm_kernels, rt_radar):
     """Targets whose two-way gain is below the floor are dropped and counted with their power."""
-    from raysim.echoes.rt.scenes import load_scene
+    from raysim.echoes.rt.scenes import SceneTarget, load_scene
     from raysim.echoes.rt.trace import MonostaticTracer, pattern_culled_share
 
-    scene = load_scene("flat_reflectors")
+    # constant-RCS points at the apexes of the scene's reflectors (which are meshes)
+    points = [SceneTarget(t.name, t.position, t.rcs_dbsm)
+              for t in load_scene("flat_reflectors").targets]
+    scene = load_scene("flat_reflectors", targets=points)
     floor_db = -6.0
     pos = np.stack([t.position for t in scene.targets])
     r = np.linalg.norm(pos, axis=1)
