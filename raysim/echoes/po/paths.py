@@ -53,7 +53,7 @@ from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 __all__ = ["PO_CENTRE", "CLUSTER_ANGLE", "TUBES_PER_WAVELENGTH", "PATHS_FRESNEL_FRACTION",
            "ScatteringTerms", "scattering_terms", "cluster_terms", "reprojection_error",
            "geometry_paths", "tube_spacing", "ground_apron", "ground_coherence",
-           "APRON_MAX_HALF_SIDE"]
+           "APRON_MAX_HALF_SIDE", "APRON_FIT_RADIUS"]
 
 #: Interaction bit of a PO scattering centre in ``PathSet.interactions`` (above
 #: Sionna's five bits); re-projected like a point scatterer (frozen vertex).
@@ -78,6 +78,9 @@ PATHS_FRESNEL_FRACTION = 0.25
 MAX_TUBES = 250_000
 #: Largest half-side of a target's ground apron [m] (:func:`ground_apron`).
 APRON_MAX_HALF_SIDE = 8.0
+#: Radius of the ground patch under a target whose mean plane is its apron [m]
+#: (the clutter's rough mirror fits its plane over the same 2 m).
+APRON_FIT_RADIUS = 2.0
 
 
 @dataclass(frozen=True)
@@ -294,7 +297,7 @@ def ground_coherence(material: str, wavelength: float):
 def ground_apron(ground_surface, position, radar, radius: float, wavelength: float):
     """Local ground under a target as a flat square apron in W, or ``None``.
 
-    The mean plane of the ground within ``FIT_RADIUS`` of the point under
+    The mean plane of the ground within :data:`APRON_FIT_RADIUS` of the point under
     ``position`` (:meth:`GroundSurface.mean_plane`), a square about that point
     of half-side ``radius + h / tan(elevation) + 2 sqrt(lambda R)``: the
     target's bounding radius, the length of the shadow of its top ``h = 2 *
@@ -308,13 +311,11 @@ def ground_apron(ground_surface, position, radar, radius: float, wavelength: flo
         The two-triangle apron in W and its clutter material id; ``None`` when
         the target is off the ground surface or the radar below the plane.
     """
-    from raysim.echoes.clutter.specular import FIT_RADIUS
-
     p = np.asarray(position, dtype=float)
     facet, zg = ground_surface.locate(p[None])
     if facet[0] < 0 or not np.isfinite(zg[0]):
         return None
-    plane = ground_surface.mean_plane(np.array([p[0], p[1], zg[0]]), FIT_RADIUS)
+    plane = ground_surface.mean_plane(np.array([p[0], p[1], zg[0]]), APRON_FIT_RADIUS)
     if plane is None:
         return None
     o, n = plane
