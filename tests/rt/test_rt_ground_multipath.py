@@ -132,3 +132,29 @@ def test_without_apron_there_are_no_ghosts(free_space):
     _, _, apex, radar = _setup()
     r1 = float(np.linalg.norm(radar - apex))
     assert np.all(direct_free.length / 2 < r1 + EDGE)
+
+
+def test_ground_apron_lies_in_the_local_ground_plane():
+    """The apron of a target over a flat ground (W, NED: ground 15 m below the radar) is
+    in the ground plane, centred under the target, as wide as its shadow plus two
+    Fresnel lengths, of the ground's material; none off the ground or under the radar."""
+    from raysim.echoes.clutter.ground import GroundSurface
+    from raysim.echoes.po.mesh import TriangleMesh
+    from raysim.echoes.po.paths import APRON_MAX_HALF_SIDE, ground_apron
+
+    ground = TriangleMesh(np.array([[-50.0, -50.0, 15.0], [50.0, -50.0, 15.0],
+                                    [50.0, 50.0, 15.0], [-50.0, 50.0, 15.0]]),
+                          np.array([[0, 1, 2], [0, 2, 3]]))
+    surface = GroundSurface.from_meshes([(ground, "asphalt-77ghz")])
+    wavelength = SPEED_OF_LIGHT / FREQUENCY
+    target, radar, radius = np.array([10.0, 5.0, 14.0]), np.zeros(3), 0.5
+    mesh, material = ground_apron(surface, target, radar, radius, wavelength)
+    assert material == "asphalt-77ghz"
+    assert np.allclose(mesh.vertices[:, 2], 15.0)
+    assert np.allclose(mesh.vertices.mean(axis=0)[:2], target[:2])
+    half = np.abs(mesh.vertices[:, :2] - target[:2]).max()
+    shadow = 2 * radius * math.hypot(10.0, 5.0) / 15.0
+    expected = radius + shadow + 2 * math.sqrt(wavelength * math.hypot(10.0, 5.0, 15.0))
+    assert abs(half - min(expected, APRON_MAX_HALF_SIDE)) < 1e-9
+    assert ground_apron(surface, np.array([80.0, 0.0, 14.0]), radar, radius, wavelength) is None
+    assert ground_apron(surface, target, np.array([0.0, 0.0, 16.0]), radius, wavelength) is None

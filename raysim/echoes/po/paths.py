@@ -319,12 +319,12 @@ def ground_apron(ground_surface, position, radar, radius: float, wavelength: flo
     if plane is None:
         return None
     o, n = plane
-    height = float((np.asarray(radar, dtype=float) - o) @ n)
-    rel = np.asarray(radar, dtype=float) - o
-    horizontal = float(np.linalg.norm(rel - height * n))
+    foot = p - ((p - o) @ n) * n                    # the target's foot on the plane
+    rel = np.asarray(radar, dtype=float) - foot
+    height = float(rel @ n)
     if height <= 0:
         return None
-    foot = o + (p - o) - ((p - o) @ n) * n
+    horizontal = float(np.linalg.norm(rel - height * n))
     range_m = float(np.linalg.norm(rel))
     half = min(APRON_MAX_HALF_SIDE, radius + 2 * radius * horizontal / height
                + 2 * math.sqrt(wavelength * range_m))
