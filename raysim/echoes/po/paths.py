@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 import time as _time
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -426,6 +427,19 @@ def reprojection_error(terms: ScatteringTerms, centre: np.ndarray, amplitude: np
     return np.abs(approx - exact) / np.maximum(np.abs(exact), 1e-300)
 
 
+#: Ground surface of each scene in use (read from its meshes once, not per trace).
+_GROUNDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _ground_of(scene):
+    """The scene's :class:`~raysim.echoes.clutter.ground.GroundSurface`, cached per scene."""
+    from raysim.echoes.clutter.ground import GroundSurface
+
+    if scene not in _GROUNDS:
+        _GROUNDS[scene] = GroundSurface.from_scene(scene)
+    return _GROUNDS[scene]
+
+
 def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: float, *,
                    fov_half_angle: float, min_range: float, max_range: float | None,
                    link_budget: bool = True,
@@ -469,9 +483,7 @@ def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: flo
     stats = {"targets": len(targets), "tubes": 0, "terms": 0, "seconds": 0.0, "aprons": 0}
     surface = None
     if ground and any(t.min_bounces == 1 for t in targets):
-        from raysim.echoes.clutter.ground import GroundSurface
-
-        surface = GroundSurface.from_scene(scene)
+        surface = _ground_of(scene)
     for t in targets:
         files = [t.mesh] if isinstance(t.mesh, str) else list(t.mesh)
         parts = [TriangleMesh.load(f) for f in files]
