@@ -28,6 +28,14 @@ length is ``2 |apex - x_radar|`` for any radar position, so its centre is exact
 (to the edge terms); on extended targets the error grows with the centre's size
 ``s`` as ``~ 2 k |delta| s / R``.
 
+Ground: each target with ``min_bounces == 1`` is traced with a flat apron of
+its local ground (:func:`ground_apron`), which radiates nothing itself; target
+hits also return by the ground (the image method, Fresnel and Ament factors).
+The ground-target-ground ghost of a retro-reflector clusters at the target's
+image below the ground, which re-projects exactly as a point: ``|x - p'| =
+|x' - p|`` for any radar position ``x`` (mirror isometry); the one-bounce ghosts
+sit between target and image, exact only to first order.
+
 Amplitudes follow the radar equation like the tracer's point targets:
 ``A = sqrt(P_t) lambda F / (4 pi R^2)`` [sqrt(W)] (0 dBi: the element pattern
 is applied at re-projection) with ``F`` the near-field
