@@ -13,8 +13,8 @@ ground plane) gives the ghosts of a point target at ``p``:
 * target-ground and ground-target: range ``(R1 + R2) / 2`` (bistatic, weak for a
   retro-reflector: its bistatic lobe ``lambda / a`` is 2 deg wide, the legs 28 deg apart);
 
-with ``Gamma`` the Fresnel coefficient at the bounce's incidence (TE: the radar
-polarisation is horizontal) and ``chi`` the Ament factor of the material.
+with ``Gamma`` the Fresnel coefficient at the bounce's incidence (TE for a
+horizontal radar polarisation, TM for a vertical one) and ``chi`` the Ament factor of the material.
 ``sigma(x')`` is the trihedral's free-space PO + SBR RCS seen from ``x'``.
 """
 
@@ -40,6 +40,9 @@ RANGE_TOL_BINS = 0.1
 GHOST_TOL_DB = 1.0
 #: The apron lies below the target and must leave its direct return unchanged [dB].
 DIRECT_TOL_DB = 0.05
+#: Radar polarisation in the test frame (x from the target to the radar, z up): horizontal is
+#: TE at the ground bounce, vertical TM (near the Brewster angle of asphalt).
+POLARISATION = {"HH": (0.0, 1.0, 0.0), "VV": (0.0, 0.0, 1.0)}
 
 
 def _setup():
@@ -62,25 +65,29 @@ def _setup():
 
 @pytest.fixture(scope="module")
 def free_space(rt_backend):
-    """The trihedral alone, seen from the radar and from its image (terms)."""
+    """The trihedral alone, seen from the radar and from its image (terms), per polarisation."""
     from raysim.echoes.po.paths import scattering_terms
 
     target, _, apex, radar = _setup()
     image = radar * [1.0, 1.0, -1.0]
-    kw = {"frequency": FREQUENCY, "polarisation_w": (0.0, 1.0, 0.0)}
-    return (scattering_terms(target, "metal", radar, apex, **kw),
-            scattering_terms(target, "metal", image, apex, **kw))
+    out = {}
+    for pol, vec in POLARISATION.items():
+        kw = {"frequency": FREQUENCY, "polarisation_w": vec}
+        out[pol] = (scattering_terms(target, "metal", radar, apex, **kw),
+                    scattering_terms(target, "metal", image, apex, **kw))
+    return out
 
 
-@pytest.mark.parametrize("ground", ["pec", "asphalt-77ghz"])
-def test_trihedral_ghosts_follow_the_image_method(free_space, ground):
+@pytest.mark.parametrize("ground, pol", [("pec", "HH"), ("asphalt-77ghz", "HH"),
+                                         ("asphalt-77ghz", "VV")])
+def test_trihedral_ghosts_follow_the_image_method(free_space, ground, pol):
     from raysim.echoes.clutter.sigma0 import ament_factor, fresnel_coefficient
     from raysim.echoes.po.paths import cluster_terms, scattering_terms
 
-    direct_free, image_free = free_space
+    direct_free, image_free = free_space[pol]
     target, apron, apex, radar = _setup()
     terms = scattering_terms(target, "metal", radar, apex, frequency=FREQUENCY,
-                             polarisation_w=(0.0, 1.0, 0.0), ground=(apron, ground))
+                             polarisation_w=POLARISATION[pol], ground=(apron, ground))
     wavelength = SPEED_OF_LIGHT / FREQUENCY
     r1 = float(np.linalg.norm(radar - apex))
     r2 = float(np.linalg.norm(radar * [1.0, 1.0, -1.0] - apex))
@@ -88,7 +95,7 @@ def test_trihedral_ghosts_follow_the_image_method(free_space, ground):
     if ground == "pec":
         gamma, chi = 1.0, 1.0
     else:
-        gamma = abs(complex(fresnel_coefficient(ground, cos_i, "HH")))
+        gamma = abs(complex(fresnel_coefficient(ground, cos_i, pol)))
         chi = float(ament_factor(ground, math.acos(cos_i), wavelength))
         assert chi < 0.9                                # the roughness is felt
     closed_db = 10 * math.log10((gamma * chi) ** 4 * (r1 / r2) ** 4
@@ -108,7 +115,7 @@ def test_trihedral_ghosts_follow_the_image_method(free_space, ground):
         < DIRECT_TOL_DB
     double = on_first & on_last
     ghost_db = 10 * math.log10(power(double) / power(direct))
-    print(f"{ground}: ground-target-ground {ghost_db:.2f} dB, image method {closed_db:.2f} dB")
+    print(f"{ground} {pol}: ground-target-ground {ghost_db:.2f} dB, closed {closed_db:.2f} dB")
     assert abs(ghost_db - closed_db) < GHOST_TOL_DB
 
     bin_m = RadarConfig().range_resolution
@@ -128,7 +135,7 @@ def test_trihedral_ghosts_follow_the_image_method(free_space, ground):
 
 def test_without_apron_there_are_no_ghosts(free_space):
     """The same trace without ground has no term beyond the target's own range extent."""
-    direct_free, _ = free_space
+    direct_free, _ = free_space["HH"]
     _, _, apex, radar = _setup()
     r1 = float(np.linalg.norm(radar - apex))
     assert np.all(direct_free.length / 2 < r1 + EDGE)
