@@ -28,6 +28,14 @@ length is ``2 |apex - x_radar|`` for any radar position, so its centre is exact
 (to the edge terms); on extended targets the error grows with the centre's size
 ``s`` as ``~ 2 k |delta| s / R``.
 
+Ground: each target with ``min_bounces == 1`` is traced with a flat apron of
+its local ground (:func:`ground_apron`), which radiates nothing itself; target
+hits also return by the ground (the image method, Fresnel and Ament factors).
+The ground-target-ground ghost of a retro-reflector clusters at the target's
+image below the ground, which re-projects exactly as a point: ``|x - p'| =
+|x' - p|`` for any radar position ``x`` (mirror isometry); the one-bounce ghosts
+sit between target and image, exact only to first order.
+
 Amplitudes follow the radar equation like the tracer's point targets:
 ``A = sqrt(P_t) lambda F / (4 pi R^2)`` [sqrt(W)] (0 dBi: the element pattern
 is applied at re-projection) with ``F`` the near-field
@@ -39,10 +47,12 @@ from __future__ import annotations
 
 import math
 import time as _time
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
+from raysim.echoes.clutter.sigma0 import CLUTTER_MATERIALS, ament_factor
 from raysim.echoes.po.mesh import TriangleMesh, po_material
 from raysim.echoes.po.rays import RayScene
 from raysim.echoes.po.rcs import MAX_BOUNCES, facet_terms_near
@@ -51,7 +61,8 @@ from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
 __all__ = ["PO_CENTRE", "CLUSTER_ANGLE", "TUBES_PER_WAVELENGTH", "PATHS_FRESNEL_FRACTION",
            "ScatteringTerms", "scattering_terms", "cluster_terms", "reprojection_error",
-           "geometry_paths", "tube_spacing"]
+           "geometry_paths", "tube_spacing", "ground_apron", "ground_coherence",
+           "APRON_MAX_HALF_SIDE", "APRON_FIT_RADIUS"]
 
 #: Interaction bit of a PO scattering centre in ``PathSet.interactions`` (above
 #: Sionna's five bits); re-projected like a point scatterer (frozen vertex).
@@ -74,6 +85,11 @@ PATHS_FRESNEL_FRACTION = 0.25
 #: is exact for the linear phase over a flat footprint, and a trihedral at
 #: 0.5 tubes per wavelength is still within 0.4 dB of its closed form).
 MAX_TUBES = 250_000
+#: Largest half-side of a target's ground apron [m] (:func:`ground_apron`).
+APRON_MAX_HALF_SIDE = 8.0
+#: Radius of the ground patch under a target whose mean plane is its apron [m]
+#: (the clutter's rough mirror fits its plane over the same 2 m).
+APRON_FIT_RADIUS = 2.0
 
 
 @dataclass(frozen=True)
@@ -160,7 +176,8 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
                      frequency: float, polarisation_w=(1.0, 0.0, 0.0),
                      tubes_per_wavelength: float = TUBES_PER_WAVELENGTH,
                      max_bounces: int = MAX_BOUNCES, min_bounces: int = 1,
-                     fresnel_fraction: float = PATHS_FRESNEL_FRACTION) -> ScatteringTerms:
+                     fresnel_fraction: float = PATHS_FRESNEL_FRACTION,
+                     ground=None) -> ScatteringTerms:
     """PO + SBR terms of a mesh seen from a point radar (near field, exact spreading).
 
     Parameters
@@ -185,6 +202,12 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
         Smallest hit kept (2 = multiple bounces only).
     fresnel_fraction : float
         Sub-facet edge as a share of ``sqrt(lambda R)`` (see :data:`PATHS_FRESNEL_FRACTION`).
+    ground : tuple (TriangleMesh, str), optional
+        Ground apron in W and its scene material: traced with the target so
+        that target-ground, ground-target and ground-target-ground bounces
+        appear, while its own bounces (single PO, tubes that hit only the
+        ground) are left out; its reflections carry the material's Ament
+        factor (:func:`ground_coherence`).
 
     Returns
     -------
@@ -195,6 +218,9 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
                          f"got {min_bounces!r}")
     start = _time.perf_counter()
     meshes, names = _parts(mesh_w, material)
+    n_target = len(meshes)
+    if ground is not None:
+        meshes, names = meshes + [ground[0]], names + [ground[1]]
     radar = np.asarray(radar_w, dtype=float)
     ref = np.asarray(reference_w, dtype=float)
     wavelength = SPEED_OF_LIGHT / frequency
@@ -207,20 +233,32 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
     which = np.concatenate([np.full(len(m.faces), i) for i, m in enumerate(locals_)])
     rel = radar - ref
     range_m = float(np.linalg.norm(rel))
-    if not range_m > local.radius:
+    body = TriangleMesh(np.concatenate([m.vertices for m in locals_[:n_target]]),
+                        np.concatenate([m.faces + o for m, o in zip(
+                            locals_[:n_target], offsets, strict=False)]))
+    cover = None
+    if ground is not None:       # tubes over the target and its image in the apron plane
+        g = locals_[n_target]
+        n_g = np.cross(g.vertices[1] - g.vertices[0], g.vertices[2] - g.vertices[0])
+        n_g /= np.linalg.norm(n_g)
+        image = body.vertices - 2 * ((body.vertices - g.vertices[0]) @ n_g)[:, None] * n_g
+        cover = np.concatenate([body.vertices, image])
+    if not range_m > body.radius:
         raise ValueError(f"radar at {radar.tolist()} lies inside the target's bounding sphere "
-                         f"(radius {local.radius:.3g} m about {ref.tolist()})")
+                         f"(radius {body.radius:.3g} m about {ref.tolist()})")
     u = rel / range_m
     e_h, e_v = _basis(u, np.asarray(polarisation_w, dtype=float))
     spacing = tube_spacing(wavelength, tubes_per_wavelength)
-    spacing = max(spacing, 2 * local.radius / math.sqrt(MAX_TUBES))
+    # the target sets the spacing (an apron leaves its direct return unchanged); the
+    # grid over its ground image adds up to about as many tubes again
+    spacing = max(spacing, 2 * body.radius / math.sqrt(MAX_TUBES))
     mats = [po_material(n, frequency) for n in names]
     scene = RayScene(local)
     if not (math.isfinite(fresnel_fraction) and 0 < fresnel_fraction <= 1):
         raise ValueError(f"fresnel_fraction must lie in (0, 1], got {fresnel_fraction!r}")
     fresnel_edge = fresnel_fraction * math.sqrt(wavelength * range_m)
     f_amp, cent = [], []
-    for part, mat in zip(locals_, mats if min_bounces == 1 else [], strict=False):
+    for part, mat in zip(locals_[:n_target], mats if min_bounces == 1 else [], strict=False):
         a, c = facet_terms_near(scene, part.subdivided(fresnel_edge), mat, u, e_v, k, range_m,
                                 spacing)
         f_amp.append(a)
@@ -228,8 +266,12 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
     f_amp = np.concatenate(f_amp) if f_amp else np.zeros(0, complex)
     cent = np.concatenate(cent) if cent else np.zeros((0, 3))
     tubes = sbr_contributions(scene, mats if len(mats) > 1 else mats[0], u, e_v, e_h, e_v,
-                              wavelength, spacing=spacing, max_bounces=int(max_bounces),
-                              range_m=range_m, facet_material=which if len(mats) > 1 else None)
+                              wavelength, spacing=spacing,
+                              max_bounces=int(max_bounces),
+                              range_m=range_m, facet_material=which if len(mats) > 1 else None,
+                              ground=None if ground is None else which == n_target,
+                              coherence=None if ground is None else ground_coherence(
+                                  ground[1], wavelength), cover=cover)
     if min_bounces > 2:
         keep = tubes.bounces >= min_bounces
         tubes = TubeTerms(*(getattr(tubes, f)[keep] for f in (
@@ -246,6 +288,61 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
         bounces=np.concatenate([np.ones(len(f_amp), np.int64), tubes.bounces]),
         radar=radar, reference=ref, range_m=range_m, wavelength=wavelength,
         tubes=tubes.tubes, spacing=spacing, seconds=_time.perf_counter() - start)
+
+
+def ground_coherence(material: str, wavelength: float):
+    """Coherent share of a ground reflection, ``cos_i [ray] -> factor [ray]``.
+
+    The Ament factor ``exp(-2 (k s cos theta_i)^2)`` of the material's RMS
+    height ``s`` (:func:`raysim.echoes.clutter.sigma0.ament_factor`) for a
+    material with a clutter model; 1 for any other (a smooth surface).
+    """
+    if material not in CLUTTER_MATERIALS:
+        return None
+    return lambda cos_i: ament_factor(material, np.arccos(np.clip(cos_i, 0.0, 1.0)),
+                                      wavelength)
+
+
+def ground_apron(ground_surface, position, radar, radius: float, wavelength: float):
+    """Local ground under a target as a flat square apron in W, or ``None``.
+
+    The mean plane of the ground within :data:`APRON_FIT_RADIUS` of the point under
+    ``position`` (:meth:`GroundSurface.mean_plane`), a square about that point
+    of half-side ``radius + h / tan(elevation) + 2 sqrt(lambda R)``: the
+    target's bounding radius, the length of the shadow of its top ``h = 2 *
+    radius`` above ground cast by the radar, and two Fresnel lengths, so the
+    specular bounce points of every target-ground leg lie on it. Capped at
+    :data:`APRON_MAX_HALF_SIDE`.
+
+    Returns
+    -------
+    (TriangleMesh, str) or None
+        The two-triangle apron in W and its clutter material id; ``None`` when
+        the target is off the ground surface or the radar below the plane.
+    """
+    p = np.asarray(position, dtype=float)
+    facet, zg = ground_surface.locate(p[None])
+    if facet[0] < 0 or not np.isfinite(zg[0]):
+        return None
+    plane = ground_surface.mean_plane(np.array([p[0], p[1], zg[0]]), APRON_FIT_RADIUS)
+    if plane is None:
+        return None
+    o, n = plane
+    foot = p - ((p - o) @ n) * n                    # the target's foot on the plane
+    rel = np.asarray(radar, dtype=float) - foot
+    height = float(rel @ n)
+    if height <= 0:
+        return None
+    horizontal = float(np.linalg.norm(rel - height * n))
+    range_m = float(np.linalg.norm(rel))
+    half = min(APRON_MAX_HALF_SIDE, radius + 2 * radius * horizontal / height
+               + 2 * math.sqrt(wavelength * range_m))
+    e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(n, e1)
+    corners = foot + half * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) @ np.stack([e1, e2])
+    mesh = TriangleMesh(corners, np.array([[0, 1, 2], [0, 2, 3]]))
+    return mesh, str(ground_surface.material[facet[0]])
 
 
 def cluster_terms(terms: ScatteringTerms, cell_range: float,
@@ -338,11 +435,24 @@ def reprojection_error(terms: ScatteringTerms, centre: np.ndarray, amplitude: np
     return np.abs(approx - exact) / np.maximum(np.abs(exact), 1e-300)
 
 
+#: Ground surface of each scene in use (read from its meshes once, not per trace).
+_GROUNDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _ground_of(scene):
+    """The scene's :class:`~raysim.echoes.clutter.ground.GroundSurface`, cached per scene."""
+    from raysim.echoes.clutter.ground import GroundSurface
+
+    if scene not in _GROUNDS:
+        _GROUNDS[scene] = GroundSurface.from_scene(scene)
+    return _GROUNDS[scene]
+
+
 def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: float, *,
                    fov_half_angle: float, min_range: float, max_range: float | None,
                    link_budget: bool = True,
                    tubes_per_wavelength: float = TUBES_PER_WAVELENGTH,
-                   max_bounces: int = MAX_BOUNCES):
+                   max_bounces: int = MAX_BOUNCES, ground: bool = True):
     """Scattering centres of the scene's geometry targets as a :class:`PathSet`.
 
     Parameters
@@ -363,6 +473,10 @@ def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: flo
     fov_half_angle, min_range, max_range
         The tracer's culls (half-angle [rad]; one-way ranges [m], ``None`` =
         ``config.max_range``).
+    ground : bool
+        Trace each target (``min_bounces == 1``) with its local ground apron
+        (:func:`ground_apron`): target-ground multipath. Targets that keep only
+        multiple bounces carry their own apron in their mesh.
 
     Returns
     -------
@@ -374,15 +488,25 @@ def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: flo
     """
     radar = np.asarray(radar_w, dtype=float)
     rows = []
-    stats = {"targets": len(targets), "tubes": 0, "terms": 0, "seconds": 0.0}
+    stats = {"targets": len(targets), "tubes": 0, "terms": 0, "seconds": 0.0, "aprons": 0}
+    surface = None
+    if ground and any(t.min_bounces == 1 for t in targets):
+        surface = _ground_of(scene)
     for t in targets:
         files = [t.mesh] if isinstance(t.mesh, str) else list(t.mesh)
         parts = [TriangleMesh.load(f) for f in files]
         mesh_w = [TriangleMesh(scene.to_world(m.vertices), m.faces) for m in parts]
+        apron = None
+        if surface is not None and t.min_bounces == 1:
+            radius = max(float(np.max(np.linalg.norm(m.vertices - t.position, axis=1)))
+                         for m in mesh_w)
+            apron = ground_apron(surface, t.position, radar, radius, config.wavelength)
+            stats["aprons"] += apron is not None
         terms = scattering_terms(mesh_w, t.material, radar, t.position,
                                  frequency=config.carrier_frequency, polarisation_w=r_wb[:, 0],
                                  tubes_per_wavelength=tubes_per_wavelength,
-                                 max_bounces=max_bounces, min_bounces=t.min_bounces)
+                                 max_bounces=max_bounces, min_bounces=t.min_bounces,
+                                 ground=apron)
         centre, amp, _ = cluster_terms(terms, config.range_resolution)
         stats["tubes"] += terms.tubes
         stats["terms"] += len(terms.amplitude)

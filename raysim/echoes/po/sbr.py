@@ -39,13 +39,15 @@ SBR_BYTES_PER_RAY = 512
 
 
 def launch_grid(scene: RayScene, u: np.ndarray, e_h: np.ndarray, e_v: np.ndarray,
-                spacing: float, range_m: float | None) -> np.ndarray:
+                spacing: float, range_m: float | None,
+                cover: np.ndarray | None = None) -> np.ndarray:
     """Tube centres on the plane ``u.r = 0`` covering the target, shape ``[ray, 3]`` [m].
 
-    Far field: orthographic projection of the vertices; near field: their
-    central projection from the radar at ``range_m * u``.
+    Far field: orthographic projection of the vertices (or of the points
+    ``cover``, shape ``[point, 3]``, when given); near field: their central
+    projection from the radar at ``range_m * u``.
     """
-    v = scene.mesh.vertices
+    v = scene.mesh.vertices if cover is None else np.asarray(cover, dtype=float)
     if range_m is not None:
         depth = range_m - v @ u
         if np.any(depth <= 0):
@@ -151,21 +153,79 @@ def _per_material(materials, which, fn, *arrays):
     return out if len(out) > 1 else out[0]
 
 
+def _via_ground(scene, material, facet_material, ground, coherence, mirror, radar, range_m,
+                k, e_pol, radiate, hit, first, x, lifted, d, e, n, a, b, which, width, path):
+    """Terms of target hits that return to the radar by a ground bounce (image method).
+
+    The tube footprint radiates towards the radar's image ``mirror`` (its far
+    field, as the direct return does towards the radar; the ground is not a
+    radiating footprint, whose near-field weight would be wrong when the
+    reflected beam is narrower than a Fresnel zone); the field is reflected by
+    the ground material at the crossing point ``s`` (Fresnel, times
+    ``coherence``), which must lie on the apron, with both legs unoccluded.
+    """
+    sel = np.flatnonzero(radiate)
+    xs, ls = x[sel], lifted[sel]
+    to_img = mirror - xs
+    r_b = np.linalg.norm(to_img, axis=1)
+    back = to_img / r_b[:, None]
+    t, facet = scene.intersect(ls, back, r_b)
+    ok = facet >= 0
+    ok[ok] = ground[facet[ok]]
+    sel, xs, ls, back, r_b, t, facet = (v[ok] for v in (sel, xs, ls, back, r_b, t, facet))
+    s = ls + t[:, None] * back
+    n_g = scene.normals[facet]
+    n_g = n_g * -np.sign(np.einsum("ri,ri->r", n_g, back))[:, None]
+    up = radar - s
+    r_up = np.linalg.norm(up, axis=1)
+    ok = scene.unoccluded(s + scene.epsilon * n_g, up / r_up[:, None], r_up)
+    sel, back, r_b, facet, s, n_g = (v[ok] for v in (sel, back, r_b, facet, s, n_g))
+    if not len(sel):
+        return TubeTerms(np.zeros(0, complex), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0),
+                         np.zeros((0, 3)), np.zeros(0, np.int64), 0)
+    d_, e_, n_, a_, b_ = (v[sel] for v in (d, e, n, a, b))
+    w = None if which is None else which[sel]
+    vec = _per_material(material, w, po_vector, d_, e_, n_, np.ascontiguousarray(back))
+    vec = vec - np.einsum("ri,ri->r", vec, back)[:, None] * back     # transverse far field
+    gw = None if facet_material is None else facet_material[facet]
+    _, vec = _per_material(material, gw, reflect, back, vec, n_g)
+    if coherence is not None:
+        vec = vec * coherence(np.abs(np.einsum("ri,ri->r", n_g, back)))[:, None]
+    total = path[sel] + r_b
+    amp = (range_m / path[sel]) * (range_m / r_b) * np.exp(-1j * k * (total - 2 * range_m))
+    term = ((-1j * k / (4 * np.pi)) * (vec @ e_pol) * amp
+            * _tube_integral(k * (back - d_), a_, b_, n_, d_, width[sel]))
+    return TubeTerms(term, first[sel], s, total, up[ok] / r_up[ok][:, None],
+                     np.full(len(sel), hit + 1), 0)
+
+
 def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarray,
                       e_h: np.ndarray, e_v: np.ndarray, wavelength: float, *,
                       spacing: float, max_bounces: int, range_m: float | None = None,
-                      facet_material: np.ndarray | None = None) -> TubeTerms:
+                      facet_material: np.ndarray | None = None,
+                      ground: np.ndarray | None = None, coherence=None,
+                      cover: np.ndarray | None = None) -> TubeTerms:
     """The terms of :func:`sbr_amplitude`, one per tube and hit (same parameters).
 
     ``material`` is one :class:`PoMaterial`, or a sequence of them indexed by
     ``facet_material`` (shape ``[facet]`` of ``scene.mesh``) for a mesh of parts.
+
+    ``ground`` (bool, shape ``[facet]``) marks facets of a ground apron: a term
+    radiates nothing itself (its own bounces are the clutter's); tubes may hit it
+    once before ``max_bounces`` target hits, and every target hit also returns
+    to the radar by a ground bounce (:func:`_via_ground`: target-ground and
+    ground-target-ground paths, ``bounces`` one more than the hit). Every
+    reflection on it carries ``coherence(cos_i)`` (shape ``[ray]`` -> ``[ray]``,
+    the rough surface's coherent share, e.g. the Ament factor; ``None`` = 1).
+    ``cover`` (shape ``[point, 3]``) bounds the launch grid instead of the
+    whole mesh (:func:`launch_grid`): a target and its ground image.
     """
     empty = TubeTerms(np.zeros(0, complex), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0),
                       np.zeros((0, 3)), np.zeros(0, np.int64), 0)
     if max_bounces < 2:
         return empty
     k = 2 * np.pi / wavelength
-    grid = launch_grid(scene, u, e_h, e_v, spacing, range_m)
+    grid = launch_grid(scene, u, e_h, e_v, spacing, range_m, cover)
     lift = 2 * scene.mesh.radius + 1.0
     if range_m is None:
         d = np.broadcast_to(-u, grid.shape).copy()
@@ -185,7 +245,16 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
     b = np.broadcast_to(e_v, grid.shape).copy()
     first = None
     out = []
-    for hit in range(1, max_bounces + 1):
+    deepest = max_bounces
+    if ground is not None:
+        if range_m is None:
+            raise ValueError("a ground apron needs the near field: give range_m")
+        g0 = int(np.flatnonzero(ground)[0])
+        n_g = scene.normals[g0]
+        mirror = radar - 2 * ((radar - scene.mesh.triangles[g0][0]) @ n_g) * n_g
+        hits = np.zeros(len(grid), np.int64)          # hits on the target so far
+        deepest = max_bounces + 1                     # one ground hit before the target
+    for hit in range(1, deepest + 1):
         t, facet = scene.intersect(o, d)
         keep = facet >= 0
         if not keep.any():
@@ -199,7 +268,12 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
         n = scene.normals[facet]
         n = n * -np.sign(np.einsum("ri,ri->r", n, d))[:, None]
         lifted = x + scene.epsilon * n
-        if hit >= 2:
+        which = None if facet_material is None else facet_material[facet]
+        on_ground = None
+        if ground is not None:
+            on_ground = ground[facet]
+            hits = hits[keep] + ~on_ground
+        if hit >= 2 or ground is not None:
             if range_m is None:
                 back = np.broadcast_to(u, x.shape)
                 seen = scene.unoccluded(lifted, back)
@@ -215,17 +289,27 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
                                                                             - 2 * range_m))
                 width = np.sqrt(domega) * path
                 total = path + r_b
-            which = None if facet_material is None else facet_material[facet]
-            vec = _per_material(material, which, po_vector, d, e, n,
-                                np.ascontiguousarray(np.broadcast_to(back, d.shape)))
-            co = vec @ e_pol
-            q = k * (back - d)
-            foot = _tube_integral(q, a, b, n, d, width)
-            term = (-1j * k / (4 * np.pi)) * co * amp * foot
-            out.append(TubeTerms(term[seen], first[seen], x[seen], total[seen],
-                                 np.array(back)[seen], np.full(int(seen.sum()), hit), 0))
-        which = None if facet_material is None else facet_material[facet]
+            if on_ground is not None:    # the ground radiates nothing itself
+                radiate = ~on_ground & (hits <= max_bounces)
+                seen &= radiate & (hit >= 2)
+            if seen.any():
+                vec = _per_material(material, which, po_vector, d, e, n,
+                                    np.ascontiguousarray(np.broadcast_to(back, d.shape)))
+                term = ((-1j * k / (4 * np.pi)) * (vec @ e_pol) * amp
+                        * _tube_integral(k * (back - d), a, b, n, d, width))
+                out.append(TubeTerms(term[seen], first[seen], x[seen], total[seen],
+                                     np.array(back)[seen], np.full(int(seen.sum()), hit), 0))
+            if on_ground is not None and radiate.any():
+                out.append(_via_ground(scene, material, facet_material, ground, coherence,
+                                       mirror, radar, range_m, k, e_pol, radiate, hit,
+                                       first, x, lifted, d, e, n, a, b, which,
+                                       np.sqrt(domega) * path, path))
         d_new, e = _per_material(material, which, reflect, d, e, n)
+        if on_ground is not None and coherence is not None and on_ground.any():
+            rough = np.ones(len(facet))
+            rough[on_ground] = coherence(np.abs(np.einsum("ri,ri->r", n[on_ground],
+                                                          d[on_ground])))
+            e = e * rough[:, None]
         a = a - 2 * np.einsum("ri,ri->r", a, n)[:, None] * n
         b = b - 2 * np.einsum("ri,ri->r", b, n)[:, None] * n
         d, o = d_new, lifted
