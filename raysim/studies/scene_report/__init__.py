@@ -50,7 +50,7 @@ IMU estimate, traced frames), :mod:`.process` (chain beams, maps, CFAR),
 from __future__ import annotations
 
 from .bench import bench_reprojection
-from .evaluate import SceneResult, evaluate_scene
+from .evaluate import MOVER_CENTRE_SPAN_DB, SceneResult, evaluate_scene, find_mover, mover_truth
 from .outputs import plot_scene, report_html, report_markdown, write_scene_report
 from .process import BORESIGHT, ChainResult, beam_blocks, cfar_detect, chain_result
 from .settings import (
@@ -60,22 +60,32 @@ from .settings import (
                        ENTROPY_MARGIN_NATS,
                        FULL,
                        MAX_DETECTIONS,
-                       MIN_HOVER_SPREAD_NATS,
+                       MAX_MOVER_SPEED,
+                       MOVER_START_NE,
                        QUICK,
                        RD_PLOT_HALF_WIDTH_BINS,
                        REPORT_MAPS,
                        RIDGE_HALF_WIDTH_BINS,
                        ReportSettings,
 )
-from .simulate import hover_trajectory, imu_samples, path_kinds, scene_motion, simulate_scene
+from .simulate import (
+                       hover_trajectory,
+                       imu_samples,
+                       path_kinds,
+                       report_mover,
+                       scene_motion,
+                       simulate_scene,
+)
 
 __all__ = [
-    "REPORT_MAPS", "ENTROPY_MARGIN_NATS", "MIN_HOVER_SPREAD_NATS", "RIDGE_HALF_WIDTH_BINS",
+    "REPORT_MAPS", "ENTROPY_MARGIN_NATS", "RIDGE_HALF_WIDTH_BINS",
+    "MOVER_START_NE", "MAX_MOVER_SPEED",
     "CFAR_TRAIN", "CFAR_GUARD", "CFAR_THRESHOLD_DB", "RD_PLOT_HALF_WIDTH_BINS",
     "MAX_DETECTIONS", "ReportSettings", "FULL", "QUICK",
     "hover_trajectory", "imu_samples", "scene_motion", "simulate_scene", "path_kinds",
     "BORESIGHT", "ChainResult", "beam_blocks", "cfar_detect", "chain_result",
-    "SceneResult", "evaluate_scene",
+    "SceneResult", "evaluate_scene", "mover_truth", "find_mover", "MOVER_CENTRE_SPAN_DB",
+    "report_mover",
     "plot_scene", "report_markdown", "report_html", "write_scene_report",
     "bench_reprojection",
 ]
