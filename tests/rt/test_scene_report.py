@@ -170,6 +170,10 @@ def test_bad_input_is_named():
         sr.ReportSettings(grid_step_deg=0.0)
     with pytest.raises(ValueError, match="preset"):
         sr.ReportSettings(imu="perfect")
+    with pytest.raises(ValueError, match="mover_speed"):
+        sr.ReportSettings(mover_speed=-6.0)
+    with pytest.raises(ValueError, match="clutter_per_cell"):
+        sr.ReportSettings(clutter_per_cell=0.0)
     with pytest.raises(ValueError, match="unknown scene 'moon'"):
         sr.evaluate_scene("moon")
     with pytest.raises(ValueError, match="'stationary'"):
