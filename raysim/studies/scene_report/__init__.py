@@ -41,6 +41,12 @@ Each map's image entropy (``entropy_rd_nats``, ``entropy_ra_nats``,
 cell-averaging CFAR on the coherent ``[range, azimuth, elevation]`` cube and
 compared with the scene's known reflector positions.
 
+Options (:class:`ReportSettings`): ``mover_speed`` drives a car mesh (PO + SBR,
+:class:`raysim.echoes.clutter.movers.CarMover`) through the scene in both frames;
+it is looked for off the zero-Doppler ridge at its own range rate
+(:func:`find_mover`). ``clutter_per_cell`` replaces Sionna's diffuse paths and
+mirror by the persistent clutter field (:mod:`raysim.echoes.clutter`).
+
 Modules: :mod:`.settings` (settings, limits), :mod:`.simulate` (trajectory,
 IMU estimate, traced frames), :mod:`.process` (chain beams, maps, CFAR),
 :mod:`.evaluate` (one scene), :mod:`.outputs` (figures, tables, files),
