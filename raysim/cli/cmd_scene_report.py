@@ -62,6 +62,9 @@ def register(subparsers) -> None:
                    help="seed of the hover jitter (default: 7)")
     p.add_argument("--threads", type=int, default=None, metavar="N",
                    help="Dr.Jit threads of the ray tracer (default: all cores)")
+    p.add_argument("--mover-speed", type=float, default=None, metavar="MPS",
+                   help="a car (PO + SBR mesh) drives east through each scene at this speed "
+                   "[m/s], reported as a mover off the clutter ridge (default: none)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--bench-reprojection", action="store_true",
                    help="only time re-projection vs re-tracing per chirp and print JSON")
@@ -97,6 +100,8 @@ def run(args: argparse.Namespace) -> int:
     settings = replace(QUICK if args.quick else FULL, imu=args.imu)
     if args.jitter_seed is not None:
         settings = replace(settings, jitter_seed=args.jitter_seed)
+    if args.mover_speed is not None:
+        settings = replace(settings, mover_speed=args.mover_speed)
     from raysim.echoes.rt import backend
 
     backend.configure("cpu", threads=args.threads)

@@ -54,6 +54,7 @@ from pydantic import BaseModel, Field, ValidationError, field_validator, model_v
 
 from raysim.io.scenario_keys import (
     ClutterSection,
+    MoverSection,
     did_you_mean,
     dumps_toml,
     format_validation_error,
@@ -139,7 +140,8 @@ class SceneSection(_Section):
     ``path`` to a Mitsuba XML scene or a mesh file (relative paths are taken
     from the scenario file's folder); ``kind = "meshes"`` with ``[[scene.meshes]]``
     (users' mesh files, :mod:`raysim.io.scenario_meshes`). ``kind`` may be omitted:
-    it is inferred from which key is given.
+    it is inferred from which key is given. ``[[scene.movers]]``: cars driving
+    through a ray-traced scene (:class:`raysim.io.scenario_keys.MoverSection`).
     """
 
     kind: Literal["points", "bundled", "mesh", "meshes"] | None = None
@@ -149,6 +151,7 @@ class SceneSection(_Section):
     meshes: list[MeshSpec] = Field(default_factory=list)
     max_depth: int = Field(3, ge=0, le=10)
     clutter: ClutterSection = Field(default_factory=ClutterSection)
+    movers: list[MoverSection] = Field(default_factory=list)
 
     @model_validator(mode="after")
     def _infer_kind(self) -> SceneSection:
@@ -169,6 +172,9 @@ class SceneSection(_Section):
             raise ValueError("kind 'meshes' needs at least one [[scene.meshes]] entry")
         if kind == "mesh" and not self.path:
             raise ValueError("kind 'mesh' needs path (a Mitsuba XML or mesh file)")
+        if self.movers and (kind == "points" or self.clutter.mode != "field"):
+            raise ValueError(f"[[scene.movers]] need a ray-traced scene with [scene.clutter] "
+                             f"mode = 'field', got kind {kind!r}, mode {self.clutter.mode!r}")
         return self
 
 

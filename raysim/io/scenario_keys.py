@@ -19,8 +19,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-__all__ = ["ClutterSection", "get_key", "set_key", "dumps_toml", "format_validation_error",
-           "parse_value", "parse_assignment", "did_you_mean"]
+__all__ = ["ClutterSection", "MoverSection", "get_key", "set_key", "dumps_toml",
+           "format_validation_error", "parse_value", "parse_assignment", "did_you_mean"]
 
 
 def did_you_mean(word: Any, choices: Iterable[str]) -> str:
@@ -268,3 +268,25 @@ class ClutterSection(BaseModel):
     reuse_m: float = Field(0.5, ge=0, le=100)
     max_scatterers: int = Field(200_000, ge=1, le=10_000_000)
     ghosts: bool = True
+
+
+class MoverSection(BaseModel):
+    """``[[scene.movers]]``: a car mesh driving through a ray-traced scene (docs/clutter.md).
+
+    Traced by PO + SBR at every trace (:class:`raysim.echoes.clutter.movers.CarMover`).
+    ``start_m`` body origin on the ground at time 0 in W (NED) [m];
+    ``heading_deg`` from north towards east; ``speed_mps`` ground speed;
+    ``yaw_rate_dps`` turn rate (0 drives straight); ``length_m``, ``width_m``,
+    ``height_m`` car size. Needs ``[scene.clutter] mode = "field"``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    name: str = "car"
+    start_m: tuple[float, float, float]
+    heading_deg: float = Field(0.0, ge=-360, le=360)
+    speed_mps: float = Field(10.0, gt=0, le=60)
+    yaw_rate_dps: float = Field(0.0, ge=-90, le=90)
+    length_m: float = Field(4.5, ge=3.5, le=5.5)
+    width_m: float = Field(1.8, ge=1.5, le=2.1)
+    height_m: float = Field(1.45, ge=1.2, le=1.9)

@@ -91,7 +91,22 @@ def _clutter(scenario: Scenario):
 
     return GroundClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
                                        max_scatterers=c.max_scatterers, seed=scenario.seed),
-                         ghosts=c.ghosts)
+                         ghosts=c.ghosts,
+                         movers=[_car(m, seed=scenario.seed + i)
+                                 for i, m in enumerate(scenario.scene.movers)])
+
+
+def _car(spec, seed: int = 0):
+    """The :class:`raysim.echoes.clutter.movers.CarMover` of one ``[[scene.movers]]`` entry."""
+    import math
+
+    from raysim.echoes.clutter.movers import CarMover
+    from raysim.echoes.clutter.tracks import RigidTrajectory
+
+    trajectory = RigidTrajectory(spec.start_m, heading=math.radians(spec.heading_deg),
+                                 speed=spec.speed_mps, yaw_rate=math.radians(spec.yaw_rate_dps))
+    return CarMover(spec.name, trajectory, spec.length_m, spec.width_m, spec.height_m,
+                    seed=seed)
 
 
 def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFrame]:

@@ -46,37 +46,38 @@ def test_stationary_clutter_is_a_zero_doppler_ridge(results):
             assert all(c.maps[m].dims == MAPS[m] for c in r.chains.values())
 
 
-#: Scenes whose RD entropy need not rise with hover: the parking lot's map is dominated
-#: by its cars' and the facade corner's discrete scattering centres (PO + SBR), and its
-#: remaining Sionna geometry alone rises by only +0.016 nats (measured -0.032 nats for the
-#: whole scene); its power still leaves the ridge (checked below).
-ENTROPY_RISE_EXEMPT = ("parking_lot",)
-
-
-#: Maps the exact chain does not restore within the margin: the parking lot's RA map with
-#: its car meshes (PO + SBR centres 16-19 m away, up to 36 deg off boresight) measures
-#: 0.196 nats off (0.10 without the cars; the RD and AE maps stay within the margin).
-EXACT_MARGIN_EXEMPT = (("parking_lot", "ra"),)
+#: The uncompensated hover must move some map's entropy at least this many times further
+#: from the stationary reference than the exact chain leaves it: compensation removes at
+#: least half of the hover's effect on the map it affects most, so the entropy sees the
+#: motion that compensation corrects. With the patch element the hover is nearly a rigid
+#: Doppler shift of nadir-weighted maps (parking lot: half a bin, RD entropy -0.031 nats,
+#: which entropy, shift-invariant, barely sees); measured ratios (QUICK): flat_reflectors
+#: RA 0.192 / 0.030, parking_lot RD 0.031 / 0.006, rough_terrain RD 0.236 / 0.087.
+MIN_COMPENSATION_GAIN = 2.0
 
 
 def test_hover_spreads_the_range_doppler_map(results):
-    """Hovering without compensation: RD entropy rises and power leaves the ridge."""
+    """Hovering without compensation: power leaves the ridge, and the map entropies see it.
+
+    The ridge leakage measures the spread directly. Entropy does not see a rigid Doppler
+    shift (it is shift-invariant), so it is compared with the exact chain's residual
+    (:data:`MIN_COMPENSATION_GAIN`) rather than with a fixed rise.
+    """
     for name, r in results.items():
-        st, unc = r.reference, r.chains["none"]
-        rise = unc.entropy["rd"] - st.entropy["rd"]
-        print(f"{name}: RD entropy {st.entropy['rd']:.4f} -> {unc.entropy['rd']:.4f} nats "
-              f"(+{rise:.4f}); off-ridge {unc.ridge_leakage_db:.1f} dB")
-        if name not in ENTROPY_RISE_EXEMPT:
-            assert rise > sr.MIN_HOVER_SPREAD_NATS
-        assert unc.ridge_leakage_db > HOVER_RIDGE_MIN_DB
+        st, unc, ex = r.reference.entropy, r.chains["none"].entropy, r.chains["exact"].entropy
+        gain = {m: abs(unc[m] - st[m]) / max(abs(ex[m] - st[m]), 1e-12)
+                for m in sr.REPORT_MAPS}
+        print(f"{name}: RD entropy {st['rd']:.4f} -> {unc['rd']:.4f} nats; off-ridge "
+              f"{r.chains['none'].ridge_leakage_db:.1f} dB; |none - st| / |exact - st| "
+              + ", ".join(f"{m} {g:.1f}" for m, g in gain.items()))
+        assert r.chains["none"].ridge_leakage_db > HOVER_RIDGE_MIN_DB
+        assert max(gain.values()) > MIN_COMPENSATION_GAIN, name
 
 
 def test_exact_chain_restores_map_entropy(results):
-    """Exact chain, ideal IMU: every map's entropy within ENTROPY_MARGIN_NATS of stationary.
-
-    The uncompensated maps must miss the margin somewhere, so the margin is
-    tight enough to see the motion.
-    """
+    """Exact chain, ideal IMU: every map's entropy within ENTROPY_MARGIN_NATS of stationary,
+    and the RD power back on the zero-Doppler ridge (leakage below EXACT_RIDGE_MAX_DB and
+    below the uncompensated leakage)."""
     for name, r in results.items():
         st = r.reference.entropy
         ex = r.chains["exact"].entropy
@@ -84,11 +85,32 @@ def test_exact_chain_restores_map_entropy(results):
         for m in sr.REPORT_MAPS:
             print(f"{name} {m.upper()}: stationary {st[m]:.4f}, uncompensated {unc[m]:.4f}, "
                   f"paper {r.chains['paper'].entropy[m]:.4f}, exact {ex[m]:.4f} nats")
-            if (name, m) not in EXACT_MARGIN_EXEMPT:
-                assert abs(ex[m] - st[m]) <= sr.ENTROPY_MARGIN_NATS, (name, m)
-        assert max(abs(unc[m] - st[m]) for m in sr.REPORT_MAPS) > sr.ENTROPY_MARGIN_NATS
+            assert abs(ex[m] - st[m]) <= sr.ENTROPY_MARGIN_NATS, (name, m)
         assert r.chains["exact"].ridge_leakage_db < EXACT_RIDGE_MAX_DB
         assert r.chains["exact"].ridge_leakage_db < r.chains["none"].ridge_leakage_db
+
+
+#: Speed of the report's car in the mover test [m/s] (issue range 5-15 m/s); from the
+#: nominal radar its range rate is ~1.7-2.2 m/s, 13-17 Doppler bins of the QUICK frame.
+MOVER_SPEED = 6.0
+
+
+def test_mover_stands_outside_the_clutter_ridge(warm_kernels):
+    """A car driving through the scene (PO + SBR centres on a rigid trajectory) is found off
+    the zero-Doppler ridge at its own range rate, stationary and hovering, before and after
+    compensation; compensation brings its Doppler back onto its trajectory's."""
+    r = sr.evaluate_scene("flat_reflectors", replace(SETTINGS, mover_speed=MOVER_SPEED),
+                          progress=False, chains=["none", "exact"])
+    (mover,) = r.movers
+    print({k: v for k, v in mover.items() if k != "match"})
+    for key, m in mover["match"].items():
+        print(key, m)
+        assert m["outside_ridge"] and m["contrast_db"] > sr.CFAR_THRESHOLD_DB, key
+        assert m["detected"], key
+    # ideal IMU: the exact chain measures the car as the resting radar does
+    assert mover["match"]["exact"]["bin"] == mover["match"][REFERENCE]["bin"]
+    assert mover["match"]["exact"]["error_bins"] <= 0.5
+    json.dumps(r.to_dict())
 
 
 def test_reflectors_are_detected_where_they_are(results):
@@ -148,6 +170,10 @@ def test_bad_input_is_named():
         sr.ReportSettings(grid_step_deg=0.0)
     with pytest.raises(ValueError, match="preset"):
         sr.ReportSettings(imu="perfect")
+    with pytest.raises(ValueError, match="mover_speed"):
+        sr.ReportSettings(mover_speed=-6.0)
+    with pytest.raises(ValueError, match="clutter_per_cell"):
+        sr.ReportSettings(clutter_per_cell=0.0)
     with pytest.raises(ValueError, match="unknown scene 'moon'"):
         sr.evaluate_scene("moon")
     with pytest.raises(ValueError, match="'stationary'"):

@@ -17,7 +17,7 @@ import numpy as np
 from raysim.echoes.clutter.sigma0 import CLUTTER_MATERIALS
 from raysim.echoes.po.mesh import TriangleMesh
 
-__all__ = ["GroundSurface", "MAX_TILT", "scene_meshes"]
+__all__ = ["GroundSurface", "MAX_TILT", "scene_meshes", "target_meshes"]
 
 #: Steepest facet still counted as ground [rad] (60 deg from the vertical).
 MAX_TILT = math.radians(60.0)
@@ -90,8 +90,13 @@ class GroundSurface:
 
     @classmethod
     def from_scene(cls, scene) -> GroundSurface:
-        """Ground of a loaded :class:`raysim.echoes.rt.scenes.RadarScene` (meshes read again)."""
-        return cls.from_meshes(scene_meshes(scene))
+        """Ground of a loaded :class:`raysim.echoes.rt.scenes.RadarScene` (meshes read again).
+
+        The geometry targets' meshes (cars, reflectors: traced by PO + SBR and
+        absent from Sionna's copy of the scene) occlude too, so the ground behind
+        a car lies in its shadow (:func:`target_meshes`).
+        """
+        return cls.from_meshes(scene_meshes(scene), occluders=target_meshes(scene))
 
     @property
     def areas(self) -> np.ndarray:
@@ -173,6 +178,42 @@ class GroundSurface:
         origin = (centroid[near] * w[:, None]).sum(axis=0) / w.sum()
         n = (self.normals[near] * w[:, None]).sum(axis=0)
         return origin, n / np.linalg.norm(n)
+
+
+def target_meshes(scene) -> list[TriangleMesh]:
+    """Meshes in W of the geometry targets of a loaded scene that its XML does not hold.
+
+    A bundled scene's XML lists its cars and reflectors too (the tracer removes
+    them from Sionna's copy), so :func:`scene_meshes` already has them; targets
+    added when loading (``extra_targets``, scenarios' geometry targets) are
+    only here. One mesh per part.
+    """
+    in_xml = {f.resolve() for f in _xml_mesh_files(scene)}
+    out = []
+    for t in getattr(scene, "targets", None) or []:
+        if not t.is_geometry:
+            continue
+        for f in [t.mesh] if isinstance(t.mesh, str) else list(t.mesh):
+            if Path(f).resolve() in in_xml:
+                continue
+            m = TriangleMesh.load(f)
+            out.append(TriangleMesh(scene.to_world(m.vertices), m.faces))
+    return out
+
+
+def _xml_mesh_files(scene) -> list[Path]:
+    """Mesh files named by the scene XML's ``ply``/``obj`` shapes."""
+    from raysim.echoes.rt.scenes import MESH_SHAPE_TYPES, _scene_xml, _substitute
+
+    path = Path(scene.descriptor.path)
+    root, defaults = _scene_xml(path)
+    out = []
+    for shape in root.iter("shape"):
+        fname = next((s.get("value") for s in shape.iter("string")
+                      if s.get("name") == "filename"), None)
+        if shape.get("type") in MESH_SHAPE_TYPES and fname is not None:
+            out.append(path.parent / _substitute(fname, defaults))
+    return out
 
 
 def scene_meshes(scene) -> list[tuple[TriangleMesh, str]]:

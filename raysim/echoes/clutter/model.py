@@ -45,8 +45,9 @@ class GroundClutter:
         Replace Sionna's ground mirror by the rough-surface mirror.
     ghosts : bool
         Add target-ground-radar ghosts of the scene's point targets.
-    movers : sequence of MovingObject
-        Objects driving through the scene.
+    movers : sequence of MovingObject or CarMover
+        Objects driving through the scene (a CarMover is traced by PO + SBR
+        at every trace, from the radar's pose then).
     ground : GroundSurface, optional
         Ground to use (default: read from the scene at the first trace).
     """
@@ -56,9 +57,12 @@ class GroundClutter:
         self.settings = FieldSettings() if settings is None else settings
         if not isinstance(self.settings, FieldSettings):
             raise ValueError(f"settings must be a FieldSettings, got {type(settings)}")
+        from raysim.echoes.clutter.movers import CarMover
+
         for m in movers:
-            if not isinstance(m, MovingObject):
-                raise ValueError(f"movers must be MovingObject instances, got {type(m)}")
+            if not isinstance(m, (MovingObject, CarMover)):
+                raise ValueError(f"movers must be MovingObject or CarMover instances, "
+                                 f"got {type(m)}")
         self.specular, self.ghosts, self.movers = bool(specular), bool(ghosts), tuple(movers)
         self.ground = ground
         self.field: ClutterField | None = None
@@ -146,7 +150,7 @@ class GroundClutter:
             tracks.append(ground_ghosts(targets, ground, config, radar_w, r_wb, time=time,
                                         polarisation=self.settings.polarisation,
                                         fov_half_angle=fov))
-        tracks.extend(m.tracks(config, radar_w, time=time) for m in self.movers)
+        tracks.extend(m.tracks(config, radar_w, time=time, r_wb=r_wb) for m in self.movers)
         return paths, tracks
 
     def _drop_ground_mirror(self, paths: PathSet) -> PathSet:

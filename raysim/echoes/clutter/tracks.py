@@ -229,7 +229,10 @@ class MovingObject:
         RCS of each centre [dBsm].
     trajectory : RigidTrajectory
     seed : int
-        Seed of the centres' phases.
+        Seed of the centres' phases (used where ``phase`` is None).
+    phase : ndarray, shape ``[point]``, optional
+        Scattering phase of each centre [rad] (e.g. from PO); default uniform
+        random phases drawn with ``seed``.
     """
 
     name: str
@@ -237,6 +240,7 @@ class MovingObject:
     rcs_dbsm: np.ndarray
     trajectory: RigidTrajectory
     seed: int = 0
+    phase: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         p = np.atleast_2d(np.asarray(self.points, dtype=float))
@@ -249,6 +253,12 @@ class MovingObject:
             raise ValueError(f"trajectory must be a RigidTrajectory, got {type(self.trajectory)}")
         object.__setattr__(self, "points", p)
         object.__setattr__(self, "rcs_dbsm", r)
+        if self.phase is not None:
+            ph = np.asarray(self.phase, dtype=float)
+            if ph.shape != r.shape or not np.all(np.isfinite(ph)):
+                raise ValueError(f"phase must be finite with shape {r.shape} [rad], "
+                                 f"got shape {ph.shape}")
+            object.__setattr__(self, "phase", ph)
 
     def positions(self, times) -> np.ndarray:
         """World positions of the centres ``[point, ..., 3]`` at ``times`` [s]."""
@@ -259,13 +269,19 @@ class MovingObject:
         y = sn * b[..., 0] + cs * b[..., 1]
         return c[None] + np.stack([x, y, b[..., 2] + 0 * x], axis=-1)
 
-    def tracks(self, config: RadarConfig, radar_w, *, time: float = 0.0) -> Tracks:
-        """Direct paths of the centres; amplitudes from the radar equation at ``time``."""
+    def tracks(self, config: RadarConfig, radar_w, *, time: float = 0.0, r_wb=None) -> Tracks:
+        """Direct paths of the centres; amplitudes from the radar equation at ``time``.
+
+        ``r_wb`` (radar attitude) is unused: the element gain is applied at synthesis.
+        """
         from raysim.echoes.clutter.field import radar_scale
 
         r = np.linalg.norm(self.positions(np.array(time)) - np.asarray(radar_w, float), axis=-1)
-        rng = np.random.default_rng([self.seed, 0x4D0E])
-        phase = np.exp(2j * np.pi * rng.random(r.size))
+        if self.phase is None:
+            rng = np.random.default_rng([self.seed, 0x4D0E])
+            phase = np.exp(2j * np.pi * rng.random(r.size))
+        else:
+            phase = np.exp(1j * self.phase)
         amp = math.sqrt(radar_scale(config)) * np.sqrt(10 ** (self.rcs_dbsm / 10)) / r**2 * phase
         return Tracks(self.positions, self.positions, amp, np.full(r.size, "mover"))
 

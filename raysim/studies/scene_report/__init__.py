@@ -41,6 +41,12 @@ Each map's image entropy (``entropy_rd_nats``, ``entropy_ra_nats``,
 cell-averaging CFAR on the coherent ``[range, azimuth, elevation]`` cube and
 compared with the scene's known reflector positions.
 
+Options (:class:`ReportSettings`): ``mover_speed`` drives a car mesh (PO + SBR,
+:class:`raysim.echoes.clutter.movers.CarMover`) through the scene in both frames;
+it is looked for off the zero-Doppler ridge at its own range rate
+(:func:`find_mover`). ``clutter_per_cell`` replaces Sionna's diffuse paths and
+mirror by the persistent clutter field (:mod:`raysim.echoes.clutter`).
+
 Modules: :mod:`.settings` (settings, limits), :mod:`.simulate` (trajectory,
 IMU estimate, traced frames), :mod:`.process` (chain beams, maps, CFAR),
 :mod:`.evaluate` (one scene), :mod:`.outputs` (figures, tables, files),
@@ -50,7 +56,7 @@ IMU estimate, traced frames), :mod:`.process` (chain beams, maps, CFAR),
 from __future__ import annotations
 
 from .bench import bench_reprojection
-from .evaluate import SceneResult, evaluate_scene
+from .evaluate import MOVER_CENTRE_SPAN_DB, SceneResult, evaluate_scene, find_mover, mover_truth
 from .outputs import plot_scene, report_html, report_markdown, write_scene_report
 from .process import BORESIGHT, ChainResult, beam_blocks, cfar_detect, chain_result
 from .settings import (
@@ -60,22 +66,32 @@ from .settings import (
                        ENTROPY_MARGIN_NATS,
                        FULL,
                        MAX_DETECTIONS,
-                       MIN_HOVER_SPREAD_NATS,
+                       MAX_MOVER_SPEED,
+                       MOVER_START_NE,
                        QUICK,
                        RD_PLOT_HALF_WIDTH_BINS,
                        REPORT_MAPS,
                        RIDGE_HALF_WIDTH_BINS,
                        ReportSettings,
 )
-from .simulate import hover_trajectory, imu_samples, path_kinds, scene_motion, simulate_scene
+from .simulate import (
+                       hover_trajectory,
+                       imu_samples,
+                       path_kinds,
+                       report_mover,
+                       scene_motion,
+                       simulate_scene,
+)
 
 __all__ = [
-    "REPORT_MAPS", "ENTROPY_MARGIN_NATS", "MIN_HOVER_SPREAD_NATS", "RIDGE_HALF_WIDTH_BINS",
+    "REPORT_MAPS", "ENTROPY_MARGIN_NATS", "RIDGE_HALF_WIDTH_BINS",
+    "MOVER_START_NE", "MAX_MOVER_SPEED",
     "CFAR_TRAIN", "CFAR_GUARD", "CFAR_THRESHOLD_DB", "RD_PLOT_HALF_WIDTH_BINS",
     "MAX_DETECTIONS", "ReportSettings", "FULL", "QUICK",
     "hover_trajectory", "imu_samples", "scene_motion", "simulate_scene", "path_kinds",
     "BORESIGHT", "ChainResult", "beam_blocks", "cfar_detect", "chain_result",
-    "SceneResult", "evaluate_scene",
+    "SceneResult", "evaluate_scene", "mover_truth", "find_mover", "MOVER_CENTRE_SPAN_DB",
+    "report_mover",
     "plot_scene", "report_markdown", "report_html", "write_scene_report",
     "bench_reprojection",
 ]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -13,10 +13,18 @@ from raysim.processing.maps import range_compress
 from raysim.vocabulary import CHAINS, REFERENCE, parse_chains
 
 from .process import ChainResult, chain_result
-from .settings import ENTROPY_MARGIN_NATS, QUICK, REPORT_MAPS, ReportSettings
+from .settings import (
+    CFAR_THRESHOLD_DB,
+    ENTROPY_MARGIN_NATS,
+    QUICK,
+    REPORT_MAPS,
+    RIDGE_HALF_WIDTH_BINS,
+    ReportSettings,
+)
 from .simulate import hover_trajectory, path_kinds, scene_motion, simulate_scene
 
-__all__ = ["SceneResult", "evaluate_scene"]
+__all__ = ["SceneResult", "evaluate_scene", "mover_truth", "find_mover",
+           "MOVER_CENTRE_SPAN_DB"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,6 +56,9 @@ class SceneResult:
     seconds : dict
         Wall time of tracing, synthesis, the IMU estimate, the reference and
         each chain [s].
+    movers : list of dict
+        Moving objects: :func:`mover_truth` plus ``match``: key (the reference
+        and every chain) -> :func:`find_mover`.
     """
 
     scene: str
@@ -59,6 +70,7 @@ class SceneResult:
     path_kinds: dict
     motion_rms: dict
     seconds: dict
+    movers: list = field(default_factory=list)
 
     def exact_within_margin(self) -> bool | None:
         """True when every map entropy of ``exact`` is within the margin of the reference.
@@ -96,6 +108,7 @@ class SceneResult:
             "entropy_margin_nats": ENTROPY_MARGIN_NATS,
             "exact_within_margin": self.exact_within_margin(),
             "targets": self.targets,
+            "movers": self.movers,
             "seconds": self.seconds,
         }
 
@@ -134,6 +147,94 @@ def _match(targets: list, reference: ChainResult, chains: dict,
         radius = max(1.0, t["range_m"] * beam / 2)
         t["reference_match"] = _nearest(t, reference, radius)
         t["match"] = {c: _nearest(t, r, radius) for c, r in chains.items()}
+
+
+#: Centres of a mover within this of its strongest (``rcs / R^4``) make up its truth [dB].
+MOVER_CENTRE_SPAN_DB = 20.0
+
+
+def mover_truth(mover, settings: ReportSettings, config) -> dict:
+    """Range and range rate of a moving object's centres at mid-frame, from the nominal radar.
+
+    Parameters
+    ----------
+    mover : raysim.echoes.clutter.tracks.MovingObject
+    settings : ReportSettings
+    config : RadarConfig
+
+    Returns
+    -------
+    dict
+        ``name``; ``range_m``, ``velocity_mps`` of its strongest centre
+        (``rcs / R^4``); ``centres``: ``[range_m, velocity_mps, bin]`` of every
+        centre within :data:`MOVER_CENTRE_SPAN_DB` of it, where ``bin`` is the
+        range rate folded into the Doppler axis ``[-N/2, N/2)`` in bins
+        (fractional); ``range_span_m`` ``(low, high)`` of those centres.
+    """
+    t = config.chirp_times()
+    t_mid = 0.5 * (float(t[0]) + float(t[-1]))
+    lever = np.asarray(settings.lever_arm, dtype=float)
+    p = mover.positions(np.array(t_mid)) - lever                         # [point, 3]
+    r = np.linalg.norm(p, axis=-1)
+    v = mover.trajectory.velocity(np.array(t_mid))
+    # rigid body, no turn within the frame: every centre moves at the body velocity
+    rate = (p @ v) / r
+    w = mover.rcs_dbsm - 40 * np.log10(r)
+    i = int(np.argmax(w))
+    near = np.nonzero(w >= w[i] - MOVER_CENTRE_SPAN_DB)[0]
+    axis = config.velocity_axis(settings.num_chirps)
+    dv, n = float(axis[1] - axis[0]), settings.num_chirps
+    bins = (rate / dv + n / 2) % n - n / 2
+    return {"name": mover.name, "range_m": float(r[i]), "velocity_mps": float(rate[i]),
+            "centres": [[float(r[k]), float(rate[k]), float(bins[k])] for k in near],
+            "range_span_m": (float(r[near].min()), float(r[near].max()))}
+
+
+def find_mover(truth: dict, result: ChainResult, range_resolution: float) -> dict:
+    """The strongest RD cell off the clutter ridge within the mover's range span.
+
+    Parameters
+    ----------
+    truth : dict
+        From :func:`mover_truth`.
+    result : ChainResult
+        Its ``rd`` map ``[range, doppler]`` is searched.
+    range_resolution : float
+        Range cell [m]; the span is widened by two cells either side.
+
+    Returns
+    -------
+    dict
+        ``range_m``, ``velocity_mps`` and ``bin`` (from zero) of the peak;
+        ``error_bins``: circular Doppler distance to the nearest truth centre
+        within two range cells of the peak; ``outside_ridge`` (the peak is
+        beyond the ridge bins ``+-RIDGE_HALF_WIDTH_BINS``); ``contrast_db``: the
+        peak over the median of its Doppler column at the gates outside the
+        span (what the rest of the scene leaves at that Doppler);
+        ``detected``: off the ridge, within one bin of a centre and
+        ``contrast_db`` above the report's CFAR threshold.
+    """
+    rd = result.maps["rd"]
+    rng, vel = rd.coords["range"], rd.coords["doppler"]
+    n = vel.size
+    centre = n // 2
+    lo, hi = truth["range_span_m"]
+    gates = (rng >= lo - 2 * range_resolution) & (rng <= hi + 2 * range_resolution)
+    off = np.abs(np.arange(n) - centre) > RIDGE_HALF_WIDTH_BINS
+    if not gates.any() or gates.all():
+        return {"detected": False}
+    sub = np.where(off[None, :], rd.values[gates], -np.inf)
+    g, d = np.unravel_index(int(np.argmax(sub)), sub.shape)
+    background = float(np.median(rd.values[~gates, d]))
+    contrast = float(10 * np.log10(sub[g, d] / max(background, np.finfo(float).tiny)))
+    b, r_peak = d - centre, float(rng[gates][g])
+    c = np.asarray(truth["centres"], dtype=float)
+    close = np.abs(c[:, 0] - r_peak) <= 2 * range_resolution
+    err = (float(np.min(np.abs((b - c[close, 2] + n / 2) % n - n / 2))) if close.any()
+           else float("inf"))
+    return {"range_m": r_peak, "velocity_mps": float(vel[d]), "bin": int(b),
+            "error_bins": err, "outside_ridge": bool(off[d]), "contrast_db": contrast,
+            "detected": bool(off[d] and err <= 1.0 and contrast > CFAR_THRESHOLD_DB)}
 
 
 def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bool = True,
@@ -189,6 +290,12 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
     bar.close()
     targets = _targets(sim["scene"], settings)
     _match(targets, reference, results, settings)
+    movers = []
+    for m in sim["movers"]:
+        truth = mover_truth(m, settings, config)
+        truth["match"] = {k: find_mover(truth, r, config.range_resolution)
+                          for k, r in {REFERENCE: reference, **results}.items()}
+        movers.append(truth)
     lever = np.asarray(settings.lever_arm, dtype=float)
     truth_disp = trajectory.point_world(t_chirp, lever)[:, 0] - lever
     ypr = np.rad2deg(trajectory.euler(t_chirp))
@@ -198,4 +305,4 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
                   "velocity_mps": float(np.sqrt(np.mean(np.sum(
                       trajectory.velocity(t_chirp) ** 2, axis=1))))}
     return SceneResult(scene, settings, reference, results, targets, sim["paths"].num_paths,
-                       path_kinds(sim["paths"]), motion_rms, seconds)
+                       path_kinds(sim["paths"]), motion_rms, seconds, movers)

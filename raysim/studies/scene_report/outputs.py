@@ -33,7 +33,9 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
     it). Panels share the colour scale: dB relative to the reference map's
     peak. The RD panels zoom on the clutter ridge (+-
     :data:`RD_PLOT_HALF_WIDTH_BINS` Doppler bins); known reflectors are
-    marked on the RA (azimuth, range) and AE (azimuth, elevation) panels.
+    marked on the RA (azimuth, range) and AE (azimuth, elevation) panels, the
+    centres of moving objects (range, folded range rate) on the RD panels,
+    which then widen to show them.
 
     Returns
     -------
@@ -60,9 +62,11 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
         for ax, (key, r) in zip(axes, panels.items(), strict=True):
             mp = r.maps[m]
             xlim = None
-            if m == "rd":                                   # zoom on the clutter ridge
+            if m == "rd":                   # zoom on the clutter ridge (and the movers)
                 dv = float(np.abs(np.diff(mp.coords["doppler"][:2]))[0])
-                xlim = (-RD_PLOT_HALF_WIDTH_BINS * dv, RD_PLOT_HALF_WIDTH_BINS * dv)
+                half = max([RD_PLOT_HALF_WIDTH_BINS] + [abs(c[2]) + 3 for mv in result.movers
+                                                        for c in mv["centres"]])
+                xlim = (-half * dv, half * dv)
             im = plot_map(ax, mp, title=f"{chain_label(key)}\nH = {r.entropy[m]:.3f} nats",
                           reference_power=ref, dynamic_range_db=dynamic_range_db, xlim=xlim)
             if m == "ae":
@@ -71,6 +75,10 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
             elif m == "ra":
                 for t in result.targets:
                     ax.plot(t["az_deg"], t["range_m"], "r+", ms=9)
+            else:                           # movers: their centres' range and range rate
+                for mv in result.movers:
+                    c = np.asarray(mv["centres"])
+                    ax.plot(c[:, 2] * dv, c[:, 0], "wx", ms=5, mew=0.8)
         fig.colorbar(im, ax=list(axes), label=f"power [dB re {REFERENCE} peak]", shrink=0.9)
         fig.suptitle(f"{result.scene}: {MAP_TITLES[m]} map")
         out = Path(folder) / f"{result.scene}_{m}.png"
@@ -148,6 +156,22 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
                     cells.append(f"{mt['error_m']:.2f}" + ("" if mt["detected"] else "*"))
             lines.append(f"| {s} | {t['name']} | {t['range_m']:.2f} | {t['az_deg']:.1f} | "
                          f"{t['el_deg']:.1f} | " + " | ".join(cells) + " |")
+    if any(r.movers for r in results.values()):
+        lines += ["", "Movers: strongest RD cell off the zero-Doppler ridge within the mover's "
+                  "range span: range rate [m/s], Doppler error to its nearest centre [bins], "
+                  "contrast over the scene at that Doppler [dB] (* = not detected)", "",
+                  "| scene | mover | range_m | true range rate | " + " | ".join(cols) + " |",
+                  "|---|---|---|---|" + "---|" * len(cols)]
+        for s, r in results.items():
+            for mv in r.movers:
+                cells = []
+                for c in cols:
+                    mt = mv["match"].get(c)
+                    cells.append("-" if mt is None or "bin" not in mt else
+                                 f"{mt['velocity_mps']:+.2f} ({mt['error_bins']:.1f}, "
+                                 f"{mt['contrast_db']:.0f} dB)" + ("" if mt["detected"] else "*"))
+                lines.append(f"| {s} | {mv['name']} | {mv['range_m']:.2f} | "
+                             f"{mv['velocity_mps']:+.2f} | " + " | ".join(cells) + " |")
     lines.append("")
     for s in results:
         lines.append(f"## {s}")

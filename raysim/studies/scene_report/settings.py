@@ -10,9 +10,10 @@ import numpy as np
 from raysim.radar.arrays import VirtualArray, upa
 from raysim.radar.config import RadarConfig
 
-__all__ = ["REPORT_MAPS", "ENTROPY_MARGIN_NATS", "MIN_HOVER_SPREAD_NATS",
+__all__ = ["REPORT_MAPS", "ENTROPY_MARGIN_NATS",
            "RIDGE_HALF_WIDTH_BINS", "CFAR_TRAIN", "CFAR_GUARD", "CFAR_THRESHOLD_DB",
-           "RD_PLOT_HALF_WIDTH_BINS", "MAX_DETECTIONS", "ReportSettings", "FULL", "QUICK"]
+           "RD_PLOT_HALF_WIDTH_BINS", "MAX_DETECTIONS",
+           "MOVER_START_NE", "MAX_MOVER_SPEED", "ReportSettings", "FULL", "QUICK"]
 
 #: The maps of every chain and of the reference, names from
 #: :data:`raysim.vocabulary.MAPS`: ``rd`` (range, doppler), ``ra`` (range,
@@ -23,13 +24,10 @@ REPORT_MAPS = ("rd", "ra", "ae")
 #: the ideal IMU [nats] (checked by ``tests/rt/test_scene_report.py``). Set by
 #: the residual Doppler of scatterers off a beam's centre, which no beam-domain
 #: compensation removes (about ``2 d delta / lambda`` for a displacement ``d``
-#: and an offset ``delta`` within the beamwidth); the largest measured value is
-#: the parking lot's RD map (0.13 nats, strong car roofs seen by neighbouring
-#: beams). See docs/scenes.md.
+#: and an offset ``delta`` within the beamwidth). With the radar's default patch
+#: element the largest measured value (QUICK) is rough_terrain's RD map (0.087
+#: nats); 0.13 nats (parking lot RD) with constant-gain elements. See docs/scenes.md.
 ENTROPY_MARGIN_NATS = 0.15
-#: Smallest RD-map entropy rise of the ``none`` chain (hover, uncompensated) over the stationary
-#: platform that counts as a visible Doppler spread [nats].
-MIN_HOVER_SPREAD_NATS = 0.05
 #: Doppler bins either side of zero counted as the stationary clutter ridge
 #: (the Hann mainlobe: bins -1, 0, +1).
 RIDGE_HALF_WIDTH_BINS = 1
@@ -39,6 +37,11 @@ CFAR_TRAIN, CFAR_GUARD, CFAR_THRESHOLD_DB = 12, 3, 12.0
 RD_PLOT_HALF_WIDTH_BINS = 12
 #: Detections kept per chain (strongest first).
 MAX_DETECTIONS = 12
+#: Start of the report's mover on the ground, north and east of the nadir point [m]: the
+#: parking lot's lane between its two rows of cars (rows at 6 m south and 4 m north).
+MOVER_START_NE = (-1.0, 6.0)
+#: Largest mover speed of the report [m/s] (a car in a car park or a street).
+MAX_MOVER_SPEED = 40.0
 
 
 @dataclass(frozen=True)
@@ -83,6 +86,15 @@ class ReportSettings:
         Paths re-projected and synthesised at once.
     gate_block : int
         Range gates beamformed at once (bounds memory).
+    clutter_per_cell : float or None
+        Ground clutter: the persistent clutter field
+        (:mod:`raysim.echoes.clutter`, rough-surface specular, ghosts) with this
+        many scatterers per range x angle cell at the pattern's peak, or None
+        for Sionna's own diffuse paths and mirror.
+    mover_speed : float or None
+        Ground speed [m/s] of a car (:class:`raysim.echoes.clutter.movers.CarMover`)
+        driving east along :data:`MOVER_START_NE` through the scene in both
+        frames, or None for no mover.
     spatial_window : str or None
         Amplitude taper over the virtual channels before beamforming, the same
         for every chain: ``"taylor"`` (30 dB, ``nbar = 4`` along x and y) or
@@ -109,6 +121,8 @@ class ReportSettings:
     path_chunk: int = 1024
     gate_block: int = 16
     spatial_window: str | None = "taylor"
+    clutter_per_cell: float | None = None
+    mover_speed: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("num_chirps", "array_size", "samples_per_src", "max_depth", "path_chunk",
@@ -139,20 +153,24 @@ class ReportSettings:
         if self.spatial_window not in ("taylor", None):
             raise ValueError(f"spatial_window must be 'taylor' or None, "
                              f"got {self.spatial_window!r}")
+        if self.clutter_per_cell is not None and not (
+                math.isfinite(self.clutter_per_cell) and 0 < self.clutter_per_cell <= 1000):
+            raise ValueError(f"clutter_per_cell must be None or in (0, 1000], "
+                             f"got {self.clutter_per_cell!r}")
+        if self.mover_speed is not None and not (
+                math.isfinite(self.mover_speed) and 0 < self.mover_speed <= MAX_MOVER_SPEED):
+            raise ValueError(f"mover_speed must be None or in (0, {MAX_MOVER_SPEED}] m/s, "
+                             f"got {self.mover_speed!r}")
         if not 1e-7 <= self.nufft_eps < 1:
             raise ValueError(f"nufft_eps must lie in [1e-7, 1), got {self.nufft_eps!r}")
 
     def radar(self) -> RadarConfig:
         """Paper waveform (77 GHz, 1 GHz, 60 us, 10 MHz, 600 samples) with these chirps.
 
-        Elements of constant gain (``element_pattern="constant"``, 10 dBi in every
-        direction): the report's entropy margins were set for them. With the
-        default patch element the wide-angle clutter is 20-40 dB weaker and the
-        hover spreads the QUICK maps by at most 0.10 nats, below
-        ``ENTROPY_MARGIN_NATS``.
+        The radar's default element pattern (:mod:`raysim.radar.pattern`, the
+        patch element) weights every path by its two-way gain.
         """
-        return RadarConfig(num_chirps=int(self.num_chirps), idle_time=float(self.idle_time),
-                           element_pattern="constant")
+        return RadarConfig(num_chirps=int(self.num_chirps), idle_time=float(self.idle_time))
 
     def array(self) -> VirtualArray:
         """Half-wavelength ``array_size x array_size`` virtual UPA (x major, y minor)."""

@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import functools
+import math
 import time
 
 import numpy as np
 
-from .settings import ReportSettings
+from .settings import MOVER_START_NE, ReportSettings
 
-__all__ = ["hover_trajectory", "imu_samples", "scene_motion", "simulate_scene", "path_kinds"]
+__all__ = ["hover_trajectory", "imu_samples", "scene_motion", "simulate_scene", "path_kinds",
+           "report_mover"]
 
 
 def path_kinds(paths) -> dict:
@@ -115,8 +117,56 @@ def scene_motion(trajectory, chirp_times, settings: ReportSettings):
                            velocity="given")
 
 
-def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress=None) -> dict:
+def _clutter_model(settings: ReportSettings):
+    """The report's :class:`raysim.echoes.clutter.model.GroundClutter`, or None (Sionna diffuse)."""
+    if settings.clutter_per_cell is None:
+        return None
+    from raysim.echoes.clutter.field import FieldSettings
+    from raysim.echoes.clutter.model import GroundClutter
+
+    return GroundClutter(FieldSettings(scatterers_per_cell=settings.clutter_per_cell,
+                                       seed=settings.trace_seed))
+
+
+def report_mover(scene, settings: ReportSettings, t0: float = 0.0):
+    """The report's car: :data:`MOVER_START_NE` on the ground, driving east, or None.
+
+    Parameters
+    ----------
+    scene : raysim.echoes.rt.scenes.RadarScene
+        Gives the ground height under the start point.
+    settings : ReportSettings
+        ``mover_speed`` [m/s] (None: no mover).
+    t0 : float
+        Time at which the car is at the start point [s].
+
+    Returns
+    -------
+    raysim.echoes.clutter.movers.CarMover or None
+    """
+    if settings.mover_speed is None:
+        return None
+    from raysim.echoes.clutter.ground import GroundSurface, scene_meshes
+    from raysim.echoes.clutter.movers import CarMover
+    from raysim.echoes.clutter.tracks import RigidTrajectory
+
+    north, east = MOVER_START_NE
+    _, z = GroundSurface.from_meshes(scene_meshes(scene)).locate(np.array([[north, east, 0.0]]))
+    if not np.isfinite(z[0]):
+        raise ValueError(f"scene {scene.name!r} has no ground under the mover start "
+                         f"{MOVER_START_NE} (north, east) [m]")
+    start = np.array([north, east, z[0]])
+    return CarMover("mover", RigidTrajectory(start, heading=math.pi / 2,
+                                             speed=float(settings.mover_speed), t0=t0))
+
+
+def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress=None,
+                   movers=()) -> dict:
     """Trace ``scene`` once at the nominal pose and synthesise both IF frames.
+
+    Both frames share the one trace (and the moving objects' scattering centres,
+    traced at the same instant), so they differ only by the platform motion
+    within the frame.
 
     Parameters
     ----------
@@ -127,14 +177,25 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
         Hover motion of the moving platform.
     progress : callable, optional
         ``progress(message)`` after each step.
+    movers : sequence
+        Moving objects besides the report's car (:func:`report_mover`):
+        :class:`raysim.echoes.clutter.movers.CarMover` or
+        :class:`raysim.echoes.clutter.tracks.MovingObject`, driving through the
+        scene in both frames, traced (PO + SBR for a CarMover) from the nominal
+        pose at the first chirp.
 
     Returns
     -------
     dict
         ``"stationary"``, ``"hover"``: IF cubes ``[chirp, channel, sample]``
         complex64 [sqrt(W)]; ``"paths"`` (:class:`raysim.echoes.rt.trace.PathSet`),
-        ``"scene"`` (:class:`raysim.echoes.rt.scenes.RadarScene`), ``"seconds"``.
+        ``"tracks"`` (list of :class:`raysim.echoes.clutter.tracks.Tracks`),
+        ``"movers"`` (the :class:`raysim.echoes.clutter.tracks.MovingObject` of
+        every mover, the report's car included),
+        ``"scene"`` (:class:`raysim.echoes.rt.scenes.RadarScene`), ``"clutter"``
+        (the field's report, empty without it), ``"seconds"``.
     """
+    from raysim.echoes.clutter.tracks import synthesize_tracks
     from raysim.echoes.rt.reproject import synthesize_paths
     from raysim.echoes.rt.scenes import load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
@@ -144,21 +205,36 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
     config = settings.radar()
     array = settings.array()
     lever = np.asarray(settings.lever_arm, dtype=float)
+    model = _clutter_model(settings)
     seconds = {}
     t = time.perf_counter()
+    t0 = float(config.chirp_times()[0])
     loaded = load_scene(scene, frequency=config.carrier_frequency)
     tracer = MonostaticTracer(max_depth=settings.max_depth,
                               samples_per_src=settings.samples_per_src, seed=settings.trace_seed)
-    paths = tracer(loaded, config, stationary(), lever, time=float(config.chirp_times()[0]))
+    tracks = []
+    if model is not None:
+        tracer = model.tracer(tracer)
+    paths = tracer(loaded, config, stationary(), lever, time=t0)
+    if model is not None:
+        paths, tracks = model.paths(loaded, paths, config, array, stationary(), lever, time=t0)
+    radar_w = stationary().point_world([t0], lever)[0, 0]
+    car = report_mover(loaded, settings, t0)
+    objects = [m.moving_object(config, radar_w, time=t0) if hasattr(m, "moving_object") else m
+               for m in [*movers, *([car] if car is not None else [])]]
+    tracks = tracks + [m.tracks(config, radar_w, time=t0) for m in objects]
     seconds["trace"] = time.perf_counter() - t
     if progress:
         progress("traced")
     synth = functools.partial(synthesize_nufft, eps=settings.nufft_eps)
-    out = {"paths": paths, "scene": loaded}
+    out = {"paths": paths, "tracks": tracks, "scene": loaded, "movers": objects,
+           "clutter": model.summary() if model is not None else {}}
     for name, motion in (("stationary", stationary()), ("hover", trajectory)):
         t = time.perf_counter()
         out[name], _ = synthesize_paths(paths, config, array, motion, lever,
                                         path_chunk=settings.path_chunk, synthesizer=synth)
+        synthesize_tracks(tracks, config, array, motion, lever, out=out[name],
+                          synthesizer=synth)
         seconds[f"synthesis_{name}"] = time.perf_counter() - t
         if progress:
             progress(f"synthesised {name}")
