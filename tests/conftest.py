@@ -31,3 +31,18 @@ def small_upa(paper_radar):
 def rng():
     """Seeded generator for Monte-Carlo tests."""
     return np.random.default_rng(20261121)
+
+
+#: Dr.Jit threads used by the tests (the CI machine has 2 cores).
+RT_TEST_THREADS = 2
+
+
+@pytest.fixture(scope="session")
+def rt_backend():
+    """Configure Sionna RT on the CPU (LLVM) variant; skip when it cannot run here."""
+    from raysim.echoes.rt import backend
+
+    try:
+        return backend.configure("cpu", threads=RT_TEST_THREADS)
+    except backend.BackendError as err:
+        pytest.skip(f"Sionna RT LLVM backend unavailable: {err}")

@@ -1,4 +1,4 @@
-"""Fixtures of the ray-tracing tests: backend, warm kernel cache, small radar."""
+"""Fixtures of the ray-tracing tests: warm kernels, small radar (backend: tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -6,20 +6,6 @@ import pytest
 
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
-
-#: Dr.Jit threads used by the tests (the CI machine has 2 cores).
-RT_TEST_THREADS = 2
-
-
-@pytest.fixture(scope="session")
-def rt_backend():
-    """Configure Sionna RT on the CPU (LLVM) variant; skip when it cannot run here."""
-    from raysim.echoes.rt import backend
-
-    try:
-        return backend.configure("cpu", threads=RT_TEST_THREADS)
-    except backend.BackendError as err:
-        pytest.skip(f"Sionna RT LLVM backend unavailable: {err}")
 
 
 @pytest.fixture(scope="module")
