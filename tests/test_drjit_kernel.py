@@ -69,3 +69,17 @@ def test_drjit_bad_input():
         drjit_kernel.synthesize_drjit(pd, cfg, use="metal")
     with pytest.raises(ValueError, match="out"):
         drjit_kernel.synthesize_drjit(pd, cfg, out=np.zeros((1, 1, 1), np.complex64))
+
+
+def test_auto_hands_many_compact_paths_to_drjit_only_on_cuda(monkeypatch):
+    """``method="auto"``: the Dr.Jit kernel where a CUDA device is present, never on the CPU."""
+    import raysim.synthesis.drjit_kernel as dk
+    from raysim.synthesis.select import GPU_MIN_PATHS, choose_method
+
+    shape = (GPU_MIN_PATHS, 256, 64, 256)
+    monkeypatch.setattr(dk, "backend", lambda: "llvm")
+    assert choose_method(*shape, 1e-5) != "drjit"
+    monkeypatch.setattr(dk, "backend", lambda: "cuda")
+    assert choose_method(*shape, 1e-5) == "drjit"
+    assert choose_method(*shape, 1e-5, compact=False) != "drjit"     # dense delays: no geometry
+    assert choose_method(GPU_MIN_PATHS - 1, *shape[1:], 1e-5) != "drjit"

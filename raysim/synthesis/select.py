@@ -25,8 +25,9 @@ Three ways to evaluate the same stop-and-hop tone sum
 ``"drjit"``
     :func:`raysim.synthesis.drjit_kernel.synthesize_drjit`, the same kernel written
     in Dr.Jit (CUDA where a GPU is present, else LLVM; :class:`PathDelays` only;
-    float64 grid, same error model). Only on request: ``"auto"`` does not pick it,
-    and ``decimate`` does not apply to it.
+    float64 grid, same error model). ``"auto"`` picks it for compact paths where a
+    CUDA device is present (:data:`GPU_MIN_PATHS` paths or more), never on the
+    CPU, where the C++ kernel is about 11x faster; ``decimate`` does not apply to it.
 
 ``method="auto"`` picks ``"direct"`` when ``eps < 1e-6`` (below what complex64
 output carries) and otherwise the cheapest of ``"tones"`` (only where
@@ -64,6 +65,10 @@ from raysim.synthesis.nufft import (
     synthesize_nufft,
 )
 from raysim.synthesis.tones import synthesize_if, synthesize_if_direct
+
+#: Paths from which ``"auto"`` hands compact paths to the Dr.Jit kernel on a CUDA device
+#: (below it the tone sum or the CPU kernel are quicker than a GPU launch).
+GPU_MIN_PATHS = 1000
 
 Method = Literal["auto", "nufft", "tones", "direct", "kernel", "drjit"]
 METHODS = ("auto", "nufft", "tones", "direct", "kernel", "drjit")
@@ -147,7 +152,8 @@ def choose_method(num_paths: int, num_chirps: int, num_channels: int, num_sample
     Returns
     -------
     str
-        ``"direct"`` if ``eps < 1e-6``, else the cheapest of ``"tones"``,
+        ``"direct"`` if ``eps < 1e-6``; ``"drjit"`` for compact paths on a CUDA
+        device (:data:`GPU_MIN_PATHS` or more); else the cheapest of ``"tones"``,
         ``"kernel"`` and ``"nufft"`` by :func:`estimate_seconds` (tones only
         where :func:`tones_error` is below ``eps``; the kernel only when
         :func:`kernel_qualifies`).
@@ -155,6 +161,11 @@ def choose_method(num_paths: int, num_chirps: int, num_channels: int, num_sample
     eps = check_eps(eps, floor=np.finfo(float).eps)
     if eps < DIRECT_BELOW_EPS:
         return "direct"
+    if compact and num_paths >= GPU_MIN_PATHS:
+        from raysim.synthesis.drjit_kernel import backend
+
+        if backend() == "cuda":
+            return "drjit"
     candidates = ("tones", "nufft") if tones_error(num_paths) <= eps else ("nufft",)
     if compact and kernel_qualifies(num_paths, num_samples, eps):
         candidates += ("kernel",)
