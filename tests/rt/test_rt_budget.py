@@ -132,8 +132,9 @@ def test_planned_trace_keeps_reflector_returns_with_fewer_rays(warm_kernels, tmp
         got = planned(scene, CFG)
         t_plan.append(time.perf_counter() - t0)
     (l_ref, a_ref), (l_got, a_got) = _targets(ref), _targets(got)
-    # four trihedral apexes plus a weak rim centre of each of the two larger ones
-    assert l_ref.size == l_got.size == 6
+    # the same centres in both: four trihedral apexes, weak rim centres of the two larger
+    # ones and their ground-multipath centres (the count of the weak ones is the engine's)
+    assert l_ref.size == l_got.size >= 4
     np.testing.assert_allclose(l_got, l_ref, atol=1e-6)
     assert np.max(np.abs(20 * np.log10(a_got / a_ref))) < 0.5
     # ground clutter is still sampled (fewer rays give proportionally fewer paths)
