@@ -13,26 +13,24 @@ import platform
 
 from setuptools import Extension, setup
 
-SRC = "raysim/synthesis/_kernel/"
 x86 = platform.machine().lower() in ("x86_64", "amd64")
 flags = ["-O3", "-std=c++17", "-fopenmp", "-fno-math-errno", "-fno-trapping-math"]
 if x86:
     flags.append("-march=x86-64-v2")
-ext = Extension(
-    "raysim.synthesis._kernel._ext",
-    sources=[SRC + "module.cpp", SRC + "kernel_portable.cpp", SRC + "kernel_avx2.cpp"],
-    depends=[SRC + "kernel_impl.h", SRC + "kernel_params.h"],
-    extra_compile_args=flags,
-    extra_link_args=["-fopenmp"],
-    language="c++",
-)
-RT = "compensation/_rt/"
-rt_ext = Extension(
-    "compensation._rt._ext",
-    sources=[RT + "module.cpp", RT + "rt_portable.cpp", RT + "rt_avx2.cpp"],
-    depends=[RT + "rt_impl.h", RT + "rt_params.h"],
-    extra_compile_args=flags,
-    extra_link_args=["-fopenmp"],
-    language="c++",
-)
+
+
+def _extension(name: str, folder: str, stem: str) -> Extension:
+    """One kernel: its module, portable and AVX2 copies, and their shared headers."""
+    return Extension(
+        name,
+        sources=[folder + f for f in ("module.cpp", f"{stem}_portable.cpp", f"{stem}_avx2.cpp")],
+        depends=[folder + f"{stem}_impl.h", folder + f"{stem}_params.h"],
+        extra_compile_args=flags,
+        extra_link_args=["-fopenmp"],
+        language="c++",
+    )
+
+
+ext = _extension("raysim.synthesis._kernel._ext", "raysim/synthesis/_kernel/", "kernel")
+rt_ext = _extension("compensation._rt._ext", "compensation/_rt/", "rt")
 setup(ext_modules=[] if os.environ.get("RAYSIM_NO_KERNEL") else [ext, rt_ext])

@@ -147,8 +147,15 @@ class ElementPattern:
         Beyond it every direction has ``G / G_peak < 10^{floor_db / 10}``, so any
         path with a leg there has a two-way gain below the floor too (the
         other leg's factor is at most 1): the cone the scene budget may prune
-        outside of. ``pi`` when no such angle exists.
+        outside of. ``pi`` when no such angle exists. Kept per pattern and floor
+        (every trace asks; the sphere grid costs a few ms).
         """
+        cache = self.__dict__.setdefault("_cull_angles", {})   # frozen: no attribute set
+        if floor_db not in cache:
+            cache[floor_db] = self._cull_angle(floor_db)
+        return cache[floor_db]
+
+    def _cull_angle(self, floor_db: float) -> float:
         theta, phi, _ = _sphere_grid()
         rel = self.gain(theta[:, None], phi[None, :]).max(axis=1) / self.peak_gain
         above = np.nonzero(rel >= 10 ** (floor_db / 10))[0]
@@ -428,3 +435,30 @@ def two_way_gain(pattern: ElementPattern, u_tx, u_rx) -> np.ndarray:
     ``[..., 3]`` (not necessarily unit); transmit and receive elements share the pattern.
     """
     return pattern.gain_direction(u_tx) * pattern.gain_direction(u_rx)
+
+
+def path_gain(pattern: ElementPattern, rotations, origins, p_dep, p_arr) -> np.ndarray:
+    """``sqrt(G_t(u_dep) G_r(u_arr))`` of paths leaving to ``p_dep``, arriving from ``p_arr``.
+
+    Parameters
+    ----------
+    pattern : ElementPattern
+        Transmit and receive element pattern (frame A).
+    rotations : array_like, shape ``[chirp, 3, 3]``
+        Radar attitude at each chirp, frame A -> W.
+    origins : array_like, shape ``[chirp, 3]``
+        Radar phase centre at each chirp in W [m].
+    p_dep, p_arr : array_like, shape ``[path, chirp, 3]``
+        First and last path vertex in W at each chirp [m].
+
+    Returns
+    -------
+    ndarray, shape ``[path, chirp]``
+        Two-way element amplitude factor (linear).
+    """
+    mats = np.asarray(rotations, dtype=float)
+    o = np.asarray(origins, dtype=float)[None]
+    # W -> A is the transpose of R: (R^T d)_i = sum_j R_ji d_j
+    u_dep = np.einsum("cji,pcj->pci", mats, np.asarray(p_dep, dtype=float) - o)
+    u_arr = np.einsum("cji,pcj->pci", mats, np.asarray(p_arr, dtype=float) - o)
+    return np.sqrt(two_way_gain(pattern, u_dep, u_arr))

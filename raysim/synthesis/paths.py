@@ -441,7 +441,7 @@ def _mid_frame_gain(paths, config: RadarConfig, array: VirtualArray, trajectory,
     """
     from raysim.echoes.oracle import element_times
     from raysim.platform.motion import stationary
-    from raysim.radar.pattern import two_way_gain
+    from raysim.radar.pattern import path_gain
 
     trajectory = stationary() if trajectory is None else trajectory
     t = float(element_times(config, array, frame, t0)[config.num_chirps // 2, 0])
@@ -449,6 +449,7 @@ def _mid_frame_gain(paths, config: RadarConfig, array: VirtualArray, trajectory,
     mat = rot.as_matrix()[0]                                           # A -> W
     origin = pos[0] + mat @ np.asarray(lever_arm, dtype=float)
     shift = np.asarray(paths.velocity, dtype=float) * (t - paths.trace_time)
-    u_dep = (np.asarray(paths.first_vertex, dtype=float) + shift - origin) @ mat
-    u_arr = (np.asarray(paths.last_vertex, dtype=float) + shift - origin) @ mat
-    return np.sqrt(two_way_gain(config.pattern, u_dep, u_arr))
+    first = np.asarray(paths.first_vertex, dtype=float) + shift
+    last = np.asarray(paths.last_vertex, dtype=float) + shift
+    return path_gain(config.pattern, mat[None], origin[None], first[:, None],
+                     last[:, None])[:, 0]

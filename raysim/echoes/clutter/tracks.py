@@ -313,7 +313,7 @@ def synthesize_tracks(tracks: list[Tracks], config: RadarConfig, array, trajecto
     """
     from raysim.echoes.rt.reproject import IF_BAND_MODES, element_positions, if_band_weight
     from raysim.platform.motion import stationary
-    from raysim.radar.pattern import two_way_gain
+    from raysim.radar.pattern import path_gain
     from raysim.synthesis.select import synthesize
 
     if if_band not in IF_BAND_MODES:
@@ -333,10 +333,8 @@ def synthesize_tracks(tracks: list[Tracks], config: RadarConfig, array, trajecto
         if tr.num_paths == 0:
             continue
         length = tr.lengths(times, x_tx, x_rx)
-        u_dep = np.einsum("cji,pcj->pci", mats, tr.p_tx(pose_t) - origin[None])
-        u_arr = np.einsum("cji,pcj->pci", mats, tr.p_rx(pose_t) - origin[None])
-        gain = np.sqrt(two_way_gain(config.pattern, u_dep, u_arr))[..., None]
-        amp = tr.amplitude[:, None, None] * gain                      # [path, chirp, 1]
+        gain = path_gain(config.pattern, mats, origin, tr.p_tx(pose_t), tr.p_rx(pose_t))
+        amp = tr.amplitude[:, None, None] * gain[..., None]           # [path, chirp, 1]
         if if_band == "cull":
             ok = np.all((length >= 0) & (length < 2 * config.max_range), axis=(1, 2))
             dropped += int(np.sum(~ok))

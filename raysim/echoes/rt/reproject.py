@@ -69,7 +69,7 @@ from raysim.echoes.rt.trace import SPECULAR, PathSet
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.radar.pattern import ElementPattern, two_way_gain
+from raysim.radar.pattern import ElementPattern, path_gain
 from raysim.synthesis.select import synthesize
 
 IF_BAND_MODES = ("cull", "taper", "none")
@@ -227,12 +227,8 @@ def pattern_amplitude(paths: PathSet, pattern: ElementPattern, trajectory: Traje
     mats = rot.as_matrix()                                            # [chirp, 3, 3] A -> W
     origin = pos + mats @ np.asarray(lever_arm, dtype=float)          # [chirp, 3]
     shift = paths.velocity[:, None, :] * (t - paths.trace_time)[None, :, None]
-    d_dep = paths.first_vertex[:, None, :] + shift - origin[None]     # [path, chirp, 3] in W
-    d_arr = paths.last_vertex[:, None, :] + shift - origin[None]
-    # W -> A is the transpose of R: (R^T d)_i = sum_j R_ji d_j
-    u_dep = np.einsum("cji,pcj->pci", mats, d_dep)
-    u_arr = np.einsum("cji,pcj->pci", mats, d_arr)
-    return np.sqrt(two_way_gain(pattern, u_dep, u_arr))[..., None]
+    return path_gain(pattern, mats, origin, paths.first_vertex[:, None, :] + shift,
+                     paths.last_vertex[:, None, :] + shift)[..., None]
 
 
 def if_band_weight(range_m: np.ndarray, config: RadarConfig, *, taper: float = 0.1) -> np.ndarray:
