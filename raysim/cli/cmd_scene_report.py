@@ -11,6 +11,8 @@ from raysim.vocabulary import CHAINS, MAP_TITLES, MAPS, REFERENCE
 #: Maps of the report (:data:`raysim.studies.scene_report.REPORT_MAPS`, not imported
 #: here: the report's modules take seconds to import, registration must not).
 REPORT_MAPS = ("rd", "ra", "ae")
+#: Clutter models of the report (:data:`raysim.studies.scene_report.REPORT_CLUTTER`).
+REPORT_CLUTTER = ("field", "sionna")
 
 EPILOG = """\
 examples:
@@ -65,10 +67,13 @@ def register(subparsers) -> None:
     p.add_argument("--mover-speed", type=float, default=None, metavar="MPS",
                    help="a car (PO + SBR mesh) drives east through each scene at this speed "
                    "[m/s], reported as a mover off the clutter ridge (default: none)")
+    p.add_argument("--clutter", choices=REPORT_CLUTTER, default=None,
+                   help="ground clutter and multipath: the persistent clutter field (default: "
+                   "calibrated sigma0, Rayleigh cells, rough-surface specular, target-ground "
+                   "ghosts) or Sionna's own diffuse paths and mirror")
     p.add_argument("--clutter-per-cell", type=float, default=None, metavar="N",
-                   help="ground clutter as the persistent clutter field with N scatterers per "
-                   "range x angle cell (10 gives Rayleigh cells; about 3x the time of the "
-                   "default, Sionna's own diffuse paths)")
+                   help="scatterers of the clutter field per range x angle cell (default: 10, "
+                   "which gives Rayleigh cells)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--bench-reprojection", action="store_true",
                    help="only time re-projection vs re-tracing per chirp and print JSON")
@@ -91,6 +96,9 @@ def run(args: argparse.Namespace) -> int:
     if args.threads is not None and args.threads < 1:
         raise ValueError(f"--threads must be a positive integer, got {args.threads}")
     chains = parse_chains(chains_option(args.chains))
+    if args.clutter_per_cell is not None and args.clutter == "sionna":
+        raise ValueError("--clutter-per-cell sets the clutter field's density; it needs "
+                         "--clutter field, got --clutter sionna")
     if args.bench_reprojection:
         import json
 
@@ -106,6 +114,8 @@ def run(args: argparse.Namespace) -> int:
         settings = replace(settings, jitter_seed=args.jitter_seed)
     if args.mover_speed is not None:
         settings = replace(settings, mover_speed=args.mover_speed)
+    if args.clutter is not None:
+        settings = replace(settings, clutter=args.clutter)
     if args.clutter_per_cell is not None:
         settings = replace(settings, clutter_per_cell=args.clutter_per_cell)
     from raysim.echoes.rt import backend

@@ -15,7 +15,10 @@ import numpy as np
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
-__all__ = ["PathDelays", "element_positions"]
+__all__ = ["PathDelays", "element_positions", "GAIN_MODES"]
+
+#: Poses at which :meth:`PathDelays.from_pathset` evaluates the element gain.
+GAIN_MODES = ("mid_frame", "per_chirp")
 
 
 # --------------------------------------------------------------------------- sources
@@ -171,7 +174,8 @@ class PathDelays:
     @classmethod
     def from_pathset(cls, paths, config: RadarConfig, array: VirtualArray, trajectory=None, *,
                      lever_arm=(0.0, 0.0, 0.0), frame: int = 0, t0: float = 0.0,
-                     if_band: str = "cull") -> PathDelays:
+                     if_band: str = "cull", gain: str = "mid_frame",
+                     pattern=None) -> PathDelays:
         """Compact form of a ray-traced :class:`raysim.echoes.rt.trace.PathSet`.
 
         Same delays as :func:`raysim.echoes.rt.reproject.reproject` (frozen scattering
@@ -179,10 +183,11 @@ class PathDelays:
         ``interior_length = length - |v_f - x_tx,0| - |v_l - x_rx,0|``, moving
         scattering points at each channel's transmit instant), without
         materialising ``[path, chirp, channel]``. The two-way element gain
-        (``config.pattern``) is taken at the pose of the frame's middle chirp:
-        the compact form keeps one amplitude per path, where ``reproject``
-        evaluates it at every chirp (under hover jitter of ``d theta`` a
-        ``cos^q`` element changes it by about ``q tan(theta) d theta``).
+        (``config.pattern``) is taken at the pose of every chirp as ``reproject``
+        does (``gain="per_chirp"``, amplitudes ``[path, chirp]``) or at the pose of
+        the frame's middle chirp (``gain="mid_frame"``, one amplitude per path,
+        which slow-time decimation needs; under hover jitter of ``d theta`` a
+        ``cos^q`` element changes the gain by about ``q tan(theta) d theta``).
 
         Parameters
         ----------
@@ -192,17 +197,27 @@ class PathDelays:
         if_band : {"cull", "none"}
             ``"cull"`` drops paths whose one-way range leaves ``[0, max_range)``
             at the first or last chirp of the frame on any channel.
+        gain : {"mid_frame", "per_chirp"}
+            Pose(s) at which the element gain is evaluated (see above).
+        pattern : raysim.radar.pattern.ElementPattern, optional
+            Element pattern (default ``config.pattern``).
         """
         if if_band not in ("cull", "none"):
             raise ValueError(f"if_band must be 'cull' or 'none', got {if_band!r}")
+        if gain not in GAIN_MODES:
+            raise ValueError(f"gain must be one of {GAIN_MODES}, got {gain!r}")
+        pattern = config.pattern if pattern is None else pattern
         first = np.asarray(paths.first_vertex, dtype=np.float64)
         last = np.asarray(paths.last_vertex, dtype=np.float64)
         base = (paths.length - np.linalg.norm(first - paths.tx_position, axis=-1)
                 - np.linalg.norm(last - paths.rx_position, axis=-1))
         base = np.maximum(base, 0.0)
         vel = np.asarray(paths.velocity, dtype=np.float64)
-        amplitude = paths.amplitude * _mid_frame_gain(paths, config, array, trajectory,
-                                                       lever_arm, frame, t0)
+        gains = _chirp_gains(paths, pattern, config, array, trajectory, lever_arm, frame, t0,
+                             mid_frame=gain == "mid_frame")
+        amplitude = paths.amplitude[:, None] * gains
+        if gain == "mid_frame":
+            amplitude = amplitude[:, 0]
         pd = cls.for_array(first, last, base, amplitude, config, array, trajectory,
                            lever_arm=lever_arm, frame=frame, t0=t0,
                            velocity=vel if np.any(vel) else None,
@@ -432,24 +447,27 @@ def element_positions(config: RadarConfig, array: VirtualArray, trajectory=None,
     return tx, element_world_positions(trajectory, times, array.rx_positions, lever_arm)
 
 
-def _mid_frame_gain(paths, config: RadarConfig, array: VirtualArray, trajectory, lever_arm,
-                    frame: int, t0: float) -> np.ndarray:
-    """``sqrt(G_t G_r)`` of every path at the middle chirp's pose, shape ``[path]``.
+def _chirp_gains(paths, pattern, config: RadarConfig, array: VirtualArray, trajectory,
+                 lever_arm, frame: int, t0: float, *, mid_frame: bool) -> np.ndarray:
+    """``sqrt(G_t G_r)`` of every path at every chirp's pose, shape ``[path, chirp]``.
 
-    The same directions as :func:`raysim.echoes.rt.reproject.pattern_amplitude`
-    (radar phase centre to the first and last vertex, in frame A).
+    The same directions and instants as :func:`raysim.echoes.rt.reproject.pattern_amplitude`
+    (radar phase centre at each chirp's first transmit instant to the first and
+    last vertex, in frame A); with ``mid_frame`` only the middle chirp, shape ``[path, 1]``.
     """
     from raysim.echoes.oracle import element_times
     from raysim.platform.motion import stationary
     from raysim.radar.pattern import path_gain
 
     trajectory = stationary() if trajectory is None else trajectory
-    t = float(element_times(config, array, frame, t0)[config.num_chirps // 2, 0])
-    pos, rot = trajectory.pose(np.array([t]))
-    mat = rot.as_matrix()[0]                                           # A -> W
-    origin = pos[0] + mat @ np.asarray(lever_arm, dtype=float)
-    shift = np.asarray(paths.velocity, dtype=float) * (t - paths.trace_time)
-    first = np.asarray(paths.first_vertex, dtype=float) + shift
-    last = np.asarray(paths.last_vertex, dtype=float) + shift
-    return path_gain(config.pattern, mat[None], origin[None], first[:, None],
-                     last[:, None])[:, 0]
+    t = element_times(config, array, frame, t0)[:, 0]
+    if mid_frame:
+        t = t[config.num_chirps // 2:config.num_chirps // 2 + 1]
+    pos, rot = trajectory.pose(t)
+    mats = rot.as_matrix()                                             # [chirp, 3, 3] A -> W
+    origin = pos + mats @ np.asarray(lever_arm, dtype=float)
+    shift = (np.asarray(paths.velocity, dtype=float)[:, None, :]
+             * (t - paths.trace_time)[None, :, None])
+    return path_gain(pattern, mats, origin,
+                     np.asarray(paths.first_vertex, dtype=float)[:, None, :] + shift,
+                     np.asarray(paths.last_vertex, dtype=float)[:, None, :] + shift)

@@ -55,6 +55,10 @@ one-way ranges below ``RadarConfig.max_range``. Energy beyond it would alias
 into the cube, so each path is either culled (``if_band="cull"``, the default:
 dropped if any of its chirps/channels falls outside) or weighted by a
 raised-cosine model of the anti-alias filter (``if_band="taper"``).
+
+Many frozen-vertex paths (a clutter field) are synthesised without
+materialising their ``[path, chirp, channel]`` delays
+(:func:`synthesize_paths`, ``compact``).
 """
 
 from __future__ import annotations
@@ -75,6 +79,9 @@ from raysim.synthesis.select import synthesize
 IF_BAND_MODES = ("cull", "taper", "none")
 #: Re-projection of single-bounce specular paths: image method or frozen vertex.
 SPECULAR_MODES = ("image", "frozen")
+#: Frozen-vertex paths from which :func:`synthesize_paths` takes the compact way by
+#: default (dense re-projection costs ``O(path x chirp x channel)`` memory traffic).
+COMPACT_MIN_PATHS = 1024
 
 
 @dataclass(frozen=True)
@@ -334,8 +341,17 @@ def iter_reprojected(paths: PathSet, config: RadarConfig, array: VirtualArray,
 def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
                      trajectory: Trajectory | None = None, lever_arm=(0.0, 0.0, 0.0), *,
                      out: np.ndarray | None = None, chirps=None, path_chunk: int = 256,
-                     synthesizer=None, **options) -> tuple[np.ndarray, int]:
+                     synthesizer=None, compact="auto", eps: float = 1e-6,
+                     **options) -> tuple[np.ndarray, int]:
     """IF cube of frozen paths via :func:`raysim.synthesis.select.synthesize`.
+
+    Paths whose re-projection is the frozen-vertex formula (all but the
+    single-bounce specular paths of ``specular="image"``) can go the compact
+    way: :meth:`raysim.synthesis.paths.PathDelays.from_pathset` with the
+    element gain at every chirp's pose, rendered by ``synthesize(method="auto")``
+    (the fused kernel where built), which never materialises
+    ``[path, chirp, channel]`` delays. The delays and gains are those of
+    :func:`reproject`; the IF-band cull tests the first and last chirp only.
 
     Parameters
     ----------
@@ -348,9 +364,15 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
     path_chunk : int
         Paths re-projected at once.
     synthesizer : callable, optional
-        ``f(tau, amplitude, config, out=cube)`` adding tones into ``cube``;
-        default :func:`raysim.synthesis.select.synthesize` (``method="auto"``,
-        ``eps=1e-6``: tone sum for a few paths, NUFFT beyond).
+        ``f(tau, amplitude, config, out=cube)`` adding tones into ``cube`` for the
+        re-projected paths; default :func:`raysim.synthesis.select.synthesize`
+        (``method="auto"`` at ``eps``: tone sum for a few paths, NUFFT beyond).
+    compact : "auto", bool
+        Compact way for the frozen-vertex paths: always (True), never (False), or
+        where at least :data:`COMPACT_MIN_PATHS` of them and no ``synthesizer``
+        is given, ``if_band`` is not ``"taper"`` and ``chirps`` is a run ("auto").
+    eps : float
+        Requested relative error of the default synthesis and of the compact way.
     **options
         ``frame``, ``t0``, ``if_band``, ``taper``, ``specular``, ``pattern`` of
         :func:`reproject`.
@@ -361,16 +383,32 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
     dropped_if_band : int
         Paths culled for leaving the sampled beat band.
     """
+    import functools
+
     n_chirp = config.num_chirps if chirps is None else len(np.atleast_1d(chirps))
     shape = (n_chirp, array.num_channels, config.num_samples)
     if out is None:
         out = np.zeros(shape, dtype=np.complex64)
     elif out.shape != shape or out.dtype != np.complex64:
         raise ValueError(f"out must be complex64 of shape {shape}, got {out.dtype} {out.shape}")
-    synth = synthesize if synthesizer is None else synthesizer
+    synth = functools.partial(synthesize, eps=eps) if synthesizer is None else synthesizer
     if not callable(synth):
         raise ValueError(f"synthesizer must be callable, got {synthesizer!r}")
+    if compact not in ("auto", True, False):
+        raise ValueError(f"compact must be 'auto', True or False, got {compact!r}")
+    frozen = np.ones(paths.num_paths, bool)
+    if options.get("specular", "image") == "image":
+        frozen = ~single_bounce_specular(paths)
+    run = _chirp_run(chirps, config.num_chirps)
+    if compact == "auto":
+        compact = (synthesizer is None and run is not None
+                   and options.get("if_band", "cull") != "taper"
+                   and int(frozen.sum()) >= COMPACT_MIN_PATHS)
     dropped = 0
+    if compact and frozen.any():
+        dropped += _synthesize_compact(paths.select(frozen), config, array, trajectory,
+                                       lever_arm, out, run, eps, options)
+        paths = paths.select(~frozen)
     for part in iter_reprojected(paths, config, array, trajectory, lever_arm,
                                  path_chunk=path_chunk, chirps=chirps, **options):
         dropped += part.dropped_if_band
@@ -378,3 +416,36 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
             synth(part.tau, part.amplitude, config, out=out)
     return out, dropped
 
+
+def _chirp_run(chirps, num_chirps: int) -> range | None:
+    """``chirps`` as a ``range`` of consecutive chirps, or None where it is not one."""
+    if chirps is None:
+        return range(num_chirps)
+    c = np.atleast_1d(np.asarray(chirps))
+    if c.size == 0 or c.dtype.kind not in "iu" or np.any(np.diff(c) != 1) \
+            or c[0] < 0 or c[-1] >= num_chirps:
+        return None
+    return range(int(c[0]), int(c[-1]) + 1)
+
+
+def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray, trajectory,
+                        lever_arm, out: np.ndarray, run: range | None, eps: float,
+                        options: dict) -> int:
+    """Add the frozen-vertex ``paths`` into ``out`` the compact way; return the culled count."""
+    from raysim.synthesis.paths import PathDelays
+
+    unknown = set(options) - {"frame", "t0", "if_band", "specular", "pattern", "taper"}
+    if unknown:
+        raise ValueError(f"unknown options {sorted(unknown)}")
+    if_band = options.get("if_band", "cull")
+    if if_band not in ("cull", "none"):
+        raise ValueError(f"the compact way needs if_band 'cull' or 'none', got {if_band!r}")
+    if run is None:
+        raise ValueError("the compact way needs chirps as consecutive indices in the frame")
+    src = PathDelays.from_pathset(paths, config, array, trajectory, lever_arm=lever_arm,
+                                  frame=options.get("frame", 0), t0=options.get("t0", 0.0),
+                                  if_band=if_band, gain="per_chirp",
+                                  pattern=options.get("pattern"))
+    if src.num_paths:
+        synthesize(src, None, config, method="auto", eps=eps, out=out, chirps=run)
+    return paths.num_paths - src.num_paths

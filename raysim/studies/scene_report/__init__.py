@@ -44,8 +44,9 @@ compared with the scene's known reflector positions.
 Options (:class:`ReportSettings`): ``mover_speed`` drives a car mesh (PO + SBR,
 :class:`raysim.echoes.clutter.movers.CarMover`) through the scene in both frames;
 it is looked for off the zero-Doppler ridge at its own range rate
-(:func:`find_mover`). ``clutter_per_cell`` replaces Sionna's diffuse paths and
-mirror by the persistent clutter field (:mod:`raysim.echoes.clutter`).
+(:func:`find_mover`). ``clutter`` is the persistent clutter field
+(:mod:`raysim.echoes.clutter`, default, ``clutter_per_cell`` scatterers per
+cell) or Sionna's own diffuse paths and mirror (``"sionna"``).
 
 Modules: :mod:`.settings` (settings, limits), :mod:`.simulate` (trajectory,
 IMU estimate, traced frames), :mod:`.process` (chain beams, maps, CFAR),
@@ -70,6 +71,7 @@ from .settings import (
                        MOVER_START_NE,
                        QUICK,
                        RD_PLOT_HALF_WIDTH_BINS,
+                       REPORT_CLUTTER,
                        REPORT_MAPS,
                        RIDGE_HALF_WIDTH_BINS,
                        ReportSettings,
@@ -85,7 +87,7 @@ from .simulate import (
 
 __all__ = [
     "REPORT_MAPS", "ENTROPY_MARGIN_NATS", "RIDGE_HALF_WIDTH_BINS",
-    "MOVER_START_NE", "MAX_MOVER_SPEED",
+    "MOVER_START_NE", "MAX_MOVER_SPEED", "REPORT_CLUTTER",
     "CFAR_TRAIN", "CFAR_GUARD", "CFAR_THRESHOLD_DB", "RD_PLOT_HALF_WIDTH_BINS",
     "MAX_DETECTIONS", "ReportSettings", "FULL", "QUICK",
     "hover_trajectory", "imu_samples", "scene_motion", "simulate_scene", "path_kinds",

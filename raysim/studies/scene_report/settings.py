@@ -13,7 +13,7 @@ from raysim.radar.config import RadarConfig
 __all__ = ["REPORT_MAPS", "ENTROPY_MARGIN_NATS",
            "RIDGE_HALF_WIDTH_BINS", "CFAR_TRAIN", "CFAR_GUARD", "CFAR_THRESHOLD_DB",
            "RD_PLOT_HALF_WIDTH_BINS", "MAX_DETECTIONS",
-           "MOVER_START_NE", "MAX_MOVER_SPEED", "ReportSettings", "FULL", "QUICK"]
+           "MOVER_START_NE", "MAX_MOVER_SPEED", "REPORT_CLUTTER", "ReportSettings", "FULL", "QUICK"]
 
 #: The maps of every chain and of the reference, names from
 #: :data:`raysim.vocabulary.MAPS`: ``rd`` (range, doppler), ``ra`` (range,
@@ -24,9 +24,15 @@ REPORT_MAPS = ("rd", "ra", "ae")
 #: the ideal IMU [nats] (checked by ``tests/rt/test_scene_report.py``). Set by
 #: the residual Doppler of scatterers off a beam's centre, which no beam-domain
 #: compensation removes (about ``2 d delta / lambda`` for a displacement ``d``
-#: and an offset ``delta`` within the beamwidth). With the radar's default patch
-#: element the largest measured value (QUICK) is rough_terrain's RD map (0.087
-#: nats); 0.13 nats (parking lot RD) with constant-gain elements. See docs/scenes.md.
+#: and an offset ``delta`` within the beamwidth). Met with Sionna's clutter
+#: (``clutter="sionna"``, sparse and mirror-dominated): the largest measured value
+#: (QUICK, patch element) is rough_terrain's RD map (0.087 nats). The persistent
+#: clutter field fills every cell near nadir, where the hover's horizontal displacement
+#: (2.5 mm) changes the relative phase of scatterers within one beam by up to about
+#: 1 rad (``4 pi d du / lambda`` across a 14-degree beam): their speckle changes over
+#: the frame, which no beam-domain compensation undoes, and the parking lot's RD map
+#: stays 0.23 nats off although its off-ridge power falls from -13.5 to -24 dB; the
+#: report flags it. See docs/scenes.md.
 ENTROPY_MARGIN_NATS = 0.15
 #: Doppler bins either side of zero counted as the stationary clutter ridge
 #: (the Hann mainlobe: bins -1, 0, +1).
@@ -42,6 +48,8 @@ MAX_DETECTIONS = 12
 MOVER_START_NE = (-1.0, 6.0)
 #: Largest mover speed of the report [m/s] (a car in a car park or a street).
 MAX_MOVER_SPEED = 40.0
+#: Ground clutter models of the report (values of ``render_scene(clutter=...)``).
+REPORT_CLUTTER = ("field", "sionna")
 
 
 @dataclass(frozen=True)
@@ -81,16 +89,21 @@ class ReportSettings:
     trace_seed : int
         Seed of the ray sampling and diffuse phases.
     nufft_eps : float
-        Relative error of the NUFFT IF synthesis.
+        Relative error of the IF synthesis (NUFFT, or the fused kernel where the
+        paths go the compact way).
     path_chunk : int
         Paths re-projected and synthesised at once.
     gate_block : int
         Range gates beamformed at once (bounds memory).
-    clutter_per_cell : float or None
-        Ground clutter: the persistent clutter field
-        (:mod:`raysim.echoes.clutter`, rough-surface specular, ghosts) with this
-        many scatterers per range x angle cell at the pattern's peak, or None
-        for Sionna's own diffuse paths and mirror.
+    clutter : {"field", "sionna"}
+        Ground clutter and multipath: the persistent clutter field
+        (:mod:`raysim.echoes.clutter`: seeded scatterers with calibrated sigma0,
+        rough-surface specular, target-ground ghosts), or Sionna's own diffuse
+        paths and mirror (the values of ``render_scene(clutter=...)``).
+    clutter_per_cell : float
+        Scatterers of the field per range x angle cell where the two-way
+        element pattern is within ``FULL_DENSITY_DB`` of its peak (10 gives
+        Rayleigh cells).
     mover_speed : float or None
         Ground speed [m/s] of a car (:class:`raysim.echoes.clutter.movers.CarMover`)
         driving east along :data:`MOVER_START_NE` through the scene in both
@@ -121,7 +134,8 @@ class ReportSettings:
     path_chunk: int = 1024
     gate_block: int = 16
     spatial_window: str | None = "taylor"
-    clutter_per_cell: float | None = None
+    clutter: str = "field"
+    clutter_per_cell: float = 10.0
     mover_speed: float | None = None
 
     def __post_init__(self) -> None:
@@ -153,9 +167,12 @@ class ReportSettings:
         if self.spatial_window not in ("taylor", None):
             raise ValueError(f"spatial_window must be 'taylor' or None, "
                              f"got {self.spatial_window!r}")
-        if self.clutter_per_cell is not None and not (
-                math.isfinite(self.clutter_per_cell) and 0 < self.clutter_per_cell <= 1000):
-            raise ValueError(f"clutter_per_cell must be None or in (0, 1000], "
+        if self.clutter not in REPORT_CLUTTER:
+            raise ValueError(f"clutter must be one of {REPORT_CLUTTER}, got {self.clutter!r}")
+        if not (isinstance(self.clutter_per_cell, (int, float)) and not isinstance(
+                self.clutter_per_cell, bool) and math.isfinite(self.clutter_per_cell)
+                and 0 < self.clutter_per_cell <= 1000):
+            raise ValueError(f"clutter_per_cell must be in (0, 1000] scatterers per cell, "
                              f"got {self.clutter_per_cell!r}")
         if self.mover_speed is not None and not (
                 math.isfinite(self.mover_speed) and 0 < self.mover_speed <= MAX_MOVER_SPEED):

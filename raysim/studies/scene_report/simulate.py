@@ -119,7 +119,7 @@ def scene_motion(trajectory, chirp_times, settings: ReportSettings):
 
 def _clutter_model(settings: ReportSettings):
     """The report's :class:`raysim.echoes.clutter.model.GroundClutter`, or None (Sionna diffuse)."""
-    if settings.clutter_per_cell is None:
+    if settings.clutter == "sionna":
         return None
     from raysim.echoes.clutter.field import FieldSettings
     from raysim.echoes.clutter.model import GroundClutter
@@ -200,7 +200,7 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
     from raysim.echoes.rt.scenes import load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
     from raysim.platform.motion import stationary
-    from raysim.synthesis.nufft import synthesize_nufft
+    from raysim.synthesis.select import synthesize
 
     config = settings.radar()
     array = settings.array()
@@ -226,13 +226,15 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
     seconds["trace"] = time.perf_counter() - t
     if progress:
         progress("traced")
-    synth = functools.partial(synthesize_nufft, eps=settings.nufft_eps)
+    # moving points at the report's eps; frozen paths: synthesize_paths takes the compact
+    # way (fused kernel, no [path, chirp, channel] delays) for the clutter field
+    synth = functools.partial(synthesize, eps=settings.nufft_eps)
     out = {"paths": paths, "tracks": tracks, "scene": loaded, "movers": objects,
            "clutter": model.summary() if model is not None else {}}
     for name, motion in (("stationary", stationary()), ("hover", trajectory)):
         t = time.perf_counter()
         out[name], _ = synthesize_paths(paths, config, array, motion, lever,
-                                        path_chunk=settings.path_chunk, synthesizer=synth)
+                                        path_chunk=settings.path_chunk, eps=settings.nufft_eps)
         synthesize_tracks(tracks, config, array, motion, lever, out=out[name],
                           synthesizer=synth)
         seconds[f"synthesis_{name}"] = time.perf_counter() - t
