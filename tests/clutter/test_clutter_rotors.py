@@ -239,3 +239,40 @@ def test_rotor_renders_through_ground_clutter():
     assert np.array_equal(cube[:, 0], direct)
     with pytest.raises(ValueError, match="Rotor"):
         GroundClutter(movers=[object()])
+
+
+SCENE = '[scene]\nname = "flat_reflectors"\n'
+ROTOR = '[[scene.rotors]]\nhub_m = [2.0, 1.0, 10.0]\nrate_rps = 40\nblade_length_m = 0.05\n'
+
+
+def test_rotor_keys_reach_the_clutter_model():
+    from raysim.io.scenario import loads_scenario
+    from raysim.pipeline.sources import _clutter
+
+    sc = loads_scenario(SCENE + ROTOR + "blades = 3\n" + ROTOR.replace(
+        "rate_rps = 40", "rate_radps = 62.83185307179586").replace("[2.0", "[4.0")
+                        + "speed_mps = 2.0\n")
+    fixed, moving = _clutter(sc).movers
+    assert isinstance(fixed, Rotor) and isinstance(moving, Rotor)
+    assert fixed.blades == 3 and fixed.rate == 40.0 and fixed.blade_length == 0.05
+    assert np.array_equal(fixed.hub, HUB)
+    assert math.isclose(moving.rate, 10.0)
+    assert isinstance(moving.hub, RigidTrajectory) and moving.hub.speed == 2.0
+
+
+@pytest.mark.parametrize("text, match", [
+    (SCENE + ROTOR.replace("rate_rps = 40\n", ""), "rate_rps"),
+    (SCENE + ROTOR + "rate_radps = 3.0\n", "rate_radps"),
+    (SCENE + ROTOR + "axis = [0, 0, 0]\n", "axis"),
+    (SCENE + ROTOR + "root_m = 0.05\n", "root_m"),
+    (SCENE + ROTOR + "blades = 0\n", "blades"),
+    (SCENE + ROTOR.replace("0.05", "-1"), "blade_length_m"),
+    (SCENE + ROTOR + 'rcs_per = "disc"\n', "rcs_per"),
+    (SCENE + ROTOR + "spin = 3\n", "spin"),
+    (SCENE + '[scene.clutter]\nmode = "sionna"\n' + ROTOR, "mode = 'field'"),
+])
+def test_rotor_scenario_bad_values_are_named(text, match):
+    from raysim.io.scenario import loads_scenario
+
+    with pytest.raises(ValueError, match=match):
+        loads_scenario(text)
