@@ -57,6 +57,16 @@ def _axis_at(beta: float) -> np.ndarray:
     return math.sin(beta) * u + math.cos(beta) * w          # u . axis = sin(beta)
 
 
+def _point(axis, r: float, theta) -> np.ndarray:
+    """Closed-form position ``[..., 3]`` of a point ``r`` from HUB at the angle ``theta`` about
+    ``axis`` from the north direction projected on the rotor plane (Rodrigues' rotation)."""
+    n = axis / np.linalg.norm(axis)
+    e1 = np.array([1.0, 0.0, 0.0]) - n[0] * n
+    e1 /= np.linalg.norm(e1)
+    th = np.asarray(theta)[..., None]
+    return HUB + r * (np.cos(th) * e1 + np.sin(th) * np.cross(n, e1))
+
+
 def _cube(rotor, config):
     array = upa(1, 1, wavelength=config.wavelength)
     cube = np.zeros((config.num_chirps, 1, config.num_samples), np.complex64)
@@ -76,7 +86,7 @@ def test_blade_scatterer_phase_and_doppler_follow_closed_form():
     k = int(np.argmin(np.abs(config.bin_ranges(config.num_samples) - np.linalg.norm(HUB))))
     phase = np.unwrap(np.angle(y[:, k]))
     t = config.chirp_times()
-    dist = np.linalg.norm(rotor.positions(t, config.wavelength)[0], axis=-1)   # exact R(t)
+    dist = np.linalg.norm(_point(rotor.axis, r, rotor.omega * t + 0.3), axis=-1)  # exact R(t)
     closed = 4 * np.pi * dist / lam
     err = (phase - phase[0]) - (closed - closed[0])
     print(f"slow-time phase vs 4 pi R / lambda: max error {np.max(np.abs(err)):.2e} rad "
@@ -167,7 +177,7 @@ def test_fast_rotor_aliases():
     k = int(np.argmin(np.abs(config.bin_ranges(config.num_samples) - np.linalg.norm(HUB))))
     measured = np.angle(y[1:, k] * np.conj(y[:-1, k])) / (2 * np.pi * config.chirp_interval)
     t = config.chirp_times()
-    dist = np.linalg.norm(fast.positions(t, config.wavelength)[0], axis=-1)
+    dist = np.linalg.norm(_point(fast.axis, 0.05, fast.omega * t), axis=-1)
     true = 2 * np.diff(dist) / (lam * config.chirp_interval)           # mean over each interval
     wrapped = (true + 0.5 * f_prf) % f_prf - 0.5 * f_prf
     err = (measured - wrapped + 0.5 * f_prf) % f_prf - 0.5 * f_prf
