@@ -55,6 +55,7 @@ from pydantic import BaseModel, Field, ValidationError, field_validator, model_v
 from raysim.io.scenario_keys import (
     ClutterSection,
     MoverSection,
+    RotorSection,
     did_you_mean,
     dumps_toml,
     format_validation_error,
@@ -141,7 +142,8 @@ class SceneSection(_Section):
     from the scenario file's folder); ``kind = "meshes"`` with ``[[scene.meshes]]``
     (users' mesh files, :mod:`raysim.io.scenario_meshes`). ``kind`` may be omitted:
     it is inferred from which key is given. ``[[scene.movers]]``: cars driving
-    through a ray-traced scene (:class:`raysim.io.scenario_keys.MoverSection`).
+    through a ray-traced scene (:class:`raysim.io.scenario_keys.MoverSection`);
+    ``[[scene.rotors]]``: rotating parts (:class:`raysim.io.scenario_keys.RotorSection`).
     """
 
     kind: Literal["points", "bundled", "mesh", "meshes"] | None = None
@@ -152,6 +154,7 @@ class SceneSection(_Section):
     max_depth: int = Field(3, ge=0, le=10)
     clutter: ClutterSection = Field(default_factory=ClutterSection)
     movers: list[MoverSection] = Field(default_factory=list)
+    rotors: list[RotorSection] = Field(default_factory=list)
 
     @model_validator(mode="after")
     def _infer_kind(self) -> SceneSection:
@@ -172,9 +175,11 @@ class SceneSection(_Section):
             raise ValueError("kind 'meshes' needs at least one [[scene.meshes]] entry")
         if kind == "mesh" and not self.path:
             raise ValueError("kind 'mesh' needs path (a Mitsuba XML or mesh file)")
-        if self.movers and (kind == "points" or self.clutter.mode != "field"):
-            raise ValueError(f"[[scene.movers]] need a ray-traced scene with [scene.clutter] "
-                             f"mode = 'field', got kind {kind!r}, mode {self.clutter.mode!r}")
+        for key, items in (("movers", self.movers), ("rotors", self.rotors)):
+            if items and (kind == "points" or self.clutter.mode != "field"):
+                raise ValueError(f"[[scene.{key}]] need a ray-traced scene with "
+                                 f"[scene.clutter] mode = 'field', got kind {kind!r}, "
+                                 f"mode {self.clutter.mode!r}")
         return self
 
 

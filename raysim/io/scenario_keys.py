@@ -17,9 +17,9 @@ import tomllib
 from collections.abc import Callable, Iterable
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-__all__ = ["ClutterSection", "MoverSection", "get_key", "set_key", "dumps_toml",
+__all__ = ["ClutterSection", "MoverSection", "RotorSection", "get_key", "set_key", "dumps_toml",
            "format_validation_error", "parse_value", "parse_assignment", "did_you_mean"]
 
 
@@ -290,3 +290,51 @@ class MoverSection(BaseModel):
     length_m: float = Field(4.5, ge=3.5, le=5.5)
     width_m: float = Field(1.8, ge=1.5, le=2.1)
     height_m: float = Field(1.45, ge=1.2, le=1.9)
+
+
+class RotorSection(BaseModel):
+    """``[[scene.rotors]]``: a rotor or fan giving micro-Doppler (docs/clutter.md).
+
+    :class:`raysim.echoes.clutter.rotors.Rotor`: ``hub_m`` hub at time 0 in W
+    (NED) [m], moving at ``speed_mps`` along ``heading_deg`` (default still);
+    ``axis`` spin axis (W, or body FRD when moving); ``rate_rps`` [rev/s] or
+    ``rate_radps`` [rad/s], one of them; ``blades``; ``blade_length_m`` hub to
+    tip; ``root_m`` where the blade's scatterers begin; ``start_angle_deg``;
+    ``scatterers_per_blade`` (default lambda / 4 apart); ``rcs_dbsm`` of a blade
+    at its flash (``rcs_per = "blade"``) or of each scatterer. Needs
+    ``[scene.clutter] mode = "field"``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    name: str = "rotor"
+    hub_m: tuple[float, float, float]
+    heading_deg: float = Field(0.0, ge=-360, le=360)
+    speed_mps: float = Field(0.0, ge=0, le=60)
+    axis: tuple[float, float, float] = (0.0, 0.0, -1.0)
+    rate_rps: float | None = Field(None, ge=-1000, le=1000)
+    rate_radps: float | None = Field(None, ge=-6300, le=6300)
+    blades: int = Field(2, ge=1, le=16)
+    blade_length_m: float = Field(gt=0, le=10)
+    root_m: float = Field(0.0, ge=0)
+    start_angle_deg: float = Field(0.0, ge=-360, le=360)
+    scatterers_per_blade: int | None = Field(None, ge=1, le=100_000)
+    rcs_dbsm: float = Field(-20.0, ge=-100, le=40)
+    rcs_per: Literal["blade", "scatterer"] = "blade"
+
+    @model_validator(mode="after")
+    def _check(self) -> RotorSection:
+        if (self.rate_rps is None) == (self.rate_radps is None):
+            raise ValueError(f"give one of rate_rps [rev/s] or rate_radps [rad/s], got "
+                             f"rate_rps={self.rate_rps!r}, rate_radps={self.rate_radps!r}")
+        if not any(self.axis):
+            raise ValueError(f"axis must not be all zero, got {list(self.axis)}")
+        if self.root_m >= self.blade_length_m:
+            raise ValueError(f"root_m must be below blade_length_m = {self.blade_length_m} m, "
+                             f"got {self.root_m}")
+        return self
+
+    @property
+    def rate(self) -> float:
+        """Spin rate [rev/s]."""
+        return self.rate_rps if self.rate_rps is not None else self.rate_radps / (2 * math.pi)

@@ -92,8 +92,26 @@ def _clutter(scenario: Scenario):
     return GroundClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
                                        max_scatterers=c.max_scatterers, seed=scenario.seed),
                          ghosts=c.ghosts,
-                         movers=[_car(m, seed=scenario.seed + i)
-                                 for i, m in enumerate(scenario.scene.movers)])
+                         movers=[*(_car(m, seed=scenario.seed + i)
+                                   for i, m in enumerate(scenario.scene.movers)),
+                                 *(_rotor(r) for r in scenario.scene.rotors)])
+
+
+def _rotor(spec):
+    """The :class:`raysim.echoes.clutter.rotors.Rotor` of one ``[[scene.rotors]]`` entry."""
+    import math
+
+    from raysim.echoes.clutter.rotors import Rotor
+    from raysim.echoes.clutter.tracks import RigidTrajectory
+
+    hub = (RigidTrajectory(spec.hub_m, heading=math.radians(spec.heading_deg),
+                           speed=spec.speed_mps)
+           if spec.speed_mps > 0 or spec.heading_deg != 0 else spec.hub_m)
+    return Rotor(spec.name, hub, axis=spec.axis, rate=spec.rate, blades=spec.blades,
+                 blade_length=spec.blade_length_m, root=spec.root_m,
+                 start_angle=math.radians(spec.start_angle_deg),
+                 scatterers_per_blade=spec.scatterers_per_blade, rcs_dbsm=spec.rcs_dbsm,
+                 rcs_per=spec.rcs_per)
 
 
 def _car(spec, seed: int = 0):

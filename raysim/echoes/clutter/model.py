@@ -45,9 +45,9 @@ class GroundClutter:
         Replace Sionna's ground mirror by the rough-surface mirror.
     ghosts : bool
         Add target-ground-radar ghosts of the scene's point targets.
-    movers : sequence of MovingObject or CarMover
+    movers : sequence of MovingObject, CarMover or Rotor
         Objects driving through the scene (a CarMover is traced by PO + SBR
-        at every trace, from the radar's pose then).
+        at every trace, from the radar's pose then) and rotating parts.
     ground : GroundSurface, optional
         Ground to use (default: read from the scene at the first trace).
     """
@@ -58,10 +58,11 @@ class GroundClutter:
         if not isinstance(self.settings, FieldSettings):
             raise ValueError(f"settings must be a FieldSettings, got {type(settings)}")
         from raysim.echoes.clutter.movers import CarMover
+        from raysim.echoes.clutter.rotors import Rotor
 
         for m in movers:
-            if not isinstance(m, (MovingObject, CarMover)):
-                raise ValueError(f"movers must be MovingObject or CarMover instances, "
+            if not isinstance(m, (MovingObject, CarMover, Rotor)):
+                raise ValueError(f"movers must be MovingObject, CarMover or Rotor instances, "
                                  f"got {type(m)}")
         self.specular, self.ghosts, self.movers = bool(specular), bool(ghosts), tuple(movers)
         self.ground = ground
