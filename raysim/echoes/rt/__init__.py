@@ -7,7 +7,8 @@ the first call that needs it configures the default backend (CPU/LLVM) unless
 
 Modules: ``backend`` (variant, libLLVM check, threads, kernel cache),
 ``scenes`` (canonical scenes and 77 GHz materials), ``trace`` (monostatic
-tracing to a :class:`~raysim.echoes.rt.trace.PathSet`), ``reproject`` (frozen
+tracing to a :class:`~raysim.echoes.rt.trace.PathSet`), ``rough_bounces`` (Ament
+factor of specular bounces on rough materials), ``reproject`` (frozen
 scattering points, per-chirp and per-channel delays), ``render`` (scene to
 :class:`~raysim.synthesis.frame.RadarFrame`).
 """

@@ -54,6 +54,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from raysim.echoes.rt.rough_bounces import object_materials, rough_bounce_factor
 from raysim.echoes.rt.scenes import ENU_FROM_NED, RadarScene
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
@@ -260,6 +261,14 @@ class MonostaticTracer:
         When given, scene geometry is traced on the plan's pruned copy of the
         scene (triangles outside the range window / pattern cone removed, see
         :meth:`for_scene`); ``None`` traces the scene as loaded.
+    rough_bounces : bool
+        Multiply every path by the Ament factor ``exp(-2 (k s cos theta_i)^2)``
+        of each of its specular bounces on a material with an rms height ``s``
+        (the ground materials of
+        :data:`raysim.echoes.clutter.sigma0.CLUTTER_MATERIALS`), at that bounce's
+        incidence angle (:mod:`raysim.echoes.rt.rough_bounces`); Sionna itself
+        reflects such surfaces with the smooth Fresnel coefficient. ``False``
+        keeps Sionna's amplitudes.
     """
 
     max_depth: int = 3
@@ -275,6 +284,7 @@ class MonostaticTracer:
     diffuse_phase: str = "random"
     link_budget: bool = True
     plan: object = None
+    rough_bounces: bool = True
 
     def __post_init__(self) -> None:
         from raysim.echoes.rt.budget import TracePlan
@@ -500,6 +510,12 @@ class MonostaticTracer:
         pol, inter, depth, doppler, tau = (pol[keep], inter[keep], depth[keep], doppler[keep],
                                            tau[keep])
         verts = scene.to_world(verts_s[:, keep, :])              # [depth, path, 3]
+        if self.rough_bounces:
+            # coherent loss of specular bounces on rough ground, before the amplitude is taken
+            objects = np.asarray(paths.objects).reshape(-1, n_all).T[keep]
+            pol = pol * rough_bounce_factor(
+                inter, objects, verts, radar_w, object_materials(scene.sionna_scene),
+                config.wavelength)[:, None, None]
         n = pol.shape[0]
         idx = np.arange(n)
         first = verts[0]

@@ -210,8 +210,10 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
     t = time.perf_counter()
     t0 = float(config.chirp_times()[0])
     loaded = load_scene(scene, frequency=config.carrier_frequency)
+    # without the clutter model the report shows Sionna's own reflections, smooth mirror included
     tracer = MonostaticTracer(max_depth=settings.max_depth,
-                              samples_per_src=settings.samples_per_src, seed=settings.trace_seed)
+                              samples_per_src=settings.samples_per_src, seed=settings.trace_seed,
+                              rough_bounces=model is not None)
     tracks = []
     if model is not None:
         tracer = model.tracer(tracer)
