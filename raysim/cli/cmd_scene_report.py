@@ -60,6 +60,9 @@ def register(subparsers) -> None:
                    "cores) instead of 128 chirps, 12x12 UPA, 100k rays, 3 deg grid")
     p.add_argument("--imu", default="ideal", metavar="PRESET",
                    help="IMU preset of the pose estimate (default: ideal)")
+    p.add_argument("--jitter-axes", default=None, metavar="LIST",
+                   help="comma list of the axes the hover jitter moves, from x, y, z, roll, "
+                   "pitch, yaw (default: all; z,roll,pitch,yaw keeps the horizontal position)")
     p.add_argument("--jitter-seed", type=int, default=None, metavar="N",
                    help="seed of the hover jitter (default: 7)")
     p.add_argument("--threads", type=int, default=None, metavar="N",
@@ -110,6 +113,9 @@ def run(args: argparse.Namespace) -> int:
         return 0
     check_output(args.out, "dir", "--out")
     settings = replace(QUICK if args.quick else FULL, imu=args.imu)
+    if args.jitter_axes is not None:
+        settings = replace(settings, jitter_axes=tuple(
+            a.strip() for a in args.jitter_axes.split(",") if a.strip()))
     if args.jitter_seed is not None:
         settings = replace(settings, jitter_seed=args.jitter_seed)
     if args.mover_speed is not None:

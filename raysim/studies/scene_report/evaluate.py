@@ -267,7 +267,8 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
 
     bar = tqdm(total=4 + len(specs), desc=scene, file=sys.stderr, disable=not progress,
                leave=False)
-    trajectory = hover_trajectory(settings.jitter_seed, float(settings.radar().chirp_times()[0]))
+    trajectory = hover_trajectory(settings.jitter_seed, float(settings.radar().chirp_times()[0]),
+                                  settings.jitter_axes)
     sim = simulate_scene(scene, settings, trajectory,
                          progress=lambda msg: (bar.set_postfix_str(msg), bar.update()))
     config, array = settings.radar(), settings.array()

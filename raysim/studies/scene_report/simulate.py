@@ -35,7 +35,7 @@ def path_kinds(paths) -> dict:
                                          & ((k & (DIFFUSE | SENSING)) == 0)))}
 
 
-def hover_trajectory(seed: int, t0: float = 0.0):
+def hover_trajectory(seed: int, t0: float = 0.0, axes=None):
     """Seeded hover jitter that starts at the nominal hover pose at ``t0``.
 
     :func:`raysim.platform.motion.hover_jitter` wanders centimetres and degrees away
@@ -51,6 +51,9 @@ def hover_trajectory(seed: int, t0: float = 0.0):
         Seed of the jitter.
     t0 : float
         Time at which the pose is nominal [s].
+    axes : sequence of str, optional
+        Axes of :data:`raysim.platform.motion.AXES` the jitter moves (default all
+        six); the others stay at the nominal pose.
 
     Returns
     -------
@@ -58,11 +61,17 @@ def hover_trajectory(seed: int, t0: float = 0.0):
     """
     from raysim.platform.motion import AXES, Ramp, Trajectory, hover_jitter
 
+    axes = AXES if axes is None else tuple(axes)
+    if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
+        raise ValueError(f"axes must be distinct names from {AXES}, got {axes!r}")
     jitter = hover_jitter(seed)
     q0 = jitter.states([t0])[0][0]
-    return jitter + Trajectory(tuple(Ramp(a, offset=-float(v)) for a, v in zip(AXES, q0,
-                                                                               strict=True)),
-                               name="nominal pose at t0")
+    moved = Trajectory(tuple(c for c in jitter.components if c.axis in axes),
+                       name=jitter.name if len(axes) == len(AXES)
+                       else f"{jitter.name} ({', '.join(axes)})")
+    return moved + Trajectory(tuple(Ramp(a, offset=-float(v)) for a, v in zip(AXES, q0,
+                                                                              strict=True)
+                                    if a in axes), name="nominal pose at t0")
 
 
 def imu_samples(trajectory, chirp_times, settings: ReportSettings):
@@ -210,10 +219,8 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
     t = time.perf_counter()
     t0 = float(config.chirp_times()[0])
     loaded = load_scene(scene, frequency=config.carrier_frequency)
-    # without the clutter model the report shows Sionna's own reflections, smooth mirror included
     tracer = MonostaticTracer(max_depth=settings.max_depth,
-                              samples_per_src=settings.samples_per_src, seed=settings.trace_seed,
-                              rough_bounces=model is not None)
+                              samples_per_src=settings.samples_per_src, seed=settings.trace_seed)
     tracks = []
     if model is not None:
         tracer = model.tracer(tracer)
