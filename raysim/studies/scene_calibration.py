@@ -20,7 +20,6 @@ The metric is the scene report's ridge leakage (RD power outside Doppler bins
 
 from __future__ import annotations
 
-import functools
 import time
 from dataclasses import dataclass, replace
 
@@ -104,7 +103,6 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     from raysim.platform.motion import stationary
     from raysim.processing.maps import range_compress
     from raysim.studies.scene_report import QUICK, chain_result, hover_trajectory
-    from raysim.synthesis.nufft import synthesize_nufft
 
     if scene not in SCENES:
         raise ValueError(f"unknown scene {scene!r}; expected one of {sorted(SCENES)}")
@@ -125,12 +123,11 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     paths = tracer(loaded, config, stationary(), lever, time=float(times[0][0]))
     seconds["trace"] = time.perf_counter() - t
     t = time.perf_counter()
-    synth = functools.partial(synthesize_nufft, eps=settings.nufft_eps)
     taper = settings.channel_taper().astype(np.float32)[None, :, None]
     rcs = []
     for f in range(frames):
         cube, _ = synthesize_paths(paths, config, array, traj, lever, frame=f, t0=t0,
-                                   path_chunk=settings.path_chunk, synthesizer=synth)
+                                   path_chunk=settings.path_chunk, eps=settings.nufft_eps)
         rcs.append(range_compress(cube) * taper)
     seconds["synthesis"] = time.perf_counter() - t
     r_axis = config.bin_ranges(rcs[0].shape[-1])
