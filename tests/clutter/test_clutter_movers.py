@@ -216,3 +216,15 @@ def test_car_ghosts_lie_at_or_below_the_ground(clutter_backend):
     assert ghost.any() and (~ghost).any()
     # body z = W z - 15 (level ground, yaw only)
     assert np.all(tracks.p_tx(np.array(0.0))[ghost, 2] - 15.0 >= -BOX_SLACK_M)
+
+
+def test_mover_bad_ground_and_parts_are_named():
+    from raysim.echoes.clutter.movers import CarMover
+    from raysim.echoes.clutter.tracks import RigidTrajectory
+    from raysim.radar.config import RadarConfig
+
+    traj = RigidTrajectory([6.0, 0.0, 1.0])
+    with pytest.raises(ValueError, match="parts"):
+        CarMover("x", traj, parts=(("mesh", "metal"),))
+    with pytest.raises(ValueError, match="GroundSurface"):
+        CarMover("car", traj).moving_object(RadarConfig(), np.zeros(3), ground="asphalt")
