@@ -15,15 +15,17 @@ as the scene's static geometry targets are), so its car-ground multipath
 appears: car-ground-radar and ground-car-radar terms (between the car and its
 image) and ground-car-ground terms (at the car's image below the ground), with
 the ground's Fresnel and Ament factors. These ghost centres are fixed in the
-body frame like the direct ones (below the ground contact, ``z > 0``). Over a
-flat ground this is exact within a frame: the mirror ``M`` across a horizontal
-plane leaves a horizontal velocity unchanged (``M v = v``), so the image of a
-body point rides on the body. On sloped ground the apron is the mean plane under
-the car at the trace instant; within a frame the image of a point moving at
-``v`` would move at ``M v``, which differs from ``v`` by ``-2 (v . n) n`` (``n``
-the plane's normal), so a ghost's range rate is off by up to ``2 |v . n|`` and
-the ground under a moving car is only refitted at the next trace (the car mesh
-also stays level, as the trajectory is planar).
+body frame like the direct ones (at or below the ground contact, ``z >= 0``:
+car-ground dihedrals at the contact line, images below it). Over a flat ground
+this is exact within a frame: the mirror ``M`` across a horizontal plane
+commutes with the trajectory's horizontal translation and its yaw (``M v = v``),
+so the image of a body point rides on the body, straight or turning. On sloped
+ground the apron is the mean plane under the car at the trace instant; within a
+frame the image of a point moving at ``v`` would move at ``M v``, which differs
+from ``v`` by ``-2 (v . n) n`` (``n`` the plane's normal), so a ghost's range
+rate is off by up to ``2 |v . n|`` and the ground under a moving car is only
+refitted at the next trace (the car mesh also stays level, as the trajectory is
+planar).
 
 Frames: the car mesh is built x forward, y left, z up; the body frame of
 :class:`MovingObject` is x forward, y right, z down (FRD), so body =
