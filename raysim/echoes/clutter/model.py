@@ -47,7 +47,8 @@ class GroundClutter:
         Add target-ground-radar ghosts of the scene's point targets.
     movers : sequence of MovingObject, CarMover or Rotor
         Objects driving through the scene (a CarMover is traced by PO + SBR
-        at every trace, from the radar's pose then) and rotating parts.
+        at every trace, from the radar's pose then, with the ground under it)
+        and rotating parts.
     ground : GroundSurface, optional
         Ground to use (default: read from the scene at the first trace).
     """
@@ -151,7 +152,12 @@ class GroundClutter:
             tracks.append(ground_ghosts(targets, ground, config, radar_w, r_wb, time=time,
                                         polarisation=self.settings.polarisation,
                                         fov_half_angle=fov))
-        tracks.extend(m.tracks(config, radar_w, time=time, r_wb=r_wb) for m in self.movers)
+        from raysim.echoes.clutter.movers import CarMover
+
+        # a car is traced with the ground under it (its car-ground multipath)
+        tracks.extend(m.tracks(config, radar_w, time=time, r_wb=r_wb, ground=ground)
+                      if isinstance(m, CarMover) else
+                      m.tracks(config, radar_w, time=time, r_wb=r_wb) for m in self.movers)
         return paths, tracks
 
     def _drop_ground_mirror(self, paths: PathSet) -> PathSet:
