@@ -190,8 +190,8 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
         Moving objects besides the report's car (:func:`report_mover`):
         :class:`raysim.echoes.clutter.movers.CarMover` or
         :class:`raysim.echoes.clutter.tracks.MovingObject`, driving through the
-        scene in both frames, traced (PO + SBR for a CarMover) from the nominal
-        pose at the first chirp.
+        scene in both frames, traced (PO + SBR for a CarMover, with its local
+        ground: car-ground ghosts) from the nominal pose at the first chirp.
 
     Returns
     -------
@@ -229,8 +229,14 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
         paths, tracks = model.paths(loaded, paths, config, array, stationary(), lever, time=t0)
     radar_w = stationary().point_world([t0], lever)[0, 0]
     car = report_mover(loaded, settings, t0)
-    objects = [m.moving_object(config, radar_w, time=t0) if hasattr(m, "moving_object") else m
-               for m in [*movers, *([car] if car is not None else [])]]
+    cars = [*movers, *([car] if car is not None else [])]
+    ground = None
+    if any(hasattr(m, "moving_object") for m in cars):   # cars are traced with their ground
+        from raysim.echoes.clutter.ground import GroundSurface
+
+        ground = model.ground if model is not None else GroundSurface.from_scene(loaded)
+    objects = [m.moving_object(config, radar_w, time=t0, ground=ground)
+               if hasattr(m, "moving_object") else m for m in cars]
     tracks = tracks + [m.tracks(config, radar_w, time=t0) for m in objects]
     seconds["trace"] = time.perf_counter() - t
     if progress:
