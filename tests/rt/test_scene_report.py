@@ -60,6 +60,10 @@ def test_stationary_clutter_is_a_zero_doppler_ridge(results):
         print(f"{name}: stationary RD power off the zero-Doppler ridge {leak:.1f} dB")
         assert leak < STATIONARY_RIDGE_TOL_DB
         assert r.path_kinds["diffuse"] > MIN_FIELD_SCATTERERS     # distributed clutter
+        # the field's count and density choice are reported (shadowed ones give no path)
+        assert r.clutter["num_scatterers"] >= r.path_kinds["diffuse"]
+        assert r.clutter["scatterers_per_cell"] == SETTINGS.clutter_per_cell
+        assert r.clutter["builds"] == 1
         for m in sr.REPORT_MAPS:                                  # vocabulary dims, every map
             assert r.reference.maps[m].dims == MAPS[m]
             assert all(c.maps[m].dims == MAPS[m] for c in r.chains.values())
@@ -176,6 +180,8 @@ def test_write_report_files(tmp_path, warm_kernels):
         metric_unit(m)                                        # every name is in METRICS
     assert (tmp_path / "flat_reflectors_rd.png").read_bytes()[:4] == b"\x89PNG"
     assert "<table>" in (tmp_path / "index.html").read_text()
+    assert data["flat_reflectors"]["clutter"]["num_scatterers"] > 0
+    assert "Clutter field" in (tmp_path / "report.md").read_text()
 
 
 def test_cfar_finds_a_point_in_noise():

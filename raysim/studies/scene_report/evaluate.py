@@ -59,6 +59,10 @@ class SceneResult:
     movers : list of dict
         Moving objects: :func:`mover_truth` plus ``match``: key (the reference
         and every chain) -> :func:`find_mover`.
+    clutter : dict
+        The clutter field's report (:attr:`raysim.echoes.clutter.field.ClutterField.report`
+        plus ``builds``: count, expected count, density scale, resolution cell,
+        build time); empty with Sionna's clutter.
     """
 
     scene: str
@@ -71,6 +75,7 @@ class SceneResult:
     motion_rms: dict
     seconds: dict
     movers: list = field(default_factory=list)
+    clutter: dict = field(default_factory=dict)
 
     def exact_within_margin(self) -> bool | None:
         """True when every map entropy of ``exact`` is within the margin of the reference.
@@ -109,6 +114,7 @@ class SceneResult:
             "exact_within_margin": self.exact_within_margin(),
             "targets": self.targets,
             "movers": self.movers,
+            "clutter": self.clutter,
             "seconds": self.seconds,
         }
 
@@ -306,4 +312,4 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
                   "velocity_mps": float(np.sqrt(np.mean(np.sum(
                       trajectory.velocity(t_chirp) ** 2, axis=1))))}
     return SceneResult(scene, settings, reference, results, targets, sim["paths"].num_paths,
-                       path_kinds(sim["paths"]), motion_rms, seconds, movers)
+                       path_kinds(sim["paths"]), motion_rms, seconds, movers, sim["clutter"])

@@ -153,6 +153,14 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
         res = {REFERENCE: r.reference, **r.chains}
         lines.append(f"| {s} | " + " | ".join(
             f"{res[c].ridge_leakage_db:.1f}" if c in res else "-" for c in cols) + " |")
+    fields = {s: r.clutter for s, r in results.items() if r.clutter.get("num_scatterers")}
+    if fields:
+        lines += ["", "Clutter field: scatterers drawn, expected count, density scale (1 "
+                  "unless `max_scatterers` capped it), build time (wall)", "",
+                  "| scene | scatterers | expected | density scale | build_s |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {s} | {c['num_scatterers']} | {c['expected']:.0f} | "
+                  f"{c['density_scale']:.3g} | {c['build_s']:.2f} |" for s, c in fields.items()]
     lines += ["", "Known reflectors: position error of the nearest detection [m] "
               "(* = outside the match radius)", "",
               "| scene | target | range_m | az_deg | el_deg | "
