@@ -32,6 +32,9 @@ VELOCITY_PRIOR_SIGMA = 1.0
 RANSAC_DRAWS = 64
 #: Inlier threshold in units of the measurement spread (when ``threshold`` is not given).
 INLIER_SIGMAS = 4.0
+#: Smallest consensus that may reject detections: more than the three unknowns, since
+#: any three detections fit a velocity exactly (a minimal sample agrees with itself).
+MIN_CONSENSUS = 4
 
 
 @dataclass(frozen=True)
@@ -114,6 +117,10 @@ def fit_ego_velocity(directions, radial_velocity, sigma=None, *, threshold: floa
                      prior_sigma: float = VELOCITY_PRIOR_SIGMA, seed: int = 0) -> EgoVelocity:
     """Robust fit of ``v_r = -u . v`` over stationary scatterers (RANSAC, then Huber).
 
+    RANSAC rejects detections only when at least :data:`MIN_CONSENSUS` of them
+    agree within the threshold; otherwise (the spreads understate the misfit)
+    every detection is kept and the Huber loss weighs them.
+
     Parameters
     ----------
     directions : array_like, shape ``[detection, 3]``
@@ -156,7 +163,7 @@ def fit_ego_velocity(directions, radial_velocity, sigma=None, *, threshold: floa
     thr = (INLIER_SIGMAS * float(np.median(s)) if scale_known else 0.05) if threshold is None \
         else positive("threshold", threshold)
     inl = np.ones(vr.size, dtype=bool)
-    if vr.size >= 5:                       # a consensus needs spare detections
+    if vr.size > MIN_CONSENSUS:            # a consensus needs spare detections
         rng = np.random.default_rng(seed)
         best = -1
         for _ in range(RANSAC_DRAWS):
@@ -165,6 +172,8 @@ def fit_ego_velocity(directions, radial_velocity, sigma=None, *, threshold: floa
             now = np.abs(-u @ v - vr) <= thr
             if now.sum() > best:
                 best, inl = int(now.sum()), now
+        if best < MIN_CONSENSUS:           # spreads understated: keep all, Huber weighs them
+            inl = np.ones(vr.size, dtype=bool)
     a, b, w = -u[inl], vr[inl], 1.0 / s[inl]
 
     def residual(v):

@@ -84,6 +84,23 @@ def test_ego_velocity_rejects_moving_scatterers():
     assert np.linalg.norm(naive - v) > 10 * np.linalg.norm(fit.velocity - v)
 
 
+def test_ego_velocity_minimal_consensus_rejects_nothing():
+    """Five stationary scatterers whose stated spreads are 1000x too small: no four agree
+    within the threshold, so none is rejected (any three fit exactly, which is no
+    consensus) and the fit uses all five."""
+    from compensation.ego_velocity import MIN_CONSENSUS
+
+    rng = np.random.default_rng(4)
+    u = rng.normal(size=(5, 3)) + [0.0, 0.0, 3.0]
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    v = np.array([0.05, -0.02, 0.03])
+    noise = np.array([1.0, -1.0, 0.5, -0.5, 0.8]) * 1e-3               # [m/s]
+    fit = fit_ego_velocity(u, -u @ v + noise, np.full(5, 1e-6))
+    assert MIN_CONSENSUS == 4 and fit.inliers.all()
+    ls, *_ = np.linalg.lstsq(-u, -u @ v + noise, rcond=None)           # all five, l2
+    assert np.linalg.norm(fit.velocity - v) < 3 * np.linalg.norm(ls - v) + 1e-4
+
+
 def test_ego_velocity_single_direction_keeps_the_prior_across():
     """One scatterer observes only its line of sight; across it the prior remains."""
     u = direction(np.array([0.3]), np.array([-0.1]))
