@@ -15,7 +15,7 @@ import numpy as np
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
-__all__ = ["PathDelays", "element_positions", "GAIN_MODES"]
+__all__ = ["PathDelays", "element_positions", "pose_gains", "GAIN_MODES"]
 
 #: Poses at which :meth:`PathDelays.from_pathset` evaluates the element gain.
 GAIN_MODES = ("mid_frame", "per_chirp")
@@ -447,27 +447,50 @@ def element_positions(config: RadarConfig, array: VirtualArray, trajectory=None,
     return tx, element_world_positions(trajectory, times, array.rx_positions, lever_arm)
 
 
-def _chirp_gains(paths, pattern, config: RadarConfig, array: VirtualArray, trajectory,
-                 lever_arm, frame: int, t0: float, *, mid_frame: bool) -> np.ndarray:
-    """``sqrt(G_t G_r)`` of every path at every chirp's pose, shape ``[path, chirp]``.
+def pose_gains(paths, pattern, trajectory, lever_arm, times) -> np.ndarray:
+    """Two-way element amplitude gain ``sqrt(G_t G_r)`` of frozen paths at given poses.
 
-    The same directions and instants as :func:`raysim.echoes.rt.reproject.pattern_amplitude`
-    (radar phase centre at each chirp's first transmit instant to the first and
-    last vertex, in frame A); with ``mid_frame`` only the middle chirp, shape ``[path, 1]``.
+    Parameters
+    ----------
+    paths : raysim.echoes.rt.trace.PathSet
+        ``first_vertex``, ``last_vertex``, ``velocity`` (scatterers move to each
+        instant) and ``trace_time`` are used.
+    pattern : raysim.radar.pattern.ElementPattern
+        Transmit and receive element pattern (frame A).
+    trajectory : raysim.platform.motion.Trajectory
+    lever_arm : array_like, shape ``[3]``
+        Radar phase centre in B [m].
+    times : array_like, shape ``[chirp]``
+        Pose instants [s].
+
+    Returns
+    -------
+    ndarray, shape ``[path, chirp]``
+        Directions from the radar phase centre to the first and last vertex, in frame A.
     """
-    from raysim.echoes.oracle import element_times
-    from raysim.platform.motion import stationary
     from raysim.radar.pattern import path_gain
 
-    trajectory = stationary() if trajectory is None else trajectory
-    t = element_times(config, array, frame, t0)[:, 0]
-    if mid_frame:
-        t = t[config.num_chirps // 2:config.num_chirps // 2 + 1]
+    t = np.asarray(times, dtype=float)
     pos, rot = trajectory.pose(t)
     mats = rot.as_matrix()                                             # [chirp, 3, 3] A -> W
-    origin = pos + mats @ np.asarray(lever_arm, dtype=float)
+    origin = pos + mats @ np.asarray(lever_arm, dtype=float)           # [chirp, 3]
     shift = (np.asarray(paths.velocity, dtype=float)[:, None, :]
              * (t - paths.trace_time)[None, :, None])
     return path_gain(pattern, mats, origin,
                      np.asarray(paths.first_vertex, dtype=float)[:, None, :] + shift,
                      np.asarray(paths.last_vertex, dtype=float)[:, None, :] + shift)
+
+
+def _chirp_gains(paths, pattern, config: RadarConfig, array: VirtualArray, trajectory,
+                 lever_arm, frame: int, t0: float, *, mid_frame: bool) -> np.ndarray:
+    """:func:`pose_gains` at every chirp's first transmit instant, shape ``[path, chirp]``
+    (as :func:`raysim.echoes.rt.reproject.reproject`); with ``mid_frame`` only the middle
+    chirp, shape ``[path, 1]``."""
+    from raysim.echoes.oracle import element_times
+    from raysim.platform.motion import stationary
+
+    trajectory = stationary() if trajectory is None else trajectory
+    t = element_times(config, array, frame, t0)[:, 0]
+    if mid_frame:
+        t = t[config.num_chirps // 2:config.num_chirps // 2 + 1]
+    return pose_gains(paths, pattern, trajectory, lever_arm, t)

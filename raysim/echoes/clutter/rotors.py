@@ -184,11 +184,7 @@ class Rotor:
         body = body.reshape((-1,) + t.shape + (3,))
         if not isinstance(self.hub, RigidTrajectory):
             return self.hub + body
-        c, psi = self.hub.pose(t)
-        cs, sn = np.cos(psi)[None], np.sin(psi)[None]
-        x = cs * body[..., 0] - sn * body[..., 1]
-        y = sn * body[..., 0] + cs * body[..., 1]
-        return c[None] + np.stack([x, y, body[..., 2]], axis=-1)
+        return self.hub.to_world(body, t)
 
     def tracks(self, config: RadarConfig, radar_w, *, time: float = 0.0, r_wb=None) -> Tracks:
         """Direct paths of the scatterers; amplitudes from the radar equation at ``time``.

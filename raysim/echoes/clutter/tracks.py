@@ -87,6 +87,19 @@ class RigidTrajectory:
         c = self.start + np.stack([dx, dy, np.zeros_like(t)], axis=-1)
         return c, psi
 
+    def to_world(self, body, times) -> np.ndarray:
+        """Body-frame points in W at ``times`` [s], shape ``[point, ..., 3]`` [m].
+
+        ``body`` [m] has shape ``[point, ..., 3]`` with ``...`` broadcastable to
+        ``times``' shape; the body turns with the yaw about ``+z_W``.
+        """
+        c, psi = self.pose(times)
+        cs, sn = np.cos(psi)[None], np.sin(psi)[None]
+        b = np.asarray(body, dtype=float)
+        x = cs * b[..., 0] - sn * b[..., 1]
+        y = sn * b[..., 0] + cs * b[..., 1]
+        return c[None] + np.stack([x, y, b[..., 2] + 0 * x], axis=-1)
+
     def velocity(self, times) -> np.ndarray:
         """Velocity of the body origin ``[..., 3]`` [m/s]."""
         _, psi = self.pose(times)
@@ -262,12 +275,8 @@ class MovingObject:
 
     def positions(self, times) -> np.ndarray:
         """World positions of the centres ``[point, ..., 3]`` at ``times`` [s]."""
-        c, psi = self.trajectory.pose(times)
-        cs, sn = np.cos(psi)[None], np.sin(psi)[None]
-        b = self.points.reshape(self.points.shape[:1] + (1,) * np.ndim(psi) + (3,))
-        x = cs * b[..., 0] - sn * b[..., 1]
-        y = sn * b[..., 0] + cs * b[..., 1]
-        return c[None] + np.stack([x, y, b[..., 2] + 0 * x], axis=-1)
+        b = self.points.reshape(self.points.shape[:1] + (1,) * np.ndim(times) + (3,))
+        return self.trajectory.to_world(b, times)
 
     def tracks(self, config: RadarConfig, radar_w, *, time: float = 0.0, r_wb=None) -> Tracks:
         """Direct paths of the centres; amplitudes from the radar equation at ``time``.

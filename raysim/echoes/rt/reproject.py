@@ -63,6 +63,7 @@ materialising their ``[path, chirp, channel]`` delays
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -73,7 +74,8 @@ from raysim.echoes.rt.trace import SPECULAR, PathSet
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.radar.pattern import ElementPattern, path_gain
+from raysim.radar.pattern import ElementPattern
+from raysim.synthesis.paths import PathDelays, pose_gains
 from raysim.synthesis.select import synthesize
 
 IF_BAND_MODES = ("cull", "taper", "none")
@@ -229,13 +231,7 @@ def pattern_amplitude(paths: PathSet, pattern: ElementPattern, trajectory: Traje
     ndarray, shape ``[path, chirp, 1]``
         ``sqrt(G_t(u_dep) G_r(u_arr))`` (linear amplitude factor).
     """
-    t = np.asarray(chirp_times, dtype=float)
-    pos, rot = trajectory.pose(t)
-    mats = rot.as_matrix()                                            # [chirp, 3, 3] A -> W
-    origin = pos + mats @ np.asarray(lever_arm, dtype=float)          # [chirp, 3]
-    shift = paths.velocity[:, None, :] * (t - paths.trace_time)[None, :, None]
-    return path_gain(pattern, mats, origin, paths.first_vertex[:, None, :] + shift,
-                     paths.last_vertex[:, None, :] + shift)[..., None]
+    return pose_gains(paths, pattern, trajectory, lever_arm, chirp_times)[..., None]
 
 
 def if_band_weight(range_m: np.ndarray, config: RadarConfig, *, taper: float = 0.1) -> np.ndarray:
@@ -383,8 +379,6 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
     dropped_if_band : int
         Paths culled for leaving the sampled beat band.
     """
-    import functools
-
     n_chirp = config.num_chirps if chirps is None else len(np.atleast_1d(chirps))
     shape = (n_chirp, array.num_channels, config.num_samples)
     if out is None:
@@ -432,8 +426,6 @@ def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray
                         lever_arm, out: np.ndarray, run: range | None, eps: float,
                         options: dict) -> int:
     """Add the frozen-vertex ``paths`` into ``out`` the compact way; return the culled count."""
-    from raysim.synthesis.paths import PathDelays
-
     unknown = set(options) - {"frame", "t0", "if_band", "specular", "pattern", "taper"}
     if unknown:
         raise ValueError(f"unknown options {sorted(unknown)}")

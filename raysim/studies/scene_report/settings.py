@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from raysim.platform.motion import AXES
 from raysim.radar.arrays import VirtualArray, upa
 from raysim.radar.config import RadarConfig
 
@@ -129,7 +130,7 @@ class ReportSettings:
     range_window: tuple[float, float] = (12.0, 45.0)
     lever_arm: tuple[float, float, float] = (0.0, 0.0, 0.10)
     jitter_seed: int = 7
-    jitter_axes: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
+    jitter_axes: tuple[str, ...] = AXES
     imu: str = "ideal"
     imu_rate: float = 4000.0
     imu_seed: int = 1
@@ -171,8 +172,6 @@ class ReportSettings:
         if self.spatial_window not in ("taylor", None):
             raise ValueError(f"spatial_window must be 'taylor' or None, "
                              f"got {self.spatial_window!r}")
-        from raysim.platform.motion import AXES
-
         axes = self.jitter_axes
         if not (isinstance(axes, tuple) and axes and all(a in AXES for a in axes)
                 and len(set(axes)) == len(axes)):

@@ -137,7 +137,7 @@ def _clutter_model(settings: ReportSettings):
                                        seed=settings.trace_seed))
 
 
-def report_mover(scene, settings: ReportSettings, t0: float = 0.0):
+def report_mover(scene, settings: ReportSettings, t0: float = 0.0, ground=None):
     """The report's car: :data:`MOVER_START_NE` on the ground, driving east, or None.
 
     Parameters
@@ -148,6 +148,8 @@ def report_mover(scene, settings: ReportSettings, t0: float = 0.0):
         ``mover_speed`` [m/s] (None: no mover).
     t0 : float
         Time at which the car is at the start point [s].
+    ground : raysim.echoes.clutter.ground.GroundSurface, optional
+        The scene's ground (read from ``scene`` when omitted).
 
     Returns
     -------
@@ -155,12 +157,13 @@ def report_mover(scene, settings: ReportSettings, t0: float = 0.0):
     """
     if settings.mover_speed is None:
         return None
-    from raysim.echoes.clutter.ground import GroundSurface, scene_meshes
+    from raysim.echoes.clutter.ground import GroundSurface
     from raysim.echoes.clutter.movers import CarMover
     from raysim.echoes.clutter.tracks import RigidTrajectory
 
     north, east = MOVER_START_NE
-    _, z = GroundSurface.from_meshes(scene_meshes(scene)).locate(np.array([[north, east, 0.0]]))
+    ground = GroundSurface.from_scene(scene) if ground is None else ground
+    _, z = ground.locate(np.array([[north, east, 0.0]]))
     if not np.isfinite(z[0]):
         raise ValueError(f"scene {scene.name!r} has no ground under the mover start "
                          f"{MOVER_START_NE} (north, east) [m]")
@@ -228,13 +231,13 @@ def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress
     if model is not None:
         paths, tracks = model.paths(loaded, paths, config, array, stationary(), lever, time=t0)
     radar_w = stationary().point_world([t0], lever)[0, 0]
-    car = report_mover(loaded, settings, t0)
-    cars = [*movers, *([car] if car is not None else [])]
-    ground = None
-    if any(hasattr(m, "moving_object") for m in cars):   # cars are traced with their ground
+    ground = None                      # cars are located on and traced with the ground
+    if settings.mover_speed is not None or any(hasattr(m, "moving_object") for m in movers):
         from raysim.echoes.clutter.ground import GroundSurface
 
         ground = model.ground if model is not None else GroundSurface.from_scene(loaded)
+    car = report_mover(loaded, settings, t0, ground)
+    cars = [*movers, *([car] if car is not None else [])]
     objects = [m.moving_object(config, radar_w, time=t0, ground=ground)
                if hasattr(m, "moving_object") else m for m in cars]
     tracks = tracks + [m.tracks(config, radar_w, time=t0) for m in objects]
