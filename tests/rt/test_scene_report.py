@@ -195,7 +195,7 @@ def test_cfar_finds_a_point_in_noise():
         sr.cfar_detect(-cube)
 
 
-def test_bad_input_is_named():
+def test_bad_input_is_named(capsys):
     """Settings and names are checked with messages that name the value."""
     with pytest.raises(ValueError, match="num_chirps"):
         sr.ReportSettings(num_chirps=4)
@@ -211,6 +211,10 @@ def test_bad_input_is_named():
         sr.ReportSettings(clutter_per_cell=0.0)
     with pytest.raises(ValueError, match="clutter must be one of"):
         sr.ReportSettings(clutter="mirror")
+    with pytest.raises(ValueError, match="jitter_axes.*'heave'"):
+        sr.ReportSettings(jitter_axes=("z", "heave"))
+    with pytest.raises(ValueError, match="axes must be distinct"):
+        sr.hover_trajectory(7, axes=("z", "z"))
     with pytest.raises(ValueError, match="unknown scene 'moon'"):
         sr.evaluate_scene("moon")
     with pytest.raises(ValueError, match="'stationary'"):
@@ -222,6 +226,9 @@ def test_bad_input_is_named():
     assert main(["scene-report", "--chains", "uncompensated", "--out", "/nonexistent"]) == 2
     assert main(["scene-report", "--clutter", "sionna", "--clutter-per-cell", "5",
                  "--out", "/nonexistent"]) == 2
+    capsys.readouterr()
+    assert main(["scene-report", "--jitter-axes", "z,heave", "--out", "/nonexistent"]) == 2
+    assert "jitter_axes" in capsys.readouterr().err
 
 
 def test_maps_are_the_vocabulary_maps():
