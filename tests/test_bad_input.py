@@ -20,7 +20,8 @@ import pytest
 from bad_input_common import ARR, SMALL, Bad, validate
 from bad_input_common import imu_samples as _imu_samples
 
-from raysim.echoes.oracle import PointTarget, element_times, simulate_point_targets
+from raysim.echoes.oracle import PointTarget, simulate_point_targets
+from raysim.platform.kinematics import element_times
 from raysim.platform.motion import HoverJitterSpec, Sinusoid, hover_jitter, sinusoid, stationary
 from raysim.radar.arrays import VirtualArray, tdm_mimo, ti_3tx4rx, upa
 from raysim.radar.config import RadarConfig

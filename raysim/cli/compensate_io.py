@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from raysim.platform.kinematics import slot_times
 from raysim.radar.config import RadarConfig
 from raysim.vocabulary import AXIS_UNITS
 
@@ -110,11 +111,6 @@ def frame_selection(text: str | None, total: int, option: str = "--frames") -> l
     return list(range(lo, hi))
 
 
-def _slot_times(chirp_times: np.ndarray, slots: int, slot_interval: float) -> np.ndarray:
-    """``[frame, chirp] -> [frame, chirp, slot]`` by the slot interval."""
-    return chirp_times[..., None] + np.arange(slots) * float(slot_interval)
-
-
 def _load_capture(path: str, radar_config: str, frames: str | None, layout: str | None,
                   t0: float) -> CompensateInput:
     from raysim.io.mmwave_config import read_mmwave_config
@@ -177,7 +173,7 @@ def _load_store(path: str, frames: str | None, frame: int) -> CompensateInput:
                                np.asarray(ds["imu_accel"].values, dtype=float)])
     arr = fr.array
     return CompensateInput(sel, lambda k: np.asarray(loaded[k].data),
-                           _slot_times(times, arr.num_slots, fr.config.slot_interval),
+                           slot_times(times, arr.num_slots, fr.config.slot_interval),
                            fr.config, arr.virtual_positions, arr.tx_slot, arr.grid_shape,
                            np.asarray(fr.lever_arm, dtype=float), imu,
                            source={"store": os.path.abspath(path)})
@@ -207,7 +203,7 @@ def _load_npz(path: str) -> CompensateInput:
                       idle_time=max(slot_interval - tc, 0.0))
     grid = tuple(int(v) for v in c["grid_shape"]) if "grid_shape" in c else None
     lever = np.asarray(c["lever_arm"], dtype=float) if "lever_arm" in c else None
-    return CompensateInput([0], lambda k: data, _slot_times(t[None], n_slot, slot_interval),
+    return CompensateInput([0], lambda k: data, slot_times(t[None], n_slot, slot_interval),
                            cfg, np.asarray(c["element_positions"], dtype=float), slot, grid,
                            lever, source={"cube": os.path.abspath(path)})
 

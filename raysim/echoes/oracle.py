@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from compensation.geometry import az_el, direction  # noqa: F401  (one definition of u(az, el))
+from raysim.platform.kinematics import element_times, element_world_positions
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import (
@@ -108,48 +109,6 @@ def radar_equation_amplitude(config: RadarConfig, range_tx, range_rx, rcs_dbsm: 
 def noise_power(config: RadarConfig) -> float:
     """Thermal noise power per complex IF sample ``k T0 F f_s`` [W]."""
     return BOLTZMANN * T0_KELVIN * 10 ** (config.noise_figure_db / 10) * config.sample_rate
-
-
-def element_times(config: RadarConfig, array: VirtualArray, frame: int = 0,
-                  t0: float = 0.0) -> np.ndarray:
-    """Transmit instant of every (chirp, channel), shape ``[chirp, channel]`` [s].
-
-    Channels of TDM slot ``s`` fire ``s * (T_c + idle)`` after the loop start.
-    """
-    if array.num_slots != config.num_tx_slots:
-        raise ValueError(
-            f"array has {array.num_slots} TDM slots but config.num_tx_slots = "
-            f"{config.num_tx_slots}; set RadarConfig(num_tx_slots={array.num_slots})"
-        )
-    return (config.chirp_times(frame, t0)[:, None]
-            + array.tx_slot[None, :] * config.slot_interval)
-
-
-def element_world_positions(trajectory: Trajectory, times: np.ndarray, points_a: np.ndarray,
-                            lever_arm: np.ndarray) -> np.ndarray:
-    """World positions of radar-frame points at per-(chirp, channel) times.
-
-    Parameters
-    ----------
-    trajectory : Trajectory
-    times : ndarray, shape ``[chirp, channel]`` or ``[chirp, channel, sample]``
-        Time of each evaluation [s].
-    points_a : ndarray, shape ``[channel, 3]``
-        Points in frame A (axes parallel to B) [m].
-    lever_arm : ndarray, shape ``[3]``
-        Radar origin in B [m].
-
-    Returns
-    -------
-    ndarray, shape ``times.shape + (3,)`` [m]
-    """
-    # evaluate each distinct time once (a virtual UPA shares one time per chirp)
-    uniq, inverse = np.unique(times, return_inverse=True)
-    pos, rot = trajectory.pose(uniq)
-    mats = rot.as_matrix()[inverse.reshape(times.shape)]       # [..., 3, 3]
-    body = points_a + np.asarray(lever_arm, dtype=float)       # [channel, 3]
-    body = body.reshape((1, body.shape[0]) + (1,) * (times.ndim - 2) + (3,))
-    return pos[inverse.reshape(times.shape)] + np.einsum("...ij,...j->...i", mats, body)
 
 
 def _pattern_factor(pattern, trajectory: Trajectory, times: np.ndarray, p: np.ndarray,

@@ -242,9 +242,9 @@ def motion_times(frame, chirp_times: np.ndarray) -> np.ndarray:
     ndarray, shape ``[chirp * slot]``
         Chirp major, slot minor; equal to ``chirp_times`` for a single-slot array.
     """
-    slots = frame.array.num_slots
-    offsets = np.arange(slots) * frame.config.slot_interval
-    return (np.asarray(chirp_times, dtype=float)[:, None] + offsets[None, :]).ravel()
+    from raysim.platform.kinematics import slot_times
+
+    return slot_times(chirp_times, frame.array.num_slots, frame.config.slot_interval).ravel()
 
 
 def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None, imu=None,

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from raysim.platform.kinematics import slot_times
 from raysim.processing.maps import range_compress
 from raysim.synthesis.frame import RadarFrame
 
@@ -42,8 +43,8 @@ class SelfCalibration:
 
 def _slot_times(frame: RadarFrame) -> np.ndarray:
     """Transmit time of every slot of every chirp of a frame, chirp major [s]."""
-    offsets = np.arange(frame.array.num_slots) * frame.config.slot_interval
-    return (np.asarray(frame.chirp_times, dtype=float)[:, None] + offsets[None, :]).ravel()
+    return slot_times(frame.chirp_times, frame.array.num_slots,
+                      frame.config.slot_interval).ravel()
 
 
 def calibrate_frames(frames: Sequence[RadarFrame], imu_time, gyro, accel, *,

@@ -61,8 +61,9 @@ def ti_setup(*, grid: int = 61, half_width_deg: float = 30.0, target_range: floa
         [chirp * 3]`` [s], ``imu`` (time, gyro, accel), ``initial_velocity``,
         ``azimuth``, ``elevation`` [rad], ``target_gate``.
     """
-    from raysim.echoes.oracle import PointTarget, element_times, simulate_point_targets
+    from raysim.echoes.oracle import PointTarget, simulate_point_targets
     from raysim.platform.imu import simulate_imu
+    from raysim.platform.kinematics import element_times
     from raysim.platform.motion import sinusoid
     from raysim.radar.arrays import ti_3tx4rx
 

@@ -170,7 +170,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     from raysim.io.flight_logs.ulog import write_px4_ulog
     from raysim.io.mmwave_config import sdk_cfg_text, ti_antenna_positions
     from raysim.io.ti_dca1000 import Dca1000Format, write_dca1000
-    from raysim.platform.imu import simulate_imu
+    from raysim.pipeline.sensors import imu_record
     from raysim.platform.motion import hover_jitter
     from raysim.radar.arrays import tdm_mimo
     from raysim.radar.config import RadarConfig
@@ -198,8 +198,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     radar_cfg = atomic_write_text(folder / "radar.cfg",
                                   sdk_cfg_text(cfg, tx_order=tx_order, rx_enabled=rx_on))
     end = start + frames * cfg.frame_interval + 0.05
-    samples = simulate_imu(traj, imu, rate=imu_rate, start=0.0, end=end, seed=seed,
-                           time_offset=time_offset)
+    samples = imu_record(traj, imu, rate=imu_rate, times=[start, end], seed=seed,
+                         time_offset=time_offset, start=0.0)
     ulog = write_px4_ulog(folder / "flight.ulg", samples)
     starts = start + np.arange(frames) * cfg.frame_interval
     return FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,

@@ -54,9 +54,9 @@ from raysim.pipeline.analysis import SINGLE_CHIRP_HALF_WIDTH_DEG, SINGLE_CHIRP_S
 from raysim.pipeline.analysis import local_axis as _axis
 from raysim.pipeline.chains import project
 from raysim.pipeline.estimate import VELOCITY_MODES, estimate_motion
-from raysim.pipeline.sensors import IMU_MARGIN_S
+from raysim.pipeline.sensors import imu_record
 from raysim.pipeline.sources import frame_source, reference_target
-from raysim.platform.imu import get_preset, simulate_imu
+from raysim.platform.imu import get_preset
 from raysim.processing import metrics
 from raysim.processing.maps import Map, range_compress
 from raysim.studies.cases import PAPER_CASES, get_case
@@ -304,13 +304,11 @@ def _evaluate(data: _CaseData, spec: ChainSpec, motion=None, rc_gate=None) -> di
 def platform_motion(data: _CaseData, imu: str, seed: int, settings: ReproductionSettings):
     """IMU samples along the scenario's motion, integrated to the pose at every chirp.
 
-    The IMU record runs from :data:`~raysim.pipeline.sensors.IMU_MARGIN_S`
-    before the first to that margin after the last chirp start; the
+    The IMU record is :func:`raysim.pipeline.sensors.imu_record` over the chirps; the
     integration is :func:`raysim.pipeline.estimate.estimate_motion`.
     """
     t = data.chirp_times.ravel()
-    samples = simulate_imu(data.trajectory, imu, rate=settings.imu_rate,
-                           start=t[0] - IMU_MARGIN_S, end=t[-1] + IMU_MARGIN_S, seed=seed)
+    samples = imu_record(data.trajectory, imu, rate=settings.imu_rate, times=t, seed=seed)
     return estimate_motion(*samples.to_arrays(), t, lever_arm=data.lever_arm,
                            trajectory=data.trajectory, velocity=settings.velocity)
 

@@ -99,7 +99,7 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     from raysim.echoes.rt.scenes import SCENES, load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
     from raysim.pipeline.estimate import estimate_motion
-    from raysim.platform.imu import simulate_imu
+    from raysim.pipeline.sensors import imu_record
     from raysim.platform.motion import stationary
     from raysim.processing.maps import range_compress
     from raysim.studies.scene_report import QUICK, chain_result, hover_trajectory
@@ -134,8 +134,8 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     lo, hi = settings.range_window
     gates = np.flatnonzero((r_axis >= lo) & (r_axis <= hi))
     end = float(times[-1][-1]) + IMU_LEAD_S
-    rec = simulate_imu(traj, imu, rate=settings.imu_rate, start=0.0, end=end, seed=imu_seed,
-                       time_offset=time_offset).to_arrays()
+    rec = imu_record(traj, imu, rate=settings.imu_rate, times=[t0, end], seed=imu_seed,
+                     time_offset=time_offset, start=0.0).to_arrays()
     t = time.perf_counter()
     res = self_calibrate(rcs, times, array.virtual_positions, *rec,
                          wavelength=config.center_wavelength, range_axis=r_axis,
@@ -143,8 +143,8 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
                          lever_arm=lever, initial_attitude=traj.attitude([t0]).as_matrix()[0],
                          velocity="hover", imu_grade=imu)
     seconds["calibration"] = time.perf_counter() - t
-    ideal = simulate_imu(traj, "ideal", rate=settings.imu_rate, start=0.0, end=end,
-                         seed=imu_seed).to_arrays()
+    ideal = imu_record(traj, "ideal", rate=settings.imu_rate, times=[t0, end], seed=imu_seed,
+                       start=0.0).to_arrays()
     truth = estimate_motion(*ideal, np.concatenate(times), lever_arm=lever, trajectory=traj,
                             velocity="given")
     t = time.perf_counter()

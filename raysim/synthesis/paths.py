@@ -163,7 +163,7 @@ class PathDelays:
         reference_time : float
             Time at which the vertices are given [s].
         """
-        from raysim.echoes.oracle import element_times
+        from raysim.platform.kinematics import element_times
 
         tx, rx = element_positions(config, array, trajectory, lever_arm=lever_arm,
                                    frame=frame, t0=t0)
@@ -433,7 +433,7 @@ def element_positions(config: RadarConfig, array: VirtualArray, trajectory=None,
     rx : ndarray, shape ``[chirp, channel, 3]`` [m], or None when the array is a
         single-slot virtual array with ``p_tx = p_rx`` (monostatic-equivalent).
     """
-    from raysim.echoes.oracle import element_times, element_world_positions
+    from raysim.platform.kinematics import element_times, element_world_positions
     from raysim.platform.motion import stationary
 
     trajectory = stationary() if trajectory is None else trajectory
@@ -486,7 +486,7 @@ def _chirp_gains(paths, pattern, config: RadarConfig, array: VirtualArray, traje
     """:func:`pose_gains` at every chirp's first transmit instant, shape ``[path, chirp]``
     (as :func:`raysim.echoes.rt.reproject.reproject`); with ``mid_frame`` only the middle
     chirp, shape ``[path, 1]``."""
-    from raysim.echoes.oracle import element_times
+    from raysim.platform.kinematics import element_times
     from raysim.platform.motion import stationary
 
     trajectory = stationary() if trajectory is None else trajectory

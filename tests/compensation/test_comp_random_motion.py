@@ -106,7 +106,7 @@ def test_constant_velocity_doppler_closed_form_and_removal():
 
 def test_tdm_slots_use_their_own_transmit_instants():
     """TI-style 3Tx x 4Rx TDM array: each slot's pose at its own transmit time."""
-    from raysim.echoes.oracle import element_times
+    from raysim.platform.kinematics import element_times
     from raysim.platform.motion import sinusoid
     from raysim.radar.arrays import ti_3tx4rx
 

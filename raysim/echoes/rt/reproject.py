@@ -69,8 +69,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raysim.echoes.oracle import element_times, element_world_positions
 from raysim.echoes.rt.trace import SPECULAR, PathSet
+from raysim.platform.kinematics import element_times, element_world_positions
 from raysim.platform.motion import Trajectory, stationary
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig

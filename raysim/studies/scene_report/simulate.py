@@ -89,16 +89,12 @@ def imu_samples(trajectory, chirp_times, settings: ReportSettings):
     time : ndarray, shape ``[sample]`` [s]
     gyro : ndarray, shape ``[sample, 3]`` [rad/s]
     accel : ndarray, shape ``[sample, 3]`` [m/s^2]
-        From four IMU periods before the first to four after the last chirp.
+        Covering the chirps with the margin of :func:`raysim.pipeline.sensors.imu_margin_s`.
     """
-    from raysim.platform.imu import simulate_imu
+    from raysim.pipeline.sensors import imu_record
 
-    t = np.asarray(chirp_times, dtype=float)
-    margin = 4.0 / settings.imu_rate
-    samples = simulate_imu(trajectory, settings.imu, rate=settings.imu_rate,
-                           start=float(t[0]) - margin, end=float(t[-1]) + margin,
-                           seed=settings.imu_seed)
-    return samples.to_arrays()
+    return imu_record(trajectory, settings.imu, rate=settings.imu_rate, times=chirp_times,
+                      seed=settings.imu_seed).to_arrays()
 
 
 def scene_motion(trajectory, chirp_times, settings: ReportSettings):

@@ -32,17 +32,12 @@ def imu_record(point: StabilityPoint, chirp_times: np.ndarray):
     raysim.platform.imu.ImuSamples
         Seeded by ``point.seed``; time stamps on the IMU clock [s].
     """
-    from raysim.platform.imu import Imu
+    from raysim.pipeline.sensors import imu_record
 
-    dt = 1.0 / point.imu_rate_hz
-    t_first, t_last = float(chirp_times[0]), float(chirp_times[-1])
-    clock = abs(point.imu_time_offset_s) + 1e-6 * abs(point.imu_clock_drift_ppm) * (
-        abs(t_first) + abs(t_last))
-    margin = 3 * dt + clock
-    pre = HOVER_WINDOW_S if point.init == "hover" else 0.0
-    imu = Imu(point.imu_spec, rate=point.imu_rate_hz, time_offset=point.imu_time_offset_s,
-              clock_drift_ppm=point.imu_clock_drift_ppm)
-    return imu(point.trajectory, t_first - margin - pre, t_last + margin + pre, seed=point.seed)
+    return imu_record(point.trajectory, point.imu_spec, rate=point.imu_rate_hz,
+                      times=chirp_times, seed=point.seed, time_offset=point.imu_time_offset_s,
+                      clock_drift_ppm=point.imu_clock_drift_ppm,
+                      lead_s=HOVER_WINDOW_S if point.init == "hover" else 0.0)
 
 
 def point_motion(point: StabilityPoint, chirp_times: np.ndarray | None = None):
