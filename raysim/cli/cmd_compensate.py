@@ -2,66 +2,19 @@
 
 The input is a raw TI DCA1000 capture (``adc_data.bin``) with its radar
 configuration (``--radar-config``: an mmWave SDK ``.cfg`` or an mmWave Studio
-``.json`` export, :mod:`raysim.io.mmwave_config`; it sets the waveform, the
-TDM slot order of the virtual array and the binary layout; every frame, or
-``--frames LO:HI``), a frame store written by :mod:`raysim.io.storage` (a Zarr
-store directory, opened with :func:`raysim.io.storage.open_store`, or a NetCDF
-file ``.nc`` from :func:`raysim.io.storage.export_netcdf`; ``--frame`` or
-``--frames``) or an ``.npz`` file with these keys:
+``.json`` export; every frame, or ``--frames LO:HI``), a frame store written by
+:mod:`raysim.io.storage` (Zarr store or NetCDF ``.nc``; ``--frame`` or
+``--frames``) or an ``.npz`` cube (keys in :mod:`raysim.pipeline.compensate`).
+The IMU log (``--imu FILE`` or a second positional argument) is any format of
+:func:`raysim.io.flight_logs.read_imu_log`, or left out for the IMU log of the
+frame store. Output (``--out``): a labelled Zarr store, or for one frame an
+``.npz`` (:mod:`raysim.io.compensate_io`).
 
-=====================  =========================  =================================
-key                    shape                      meaning
-=====================  =========================  =================================
-``data``               ``[chirp, channel, sample]``  complex IF samples
-``chirp_times``        ``[chirp]``                chirp start times, radar clock [s]
-``element_positions``  ``[channel, 3]``           virtual positions p_tx + p_rx in A [m]
-``carrier_frequency``  scalar                     f_c [Hz]
-``bandwidth``          scalar                     B [Hz]
-``chirp_duration``     scalar                     T_c [s]
-``sample_rate``        scalar                     f_s [Hz] (complex sampling)
-``grid_shape``         ``[2]`` (optional)         (nx, ny), x major, y minor
-``lever_arm``          ``[3]`` (optional)         r_IR in B [m]
-``tx_slot``            ``[channel]`` (optional)   TDM slot of each channel
-``slot_interval``      scalar (optional)          ramp-to-ramp interval of slots [s]
-=====================  =========================  =================================
-
-TDM MIMO: the IMU log is integrated once to the start of every transmit slot
-of every selected frame, and each slot's channels are compensated with the
-pose of their own ramp (exact and paper chains).
-
-IMU log (``--imu FILE``, or a second positional argument), any format of
-:func:`raysim.io.flight_logs.read_imu_log`: the project's IMU CSV (units in
-the header, ``#`` comments; what :func:`raysim.io.write_imu_csv` writes), a
-PX4 ULog ``.ulg`` (``sensor_combined``), an ArduPilot DataFlash ``.bin``
-(``IMU``; needs ``raysim[ardupilot]``) or a ROS 2 bag (folder, ``.mcap`` or
-``.db3``; ``sensor_msgs/msg/Imu``, FLU turned into FRD). Times are on the IMU
-clock [s] (``--time-offset`` is IMU clock minus radar clock), angular rate and
-specific force in the body frame FRD. It may be left out when the frame store
-holds an IMU log (``imu_time``, ``imu_gyro``, ``imu_accel``).
-
-Output (``--out``): a labelled Zarr store (written aside, then moved into
-place; :func:`raysim.io.compensate_io.write_compensated_store`) with
-``beams [frame, chirp, range, azimuth, elevation]`` (complex64),
-``doppler_power [frame, doppler, range, azimuth, elevation]`` (float32),
-``chirp_time [frame, chirp]`` and ``slot_time [frame, chirp, slot]`` [s], the
-coordinates ``range`` [m], ``azimuth``, ``elevation`` [deg], ``doppler``
-[m/s] and the attributes ``chain`` and ``warnings``; or, for one frame and a
-path ending in ``.npz``: ``beams [chirp, range, azimuth, elevation]``,
-``doppler_power [doppler, range, azimuth, elevation]``, ``chirp_times`` [s],
-``range_m``, ``azimuth_deg``, ``elevation_deg``, ``velocity_mps``, ``chain``
-and ``warnings``. The warnings are the result's assumption warnings (see
-:mod:`compensation.guards`), also printed on stderr as
-``warning: <chain>: <text>``.
-
-Chains (``--chain``, names of :mod:`raysim.vocabulary`, turned into beams by
-:func:`raysim.pipeline.chains.project`): ``exact`` (rigid-body projection,
-default), ``paper`` (the published chain; ``paper:published`` with the
-paper's rotation phase ``v_r(nT) nT``) and ``none`` (conventional beamformer,
-no IMU log needed).
-
-The work is :func:`raysim.pipeline.compensate.compensate`; this module parses
-the options, calls it and prints its warnings, the self-calibration and the
-output written.
+This module parses the options, calls the compensate stage
+(:func:`raysim.pipeline.compensate.compensate`: reading, motion estimate or
+self-calibration, the chain of every frame, writing) and prints its warnings
+on stderr as ``warning: <chain>: <text>``, the self-calibration's estimates
+and the output written.
 """
 
 from __future__ import annotations
