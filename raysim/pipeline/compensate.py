@@ -150,6 +150,20 @@ def _angles(value, option: str) -> np.ndarray:
     return np.deg2rad(v)
 
 
+def _frames_text(frames) -> str | None:
+    """``frames`` as ``"LO:HI"`` / ``"K"`` text: given so, or an int ``K``, or ``(LO, HI)``."""
+    if frames is None or isinstance(frames, str):
+        return frames
+    if isinstance(frames, (int, np.integer)) and not isinstance(frames, bool):
+        return str(int(frames))
+    if (isinstance(frames, (tuple, list)) and len(frames) == 2
+            and all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                    for v in frames)):
+        return f"{int(frames[0])}:{int(frames[1])}"
+    raise ValueError(f"--frames: got {frames!r}, expected 'LO:HI', 'K', an int K or a pair "
+                     f"(LO, HI) of frame numbers")
+
+
 def _imu_table(imu, inp, source: str) -> np.ndarray:
     """The IMU log as a table ``[sample, 7]``: time, gyro, accel (SI, FRD)."""
     from raysim.io.flight_logs import read_imu_log
@@ -226,7 +240,7 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                                                    else time_offset)
 
 
-def compensate(source, imu=None, *, out, chain="exact", frames: str | None = None,
+def compensate(source, imu=None, *, out, chain="exact", frames=None,
                frame: int = 0, radar_config=None, layout: str | None = None,
                capture_t0: float = 0.0, range_m=(0.0, 1e9), azimuth_deg=None,
                elevation_deg=None, lever_arm=None, time_offset: float | str = 0.0,
@@ -251,9 +265,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames: str | None = Non
     chain : str or raysim.vocabulary.ChainSpec
         ``exact`` (rigid-body projection), ``paper``, ``paper:published`` or
         ``none`` (conventional beamformer).
-    frames : str, optional
-        ``"LO:HI"`` (HI excluded) or ``"K"``: frames of a capture or store
-        (default every frame of a capture, ``frame`` of a store).
+    frames : str, int or (int, int), optional
+        ``"LO:HI"`` or ``(LO, HI)`` (HI excluded), or ``"K"`` / ``K``: frames of
+        a capture or store (default every frame of a capture, ``frame`` of a
+        store).
     frame : int
         Frame of a store when ``frames`` is None.
     radar_config : str or path-like, optional
@@ -313,8 +328,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames: str | None = Non
     as_npz = check_compensated_output(out, "--out")
     source = os.fspath(source)
     inp = load_input(source, radar_config=None if radar_config is None
-                     else os.fspath(radar_config), frames=frames, frame=frame, layout=layout,
-                     capture_t0=capture_t0)
+                     else os.fspath(radar_config), frames=_frames_text(frames), frame=frame,
+                     layout=layout, capture_t0=capture_t0)
     if as_npz and len(inp.frames) != 1:
         raise ValueError(f"--out {str(out)!r}: an .npz holds one frame, the selection has "
                          f"{len(inp.frames)}; give a store path (no .npz) or --frames K")

@@ -36,6 +36,17 @@ def split_frames(chirp_times) -> list[np.ndarray]:
 VELOCITY_MODES = ("given", "hover")
 
 
+def _truth_initial_state(options: dict, trajectory, t_ref: float, velocity: str) -> None:
+    """Fill ``options`` with the truth state of ``trajectory`` at ``t_ref`` [s] where unset.
+
+    The attitude and position always; the velocity with ``velocity="given"``.
+    """
+    if velocity == "given":
+        options.setdefault("initial_velocity", trajectory.velocity([t_ref])[0])
+    options.setdefault("initial_attitude", trajectory.attitude([t_ref]).as_matrix()[0])
+    options.setdefault("initial_position", trajectory.position([t_ref])[0])
+
+
 def estimate_motion(imu_time, gyro, accel, chirp_times, *, lever_arm, trajectory,
                     time_offset: float = 0.0, velocity: str = "given", **options):
     """Strapdown-integrate IMU samples to the platform pose at every chirp.
@@ -76,12 +87,7 @@ def estimate_motion(imu_time, gyro, accel, chirp_times, *, lever_arm, trajectory
     t = np.asarray(chirp_times, dtype=float).ravel()
     t_ref = float(t[0])
     frames = split_frames(t)
-    if velocity == "given":
-        options.setdefault("initial_velocity", trajectory.velocity([t_ref])[0])
-    if "initial_attitude" not in options:
-        options["initial_attitude"] = trajectory.attitude([t_ref]).as_matrix()[0]
-    if "initial_position" not in options:
-        options["initial_position"] = trajectory.position([t_ref])[0]
+    _truth_initial_state(options, trajectory, t_ref, velocity)
     return integrate_imu(np.asarray(imu_time), np.asarray(gyro), np.asarray(accel), frames,
                          lever_arm=lever_arm, time_offset=time_offset, reference_time=t_ref,
                          velocity=velocity, **options)
@@ -141,10 +147,7 @@ def estimate_record(imu_time, gyro, accel, frame_times, *, lever_arm, trajectory
     t = np.concatenate(frames)
     t_ref = float(t[0])
     if trajectory is not None:
-        if velocity == "given":
-            options.setdefault("initial_velocity", trajectory.velocity([t_ref])[0])
-        options.setdefault("initial_attitude", trajectory.attitude([t_ref]).as_matrix()[0])
-        options.setdefault("initial_position", trajectory.position([t_ref])[0])
+        _truth_initial_state(options, trajectory, t_ref, velocity)
     # query times: one integration over the record (the frames are increasing, any spacing)
     motion = integrate_imu(np.asarray(imu_time), np.asarray(gyro), np.asarray(accel), t,
                            lever_arm=lever_arm, time_offset=time_offset, reference_time=t_ref,

@@ -44,6 +44,14 @@ def test_stage_is_the_command(flight, tmp_path):
     a, b = open_store(tmp_path / "s.zarr"), open_store(tmp_path / "c.zarr")
     assert np.array_equal(a["beams"].values, b["beams"].values)
     assert a.attrs["time_offset_s"] == b.attrs["time_offset_s"]
+    # frames as a pair of numbers; the chain none needs no IMU log and applies no offset
+    one = compensate(flight.capture, radar_config=flight.radar_config, frames=(1, 2),
+                     chain="none", out=tmp_path / "n.npz", range_m=(r - 0.5, r + 0.5),
+                     azimuth_deg=[az], elevation_deg=[0.0])
+    assert one.frames == [1] and one.time_offset is None and one.calibration is None
+    with pytest.raises(ValueError, match=r"--frames: got \(1, 2, 3\)"):
+        compensate(flight.capture, radar_config=flight.radar_config, frames=(1, 2, 3),
+                   chain="none", out=tmp_path / "m.npz")
 
 
 def test_flight_table_runs_the_stage_not_the_cli(tmp_path, monkeypatch):
