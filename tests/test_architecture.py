@@ -155,3 +155,69 @@ def test_stage_packages_exist():
     for stage in ("radar", "platform", "echoes", "synthesis", "processing", "io", "pipeline",
                   "studies", "cli"):
         assert (ROOT / "raysim" / stage / "__init__.py").is_file(), stage
+
+
+#: Modules and names that integrate an IMU log or project beams: the CLI calls stages
+#: (raysim.pipeline.compensate, run, ...) and never these (docs/architecture.md).
+MOTION_AND_PROJECTION_MODULES = (
+    "compensation.strapdown", "compensation.projection", "compensation.exact",
+    "compensation.paper", "compensation.realtime", "compensation.multiframe",
+    "compensation.calibration", "raysim.pipeline.estimate", "raysim.pipeline.chains",
+    "raysim.pipeline.self_calibration")
+MOTION_AND_PROJECTION_NAMES = (
+    "integrate_imu", "integrate_record", "estimate_motion", "estimate_record",
+    "scenario_motion", "rigid_body_projection", "beam_projection", "paper_chain",
+    "project", "project_record", "RealtimeProjector", "self_calibrate",
+    "calibrate_frames", "calibrate_record")
+
+
+def _motion_or_projection_uses(tree: ast.AST) -> list[str]:
+    """Imports of :data:`MOTION_AND_PROJECTION_MODULES` and imports, calls or attribute
+    uses of :data:`MOTION_AND_PROJECTION_NAMES` in a module's AST."""
+    mods, names = MOTION_AND_PROJECTION_MODULES, set(MOTION_AND_PROJECTION_NAMES)
+
+    def banned_module(m: str) -> bool:
+        return any(m == b or m.startswith(b + ".") for b in mods)
+
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found += [f"import {a.name}" for a in node.names if banned_module(a.name)]
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            if banned_module(node.module):
+                found.append(f"from {node.module} import ...")
+            found += [f"from {node.module} import {a.name}" for a in node.names
+                      if a.name in names or banned_module(f"{node.module}.{a.name}")]
+        elif isinstance(node, ast.Call):
+            f = node.func
+            name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(
+                f, ast.Attribute) else None
+            if name in names:
+                found.append(f"call {name}(...) line {node.lineno}")
+        elif isinstance(node, ast.Attribute) and node.attr in names:
+            found.append(f"attribute .{node.attr} line {node.lineno}")
+    return found
+
+
+def test_checker_finds_motion_and_projection_uses():
+    """The checker itself: imports, calls and module attributes are found."""
+    src = ("from compensation import integrate_imu\nimport compensation.exact as ex\n"
+           "from raysim.pipeline import chains\nchains.project(1)\n"
+           "from raysim.pipeline.compensate import compensate\ncompensate(1)\n")
+    found = _motion_or_projection_uses(ast.parse(src))
+    assert "from compensation import integrate_imu" in found
+    assert "import compensation.exact" in found
+    assert "from raysim.pipeline import chains" in found
+    assert any(f.startswith("call project(") for f in found)
+    assert not any("compensate" in f for f in found)
+
+
+def test_cli_holds_no_strapdown_or_projection():
+    """Every module under raysim/cli/ parses, calls stages and prints: none imports or calls
+    a strapdown, self-calibration or projection function (the stages do)."""
+    bad = {}
+    for path in sorted((ROOT / "raysim" / "cli").rglob("*.py")):
+        found = _motion_or_projection_uses(ast.parse(path.read_text(), str(path)))
+        if found:
+            bad[str(path.relative_to(ROOT))] = found
+    assert bad == {}

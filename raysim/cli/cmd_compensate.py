@@ -2,75 +2,29 @@
 
 The input is a raw TI DCA1000 capture (``adc_data.bin``) with its radar
 configuration (``--radar-config``: an mmWave SDK ``.cfg`` or an mmWave Studio
-``.json`` export, :mod:`raysim.io.mmwave_config`; it sets the waveform, the
-TDM slot order of the virtual array and the binary layout; every frame, or
-``--frames LO:HI``), a frame store written by :mod:`raysim.io.storage` (a Zarr
-store directory, opened with :func:`raysim.io.storage.open_store`, or a NetCDF
-file ``.nc`` from :func:`raysim.io.storage.export_netcdf`; ``--frame`` or
-``--frames``) or an ``.npz`` file with these keys:
+``.json`` export; every frame, or ``--frames LO:HI``), a frame store written by
+:mod:`raysim.io.storage` (Zarr store or NetCDF ``.nc``; ``--frame`` or
+``--frames``) or an ``.npz`` cube (keys in :mod:`raysim.pipeline.compensate`).
+The IMU log (``--imu FILE`` or a second positional argument) is any format of
+:func:`raysim.io.flight_logs.read_imu_log`, or left out for the IMU log of the
+frame store. Output (``--out``): a labelled Zarr store, or for one frame an
+``.npz`` (:mod:`raysim.io.compensate_io`).
 
-=====================  =========================  =================================
-key                    shape                      meaning
-=====================  =========================  =================================
-``data``               ``[chirp, channel, sample]``  complex IF samples
-``chirp_times``        ``[chirp]``                chirp start times, radar clock [s]
-``element_positions``  ``[channel, 3]``           virtual positions p_tx + p_rx in A [m]
-``carrier_frequency``  scalar                     f_c [Hz]
-``bandwidth``          scalar                     B [Hz]
-``chirp_duration``     scalar                     T_c [s]
-``sample_rate``        scalar                     f_s [Hz] (complex sampling)
-``grid_shape``         ``[2]`` (optional)         (nx, ny), x major, y minor
-``lever_arm``          ``[3]`` (optional)         r_IR in B [m]
-``tx_slot``            ``[channel]`` (optional)   TDM slot of each channel
-``slot_interval``      scalar (optional)          ramp-to-ramp interval of slots [s]
-=====================  =========================  =================================
-
-TDM MIMO: the IMU log is integrated once to the start of every transmit slot
-of every selected frame, and each slot's channels are compensated with the
-pose of their own ramp (exact and paper chains).
-
-IMU log (``--imu FILE``, or a second positional argument), any format of
-:func:`raysim.io.flight_logs.read_imu_log`: the project's IMU CSV (units in
-the header, ``#`` comments; what :func:`raysim.io.write_imu_csv` writes), a
-PX4 ULog ``.ulg`` (``sensor_combined``), an ArduPilot DataFlash ``.bin``
-(``IMU``; needs ``raysim[ardupilot]``) or a ROS 2 bag (folder, ``.mcap`` or
-``.db3``; ``sensor_msgs/msg/Imu``, FLU turned into FRD). Times are on the IMU
-clock [s] (``--time-offset`` is IMU clock minus radar clock), angular rate and
-specific force in the body frame FRD. It may be left out when the frame store
-holds an IMU log (``imu_time``, ``imu_gyro``, ``imu_accel``).
-
-Output (``--out``): a labelled Zarr store (written aside, then moved into
-place; :func:`raysim.cli.compensate_io.write_compensated_store`) with
-``beams [frame, chirp, range, azimuth, elevation]`` (complex64),
-``doppler_power [frame, doppler, range, azimuth, elevation]`` (float32),
-``chirp_time [frame, chirp]`` and ``slot_time [frame, chirp, slot]`` [s], the
-coordinates ``range`` [m], ``azimuth``, ``elevation`` [deg], ``doppler``
-[m/s] and the attributes ``chain`` and ``warnings``; or, for one frame and a
-path ending in ``.npz``: ``beams [chirp, range, azimuth, elevation]``,
-``doppler_power [doppler, range, azimuth, elevation]``, ``chirp_times`` [s],
-``range_m``, ``azimuth_deg``, ``elevation_deg``, ``velocity_mps``, ``chain``
-and ``warnings``. The warnings are the result's assumption warnings (see
-:mod:`compensation.guards`), also printed on stderr as
-``warning: <chain>: <text>``.
-
-Chains (``--chain``, names of :mod:`raysim.vocabulary`, turned into beams by
-:func:`raysim.pipeline.chains.project`): ``exact`` (rigid-body projection,
-default), ``paper`` (the published chain; ``paper:published`` with the
-paper's rotation phase ``v_r(nT) nT``) and ``none`` (conventional beamformer,
-no IMU log needed).
+This module parses the options, calls the compensate stage
+(:func:`raysim.pipeline.compensate.compensate`: reading, motion estimate or
+self-calibration, the chain of every frame, writing) and prints its warnings
+on stderr as ``warning: <chain>: <text>``, the self-calibration's estimates
+and the output written.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import sys
 
 import numpy as np
 
 from raysim.cli.options import chains_option, span_grid, span_option
-from raysim.io.files import atomic_write
 from raysim.vocabulary import CHAINS, ChainSpec, parse_chain
 
 EPILOG = """\
@@ -98,9 +52,6 @@ exit status: 0 written, 2 invalid input (the message names the flag or file
 and the value).
 """
 
-SPEED_OF_LIGHT = 299_792_458.0
-
-
 def _floats(text: str, n: int, name: str) -> np.ndarray:
     try:
         vals = np.array([float(v) for v in text.split(",")])
@@ -109,7 +60,6 @@ def _floats(text: str, n: int, name: str) -> np.ndarray:
     if vals.size != n or not np.all(np.isfinite(vals)):
         raise ValueError(f"{name} must be {n} comma-separated finite numbers, got {text!r}")
     return vals
-
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter,
@@ -141,7 +91,7 @@ def register(subparsers) -> None:
         "(or the paper's chain) on the selected range cells and angle grid.",
         epilog=EPILOG, formatter_class=_HelpFormatter)
     p.add_argument("cube", help="raysim Zarr store, NetCDF file (.nc), .npz (keys: see "
-                   "`raysim compensate --help`) or DCA1000 capture (.bin, with --radar-config)")
+                   "raysim.pipeline.compensate) or DCA1000 capture (.bin, with --radar-config)")
     p.add_argument("imu_positional", nargs="?", default=None, metavar="imu",
                    help="IMU log, same as --imu")
     p.add_argument("--imu", default=None, metavar="FILE",
@@ -194,37 +144,10 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _is_store(path: str) -> bool:
-    from raysim.io.zarr_store import store_exists
-
-    return store_exists(path)
-
-
-def _is_compensated_store(path: str) -> bool:
-    import zarr
-
-    from raysim.cli.compensate_io import COMPENSATED_FORMAT_ATTR
-
-    return COMPENSATED_FORMAT_ATTR in zarr.open_group(path, mode="r").attrs
-
-
-def _load_imu(path: str) -> np.ndarray:
-    """IMU log of any supported format as a table ``[sample, 7]``: time, gyro, accel (SI, FRD)."""
-    from raysim.io.flight_logs import read_imu_log
-
-    if not os.path.exists(path):
-        raise ValueError(f"IMU file {path!r} does not exist")
-    try:
-        s = read_imu_log(path)
-    except ImportError as exc:   # an optional reader (pymavlink for .bin) is missing
-        raise ValueError(f"IMU file {path!r}: {exc}") from None
-    return np.column_stack([s.time, s.gyro, s.accel])
-
-
-def _time_offset(text: str) -> float | None:
-    """``--time-offset`` value [s]; ``None`` for ``auto``."""
+def _time_offset(text: str) -> float | str:
+    """``--time-offset`` value [s]; ``"auto"`` as is."""
     if text.strip() == "auto":
-        return None
+        return "auto"
     try:
         value = float(text)
     except ValueError:
@@ -233,32 +156,6 @@ def _time_offset(text: str) -> float | None:
     if not np.isfinite(value):
         raise ValueError(f"--time-offset must be finite, got {text!r}")
     return value
-
-
-def _self_calibrate(args, inp, imu: np.ndarray, offset: float | None, lam: float,
-                    r_axis: np.ndarray, gates: np.ndarray, options: dict):
-    """Per-frame motions with the clock offset and/or velocity estimated from the radar.
-
-    Every selected frame takes part (the gyro bias, a drift over frames, needs
-    two or more); stationary scatterers are detected on the selected range
-    cells of the first frame. Returns ``(motions, report)``.
-    """
-    from compensation.calibration import self_calibrate
-    from raysim.processing.maps import range_compress
-
-    estimate = (("time_offset",) if offset is None else ()) + (
-        ("velocity",) if args.velocity == "radar" else ())
-    if len(inp.frames) > 1:
-        estimate += ("gyro_bias",)
-    rcs = [range_compress(inp.read(k))[..., : r_axis.size] for k in range(len(inp.frames))]
-    times = [inp.slot_times[k].ravel() for k in range(len(inp.frames))]
-    if inp.num_slots > 1:
-        options = dict(options, channel_slot=inp.tx_slot)
-    res = self_calibrate(rcs, times, inp.element_positions, imu[:, 0], imu[:, 1:4],
-                         imu[:, 4:7], wavelength=lam, range_axis=r_axis, estimate=estimate,
-                         time_offset=0.0 if offset is None else offset,
-                         grid_shape=inp.grid_shape, detect_gates=gates, **options)
-    return list(res.motions), res.report()
 
 
 def _calibration_text(report: dict) -> str:
@@ -277,142 +174,37 @@ def _calibration_text(report: dict) -> str:
 
 def run(args) -> int:
     """Execute ``raysim compensate``; returns the exit code."""
-    from dataclasses import replace
-
-    from scipy.spatial.transform import Rotation
-
-    from compensation import integrate_imu
-    from compensation.geometry import direction
-    from raysim.cli.compensate_io import load_input, write_compensated_store
-    from raysim.cli.options import check_output
-    from raysim.pipeline.chains import project
-    from raysim.processing.maps import range_compress
+    from raysim.pipeline.compensate import compensate
 
     spec = _chain(args.chain)
-    as_npz = args.out.endswith(".npz")
-    check_output(args.out, "file" if as_npz else "dir", "--out")
-    if not as_npz and os.path.isdir(args.out):
-        if not _is_store(args.out):
-            raise ValueError(f"--out: cannot write {args.out!r}: it is an existing directory "
-                             f"that is not a Zarr store (expected a new store path, or .npz "
-                             f"for one frame)")
-        if not _is_compensated_store(args.out):
-            raise ValueError(f"--out: cannot write {args.out!r}: it is an existing Zarr store "
-                             f"not written by raysim compensate (a frame store?); expected a "
-                             f"new path or an earlier compensated store to replace")
-    inp = load_input(args.cube, radar_config=args.radar_config, frames=args.frames,
-                     frame=args.frame, layout=args.layout, capture_t0=args.capture_t0)
-    if as_npz and len(inp.frames) != 1:
-        raise ValueError(f"--out {args.out!r}: an .npz holds one frame, the selection has "
-                         f"{len(inp.frames)}; give a store path (no .npz) or --frames K")
-    cfg = inp.config
-    lam = cfg.center_wavelength
-    u = None
-    if spec.name == "paper":
-        if args.direction_deg is None:
-            raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target "
-                             f"direction)")
-        u = direction(*np.deg2rad(_floats(args.direction_deg, 2, "--direction-deg")))
-    slots = inp.num_slots
-    n_samples = inp.read(0).shape[-1]
-    r_axis = cfg.bin_ranges(n_samples if cfg.complex_sampling else n_samples // 2)
-    r_lo, r_hi = span_option(args.range_m, "--range-m", False)
-    gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
-    if gates.size == 0:
-        raise ValueError(f"--range-m {args.range_m} selects no range cell; cells span "
-                         f"0 .. {r_axis[-1]:.2f} m")
-    motions = calibration = None
-    if spec.compensated:
-        if args.imu is not None and args.imu_positional is not None:
-            raise ValueError(f"give the IMU log once: --imu {args.imu!r} and the positional "
-                             f"{args.imu_positional!r} were both given")
-        imu_path = args.imu if args.imu is not None else args.imu_positional
-        if imu_path is not None:
-            imu = _load_imu(imu_path)
-        elif inp.imu is not None:
-            imu = inp.imu
-        else:
-            raise ValueError(f"{args.cube!r} holds no IMU log; give an IMU log with --imu FILE")
-        lever = (_floats(args.lever_arm, 3, "--lever-arm") if args.lever_arm is not None
-                 else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
-        if args.initial_attitude_deg.strip() == "level":
-            attitude = "level"
-        else:
-            ypr = np.deg2rad(_floats(args.initial_attitude_deg, 3, "--initial-attitude-deg"))
-            attitude = Rotation.from_euler("ZYX", ypr).as_matrix()
-        kwargs = {}
-        if args.velocity == "given":
-            if args.initial_velocity is None:
-                raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
-            kwargs["initial_velocity"] = _floats(args.initial_velocity, 3, "--initial-velocity")
-        offset = _time_offset(args.time_offset)
-        kwargs.update(lever_arm=lever, initial_attitude=attitude, imu_grade=args.imu_grade,
-                      velocity="hover" if args.velocity == "radar" else args.velocity)
-        if offset is None or args.velocity == "radar":
-            motions, calibration = _self_calibrate(args, inp, imu, offset, lam, r_axis, gates,
-                                                   kwargs)
-        else:
-            # one integration over every slot of every selected frame, chirp major, slot minor
-            motion = integrate_imu(imu[:, 0], imu[:, 1:4], imu[:, 4:7], inp.slot_times.ravel(),
-                                   time_offset=offset, **kwargs)
-            per_frame = inp.slot_times[0].size
-            motions = [motion.select(slice(k * per_frame, (k + 1) * per_frame))
-                       for k in range(len(inp.frames))]
-    az = np.deg2rad(span_grid(args.az_deg, "--az-deg"))
-    el = np.deg2rad(span_grid(args.el_deg, "--el-deg"))
-    results, found = [], []
-    frames = range(len(inp.frames))
-    if len(inp.frames) > 1 and not args.no_progress:
-        from tqdm import tqdm
-
-        frames = tqdm(frames, unit="frame", desc="compensate", file=sys.stderr)
-    for k in frames:
-        mot = None if motions is None else motions[k]
-        # TDM: every slot's channels with the pose of their own ramp
-        channel_slot = inp.tx_slot if mot is not None and slots > 1 else None
-        rc = range_compress(inp.read(k))[..., : r_axis.size]
-        beams = project(spec, rc, inp.element_positions, wavelength=lam, range_axis=r_axis,
-                        azimuth=az, elevation=el, motion=mot, direction=u,
-                        grid_shape=inp.grid_shape, range_gates=gates, channel_slot=channel_slot)
-        if mot is None:   # the conventional beamformer carries chirp indices, not times
-            beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
-        found.extend(w for w in beams.warnings if w not in found)
-        results.append(beams)
-    if as_npz:
-        _write_npz(args.out, results[0], spec.key, az, el, calibration)
-    else:
-        attrs = {"velocity": args.velocity}
-        if calibration is not None:
-            attrs["self_calibration"] = json.dumps(calibration)
-        if spec.compensated:   # the offset applied: given, or estimated ('auto')
-            attrs["time_offset_s"] = float(calibration["time_offset_s"] if offset is None
-                                           else offset)
-        write_compensated_store(args.out, inp, results, chain=spec.key, warnings=found,
-                                azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
-                                extra_attrs=attrs)
-    for w in found:
-        print(f"warning: {spec.key}: {w}", file=sys.stderr)
-    if calibration is not None:
-        print(_calibration_text(calibration))
-    shape = (len(results),) + results[0].data.shape
-    print(f"wrote {args.out}: beams {shape} [frame, chirp, range, azimuth, elevation], "
-          f"chain {spec.key}" + (f", {len(found)} warning(s)" if found else ""))
+    if args.imu is not None and args.imu_positional is not None:
+        raise ValueError(f"give the IMU log once: --imu {args.imu!r} and the positional "
+                         f"{args.imu_positional!r} were both given")
+    if spec.name == "paper" and args.direction_deg is None:
+        raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target direction)")
+    attitude = args.initial_attitude_deg.strip()
+    result = compensate(
+        args.cube, args.imu if args.imu is not None else args.imu_positional, out=args.out,
+        chain=spec, frames=args.frames, frame=args.frame, radar_config=args.radar_config,
+        layout=args.layout, capture_t0=args.capture_t0,
+        range_m=span_option(args.range_m, "--range-m", False),
+        azimuth_deg=span_grid(args.az_deg, "--az-deg"),
+        elevation_deg=span_grid(args.el_deg, "--el-deg"),
+        lever_arm=None if args.lever_arm is None else _floats(args.lever_arm, 3, "--lever-arm"),
+        time_offset=_time_offset(args.time_offset), velocity=args.velocity,
+        initial_velocity=None if args.initial_velocity is None
+        else _floats(args.initial_velocity, 3, "--initial-velocity"),
+        initial_attitude_deg="level" if attitude == "level"
+        else _floats(attitude, 3, "--initial-attitude-deg"),
+        imu_grade=args.imu_grade,
+        direction_deg=None if args.direction_deg is None
+        else _floats(args.direction_deg, 2, "--direction-deg"),
+        progress=not args.no_progress)
+    for w in result.warnings:
+        print(f"warning: {result.chain}: {w}", file=sys.stderr)
+    if result.calibration is not None:
+        print(_calibration_text(result.calibration))
+    print(f"wrote {args.out}: beams {result.shape} [frame, chirp, range, azimuth, elevation], "
+          f"chain {result.chain}" + (f", {len(result.warnings)} warning(s)"
+                                     if result.warnings else ""))
     return 0
-
-
-def _write_npz(path: str, beams, chain: str, az, el, calibration: dict | None) -> None:
-    """The single-frame ``.npz`` output (keys in the module docstring)."""
-    doppler = beams.doppler()
-
-    def write(tmp):
-        with open(tmp, "wb") as fh:  # a file object: np.savez would append ".npz" to a name
-            np.savez(fh, beams=beams.data,
-                     doppler_power=(np.abs(doppler) ** 2).astype(np.float32),
-                     chirp_times=beams.chirp_time, range_m=beams.range,
-                     azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
-                     velocity_mps=beams.velocity(), chain=np.array(chain),
-                     warnings=np.array(beams.warnings, dtype=str),
-                     **({} if calibration is None else
-                        {"self_calibration": np.array(json.dumps(calibration))}))
-
-    atomic_write(path, write)

@@ -15,6 +15,10 @@
 * :mod:`~raysim.pipeline.chains`: ``none`` / ``paper`` / ``exact`` beams.
 * :mod:`~raysim.pipeline.analysis`: maps and metrics through one chain.
 * :mod:`~raysim.pipeline.run`: the stages composed (``render``, ``evaluate``).
+* :mod:`~raysim.pipeline.self_calibration`: velocity, clock offset and gyro
+  bias estimated from the frames.
+* :mod:`~raysim.pipeline.compensate`: stored cubes and captures plus an IMU
+  log -> compensated beams (behind ``raysim compensate``).
 
 Every command and study is a composition of these stages.
 """

@@ -10,7 +10,8 @@ import numpy as np
 
 from raysim.io.scenario import Scenario
 
-__all__ = ["VELOCITY_MODES", "estimate_motion", "scenario_motion", "split_frames"]
+__all__ = ["VELOCITY_MODES", "estimate_motion", "estimate_record", "scenario_motion",
+           "split_frames"]
 
 #: An interval above this multiple of the median chirp interval starts a new frame.
 FRAME_GAP_FACTOR = 1.5
@@ -33,6 +34,17 @@ def split_frames(chirp_times) -> list[np.ndarray]:
 #: Initial-velocity handling: ``given`` takes the truth (the flight controller's
 #: state), ``hover`` assumes the velocity averages to zero over the IMU record.
 VELOCITY_MODES = ("given", "hover")
+
+
+def _truth_initial_state(options: dict, trajectory, t_ref: float, velocity: str) -> None:
+    """Fill ``options`` with the truth state of ``trajectory`` at ``t_ref`` [s] where unset.
+
+    The attitude and position always; the velocity with ``velocity="given"``.
+    """
+    if velocity == "given":
+        options.setdefault("initial_velocity", trajectory.velocity([t_ref])[0])
+    options.setdefault("initial_attitude", trajectory.attitude([t_ref]).as_matrix()[0])
+    options.setdefault("initial_position", trajectory.position([t_ref])[0])
 
 
 def estimate_motion(imu_time, gyro, accel, chirp_times, *, lever_arm, trajectory,
@@ -75,15 +87,72 @@ def estimate_motion(imu_time, gyro, accel, chirp_times, *, lever_arm, trajectory
     t = np.asarray(chirp_times, dtype=float).ravel()
     t_ref = float(t[0])
     frames = split_frames(t)
-    if velocity == "given":
-        options.setdefault("initial_velocity", trajectory.velocity([t_ref])[0])
-    if "initial_attitude" not in options:
-        options["initial_attitude"] = trajectory.attitude([t_ref]).as_matrix()[0]
-    if "initial_position" not in options:
-        options["initial_position"] = trajectory.position([t_ref])[0]
+    _truth_initial_state(options, trajectory, t_ref, velocity)
     return integrate_imu(np.asarray(imu_time), np.asarray(gyro), np.asarray(accel), frames,
                          lever_arm=lever_arm, time_offset=time_offset, reference_time=t_ref,
                          velocity=velocity, **options)
+
+
+def estimate_record(imu_time, gyro, accel, frame_times, *, lever_arm, trajectory=None,
+                    time_offset: float = 0.0, velocity: str = "given", **options) -> list:
+    """One strapdown integration over every frame of a record, split per frame.
+
+    The attitude and velocity carry over from frame to frame (one integration
+    from the first chirp of the record, :func:`compensation.integrate_imu`);
+    the motion is split with :func:`compensation.multiframe.split_motion`.
+
+    Parameters
+    ----------
+    imu_time : ndarray, shape ``[sample]``
+        IMU time stamps [s, IMU clock].
+    gyro, accel : ndarray, shape ``[sample, 3]``
+        Angular rate [rad/s] and specific force [m/s^2] in B.
+    frame_times : sequence of array_like, each shape ``[time]``
+        Query times of each frame, in order [s, radar clock]: the chirp start
+        times, or under TDM the start of every transmit slot's ramp (chirp
+        major, slot minor). Increasing; a frame need not be uniform (TDM loops
+        may have idle time between them).
+    lever_arm : array_like, shape ``[3]``
+        Radar phase centre in B [m].
+    trajectory : raysim.platform.motion.Trajectory, optional
+        Truth of a simulation: the initial attitude and position (and with
+        ``velocity="given"`` the velocity) at the first time come from it, as
+        in :func:`estimate_motion`, unless ``options`` give them. Without it
+        (recorded data) ``options`` give the initial state
+        (:func:`compensation.integrate_imu` defaults: level attitude, hover
+        point).
+    time_offset : float
+        IMU clock minus radar clock [s].
+    velocity : {"given", "hover"}
+        :data:`VELOCITY_MODES`; ``"given"`` without a trajectory needs
+        ``initial_velocity`` in ``options``.
+    **options
+        Passed to :func:`compensation.integrate_imu` (``initial_attitude``,
+        ``initial_velocity``, ``hover_window``, ``imu_grade`` ...).
+
+    Returns
+    -------
+    list of compensation.PlatformMotion
+        One per frame, ``frame_times[k].size`` poses each.
+    """
+    from compensation import integrate_imu
+    from compensation.multiframe import split_motion
+
+    if velocity not in VELOCITY_MODES:
+        raise ValueError(f"velocity: got {velocity!r}, expected one of {list(VELOCITY_MODES)}")
+    frames = [np.asarray(f, dtype=float).ravel() for f in frame_times]
+    if not frames or any(f.size < 1 for f in frames):
+        raise ValueError(f"frame_times must hold one or more frames of at least one time, "
+                         f"got sizes {[f.size for f in frames]}")
+    t = np.concatenate(frames)
+    t_ref = float(t[0])
+    if trajectory is not None:
+        _truth_initial_state(options, trajectory, t_ref, velocity)
+    # query times: one integration over the record (the frames are increasing, any spacing)
+    motion = integrate_imu(np.asarray(imu_time), np.asarray(gyro), np.asarray(accel), t,
+                           lever_arm=lever_arm, time_offset=time_offset, reference_time=t_ref,
+                           velocity=velocity, **options)
+    return split_motion(motion, [f.size for f in frames])
 
 
 def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory=None):

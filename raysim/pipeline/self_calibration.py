@@ -3,8 +3,10 @@
 The unknowns an IMU cannot give (the platform velocity, the IMU-radar clock
 offset, the gyro bias) are estimated from the radar frames themselves by
 :func:`compensation.calibration.self_calibrate`; this module feeds it the
-frames of a run (range compression, array geometry, TDM slot times) and turns
-the result into the motion the chains use and a report with units.
+frames of a run (:func:`calibrate_frames`: range compression, array geometry,
+TDM slot times) or of a stored record (:func:`calibrate_record`: range-compressed
+frames and their slot times, as the compensate stage reads them) and turns the
+result into the motion the chains use and a report with units.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from raysim.platform.kinematics import slot_times
 from raysim.processing.maps import range_compress
 from raysim.synthesis.frame import RadarFrame
 
-__all__ = ["SelfCalibration", "calibrate_frames"]
+__all__ = ["SelfCalibration", "calibrate_frames", "calibrate_record"]
 
 
 @dataclass(frozen=True)
@@ -47,10 +49,81 @@ def _slot_times(frame: RadarFrame) -> np.ndarray:
                       frame.config.slot_interval).ravel()
 
 
+def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, imu_time,
+                     gyro, accel, *, wavelength: float, range_axis, time_offset: float = 0.0,
+                     estimate=None, trajectory=None, **options) -> SelfCalibration:
+    """Estimate velocity, clock offset and gyro bias of a record of range-compressed frames.
+
+    Parameters
+    ----------
+    rcs : sequence of ndarray, each shape ``[chirp, channel, range]``
+        Range-compressed frames, in time order.
+    frame_times : sequence of array_like, each shape ``[chirp * slot]``
+        Start time of every chirp (TDM: every transmit slot's ramp, chirp major)
+        of each frame [s, radar clock], uniform within a frame.
+    element_positions : array_like, shape ``[channel, 3]``
+        Virtual positions in A [m].
+    imu_time : array_like, shape ``[sample]``
+        IMU time stamps [s, IMU clock].
+    gyro, accel : array_like, shape ``[sample, 3]``
+        Angular rate [rad/s] and specific force [m/s^2] in B.
+    wavelength : float
+        Mid-chirp wavelength [m].
+    range_axis : array_like, shape ``[range]``
+        Range of every bin of ``rcs`` [m].
+    time_offset : float
+        First guess of IMU clock minus radar clock [s].
+    estimate : sequence of str, optional
+        Subset of :data:`compensation.calibration.ESTIMATES` (default all;
+        the gyro bias needs two frames or more).
+    trajectory : raysim.platform.motion.Trajectory, optional
+        Truth of a simulation: the initial attitude and position at the first
+        time come from it unless ``options`` give them. The velocity never does.
+    **options
+        For :func:`compensation.calibration.self_calibrate` (``lever_arm``,
+        ``channel_slot``, ``grid_shape``, ``detect_gates``, ``velocity``,
+        ``initial_attitude``, ``imu_grade``, ``hover_window`` ...).
+
+    Returns
+    -------
+    SelfCalibration
+    """
+    from compensation import PlatformMotion
+    from compensation.calibration import ESTIMATES, self_calibrate
+
+    if len(rcs) < 1 or len(rcs) != len(frame_times):
+        raise ValueError(f"rcs holds {len(rcs)} frames and frame_times {len(frame_times)}; "
+                         f"expected the same number, at least one")
+    times = [np.asarray(t, dtype=float).ravel() for t in frame_times]
+    t0 = float(times[0][0])
+    if trajectory is not None:
+        options.setdefault("initial_attitude", trajectory.attitude([t0]).as_matrix()[0])
+        options.setdefault("initial_position", trajectory.position([t0])[0])
+    options.setdefault("velocity", "hover")
+    if estimate is None:
+        estimate = ESTIMATES if len(rcs) > 1 else tuple(e for e in ESTIMATES
+                                                        if e != "gyro_bias")
+    res = self_calibrate(list(rcs), times, element_positions, imu_time, gyro, accel,
+                         wavelength=wavelength, range_axis=range_axis,
+                         estimate=tuple(estimate), time_offset=time_offset,
+                         reference_time=t0, **options)
+    ms = res.motions
+    motion = PlatformMotion(np.concatenate([m.time for m in ms]),
+                            np.concatenate([m.attitude for m in ms]),
+                            np.concatenate([m.position for m in ms]),
+                            np.concatenate([m.velocity for m in ms]),
+                            np.concatenate([m.angular_rate for m in ms]), ms[0].lever_arm,
+                            ms[0].warnings)
+    return SelfCalibration(motion, res, res.report())
+
+
 def calibrate_frames(frames: Sequence[RadarFrame], imu_time, gyro, accel, *,
                      time_offset: float = 0.0, estimate=None, trajectory=None,
                      **options) -> SelfCalibration:
     """Estimate velocity, clock offset and gyro bias from frames and an IMU log.
+
+    :func:`calibrate_record` of the frames' range-compressed cubes and TDM
+    slot times.
 
     Parameters
     ----------
@@ -79,38 +152,17 @@ def calibrate_frames(frames: Sequence[RadarFrame], imu_time, gyro, accel, *,
     -------
     SelfCalibration
     """
-    from compensation.calibration import ESTIMATES, self_calibrate
-
     if len(frames) < 1:
         raise ValueError("frames must hold at least one frame")
     first = frames[0]
     cfg, arr = first.config, first.array
-    times = [_slot_times(fr) for fr in frames]
-    t0 = float(times[0][0])
-    if trajectory is not None:
-        options.setdefault("initial_attitude", trajectory.attitude([t0]).as_matrix()[0])
-        options.setdefault("initial_position", trajectory.position([t0])[0])
-    options.setdefault("velocity", "hover")
     options.setdefault("lever_arm", np.asarray(first.lever_arm, dtype=float))
     if arr.num_slots > 1:
         options.setdefault("channel_slot", arr.tx_slot)
     if arr.grid_shape is not None and arr.num_slots == 1:
         options.setdefault("grid_shape", arr.grid_shape)
-    if estimate is None:
-        estimate = ESTIMATES if len(frames) > 1 else tuple(e for e in ESTIMATES
-                                                          if e != "gyro_bias")
     rcs = [range_compress(np.asarray(fr.data)) for fr in frames]
-    res = self_calibrate(rcs, times, arr.virtual_positions, imu_time, gyro, accel,
-                         wavelength=cfg.center_wavelength, range_axis=cfg.range_axis(),
-                         estimate=tuple(estimate), time_offset=time_offset,
-                         reference_time=t0, **options)
-    from compensation import PlatformMotion
-
-    ms = res.motions
-    motion = PlatformMotion(np.concatenate([m.time for m in ms]),
-                            np.concatenate([m.attitude for m in ms]),
-                            np.concatenate([m.position for m in ms]),
-                            np.concatenate([m.velocity for m in ms]),
-                            np.concatenate([m.angular_rate for m in ms]), ms[0].lever_arm,
-                            ms[0].warnings)
-    return SelfCalibration(motion, res, res.report())
+    return calibrate_record(rcs, [_slot_times(fr) for fr in frames], arr.virtual_positions,
+                            imu_time, gyro, accel, wavelength=cfg.center_wavelength,
+                            range_axis=cfg.range_axis(), time_offset=time_offset,
+                            estimate=estimate, trajectory=trajectory, **options)

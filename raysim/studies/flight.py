@@ -10,10 +10,13 @@ same trajectory (default ``consumer_mems``, with a clock offset) and writes
   (:mod:`raysim.io.ti_dca1000`, 2 LVDS lanes, 16 bit),
 * ``radar.cfg``: its mmWave SDK configuration (:mod:`raysim.io.mmwave_config`),
 
-so that one ``raysim compensate`` command (:attr:`FlightFiles.command`) gives
-the compensated store. Clocks: the radar clock is the truth time (the first
-ramp at ``start`` s, ``--capture-t0``), the IMU clock reads truth time plus
-``time_offset`` (``--time-offset``); the IMU record starts at truth time 0.
+so that one ``raysim compensate`` command (:meth:`FlightFiles.command`,
+:meth:`FlightFiles.calibrating_command`), or one call of the compensate stage
+(:func:`raysim.pipeline.compensate.compensate` with
+:meth:`FlightFiles.calibrating_options`), gives the compensated store.
+Clocks: the radar clock is the truth time (the first ramp at ``start`` s,
+``--capture-t0``), the IMU clock reads truth time plus ``time_offset``
+(``--time-offset``); the IMU record starts at truth time 0.
 """
 
 from __future__ import annotations
@@ -104,12 +107,13 @@ class FlightFiles:
                 *extra]
 
 
-    def calibrating_command(self, out: str | Path, *extra: str,
-                            attitude: str = "flight_controller") -> list[str]:
-        """``raysim compensate`` arguments that compensate every frame with only what a user
-        has: the IMU grade, the lever arm and the initial attitude; the initial velocity and
-        the clock offset are estimated from the radar (``--velocity radar --time-offset
-        auto``, :func:`compensation.calibration.self_calibrate`).
+    def calibrating_options(self, attitude: str = "flight_controller") -> dict:
+        """Keyword arguments of :func:`raysim.pipeline.compensate.compensate` that compensate
+        every frame with only what a user has: the IMU grade, the lever arm and the initial
+        attitude; the initial velocity and the clock offset are estimated from the radar
+        (``velocity="radar"``, ``time_offset="auto"``,
+        :func:`compensation.calibration.self_calibrate`). The output, range cells and
+        angle grid are the caller's.
 
         ``attitude`` ``"flight_controller"``: the attitude at the first ramp as the flight
         controller's estimate (PX4 logs it as ``vehicle_attitude``); here its value is the
@@ -118,17 +122,30 @@ class FlightFiles:
         accelerometer bias of 20 mg tilts it by about 1 deg).
         """
         if attitude == "flight_controller":
-            att = ",".join(repr(float(x)) for x in self.initial_attitude_deg[0])
+            att = tuple(float(x) for x in self.initial_attitude_deg[0])
         elif attitude == "level":
             att = "level"
         else:
             raise ValueError(f"attitude: got {attitude!r}, expected 'flight_controller' or "
                              f"'level'")
-        return ["compensate", str(self.capture), "--radar-config", str(self.radar_config),
-                "--imu", str(self.imu_log), "--capture-t0", repr(self.start),
-                "--imu-grade", self.imu, "--velocity", "radar", "--time-offset", "auto",
-                "--initial-attitude-deg", att, "--lever-arm",
-                ",".join(repr(float(x)) for x in self.lever_arm), "--out", str(out), *extra]
+        return dict(source=self.capture, imu=self.imu_log, radar_config=self.radar_config,
+                    capture_t0=float(self.start), imu_grade=self.imu, velocity="radar",
+                    time_offset="auto", initial_attitude_deg=att,
+                    lever_arm=tuple(float(x) for x in self.lever_arm))
+
+    def calibrating_command(self, out: str | Path, *extra: str,
+                            attitude: str = "flight_controller") -> list[str]:
+        """``raysim compensate`` arguments (without ``raysim``) of :meth:`calibrating_options`
+        with the output ``out`` and the ``extra`` arguments."""
+        o = self.calibrating_options(attitude)
+        att = o["initial_attitude_deg"]
+        return ["compensate", str(o["source"]), "--radar-config", str(o["radar_config"]),
+                "--imu", str(o["imu"]), "--capture-t0", repr(o["capture_t0"]),
+                "--imu-grade", o["imu_grade"], "--velocity", o["velocity"], "--time-offset",
+                o["time_offset"], "--initial-attitude-deg",
+                att if isinstance(att, str) else ",".join(repr(x) for x in att),
+                "--lever-arm", ",".join(repr(x) for x in o["lever_arm"]), "--out", str(out),
+                *extra]
 
 
 def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_mems",
@@ -253,23 +270,28 @@ def measure_store(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
     return np.array(out)
 
 
+def _grid(lo: float, hi: float, step: float) -> np.ndarray:
+    """``lo, lo + step, ...`` up to ``hi`` included [deg] (the ``LO:HI:STEP`` of the CLI)."""
+    return lo + step * np.arange(int(np.floor((hi - lo) / step + 1e-9)) + 1)
+
+
 def calibrated_flight_table(folder: str | Path, seeds=range(4), *, frames: int = 4,
                             attitude: str = "flight_controller", **flight) -> list[dict]:
-    """Write a flight per seed, compensate it with one self-calibrating ``raysim compensate``
-    (:meth:`FlightFiles.calibrating_command`) and measure every frame.
+    """Write a flight per seed, compensate it with one self-calibrating compensate stage
+    (:func:`raysim.pipeline.compensate.compensate` with
+    :meth:`FlightFiles.calibrating_options`, what ``raysim compensate``
+    :meth:`FlightFiles.calibrating_command` runs) and measure every frame.
 
     Returns
     -------
     list of dict
         Per seed: ``seed``, worst ``angle_deg``, ``pseudo_velocity_bin`` (absolute),
         ``leakage_db`` over the frames, ``offset_error_ms`` (estimated minus true),
-        ``cpu_s`` of the compensate command (``time.process_time``).
+        ``cpu_s`` of the compensate stage (``time.process_time``).
     """
-    import json
     import time
 
-    from raysim.cli import main
-    from raysim.io.zarr_store import open_store
+    from raysim.pipeline.compensate import compensate
 
     rows = []
     for seed in seeds:
@@ -277,15 +299,12 @@ def calibrated_flight_table(folder: str | Path, seeds=range(4), *, frames: int =
         out = Path(folder) / f"seed{seed}" / "compensated.zarr"
         r, az, _ = f.target
         cpu = time.process_time()
-        code = main(f.calibrating_command(
-            out, "--range-m", f"{r - 0.5}:{r + 0.5}", "--az-deg",
-            f"{az - 6}:{az + 6}:{MEASURE_STEP_DEG}", "--el-deg", "0:0:1", "--no-progress",
-            attitude=attitude))
+        res = compensate(**f.calibrating_options(attitude), out=out, range_m=(r - 0.5, r + 0.5),
+                         azimuth_deg=_grid(az - 6, az + 6, MEASURE_STEP_DEG),
+                         elevation_deg=(0.0,))
         cpu = time.process_time() - cpu
-        if code != 0:
-            raise RuntimeError(f"raysim compensate exited with {code} on seed {seed}")
         m = measure_store(out, f)
-        cal = json.loads(open_store(out).attrs["self_calibration"])
+        cal = res.calibration
         rows.append(dict(seed=int(seed), angle_deg=float(m[:, 0].max()),
                          pseudo_velocity_bin=float(np.abs(m[:, 1]).max()),
                          leakage_db=float(m[:, 2].max()),

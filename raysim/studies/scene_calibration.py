@@ -7,12 +7,22 @@ several frames of the hovering radar from the frozen paths
 vibration), samples an IMU (default ``consumer_mems``) with a clock offset
 along the same motion, and compensates every frame with the exact chain twice:
 
-* with the pose from :func:`compensation.calibration.self_calibrate` (clock
+* with the pose from the self-calibration stage
+  (:func:`raysim.pipeline.self_calibration.calibrate_record`, which runs
+  :func:`compensation.calibration.self_calibrate`: clock
   offset, per-frame velocity and gyro bias estimated from the radar; initial
   velocity unknown: hover guess; the initial attitude is the flight
   controller's, here the simulated one at the first chirp),
 * with the true pose (an ideal IMU with the true initial state, as the scene
   report's ``exact`` chain).
+
+The ground clutter is the settings' (``settings.clutter``): the persistent
+clutter field (:class:`raysim.echoes.clutter.model.GroundClutter`, the scene
+report's default: seeded scatterers with calibrated sigma0, rough-surface
+mirror, target-ground ghosts) or Sionna's own diffuse paths (``"sionna"``), traced
+as :func:`raysim.echoes.rt.render.render_scene` and the scene report do. The
+report's car (``settings.mover_speed``) is refused: the self-calibration
+measures a stationary scene.
 
 The metric is the scene report's ridge leakage (RD power outside Doppler bins
 -1..+1 over the total, :func:`raysim.studies.scene_report.process.chain_result`).
@@ -21,7 +31,7 @@ The metric is the scene report's ridge leakage (RD power outside Doppler bins
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -48,6 +58,10 @@ class SceneCalibration:
         :meth:`compensation.calibration.CalibrationResult.report`.
     seconds : dict
         Wall time of ``trace``, ``synthesis``, ``calibration``, ``chains`` [s].
+    clutter : dict
+        The clutter field's report
+        (:meth:`raysim.echoes.clutter.model.GroundClutter.summary`: scatterer
+        count, build time); empty with Sionna's clutter.
     """
 
     leakage_estimated_db: np.ndarray
@@ -57,6 +71,7 @@ class SceneCalibration:
     scatterers: int
     report: dict
     seconds: dict
+    clutter: dict = field(default_factory=dict)
 
     @property
     def worst_gap_db(self) -> float:
@@ -75,8 +90,9 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     scene : str
         Bundled scene name (:data:`raysim.echoes.rt.scenes.SCENES`).
     settings : raysim.studies.scene_report.ReportSettings, optional
-        Radar, array, tracing and processing; default
-        :data:`raysim.studies.scene_report.QUICK`.
+        Radar, array, tracing, ground clutter (``clutter``, ``clutter_per_cell``)
+        and processing; default :data:`raysim.studies.scene_report.QUICK`
+        (the persistent clutter field). ``mover_speed`` must be None.
     frames : int
         Frames (two or more, so that the gyro bias is estimated).
     frame_period : float
@@ -93,22 +109,40 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     Returns
     -------
     SceneCalibration
+
+    Raises
+    ------
+    ValueError
+        An unknown scene, fewer than two frames, or settings with a mover.
     """
-    from compensation.calibration import self_calibrate
+    import functools
+
+    from raysim.echoes.clutter.field import FieldSettings
+    from raysim.echoes.clutter.model import GroundClutter
+    from raysim.echoes.clutter.tracks import synthesize_tracks
     from raysim.echoes.rt.reproject import synthesize_paths
     from raysim.echoes.rt.scenes import SCENES, load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
     from raysim.pipeline.estimate import estimate_motion
+    from raysim.pipeline.self_calibration import calibrate_record
     from raysim.pipeline.sensors import imu_record
     from raysim.platform.motion import stationary
     from raysim.processing.maps import range_compress
     from raysim.studies.scene_report import QUICK, chain_result, hover_trajectory
+    from raysim.synthesis.select import synthesize
 
     if scene not in SCENES:
         raise ValueError(f"unknown scene {scene!r}; expected one of {sorted(SCENES)}")
     if not (isinstance(frames, int) and frames >= 2):
         raise ValueError(f"frames must be an integer >= 2, got {frames!r}")
     settings = QUICK if settings is None else settings
+    if settings.mover_speed is not None:
+        raise ValueError(f"settings.mover_speed: got {settings.mover_speed!r}, expected None "
+                         f"(the self-calibration study measures a stationary scene; a car "
+                         f"is a moving scatterer)")
+    # the report's ground clutter: the persistent field, or Sionna's diffuse paths
+    model = None if settings.clutter == "sionna" else GroundClutter(FieldSettings(
+        scatterers_per_cell=settings.clutter_per_cell, seed=settings.trace_seed))
     config = replace(settings.radar(), num_frames=frames, frame_period=float(frame_period))
     array = settings.array()
     lever = np.asarray(settings.lever_arm, dtype=float)
@@ -120,14 +154,23 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     loaded = load_scene(scene, frequency=config.carrier_frequency)
     tracer = MonostaticTracer(max_depth=settings.max_depth,
                               samples_per_src=settings.samples_per_src, seed=settings.trace_seed)
+    tracks = []
+    if model is not None:
+        tracer = model.tracer(tracer)
     paths = tracer(loaded, config, stationary(), lever, time=float(times[0][0]))
+    if model is not None:
+        paths, tracks = model.paths(loaded, paths, config, array, stationary(), lever,
+                                    time=float(times[0][0]))
     seconds["trace"] = time.perf_counter() - t
     t = time.perf_counter()
     taper = settings.channel_taper().astype(np.float32)[None, :, None]
+    synth = functools.partial(synthesize, eps=settings.nufft_eps)
     rcs = []
     for f in range(frames):
         cube, _ = synthesize_paths(paths, config, array, traj, lever, frame=f, t0=t0,
                                    path_chunk=settings.path_chunk, eps=settings.nufft_eps)
+        synthesize_tracks(tracks, config, array, traj, lever, out=cube, frame=f, t0=t0,
+                          synthesizer=synth)
         rcs.append(range_compress(cube) * taper)
     seconds["synthesis"] = time.perf_counter() - t
     r_axis = config.bin_ranges(rcs[0].shape[-1])
@@ -137,11 +180,11 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     rec = imu_record(traj, imu, rate=settings.imu_rate, times=[t0, end], seed=imu_seed,
                      time_offset=time_offset, start=0.0).to_arrays()
     t = time.perf_counter()
-    res = self_calibrate(rcs, times, array.virtual_positions, *rec,
-                         wavelength=config.center_wavelength, range_axis=r_axis,
-                         time_offset=0.0, grid_shape=array.grid_shape, detect_gates=gates,
-                         lever_arm=lever, initial_attitude=traj.attitude([t0]).as_matrix()[0],
-                         velocity="hover", imu_grade=imu)
+    res = calibrate_record(rcs, times, array.virtual_positions, *rec,
+                           wavelength=config.center_wavelength, range_axis=r_axis,
+                           time_offset=0.0, grid_shape=array.grid_shape, detect_gates=gates,
+                           lever_arm=lever, initial_attitude=traj.attitude([t0]).as_matrix()[0],
+                           velocity="hover", imu_grade=imu).result
     seconds["calibration"] = time.perf_counter() - t
     ideal = imu_record(traj, "ideal", rate=settings.imu_rate, times=[t0, end], seed=imu_seed,
                        start=0.0).to_arrays()
@@ -157,7 +200,8 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
                                  settings, config, array).ridge_leakage_db)
     seconds["chains"] = time.perf_counter() - t
     return SceneCalibration(np.array(est), np.array(true), float(res.time_offset),
-                            float(time_offset), len(res.scatterers), res.report(), seconds)
+                            float(time_offset), len(res.scatterers), res.report(), seconds,
+                            model.summary() if model is not None else {})
 
 
 if __name__ == "__main__":     # python -m raysim.studies.scene_calibration [SEEDS]

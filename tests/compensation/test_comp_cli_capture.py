@@ -142,7 +142,7 @@ def test_capture_needs_its_configuration(tmp_path, capsys):
 
 @pytest.mark.parametrize("text", ["2:1", "a:b"])
 def test_frame_selection_is_checked(text):
-    from raysim.cli.compensate_io import frame_selection
+    from raysim.io.compensate_io import frame_selection
 
     with pytest.raises(ValueError, match="--frames"):
         frame_selection(text, 4)

@@ -1,16 +1,20 @@
-"""Input and output of ``raysim compensate``: cubes, captures and the compensated store.
+"""Input and output of the compensate stage: cubes, captures and the compensated store.
 
-Inputs, all turned into one :class:`CompensateInput`:
+The readers and writers of :func:`raysim.pipeline.compensate.compensate` (and
+so of ``raysim compensate``). Inputs, all turned into one
+:class:`CompensateInput`:
 
 * a frame store (Zarr, or NetCDF ``.nc``) of :mod:`raysim.io.storage`;
-* an ``.npz`` cube (keys in :mod:`raysim.cli.cmd_compensate`);
+* an ``.npz`` cube (keys in :mod:`raysim.pipeline.compensate`);
 * a DCA1000 capture (``.bin``, :mod:`raysim.io.ti_dca1000`) with its radar
   configuration (mmWave SDK ``.cfg`` or mmWave Studio ``.json``,
   :mod:`raysim.io.mmwave_config`), which sets the waveform, the TDM slot order
   of the virtual array and the binary layout.
 
 Output: a labelled Zarr store (:func:`write_compensated_store`), or for one
-frame the ``.npz`` of earlier versions.
+frame the ``.npz`` of earlier versions (:func:`write_compensated_npz`);
+:func:`check_compensated_output` refuses, before any computation, a path that
+holds something else.
 """
 
 from __future__ import annotations
@@ -21,12 +25,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from raysim.io.files import atomic_write, check_output
 from raysim.platform.kinematics import slot_times
 from raysim.radar.config import RadarConfig
 from raysim.vocabulary import AXIS_UNITS
 
 __all__ = ["CompensateInput", "load_input", "frame_selection", "write_compensated_store",
-           "COMPENSATED_FORMAT", "COMPENSATED_FORMAT_ATTR"]
+           "write_compensated_npz", "check_compensated_output", "COMPENSATED_FORMAT",
+           "COMPENSATED_FORMAT_ATTR"]
 
 #: Format version of the compensated store (attribute :data:`COMPENSATED_FORMAT_ATTR`).
 COMPENSATED_FORMAT = 1
@@ -38,7 +44,7 @@ _NPZ_NEED = ("data", "chirp_times", "element_positions", "carrier_frequency", "b
 
 @dataclass(frozen=True, eq=False)
 class CompensateInput:
-    """What ``raysim compensate`` needs of its input, whatever the file.
+    """What the compensate stage needs of its input, whatever the file.
 
     Attributes
     ----------
@@ -211,7 +217,7 @@ def _load_npz(path: str) -> CompensateInput:
 def load_input(path: str, *, radar_config: str | None = None, frames: str | None = None,
                frame: int = 0, layout: str | None = None,
                capture_t0: float = 0.0) -> CompensateInput:
-    """Open the input of ``raysim compensate``.
+    """Open the input of the compensate stage (``raysim compensate``).
 
     Parameters
     ----------
@@ -311,3 +317,87 @@ def write_compensated_store(path: str, inp: CompensateInput, beams: list, *, cha
                "chain": chain, "warnings": json.dumps(list(warnings)),
                "source": json.dumps(inp.source), **(extra_attrs or {})})
     write_store(path, ds, overwrite=os.path.exists(path))
+
+
+def write_compensated_npz(path: str, beams, chain: str, azimuth_deg, elevation_deg,
+                          calibration: dict | None = None) -> None:
+    """Write the single-frame ``.npz`` output, atomically.
+
+    Keys: ``beams [chirp, range, azimuth, elevation]`` (input units),
+    ``doppler_power [doppler, range, azimuth, elevation]`` (float32, input
+    units^2), ``chirp_times [chirp]`` [s], ``range_m``, ``azimuth_deg``,
+    ``elevation_deg``, ``velocity_mps`` (Doppler axis, range rate), ``chain``,
+    ``warnings`` and, with a self-calibration, ``self_calibration`` (its
+    report as JSON).
+
+    Parameters
+    ----------
+    path : str
+        Output file (written aside, then renamed into place).
+    beams : compensation.BeamCube
+        The frame's beams.
+    chain : str
+        Chain key of :mod:`raysim.vocabulary`.
+    azimuth_deg, elevation_deg : array_like
+        Grid axes [deg].
+    calibration : dict, optional
+        Self-calibration report.
+    """
+    doppler = beams.doppler()
+
+    def write(tmp):
+        with open(tmp, "wb") as fh:  # a file object: np.savez would append ".npz" to a name
+            np.savez(fh, beams=beams.data,
+                     doppler_power=(np.abs(doppler) ** 2).astype(np.float32),
+                     chirp_times=beams.chirp_time, range_m=beams.range,
+                     azimuth_deg=np.asarray(azimuth_deg, dtype=float),
+                     elevation_deg=np.asarray(elevation_deg, dtype=float),
+                     velocity_mps=beams.velocity(), chain=np.array(chain),
+                     warnings=np.array(beams.warnings, dtype=str),
+                     **({} if calibration is None else
+                        {"self_calibration": np.array(json.dumps(calibration))}))
+
+    atomic_write(path, write)
+
+
+def check_compensated_output(path, option: str = "--out") -> bool:
+    """Check, before any computation, that the compensated output may be written at ``path``.
+
+    A path ending in ``.npz`` is a file; any other a Zarr store, which may
+    replace only an earlier store of :func:`write_compensated_store` (never a
+    frame store or another folder).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The output.
+    option : str
+        The option or parameter named in the messages.
+
+    Returns
+    -------
+    bool
+        True for the single-frame ``.npz`` layout, False for a store.
+
+    Raises
+    ------
+    ValueError
+        Naming ``option`` and ``path``.
+    """
+    import zarr
+
+    from raysim.io.zarr_store import store_exists
+
+    path = os.fspath(path)
+    as_npz = path.endswith(".npz")
+    check_output(path, "file" if as_npz else "dir", option)
+    if not as_npz and os.path.isdir(path):
+        if not store_exists(path):
+            raise ValueError(f"{option}: cannot write {path!r}: it is an existing directory "
+                             f"that is not a Zarr store (expected a new store path, or .npz "
+                             f"for one frame)")
+        if COMPENSATED_FORMAT_ATTR not in zarr.open_group(path, mode="r").attrs:
+            raise ValueError(f"{option}: cannot write {path!r}: it is an existing Zarr store "
+                             f"not written by raysim compensate (a frame store?); expected a "
+                             f"new path or an earlier compensated store to replace")
+    return as_npz

@@ -1,0 +1,399 @@
+"""Compensate stage: a stored IF cube or a raw capture plus an IMU log -> compensated beams.
+
+:func:`compensate` is the one implementation behind ``raysim compensate`` (the
+command only parses its options and prints) and the studies that compensate
+recorded files (:mod:`raysim.studies.flight`). It reads the input
+(:mod:`raysim.io.compensate_io`), estimates the platform motion at every
+transmit slot of every selected frame (one integration over the record,
+:func:`raysim.pipeline.estimate.estimate_record`; or, when the clock offset or
+the velocity is unknown, the self-calibration of
+:func:`raysim.pipeline.self_calibration.calibrate_record`), projects every
+frame with its own motion through the chain (:func:`raysim.pipeline.chains.project`)
+and writes the output.
+
+Input (``source``): a raw TI DCA1000 capture (``adc_data.bin``) with its radar
+configuration (``radar_config``: an mmWave SDK ``.cfg`` or an mmWave Studio
+``.json`` export, :mod:`raysim.io.mmwave_config`; it sets the waveform, the
+TDM slot order of the virtual array and the binary layout; every frame, or
+``frames="LO:HI"``), a frame store written by :mod:`raysim.io.storage` (a Zarr
+store directory, or a NetCDF file ``.nc`` from
+:func:`raysim.io.storage.export_netcdf`; ``frame`` or ``frames``) or an ``.npz``
+file with these keys:
+
+=====================  =========================  =================================
+key                    shape                      meaning
+=====================  =========================  =================================
+``data``               ``[chirp, channel, sample]``  complex IF samples
+``chirp_times``        ``[chirp]``                chirp start times, radar clock [s]
+``element_positions``  ``[channel, 3]``           virtual positions p_tx + p_rx in A [m]
+``carrier_frequency``  scalar                     f_c [Hz]
+``bandwidth``          scalar                     B [Hz]
+``chirp_duration``     scalar                     T_c [s]
+``sample_rate``        scalar                     f_s [Hz] (complex sampling)
+``grid_shape``         ``[2]`` (optional)         (nx, ny), x major, y minor
+``lever_arm``          ``[3]`` (optional)         r_IR in B [m]
+``tx_slot``            ``[channel]`` (optional)   TDM slot of each channel
+``slot_interval``      scalar (optional)          ramp-to-ramp interval of slots [s]
+=====================  =========================  =================================
+
+TDM MIMO: the IMU log is integrated once to the start of every transmit slot
+of every selected frame, and each slot's channels are compensated with the
+pose of their own ramp (exact and paper chains).
+
+IMU log (``imu``): a file of any format of
+:func:`raysim.io.flight_logs.read_imu_log` (the project's IMU CSV, PX4 ULog,
+ArduPilot DataFlash ``.bin``, ROS 2 bag; FLU turned into FRD), or a table
+``[sample, 7]`` (time [s, IMU clock], angular rate [rad/s], specific force
+[m/s^2], body frame FRD). ``time_offset`` is IMU clock minus radar clock. It
+may be left out when the frame store holds an IMU log.
+
+Output (``out``): a labelled Zarr store
+(:func:`raysim.io.compensate_io.write_compensated_store`) with ``beams
+[frame, chirp, range, azimuth, elevation]``, ``doppler_power``, ``chirp_time``,
+``slot_time``, the axes and the attributes ``chain``, ``warnings``,
+``velocity``, ``time_offset_s`` and ``self_calibration``; or, for one frame and
+a path ending in ``.npz``, the file of
+:func:`raysim.io.compensate_io.write_compensated_npz`. The warnings are the
+chains' and the integration's assumption warnings (:mod:`compensation.guards`),
+in the output and in :attr:`CompensateResult.warnings`.
+
+Errors name the parameter by its ``raysim compensate`` option (``--frames``,
+``--range-m`` ...): parameter ``x_y`` is option ``--x-y``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from raysim.io.compensate_io import (
+    check_compensated_output,
+    load_input,
+    write_compensated_npz,
+    write_compensated_store,
+)
+from raysim.pipeline.chains import project
+from raysim.pipeline.estimate import estimate_record
+from raysim.pipeline.self_calibration import calibrate_record
+from raysim.processing.maps import range_compress
+from raysim.vocabulary import parse_chain
+
+__all__ = ["CompensateResult", "compensate", "VELOCITY_CHOICES", "DEFAULT_ANGLES_DEG"]
+
+#: Initial-velocity handling: zero mean over the hover window (``hover``), given
+#: (``given``), or estimated from the Doppler of stationary scatterers (``radar``).
+VELOCITY_CHOICES = ("hover", "given", "radar")
+#: Default azimuth and elevation grid [deg] (``-60:60:1``).
+DEFAULT_ANGLES_DEG = -60.0 + np.arange(121.0)
+
+
+@dataclass(frozen=True, eq=False)
+class CompensateResult:
+    """What :func:`compensate` wrote.
+
+    Attributes
+    ----------
+    out : pathlib.Path
+        The output (Zarr store or ``.npz``).
+    chain : str
+        Chain key (:mod:`raysim.vocabulary`).
+    frames : list of int
+        Frame numbers within the source of the compensated frames.
+    beams : list of compensation.BeamCube
+        One per frame, ``data [chirp, range, azimuth, elevation]``.
+    warnings : tuple of str
+        Assumption warnings of all frames, each once, in order.
+    calibration : dict or None
+        Self-calibration report (estimates with one-sigma uncertainties, SI
+        units) when the clock offset or the velocity was estimated.
+    time_offset : float or None
+        IMU clock minus radar clock applied [s] (given, or estimated);
+        None for the chain ``none``.
+    """
+
+    out: Path
+    chain: str
+    frames: list
+    beams: list
+    warnings: tuple
+    calibration: dict | None
+    time_offset: float | None
+
+    @property
+    def shape(self) -> tuple:
+        """``(frame, chirp, range, azimuth, elevation)`` of the beams."""
+        return (len(self.beams),) + tuple(self.beams[0].data.shape)
+
+
+def _vector(value, n: int, option: str) -> np.ndarray:
+    """``n`` finite floats, or a ValueError naming ``option`` and the value."""
+    try:
+        v = np.asarray(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        v = np.zeros(0)
+    if v.size != n or not np.all(np.isfinite(v)):
+        raise ValueError(f"{option}: got {value!r}, expected {n} finite numbers")
+    return v
+
+
+def _angles(value, option: str) -> np.ndarray:
+    """A non-empty grid of finite angles [deg] -> [rad], shape ``[angle]``."""
+    try:
+        v = np.asarray(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        v = np.zeros(0)
+    if v.size < 1 or not np.all(np.isfinite(v)):
+        raise ValueError(f"{option}: got {value!r}, expected one or more finite angles [deg]")
+    return np.deg2rad(v)
+
+
+def _frames_text(frames) -> str | None:
+    """``frames`` as ``"LO:HI"`` / ``"K"`` text: given so, or an int ``K``, or ``(LO, HI)``."""
+    if frames is None or isinstance(frames, str):
+        return frames
+    if isinstance(frames, (int, np.integer)) and not isinstance(frames, bool):
+        return str(int(frames))
+    if (isinstance(frames, (tuple, list)) and len(frames) == 2
+            and all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                    for v in frames)):
+        return f"{int(frames[0])}:{int(frames[1])}"
+    raise ValueError(f"--frames: got {frames!r}, expected 'LO:HI', 'K', an int K or a pair "
+                     f"(LO, HI) of frame numbers")
+
+
+def _imu_table(imu, inp, source: str) -> np.ndarray:
+    """The IMU log as a table ``[sample, 7]``: time, gyro, accel (SI, FRD)."""
+    from raysim.io.flight_logs import read_imu_log
+
+    if imu is None:
+        if inp.imu is None:
+            raise ValueError(f"{source!r} holds no IMU log; give an IMU log with --imu FILE")
+        return inp.imu
+    if isinstance(imu, (str, os.PathLike)):
+        path = os.fspath(imu)
+        if not os.path.exists(path):
+            raise ValueError(f"IMU file {path!r} does not exist")
+        try:
+            s = read_imu_log(path)
+        except ImportError as exc:   # an optional reader (pymavlink for .bin) is missing
+            raise ValueError(f"IMU file {path!r}: {exc}") from None
+        return np.column_stack([s.time, s.gyro, s.accel])
+    table = np.asarray(imu, dtype=float)
+    if table.ndim != 2 or table.shape[1] != 7:
+        raise ValueError(f"imu: got an array of shape {table.shape}, expected a file path or "
+                         f"a table [sample, 7] (time, gyro xyz, accel xyz)")
+    return table
+
+
+def _attitude(value):
+    """``initial_attitude_deg``: ``"level"`` or (yaw, pitch, roll) [deg] -> ``R_WB`` [3, 3]."""
+    from scipy.spatial.transform import Rotation
+
+    if isinstance(value, str):
+        if value.strip() != "level":
+            raise ValueError(f"--initial-attitude-deg: got {value!r}, expected YAW,PITCH,ROLL "
+                             f"[deg] or 'level'")
+        return "level"
+    ypr = np.deg2rad(_vector(value, 3, "--initial-attitude-deg"))
+    return Rotation.from_euler("ZYX", ypr).as_matrix()
+
+
+def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
+             velocity, initial_velocity, initial_attitude_deg, imu_grade):
+    """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
+
+    ``rcs`` receives the range-compressed frames when they are computed for the
+    self-calibration (the projection then reuses them).
+    """
+    options = dict(lever_arm=lever_arm, initial_attitude=_attitude(initial_attitude_deg),
+                   imu_grade=imu_grade, velocity="hover" if velocity == "radar" else velocity)
+    if velocity == "given":
+        if initial_velocity is None:
+            raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
+        options["initial_velocity"] = _vector(initial_velocity, 3, "--initial-velocity")
+    auto = isinstance(time_offset, str)
+    time_t = [inp.slot_times[k].ravel() for k in range(len(inp.frames))]
+    if not (auto or velocity == "radar"):
+        # one integration over every slot of every selected frame, chirp major, slot minor
+        motions = estimate_record(imu[:, 0], imu[:, 1:4], imu[:, 4:7], time_t,
+                                  time_offset=time_offset, **options)
+        return motions, None, float(time_offset)
+    # Every selected frame takes part (the gyro bias, a drift over frames, needs two or
+    # more); stationary scatterers are detected on the selected range cells of frame 0.
+    estimate = (("time_offset",) if auto else ()) + (
+        ("velocity",) if velocity == "radar" else ())
+    if len(inp.frames) > 1:
+        estimate += ("gyro_bias",)
+    if inp.num_slots > 1:
+        options["channel_slot"] = inp.tx_slot
+    rcs.extend(range_compress(inp.read(k))[..., : r_axis.size] for k in range(len(inp.frames)))
+    cal = calibrate_record(rcs, time_t, inp.element_positions, imu[:, 0], imu[:, 1:4],
+                           imu[:, 4:7], wavelength=inp.config.center_wavelength,
+                           range_axis=r_axis, estimate=estimate,
+                           time_offset=0.0 if auto else time_offset,
+                           grid_shape=inp.grid_shape, detect_gates=gates, **options)
+    report = cal.report
+    return list(cal.result.motions), report, float(report["time_offset_s"] if auto
+                                                   else time_offset)
+
+
+def compensate(source, imu=None, *, out, chain="exact", frames=None,
+               frame: int = 0, radar_config=None, layout: str | None = None,
+               capture_t0: float = 0.0, range_m=(0.0, 1e9), azimuth_deg=None,
+               elevation_deg=None, lever_arm=None, time_offset: float | str = 0.0,
+               velocity: str = "hover", initial_velocity=None,
+               initial_attitude_deg=(0.0, 0.0, 0.0), imu_grade: str | None = None,
+               direction_deg=None, progress: bool = False) -> CompensateResult:
+    """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
+
+    Parameters
+    ----------
+    source : str or path-like
+        Zarr store, NetCDF ``.nc``, ``.npz`` cube, or DCA1000 capture (``.bin``,
+        or any file with ``radar_config``); formats in the module docstring.
+    imu : str, path-like or ndarray ``[sample, 7]``, optional
+        IMU log (file, or table of time [s, IMU clock], gyro [rad/s], accel
+        [m/s^2], FRD); default the IMU log of the frame store. Not used by the
+        chain ``none``.
+    out : str or path-like
+        Output: a Zarr store (a new path, or an earlier compensated store to
+        replace), or for one frame a path ending in ``.npz``. Checked before
+        any computation.
+    chain : str or raysim.vocabulary.ChainSpec
+        ``exact`` (rigid-body projection), ``paper``, ``paper:published`` or
+        ``none`` (conventional beamformer).
+    frames : str, int or (int, int), optional
+        ``"LO:HI"`` or ``(LO, HI)`` (HI excluded), or ``"K"`` / ``K``: frames of
+        a capture or store (default every frame of a capture, ``frame`` of a
+        store).
+    frame : int
+        Frame of a store when ``frames`` is None.
+    radar_config : str or path-like, optional
+        mmWave SDK ``.cfg`` or Studio ``.json`` of a capture.
+    layout : {"2lane", "4lane"}, optional
+        LVDS lanes of a capture (default from the configuration).
+    capture_t0 : float
+        Radar-clock time of the first ramp of a capture [s].
+    range_m : (float, float)
+        Range cells ``lo <= r <= hi`` to compensate [m].
+    azimuth_deg, elevation_deg : array_like, optional
+        Beam grid axes [deg]; default -60..60 in 1 deg steps.
+    lever_arm : array_like, shape ``[3]``, optional
+        ``r_IR`` in B [m]; default the input's, else zero.
+    time_offset : float or "auto"
+        IMU clock minus radar clock [s]; ``"auto"`` estimates it from the radar
+        (residual slow-time phase of stationary scatterers against the IMU).
+    velocity : {"hover", "given", "radar"}
+        Initial velocity: zero mean over the hover window, ``initial_velocity``,
+        or estimated from the Doppler of stationary scatterers (per frame).
+    initial_velocity : array_like, shape ``[3]``, optional
+        Body velocity in W at the first chirp [m/s] (``velocity="given"``).
+    initial_attitude_deg : (float, float, float) or "level"
+        Attitude at the first chirp, Z-Y-X Euler angles (yaw, pitch, roll)
+        [deg], or ``"level"`` (roll and pitch from accelerometer levelling,
+        heading 0).
+    imu_grade : {"ideal", "tactical", "consumer_mems"}, optional
+        Sets the hover window of ``velocity`` hover / radar and of ``"level"``;
+        default the whole record.
+    direction_deg : (float, float), optional
+        Target direction (azimuth, elevation) [deg] of the paper chain's
+        slow-time correction (required by ``paper``).
+    progress : bool
+        A progress bar on stderr for records of several frames.
+
+    Returns
+    -------
+    CompensateResult
+
+    Raises
+    ------
+    ValueError
+        Bad input, named: the output path, missing files, frame selections,
+        radar configurations, option values, an IMU log that does not cover
+        the chirps.
+    """
+    spec = parse_chain(chain)
+    if velocity not in VELOCITY_CHOICES:
+        raise ValueError(f"--velocity: got {velocity!r}, expected one of {VELOCITY_CHOICES}")
+    if isinstance(time_offset, str):
+        if time_offset != "auto":
+            raise ValueError(f"--time-offset: got {time_offset!r}, expected a number of "
+                             f"seconds or 'auto'")
+    else:
+        time_offset = float(_vector(time_offset, 1, "--time-offset")[0])
+    out = Path(out)
+    as_npz = check_compensated_output(out, "--out")
+    source = os.fspath(source)
+    inp = load_input(source, radar_config=None if radar_config is None
+                     else os.fspath(radar_config), frames=_frames_text(frames), frame=frame,
+                     layout=layout, capture_t0=capture_t0)
+    if as_npz and len(inp.frames) != 1:
+        raise ValueError(f"--out {str(out)!r}: an .npz holds one frame, the selection has "
+                         f"{len(inp.frames)}; give a store path (no .npz) or --frames K")
+    cfg = inp.config
+    u = None
+    if spec.name == "paper":
+        from compensation.geometry import direction
+
+        if direction_deg is None:
+            raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target "
+                             f"direction)")
+        u = direction(*np.deg2rad(_vector(direction_deg, 2, "--direction-deg")))
+    n_samples = inp.read(0).shape[-1]
+    r_axis = cfg.bin_ranges(n_samples if cfg.complex_sampling else n_samples // 2)
+    r_lo, r_hi = _vector(range_m, 2, "--range-m")
+    gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
+    if gates.size == 0:
+        raise ValueError(f"--range-m {r_lo:g}:{r_hi:g} selects no range cell; cells span "
+                         f"0 .. {r_axis[-1]:.2f} m")
+    az = _angles(DEFAULT_ANGLES_DEG if azimuth_deg is None else azimuth_deg, "--az-deg")
+    el = _angles(DEFAULT_ANGLES_DEG if elevation_deg is None else elevation_deg, "--el-deg")
+    motions = calibration = offset = None
+    rcs: list = []                     # range-compressed frames, kept when calibrating
+    if spec.compensated:
+        table = _imu_table(imu, inp, source)
+        lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
+                 else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
+        motions, calibration, offset = _motions(
+            inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
+            time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
+            initial_attitude_deg=initial_attitude_deg, imu_grade=imu_grade)
+    results, found = [], []
+    ks = range(len(inp.frames))
+    if len(inp.frames) > 1 and progress:
+        import sys
+
+        from tqdm import tqdm
+
+        ks = tqdm(ks, unit="frame", desc="compensate", file=sys.stderr)
+    for k in ks:
+        mot = None if motions is None else motions[k]
+        # TDM: every slot's channels with the pose of their own ramp
+        channel_slot = inp.tx_slot if mot is not None and inp.num_slots > 1 else None
+        rc = rcs[k] if rcs else range_compress(inp.read(k))[..., : r_axis.size]
+        beams = project(spec, rc, inp.element_positions, wavelength=cfg.center_wavelength,
+                        range_axis=r_axis, azimuth=az, elevation=el, motion=mot, direction=u,
+                        grid_shape=inp.grid_shape, range_gates=gates, channel_slot=channel_slot)
+        if mot is None:   # the conventional beamformer carries chirp indices, not times
+            beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
+        found.extend(w for w in beams.warnings if w not in found)
+        results.append(beams)
+    if as_npz:
+        write_compensated_npz(os.fspath(out), results[0], spec.key, np.rad2deg(az),
+                              np.rad2deg(el), calibration)
+    else:
+        import json
+
+        attrs = {"velocity": velocity}
+        if calibration is not None:
+            attrs["self_calibration"] = json.dumps(calibration)
+        if offset is not None:     # the offset applied: given, or estimated ('auto')
+            attrs["time_offset_s"] = offset
+        write_compensated_store(os.fspath(out), inp, results, chain=spec.key, warnings=found,
+                                azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
+                                extra_attrs=attrs)
+    return CompensateResult(out, spec.key, list(inp.frames), results, tuple(found),
+                            calibration, offset)
