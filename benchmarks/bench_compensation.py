@@ -42,9 +42,9 @@ import numpy as np
 
 from compensation import integrate_imu, rigid_body_projection
 from raysim.echoes.oracle import simulate_point_targets
-from raysim.io.scenario import scenario_from_case
 from raysim.platform.imu import simulate_imu
 from raysim.processing.maps import az_el_grid, doppler_fft, range_compress, steering_matrix
+from raysim.scenario import scenario_from_case
 
 
 def _best(fn, repeat: int) -> tuple[float, object]:

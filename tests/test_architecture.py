@@ -152,6 +152,6 @@ def test_modules_are_small():
 
 def test_stage_packages_exist():
     """The folders show the data flow (docs/architecture.md)."""
-    for stage in ("radar", "platform", "echoes", "synthesis", "processing", "io", "pipeline",
-                  "studies", "cli"):
+    for stage in ("radar", "platform", "echoes", "synthesis", "processing", "scenario", "io",
+                  "pipeline", "studies", "cli"):
         assert (ROOT / "raysim" / stage / "__init__.py").is_file(), stage

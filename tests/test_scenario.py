@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raysim.io.scenario import (
+from raysim.scenario import (
     dumps_toml,
     load_scenario,
     loads_scenario,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raysim.io.scenario import Scenario
+from raysim.scenario import Scenario
 from raysim.synthesis.frame import RadarFrame
 
 __all__ = ["FeatureUnavailable", "Reference", "frame_source", "reference_target", "LazyFrames",

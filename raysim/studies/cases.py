@@ -1,10 +1,10 @@
 """The paper's experiments as named scenarios.
 
 A paper case is plain data: a scenario override (the TOML keys of
-:class:`raysim.io.scenario.Scenario`: target, motion sinusoids, radar, array,
+:class:`raysim.scenario.Scenario`: target, motion sinusoids, radar, array,
 frames, lever arm) and the values the paper reports, in the words of
-:mod:`raysim.vocabulary`. :func:`raysim.io.scenario.scenario_from_case` turns a
-case into a :class:`~raysim.io.scenario.Scenario`; ``raysim simulate --case``,
+:mod:`raysim.vocabulary`. :func:`raysim.scenario.scenario_from_case` turns a
+case into a :class:`~raysim.scenario.Scenario`; ``raysim simulate --case``,
 ``raysim report --case`` and ``raysim reproduce`` all render that scenario.
 
 Every case shares :data:`BASE`: the paper's Table 2 radar (the ``[radar]``
@@ -105,7 +105,7 @@ def get_case(name: str) -> dict:
     """A paper case by name: ``{"name", "description", "scenario", "paper"}`` (a copy).
 
     ``scenario`` is the full override (:data:`BASE` merged with the case's
-    keys), ready for :func:`raysim.io.scenario.validate_scenario`.
+    keys), ready for :func:`raysim.scenario.validate_scenario`.
 
     Raises
     ------

@@ -49,7 +49,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from raysim.echoes.oracle import direction
-from raysim.io.scenario import Scenario, scenario_from_case
 from raysim.pipeline.analysis import SINGLE_CHIRP_HALF_WIDTH_DEG, SINGLE_CHIRP_STEP_DEG, angle_chirp
 from raysim.pipeline.analysis import local_axis as _axis
 from raysim.pipeline.chains import project
@@ -59,6 +58,7 @@ from raysim.pipeline.sources import frame_source, reference_target
 from raysim.platform.imu import get_preset
 from raysim.processing import metrics
 from raysim.processing.maps import Map, range_compress
+from raysim.scenario import Scenario, scenario_from_case
 from raysim.studies.cases import PAPER_CASES, get_case
 from raysim.studies.reproduce_output import format_table, write_case_figures, write_results
 from raysim.vocabulary import MAPS, REFERENCE, ChainSpec, metric_unit, parse_chain, parse_chains

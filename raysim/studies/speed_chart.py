@@ -246,7 +246,7 @@ def measure_decimation(*, quick: bool) -> dict:
 def measure_motion(*, quick: bool) -> dict:
     """Stop-and-hop against intra-chirp motion (one target, pitch 10 deg at 20 Hz)."""
     from raysim.echoes.oracle import simulate_point_targets
-    from raysim.io.scenario import scenario_from_case
+    from raysim.scenario import scenario_from_case
     from raysim.studies.workloads import paper_setup
 
     case = scenario_from_case("rotation_y")

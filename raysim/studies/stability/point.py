@@ -179,7 +179,7 @@ class StabilityPoint:
             ``scenario.trajectory()``, the target, lever arm and IMU fields of
             the file, ``seed`` = ``scenario.imu_seed``.
         """
-        from raysim.io.scenario import Scenario
+        from raysim.scenario import Scenario
 
         if not isinstance(scenario, Scenario):
             raise ValueError(f"scenario must be a raysim.io.scenario.Scenario, got "
