@@ -18,7 +18,7 @@ from raysim.scenario import (
     set_key,
     validate_scenario,
 )
-from raysim.studies.cases import DEFAULT_LEVER_ARM, PAPER_CASES, get_case
+from raysim.scenario.paper_cases import DEFAULT_LEVER_ARM, PAPER_CASES, get_case
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -187,6 +187,32 @@ def test_paper_case_scenarios_and_examples(name):
     ex = load_scenario(EXAMPLES / f"case_{name}.toml")
     assert ex.radar_config() == s.radar_config()
     assert ex.motion.case == name and ex.scene.targets == s.scene.targets
+
+
+def test_paper_cases_are_data_files_in_paper_order(tmp_path):
+    """The cases are TOML files; the index keeps the paper's order; bad folders are named."""
+    from raysim.scenario import paper_cases
+
+    assert list(PAPER_CASES) == ["stationary", "rotation_y", "yaw", "translation_y",
+                                 "translation_z"]
+    base, cases = paper_cases.load_cases(paper_cases.CASES_DIR)
+    assert cases == PAPER_CASES and base == paper_cases.BASE
+    for name in PAPER_CASES:
+        data = tomllib.loads((paper_cases.CASES_DIR / f"{name}.toml").read_text())
+        assert set(data) <= {"description", "scenario", "paper"}
+    # a case file the index does not list
+    for f in paper_cases.CASES_DIR.glob("*.toml"):
+        (tmp_path / f.name).write_text(f.read_text())
+    (tmp_path / "roll_x.toml").write_text('description = "x"\n')
+    with pytest.raises(ValueError, match="do not match the case files.*roll_x"):
+        paper_cases.load_cases(tmp_path)
+    (tmp_path / "roll_x.toml").unlink()
+    (tmp_path / "yaw.toml").write_text('description = "x"\nfrmes = 3\n')
+    with pytest.raises(ValueError, match="yaw.toml: expected keys.*frmes"):
+        paper_cases.load_cases(tmp_path)
+    (tmp_path / "yaw.toml").write_text("description = \n")
+    with pytest.raises(ValueError, match="yaw.toml' is not valid TOML"):
+        paper_cases.load_cases(tmp_path)
 
 
 def test_every_bundled_scene_has_an_example():

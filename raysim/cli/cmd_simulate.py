@@ -196,7 +196,7 @@ def run(args) -> int:
     ref = result["reference"]
     paper = {}
     if scenario.motion.case is not None:
-        from raysim.studies.cases import get_case
+        from raysim.scenario.paper_cases import get_case
 
         paper = get_case(scenario.motion.case)["paper"]
     out = {

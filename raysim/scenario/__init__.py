@@ -12,6 +12,10 @@ Modules
 ``reader``
     :func:`load_scenario` (a file), :func:`loads_scenario` (TOML text),
     :func:`scenario_from_case` (a paper case).
+``paper_cases``
+    The paper's experiments, read from the TOML data files ``cases/<name>.toml``
+    (scenario keys and the values the paper reports): :data:`PAPER_CASES`,
+    :func:`get_case`, :func:`paper_values`.
 ``radar``, ``meshes``
     The ``[radar]`` section and the ``[[scene.meshes]]`` entries.
 ``keys``
@@ -47,6 +51,7 @@ from raysim.scenario.model import (
     TargetSpec,
     validate_scenario,
 )
+from raysim.scenario.paper_cases import DEFAULT_LEVER_ARM, PAPER_CASES, get_case, paper_values
 from raysim.scenario.radar import RadarSection
 from raysim.scenario.reader import load_scenario, loads_scenario, scenario_from_case
 
@@ -56,4 +61,5 @@ __all__ = [
     "OutputSection", "Scenario", "load_scenario", "loads_scenario", "validate_scenario",
     "scenario_from_case", "set_key", "get_key", "dumps_toml", "format_validation_error",
     "ANGLE_AXES", "TRANSLATION_AXES", "parse_value", "parse_assignment", "did_you_mean",
+    "PAPER_CASES", "DEFAULT_LEVER_ARM", "get_case", "paper_values",
 ]

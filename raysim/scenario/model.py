@@ -61,6 +61,7 @@ from raysim.scenario.keys import (
     set_key,
 )
 from raysim.scenario.meshes import MeshSpec
+from raysim.scenario.paper_cases import PAPER_CASES, get_case
 from raysim.scenario.radar import RadarSection, _in_range, _Section
 
 __all__ = [
@@ -226,7 +227,7 @@ class MotionSection(_Section):
     """``[motion]``: platform motion, the sum of every part given.
 
     ``case``: the motion of a paper case (the ``motion`` keys of
-    ``raysim.studies.cases.PAPER_CASES[case]["scenario"]``);
+    ``raysim.scenario.paper_cases.PAPER_CASES[case]["scenario"]``);
     ``[[motion.sinusoids]]``: extra sinusoids; ``velocity_mps``: constant world
     velocity [m/s]; ``[motion.hover_jitter]``: stochastic jitter. Nothing given
     means a stationary platform.
@@ -241,8 +242,6 @@ class MotionSection(_Section):
     @classmethod
     def _known_case(cls, v: str | None) -> str | None:
         if v is not None:
-            from raysim.studies.cases import PAPER_CASES
-
             if v not in PAPER_CASES:
                 raise ValueError(f"a paper case name, one of {sorted(PAPER_CASES)}"
                                  f"{did_you_mean(v, PAPER_CASES)}")
@@ -391,7 +390,6 @@ class Scenario(_Section):
         velocity has none. ``(0.0, "")`` for a platform without oscillation.
         """
         from raysim.platform.motion import HoverJitterSpec
-        from raysim.studies.cases import get_case
 
         m = self.motion
         sines = list(m.sinusoids)
@@ -457,7 +455,6 @@ class Scenario(_Section):
             hover_jitter,
             stationary,
         )
-        from raysim.studies.cases import get_case
 
         def sines(specs: list[SinusoidSpec]) -> Trajectory:
             comps = tuple(Sinusoid(s.axis, s.amplitude_si, s.frequency_hz,

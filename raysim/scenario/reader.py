@@ -2,7 +2,7 @@
 
 :func:`loads_scenario` parses TOML text (relative file paths taken from a
 folder), :func:`load_scenario` reads a UTF-8 file, :func:`scenario_from_case`
-builds the scenario of a paper case (:mod:`raysim.studies.cases`). Every
+builds the scenario of a paper case (:mod:`raysim.scenario.paper_cases`). Every
 problem is one :class:`ValueError` naming the file, the key path and the value.
 """
 
@@ -15,6 +15,7 @@ from typing import Any
 
 from raysim.scenario.keys import did_you_mean
 from raysim.scenario.model import Scenario, validate_scenario
+from raysim.scenario.paper_cases import PAPER_CASES, get_case
 
 __all__ = ["loads_scenario", "load_scenario", "scenario_from_case"]
 
@@ -63,24 +64,20 @@ def load_scenario(path: str | Path) -> Scenario:
 def scenario_from_case(name: str, **overrides: Any) -> Scenario:
     """The scenario of a paper case (radar, 20 x 20 UPA, target, motion, frames, lever arm).
 
-    Built from the case's scenario keys (``raysim.studies.cases.get_case(name)``)
+    Built from the case's scenario keys (``raysim.scenario.paper_cases.get_case(name)``)
     with ``motion.case = name`` standing for the case's motion sinusoids, so
     the TOML form reads like ``examples/case_<name>.toml``.
 
     Parameters
     ----------
     name : str
-        Key of :data:`raysim.studies.cases.PAPER_CASES`.
+        Key of :data:`raysim.scenario.paper_cases.PAPER_CASES`.
     **overrides
         Not accepted; use :meth:`Scenario.with_values` for changes.
     """
-    from raysim.studies.cases import get_case
-
     if overrides:
         raise ValueError(f"scenario_from_case takes no overrides, got {sorted(overrides)}; "
                          f"use Scenario.with_values")
-    from raysim.studies.cases import PAPER_CASES
-
     if not isinstance(name, str) or name not in PAPER_CASES:
         raise ValueError(f"unknown paper case {name!r}; expected one of {sorted(PAPER_CASES)}"
                          f"{did_you_mean(name, PAPER_CASES)}")

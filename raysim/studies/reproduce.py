@@ -59,7 +59,7 @@ from raysim.platform.imu import get_preset
 from raysim.processing import metrics
 from raysim.processing.maps import Map, range_compress
 from raysim.scenario import Scenario, scenario_from_case
-from raysim.studies.cases import PAPER_CASES, get_case
+from raysim.scenario.paper_cases import PAPER_CASES, get_case
 from raysim.studies.reproduce_output import format_table, write_case_figures, write_results
 from raysim.vocabulary import MAPS, REFERENCE, ChainSpec, metric_unit, parse_chain, parse_chains
 
