@@ -136,6 +136,35 @@ def test_compensation_never_imports_raysim():
     assert {m: i for m, i in bad.items() if i} == {}
 
 
+#: What the scenario model may never reach: it describes a run, others build and run it.
+SCENARIO_NEVER = ("raysim.studies", "raysim.echoes", "raysim.pipeline", "raysim.synthesis",
+                  "raysim.processing", "raysim.cli")
+
+
+def _reach(graph: dict[str, set[str]], start: list[str]) -> set[str]:
+    """Modules reachable from ``start`` through imports (``start`` itself aside)."""
+    seen: set[str] = set()
+    todo = list(start)
+    while todo:
+        for nxt in graph.get(todo.pop(), ()):
+            if nxt not in seen:
+                seen.add(nxt)
+                todo.append(nxt)
+    return seen
+
+
+def test_scenario_model_imports_no_study_and_no_echo_builder():
+    """``raysim.scenario`` reaches radar, platform and io helpers, never studies, echoes or
+    the pipeline (directly or through another module)."""
+    graph = _graph()
+    scenario = [m for m in graph if m == "raysim.scenario" or m.startswith("raysim.scenario.")]
+    assert "raysim.scenario.model" in scenario
+    bad = sorted(m for m in _reach(graph, scenario)
+                 if any(m == p or m.startswith(p + ".") for p in SCENARIO_NEVER))
+    assert bad == []
+    assert _reach({"a": {"b"}, "b": {"c"}}, ["a"]) == {"b", "c"}
+
+
 def test_no_public_class_defined_twice():
     where = defaultdict(list)
     for name, path in _modules().items():

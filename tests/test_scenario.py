@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from raysim.pipeline.sources import point_targets
 from raysim.scenario import (
     dumps_toml,
     load_scenario,
@@ -141,7 +142,7 @@ noise_density = 1e-4
 """)
     spec = s.imu_spec()
     assert spec.gyro.noise_density == 1e-4 and math.isinf(spec.gyro.full_scale)
-    tgt = s.point_targets()[0]
+    tgt = point_targets(s)[0]
     d = tgt.position - s.lever_arm
     assert np.linalg.norm(d) == pytest.approx(15.0)
     assert math.degrees(math.atan2(d[0], d[2])) == pytest.approx(20.0)
@@ -173,7 +174,7 @@ def test_paper_case_scenarios_and_examples(name):
     assert s.frames == frames and s.virtual_array().grid_shape == (20, 20)
     np.testing.assert_array_equal(s.lever_arm, DEFAULT_LEVER_ARM)
     want = PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=DEFAULT_LEVER_ARM)
-    np.testing.assert_array_equal(s.point_targets()[0].position, want.position)
+    np.testing.assert_array_equal(point_targets(s)[0].position, want.position)
     t = np.linspace(0.0, 0.05, 7)
     truth = stationary() if motion is None else sinusoid(*motion)
     for got, exp in zip(s.trajectory().states(t), truth.states(t), strict=True):

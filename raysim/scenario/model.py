@@ -487,15 +487,6 @@ class Scenario(_Section):
             traj = traj + p
         return traj
 
-    def point_targets(self) -> list:
-        """Point targets (:class:`~raysim.echoes.oracle.PointTarget`); empty unless ``points``."""
-        from raysim.echoes.oracle import PointTarget
-
-        return [PointTarget.at(t.range_m, math.radians(t.az_deg), math.radians(t.el_deg),
-                               velocity=t.velocity_mps, rcs_dbsm=t.rcs_dbsm,
-                               radar_origin=self.lever_arm)
-                for t in self.scene.targets]
-
     def imu_spec(self):
         """The :class:`raysim.platform.imu.ImuSpec` (requires :mod:`raysim.platform.imu`)."""
         from raysim.platform.imu import ImuSpec, SensorErrors, get_preset
