@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
+from raysim.processing.metrics import image_entropy, parabolic_offset
 from raysim.processing.windows import window
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
@@ -58,16 +59,40 @@ class Map:
         return np.maximum(10 * np.log10(np.maximum(v, 1e-30)), floor_db)
 
     def peak(self) -> dict[str, float]:
-        """Interpolated peak position per axis (see :func:`raysim.processing.metrics.map_peak`)."""
-        from raysim.processing.metrics import map_peak
-
+        """Interpolated peak position per axis (see :func:`map_peak`)."""
         return map_peak(self)
 
     def entropy(self) -> float:
         """Shannon entropy of the normalised intensity [nats]."""
-        from raysim.processing.metrics import image_entropy
-
         return image_entropy(self.values)
+
+
+def map_peak(m: Map) -> dict[str, float]:
+    """Interpolated peak of a map: coordinate per axis, parabola on dB values.
+
+    Returns
+    -------
+    dict
+        Axis name -> peak coordinate (in the axis unit), plus ``"value"`` (linear peak power).
+    """
+    v = m.values
+    idx = np.unravel_index(int(np.argmax(v)), v.shape)
+    db = 10 * np.log10(np.maximum(v, 1e-300))
+    out: dict[str, float] = {}
+    for ax, name in enumerate(m.dims):
+        coord = np.asarray(m.coords[name], dtype=float)
+        i = idx[ax]
+        frac = 0.0
+        if 0 < i < v.shape[ax] - 1:
+            lo = list(idx)
+            hi = list(idx)
+            lo[ax] -= 1
+            hi[ax] += 1
+            frac = parabolic_offset(db[tuple(lo)], db[idx], db[tuple(hi)])
+        step = coord[1] - coord[0] if coord.size > 1 else 0.0
+        out[name] = float(coord[i] + frac * step)
+    out["value"] = float(v[idx])
+    return out
 
 
 def range_compress(data: np.ndarray, *, window_name: str | None = "hann",
