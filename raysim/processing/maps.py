@@ -24,6 +24,12 @@ from raysim.processing.windows import window
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
 
+#: Axis name -> (CF unit, long name) of a map coordinate (SI, as stored in ``Map.coords``).
+AXIS_COORDS = {"range": ("m", "range from the radar phase centre"),
+               "doppler": ("m s-1", "range rate of the Doppler bin"),
+               "azimuth": ("rad", "azimuth (docs/conventions.md)"),
+               "elevation": ("rad", "elevation (docs/conventions.md)")}
+
 #: Worker threads for scipy.fft (the machine has 2 cores).
 FFT_WORKERS = -1
 
@@ -65,6 +71,32 @@ class Map:
     def entropy(self) -> float:
         """Shannon entropy of the normalised intensity [nats]."""
         return image_entropy(self.values)
+
+    def to_xarray(self, name: str = "power"):
+        """The map as a labelled :class:`xarray.DataArray`.
+
+        Dimensions are :attr:`dims` (``range``, ``doppler``, ``azimuth``,
+        ``elevation`` of docs/conventions.md) with :attr:`coords` as their
+        coordinates, in SI (``range`` [m], ``doppler`` range rate [m/s],
+        ``azimuth`` / ``elevation`` [rad]); each coordinate's ``units`` and
+        ``long_name`` are in its attrs. The values are not copied.
+
+        Returns
+        -------
+        xarray.DataArray
+            Shape ``values.shape``, named ``name``.
+        """
+        import xarray as xr
+
+        coords = {}
+        for d in self.dims:
+            if d in self.coords:
+                unit, long_name = AXIS_COORDS.get(d, ("1", d))
+                coords[d] = (d, np.asarray(self.coords[d]),
+                             {"units": unit, "long_name": long_name})
+        return xr.DataArray(self.values, dims=self.dims, coords=coords, name=name,
+                            attrs={"long_name": "power, linear (|.|^2 of the processed "
+                                                "samples)"})
 
 
 def map_peak(m: Map) -> dict[str, float]:
