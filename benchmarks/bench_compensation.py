@@ -42,9 +42,10 @@ import numpy as np
 
 from compensation import integrate_imu, rigid_body_projection
 from raysim.echoes.oracle import simulate_point_targets
-from raysim.io.scenario import scenario_from_case
+from raysim.pipeline.sources import point_targets
 from raysim.platform.imu import simulate_imu
 from raysim.processing.maps import az_el_grid, doppler_fft, range_compress, steering_matrix
+from raysim.scenario import scenario_from_case
 
 
 def _best(fn, repeat: int) -> tuple[float, object]:
@@ -78,7 +79,7 @@ def main(argv=None) -> dict:
 
     case = scenario_from_case(args.case)
     cfg, arr, traj = case.radar_config(), case.virtual_array(), case.trajectory()
-    frame = simulate_point_targets(cfg, arr, case.point_targets(), traj,
+    frame = simulate_point_targets(cfg, arr, point_targets(case), traj,
                                    lever_arm=case.lever_arm)
     tgt = case.scene.targets[0]
     target_range, target_az, target_el = (tgt.range_m, np.deg2rad(tgt.az_deg),

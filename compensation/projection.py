@@ -109,6 +109,37 @@ class BeamCube:
 
         return replace(self, warnings=merge(self.warnings, warnings))
 
+    def to_xarray(self):
+        """The beams as a labelled :class:`xarray.DataArray` ``beams``.
+
+        Dimensions ``chirp, range, azimuth, elevation`` (docs/conventions.md).
+        Coordinates: ``chirp_time`` ``[chirp]`` [s], ``range`` [m],
+        ``azimuth`` and ``elevation`` [rad], each with ``units`` and
+        ``long_name`` in its attrs. Attributes: ``wavelength_m`` and
+        ``warnings`` (the :attr:`warnings`, ``"; "``-joined, empty when none).
+        The data is not copied.
+
+        Returns
+        -------
+        xarray.DataArray
+            Shape ``[chirp, range, azimuth, elevation]``, complex64.
+        """
+        import xarray as xr
+
+        coords = {
+            "chirp_time": ("chirp", np.asarray(self.chirp_time, dtype=float),
+                           {"units": "s", "long_name": "chirp start time"}),
+            "range": ("range", np.asarray(self.range, dtype=float),
+                      {"units": "m", "long_name": "range from the nominal radar phase centre"}),
+            "azimuth": ("azimuth", np.asarray(self.azimuth, dtype=float),
+                        {"units": "rad", "long_name": "azimuth of the global grid"}),
+            "elevation": ("elevation", np.asarray(self.elevation, dtype=float),
+                          {"units": "rad", "long_name": "elevation of the global grid"}),
+        }
+        return xr.DataArray(self.data, dims=self.dims, coords=coords, name="beams", attrs={
+            "long_name": "beamformed, range-compressed samples (channel-averaged)",
+            "wavelength_m": float(self.wavelength), "warnings": "; ".join(self.warnings)})
+
     @property
     def chirp_interval(self) -> float:
         """Mean slow-time sampling period [s] (NaN for a single chirp)."""

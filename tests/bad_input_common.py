@@ -40,7 +40,7 @@ def imu_samples(t, gyro=None, accel=None):
 
 
 def scenario_data(**radar):
-    from raysim.io.scenario import scenario_from_case
+    from raysim.scenario import scenario_from_case
 
     data = scenario_from_case("rotation_y").model_dump(mode="json", exclude_none=True)
     data["radar"].update(radar)
@@ -48,7 +48,7 @@ def scenario_data(**radar):
 
 
 def validate(data):
-    from raysim.io.scenario import validate_scenario
+    from raysim.scenario import validate_scenario
 
     return validate_scenario(data)
 

@@ -28,8 +28,12 @@ def _is_type_checking(node: ast.If) -> bool:
         isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING")
 
 
-def _imports(path: Path, name: str, modules: dict) -> set[str]:
-    """Project modules imported anywhere in a module (functions too), TYPE_CHECKING aside."""
+def _imports(path: Path, name: str, modules: dict, type_only: bool = True) -> set[str]:
+    """Project modules imported anywhere in a module (functions too).
+
+    Imports under ``if TYPE_CHECKING:`` are edges too (``type_only``): a cycle
+    of annotations is still a cycle of the design.
+    """
     tree = ast.parse(path.read_text(), str(path))
     is_pkg = path.name == "__init__.py"
     found: set[str] = set()
@@ -44,7 +48,7 @@ def _imports(path: Path, name: str, modules: dict) -> set[str]:
 
     def visit(node):
         for child in ast.iter_child_nodes(node):
-            if isinstance(child, ast.If) and _is_type_checking(child):
+            if isinstance(child, ast.If) and _is_type_checking(child) and not type_only:
                 for sub in child.orelse:
                     visit(sub)
                 continue
@@ -120,8 +124,20 @@ def test_reference_cycle_is_found():
     assert _cycles({"a": {"b"}, "b": set()}) == []
 
 
+def test_type_only_imports_are_edges(tmp_path):
+    """An import under ``if TYPE_CHECKING:`` is an edge like any other."""
+    a, b = tmp_path / "a.py", tmp_path / "b.py"
+    a.write_text("from typing import TYPE_CHECKING\n\nif TYPE_CHECKING:\n    from b import X\n")
+    b.write_text("import typing\n\nif typing.TYPE_CHECKING:\n    import a\nelse:\n    X = 1\n")
+    modules = {"a": a, "b": b}
+    graph = {n: _imports(p, n, modules) for n, p in modules.items()}
+    assert graph == {"a": {"b"}, "b": {"a"}}
+    assert _cycles(graph) == [["a", "b"]]
+    assert _imports(a, "a", modules, type_only=False) == set()
+
+
 def test_no_import_cycles():
-    """Module imports (top level and inside functions) form a DAG."""
+    """Module imports (top level, inside functions and type-only) form a DAG."""
     graph = _graph()
     # package __init__ modules only re-export; drop edges from a package to its own modules
     for name in list(graph):
@@ -134,6 +150,35 @@ def test_compensation_never_imports_raysim():
     bad = {m: sorted(i for i in imps if i.startswith("raysim"))
            for m, imps in graph.items() if m.startswith("compensation")}
     assert {m: i for m, i in bad.items() if i} == {}
+
+
+#: What the scenario model may never reach: it describes a run, others build and run it.
+SCENARIO_NEVER = ("raysim.studies", "raysim.echoes", "raysim.pipeline", "raysim.synthesis",
+                  "raysim.processing", "raysim.cli")
+
+
+def _reach(graph: dict[str, set[str]], start: list[str]) -> set[str]:
+    """Modules reachable from ``start`` through imports (``start`` itself aside)."""
+    seen: set[str] = set()
+    todo = list(start)
+    while todo:
+        for nxt in graph.get(todo.pop(), ()):
+            if nxt not in seen:
+                seen.add(nxt)
+                todo.append(nxt)
+    return seen
+
+
+def test_scenario_model_imports_no_study_and_no_echo_builder():
+    """``raysim.scenario`` reaches radar, platform and io helpers, never studies, echoes or
+    the pipeline (directly or through another module, type-only imports included)."""
+    graph = _graph()
+    scenario = [m for m in graph if m == "raysim.scenario" or m.startswith("raysim.scenario.")]
+    assert "raysim.scenario.model" in scenario
+    bad = sorted(m for m in _reach(graph, scenario)
+                 if any(m == p or m.startswith(p + ".") for p in SCENARIO_NEVER))
+    assert bad == []
+    assert _reach({"a": {"b"}, "b": {"c"}}, ["a"]) == {"b", "c"}
 
 
 def test_no_public_class_defined_twice():
@@ -152,8 +197,8 @@ def test_modules_are_small():
 
 def test_stage_packages_exist():
     """The folders show the data flow (docs/architecture.md)."""
-    for stage in ("radar", "platform", "echoes", "synthesis", "processing", "io", "pipeline",
-                  "studies", "cli"):
+    for stage in ("radar", "platform", "echoes", "synthesis", "processing", "scenario", "io",
+                  "pipeline", "studies", "cli"):
         assert (ROOT / "raysim" / stage / "__init__.py").is_file(), stage
 
 

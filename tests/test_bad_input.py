@@ -214,7 +214,7 @@ CASES = [
     Bad("analyse-inf-in-if", lambda _: _analyse_bad(math.inf), ValueError,
         ("frame 2", "chirp 3", "channel 1", "sample 7", "inf")),
     Bad("unknown-paper-case",
-        lambda _: __import__("raysim.studies.cases", fromlist=["x"]).get_case("roll_x"), ValueError,
+        lambda _: __import__("raysim.scenario", fromlist=["x"]).get_case("roll_x"), ValueError,
         ("'roll_x'", "rotation_y")),
     # ---------------------------------------------------------------------- IMU
     Bad("imu-zero-rate",

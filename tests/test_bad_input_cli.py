@@ -33,7 +33,7 @@ def _file(tmp: Path, name: str = "afile") -> Path:
 
 
 def _load(path: Path):
-    from raysim.io.scenario import load_scenario
+    from raysim.scenario import load_scenario
 
     return load_scenario(path)
 
@@ -44,7 +44,7 @@ def _scenario_bytes(tmp: Path, data: bytes, name: str = "s.toml"):
 
 
 def _with(**changes):
-    from raysim.io.scenario import scenario_from_case
+    from raysim.scenario import scenario_from_case
 
     return scenario_from_case("rotation_y").with_values(changes)
 
@@ -59,7 +59,7 @@ CLI_CASES = [
     Bad("scenario-unknown-key", lambda _: validate(scenario_data(samplerate=1)), ValueError,
         ("radar.samplerate", "unknown keys")),
     Bad("scenario-missing-file",
-        lambda t: __import__("raysim.io.scenario", fromlist=["x"]).load_scenario(t / "no.toml"),
+        lambda t: __import__("raysim.scenario", fromlist=["x"]).load_scenario(t / "no.toml"),
         ValueError, ("no.toml", "cannot read")),
     Bad("scenario-not-utf8", lambda t: _scenario_bytes(t, 'name = "caf\xe9"\n'.encode("latin-1")),
         ValueError, ("s.toml", "not UTF-8", "offset")),
@@ -79,7 +79,7 @@ CLI_CASES = [
     Bad("scenario-unknown-key-suggests", lambda _: validate(scenario_data(num_chrips=64)),
         ValueError, ("radar.num_chrips", "did you mean 'num_chirps'")),
     Bad("scenario-unknown-case-suggests",
-        lambda _: __import__("raysim.io.scenario", fromlist=["x"]).scenario_from_case("rotaton_y"),
+        lambda _: __import__("raysim.scenario", fromlist=["x"]).scenario_from_case("rotaton_y"),
         ValueError, ("'rotaton_y'", "did you mean 'rotation_y'")),
     Bad("scenario-imu-preset-suggests", lambda _: _with(**{"imu.preset": "tactcal"}), ValueError,
         ("imu.preset", "tactcal", "did you mean 'tactical'")),

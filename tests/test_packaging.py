@@ -1,5 +1,6 @@
-"""A plain install: the wheel ships the scenes (and their generator), the examples and the
-conventions, and runs from a fresh virtual environment outside the repository."""
+"""A plain install: the wheel ships the scenes (and their generator), the examples, the
+conventions and the paper cases, and runs from a fresh virtual environment outside the
+repository."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import pytest
 
 import raysim.data
 from raysim.echoes.rt import scenes
+from raysim.scenario import paper_cases
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -42,10 +44,21 @@ def test_package_data_is_found_from_the_package():
     assert (ROOT / "examples").resolve() == (raysim.data.DATA_DIR / "examples").resolve()
 
 
+def test_paper_cases_are_package_data():
+    """Every paper case is a TOML file next to its loader, listed in ``_paper.toml``."""
+    folder = paper_cases.CASES_DIR
+    assert folder.resolve() == (Path(paper_cases.__file__).parent / "cases").resolve()
+    files = sorted(p.stem for p in folder.glob("*.toml") if not p.stem.startswith("_"))
+    assert files == sorted(paper_cases.PAPER_CASES)
+    assert (folder / "_paper.toml").is_file()
+
+
 def _expected_files() -> list[str]:
     data = raysim.data.DATA_DIR
-    return sorted(str(p.relative_to(data.parent.parent)) for p in data.rglob("*")
-                  if p.is_file() and "__pycache__" not in p.parts)
+    root = data.parent.parent
+    shipped = [p for p in data.rglob("*") if p.is_file() and "__pycache__" not in p.parts]
+    shipped += list(paper_cases.CASES_DIR.glob("*.toml"))
+    return sorted(str(p.relative_to(root)) for p in shipped)
 
 
 @pytest.mark.slow
@@ -71,7 +84,8 @@ def test_wheel_ships_the_data_and_runs_outside_the_repository(tmp_path):
     assert not missing, f"the wheel lacks {missing}"
     for must in ("raysim/data/conventions.md", "raysim/data/scenes/generate.py",
                  "raysim/data/examples/case_yaw.toml",
-                 "raysim/data/scenes/flat_reflectors/flat_reflectors.xml"):
+                 "raysim/data/scenes/flat_reflectors/flat_reflectors.xml",
+                 "raysim/scenario/cases/_paper.toml", "raysim/scenario/cases/yaw.toml"):
         assert must in names
 
     env_dir = tmp_path / "venv"
@@ -94,11 +108,14 @@ def test_wheel_ships_the_data_and_runs_outside_the_repository(tmp_path):
         assert name in run.stdout
     where = subprocess.run(
         [str(py), "-c", "import raysim, raysim.data as d; print(raysim.__file__); "
-         "print(d.example_path('case_yaw.toml')); print(len(d.conventions_text()))"],
+         "print(d.example_path('case_yaw.toml')); print(len(d.conventions_text())); "
+         "from raysim.scenario import scenario_from_case, paper_cases as c; "
+         "print(c.CASES_DIR); print(scenario_from_case('yaw').frames)"],
         capture_output=True, text=True, cwd=outside, env=env)
     assert where.returncode == 0, where.stderr
-    module, example, size = where.stdout.split()
+    module, example, size, cases, frames = where.stdout.split()
     assert str(env_dir) in module and str(env_dir) in example and int(size) > 1000
+    assert str(env_dir) in cases and frames == "20"
 
 
 def _tracked(path: str) -> bool:

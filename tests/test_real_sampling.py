@@ -95,9 +95,9 @@ def test_report_of_a_real_sampled_radar(tmp_path):
 
 def test_real_sampled_store_round_trip(tmp_path):
     from raysim.io import storage
-    from raysim.io.scenario import scenario_from_case
     from raysim.pipeline.run import render
     from raysim.pipeline.sources import render_frames
+    from raysim.scenario import scenario_from_case
 
     scen = scenario_from_case("stationary").with_values(
         {"radar.num_chirps": 16, "array.nx": 2, "array.ny": 2, "frames": 2,

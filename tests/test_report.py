@@ -14,8 +14,8 @@ import pytest
 from scenario_texts import small_scenario
 
 from raysim.cli import main
-from raysim.io.scenario import scenario_from_case
 from raysim.pipeline.run import render
+from raysim.scenario import scenario_from_case
 from raysim.studies.report import collect_from_scenario, software_versions, write_report
 from raysim.vocabulary import MAP_TITLES
 
@@ -141,8 +141,8 @@ def _peak_report_memory(store) -> tuple[int, int]:
 def test_report_streams_the_frames_of_a_store(tmp_path):
     """The peak memory of a report does not grow with the store: 9 frames cost at most
     ~3 frames more than 1 frame (the fixed workspace of maps and IMU is the same)."""
-    from raysim.io.scenario import scenario_from_case
     from raysim.pipeline.run import render
+    from raysim.scenario import scenario_from_case
 
     small = {"radar.num_chirps": 64, "array.nx": 4, "array.ny": 4,
              "radar.chirp_duration_s": 12.8e-6, "imu.preset": "tactical",

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raysim.io.scenario import (
+from raysim.pipeline.sources import point_targets
+from raysim.scenario import (
     dumps_toml,
     load_scenario,
     loads_scenario,
@@ -18,7 +19,7 @@ from raysim.io.scenario import (
     set_key,
     validate_scenario,
 )
-from raysim.studies.cases import DEFAULT_LEVER_ARM, PAPER_CASES, get_case
+from raysim.scenario.paper_cases import DEFAULT_LEVER_ARM, PAPER_CASES, get_case
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -141,7 +142,7 @@ noise_density = 1e-4
 """)
     spec = s.imu_spec()
     assert spec.gyro.noise_density == 1e-4 and math.isinf(spec.gyro.full_scale)
-    tgt = s.point_targets()[0]
+    tgt = point_targets(s)[0]
     d = tgt.position - s.lever_arm
     assert np.linalg.norm(d) == pytest.approx(15.0)
     assert math.degrees(math.atan2(d[0], d[2])) == pytest.approx(20.0)
@@ -173,7 +174,7 @@ def test_paper_case_scenarios_and_examples(name):
     assert s.frames == frames and s.virtual_array().grid_shape == (20, 20)
     np.testing.assert_array_equal(s.lever_arm, DEFAULT_LEVER_ARM)
     want = PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=DEFAULT_LEVER_ARM)
-    np.testing.assert_array_equal(s.point_targets()[0].position, want.position)
+    np.testing.assert_array_equal(point_targets(s)[0].position, want.position)
     t = np.linspace(0.0, 0.05, 7)
     truth = stationary() if motion is None else sinusoid(*motion)
     for got, exp in zip(s.trajectory().states(t), truth.states(t), strict=True):
@@ -187,6 +188,32 @@ def test_paper_case_scenarios_and_examples(name):
     ex = load_scenario(EXAMPLES / f"case_{name}.toml")
     assert ex.radar_config() == s.radar_config()
     assert ex.motion.case == name and ex.scene.targets == s.scene.targets
+
+
+def test_paper_cases_are_data_files_in_paper_order(tmp_path):
+    """The cases are TOML files; the index keeps the paper's order; bad folders are named."""
+    from raysim.scenario import paper_cases
+
+    assert list(PAPER_CASES) == ["stationary", "rotation_y", "yaw", "translation_y",
+                                 "translation_z"]
+    base, cases = paper_cases.load_cases(paper_cases.CASES_DIR)
+    assert cases == PAPER_CASES and base == paper_cases.BASE
+    for name in PAPER_CASES:
+        data = tomllib.loads((paper_cases.CASES_DIR / f"{name}.toml").read_text())
+        assert set(data) <= {"description", "scenario", "paper"}
+    # a case file the index does not list
+    for f in paper_cases.CASES_DIR.glob("*.toml"):
+        (tmp_path / f.name).write_text(f.read_text())
+    (tmp_path / "roll_x.toml").write_text('description = "x"\n')
+    with pytest.raises(ValueError, match="do not match the case files.*roll_x"):
+        paper_cases.load_cases(tmp_path)
+    (tmp_path / "roll_x.toml").unlink()
+    (tmp_path / "yaw.toml").write_text('description = "x"\nfrmes = 3\n')
+    with pytest.raises(ValueError, match="yaw.toml: expected keys.*frmes"):
+        paper_cases.load_cases(tmp_path)
+    (tmp_path / "yaw.toml").write_text("description = \n")
+    with pytest.raises(ValueError, match="yaw.toml' is not valid TOML"):
+        paper_cases.load_cases(tmp_path)
 
 
 def test_every_bundled_scene_has_an_example():

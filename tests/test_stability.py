@@ -353,7 +353,7 @@ def test_single_chirp_angle_error_is_chirp_n_over_2_minus_1():
 
 def test_point_from_toml_scenario():
     """A TOML scenario (one static target, UPA) gives the same point as the direct build."""
-    from raysim.io.scenario import loads_scenario
+    from raysim.scenario import loads_scenario
 
     scn = loads_scenario("""
         seed = 4

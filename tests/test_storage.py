@@ -10,9 +10,9 @@ import xarray as xr
 import zarr
 
 from raysim.io import storage
-from raysim.io.scenario import scenario_from_case
 from raysim.pipeline.run import render, render_dataset
 from raysim.pipeline.sources import render_frames
+from raysim.scenario import scenario_from_case
 
 SMALL = {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4,
          "radar.chirp_duration_s": 12.8e-6, "imu.preset": "tactical", "imu.rate_hz": 20000.0}

@@ -13,8 +13,8 @@ import xarray as xr
 import zarr
 
 from raysim.io import storage
-from raysim.io.scenario import scenario_from_case
 from raysim.pipeline.run import render, render_dataset
+from raysim.scenario import scenario_from_case
 
 SMALL = {"radar.num_chirps": 16, "array.nx": 2, "array.ny": 2,
          "radar.chirp_duration_s": 12.8e-6, "imu.preset": "tactical", "imu.rate_hz": 20000.0}
@@ -157,8 +157,8 @@ def test_scenario_epoch_reaches_the_store(tmp_path):
     import pandas as pd
     import xarray as xr
 
-    from raysim.io.scenario import scenario_from_case
     from raysim.pipeline.run import render
+    from raysim.scenario import scenario_from_case
 
     scen = scenario_from_case("stationary").with_values(
         {"radar.num_chirps": 8, "array.nx": 2, "array.ny": 2,

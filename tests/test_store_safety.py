@@ -16,9 +16,9 @@ import zarr
 
 from raysim.cli import main as cli_main
 from raysim.io import storage
-from raysim.io.scenario import scenario_from_case
 from raysim.io.store_guard import lock_path, remove_debris, writer_lock
 from raysim.pipeline.run import render
+from raysim.scenario import scenario_from_case
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = {"radar.num_chirps": 8, "array.nx": 2, "array.ny": 2,
@@ -145,7 +145,7 @@ def test_second_writer_gets_a_clear_error(scenario, tmp_path):
 
 _KILLED_WRITER = """
 import sys
-from raysim.io.scenario import scenario_from_case
+from raysim.scenario import scenario_from_case
 from raysim.pipeline.run import render
 small = {"radar.num_chirps": 8, "array.nx": 2, "array.ny": 2, "radar.chirp_duration_s": 12.8e-6}
 render(scenario_from_case("stationary").with_values({**small, "frames": 400}), sys.argv[1])

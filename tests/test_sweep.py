@@ -10,7 +10,7 @@ from scenario_texts import small_scenario
 
 import raysim.studies.sweep as sweep_mod
 from raysim.cli import main
-from raysim.io.scenario import scenario_from_case
+from raysim.scenario import scenario_from_case
 from raysim.studies.sweep import SweepSpec, parse_values, run_sweep, sweep_points
 
 SMALL = {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4,

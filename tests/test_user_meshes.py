@@ -140,7 +140,7 @@ def _scenario_text(extra=""):
 
 
 def test_scenario_meshes_key(tmp_path):
-    from raysim.io.scenario import load_scenario
+    from raysim.scenario import load_scenario
 
     plate = trimesh.creation.box((2.0, 2.0, 0.02))
     _write(plate, tmp_path / "plate.stl")
@@ -162,8 +162,8 @@ def test_converted_scene_traces_the_plate_below(tmp_path):
     from raysim.echoes.rt.scenes import load_scene
     from raysim.echoes.rt.trace import SPECULAR, MonostaticTracer
     from raysim.echoes.rt.user_meshes import convert_user_meshes
-    from raysim.io.scenario import load_scenario
     from raysim.radar.config import RadarConfig
+    from raysim.scenario import load_scenario
 
     _write(trimesh.creation.box((2.0, 2.0, 0.02)), tmp_path / "plate.stl")
     (tmp_path / "s.toml").write_text(_scenario_text(), encoding="utf-8")

@@ -173,7 +173,7 @@ def test_motion_label_is_the_same_everywhere(outputs):
     assert outputs["simulate"]["motion"] == MOTION_LABEL
     assert outputs["store"]["motion_name"] == MOTION_LABEL
     assert f"Motion: {MOTION_LABEL}" in outputs["report"]
-    from raysim.io.scenario import scenario_from_case
+    from raysim.scenario import scenario_from_case
 
     # a paper case's motion (built by raysim.platform.motion.sinusoid) reads the same
     assert scenario_from_case("rotation_y").trajectory().name == MOTION_LABEL

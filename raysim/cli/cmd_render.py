@@ -43,9 +43,9 @@ def register(subparsers) -> None:
 def run(args) -> int:
     """Run ``raysim render``; returns the exit code."""
     from raysim.cli.options import check_output
-    from raysim.io.scenario import load_scenario, parse_assignment
     from raysim.pipeline.run import render
     from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.scenario import load_scenario, parse_assignment
 
     scenario = load_scenario(args.scenario)
     if args.set:

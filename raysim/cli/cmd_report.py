@@ -53,8 +53,8 @@ def run(args) -> int:
     """Run ``raysim report``; returns the exit code."""
     from raysim.cli.cmd_simulate import print_warnings
     from raysim.cli.options import chains_option, check_output
-    from raysim.io.scenario import load_scenario, parse_assignment, scenario_from_case
     from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.scenario import load_scenario, parse_assignment, scenario_from_case
     from raysim.studies.report import collect_from_dataset, collect_from_scenario, write_report
 
     chains = chains_option(args.chains)

@@ -64,7 +64,7 @@ def run(args) -> int:
     """Execute ``raysim reproduce``; returns the exit code."""
     from raysim.cli.options import chains_option, check_output, known_name
     from raysim.platform.imu import PRESETS
-    from raysim.studies.cases import PAPER_CASES
+    from raysim.scenario.paper_cases import PAPER_CASES
     from raysim.studies.reproduce import ReproductionSettings, format_table, reproduce
 
     known_name(args.imu, PRESETS, "--imu", "IMU preset")

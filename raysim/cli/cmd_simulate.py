@@ -86,7 +86,7 @@ def _floats(text: str, n: tuple[int, ...], flag: str) -> list[float]:
 
 
 def _sinusoid(text: str) -> dict:
-    from raysim.io.scenario import ANGLE_AXES, TRANSLATION_AXES
+    from raysim.scenario import ANGLE_AXES, TRANSLATION_AXES
 
     parts = text.split(":")
     axis = parts[0]
@@ -105,8 +105,8 @@ def _sinusoid(text: str) -> dict:
 
 
 def build_scenario(args):
-    """The :class:`~raysim.io.scenario.Scenario` described by parsed arguments."""
-    from raysim.io.scenario import (
+    """The :class:`~raysim.scenario.Scenario` described by parsed arguments."""
+    from raysim.scenario import (
         load_scenario,
         parse_assignment,
         scenario_from_case,
@@ -145,7 +145,7 @@ def build_scenario(args):
         data.setdefault("imu", {})["preset"] = args.imu
     if args.frames is not None:
         data["frames"] = args.frames
-    from raysim.io.scenario import set_key
+    from raysim.scenario import set_key
 
     for item in args.set:
         key, value = parse_assignment(item)
@@ -196,7 +196,7 @@ def run(args) -> int:
     ref = result["reference"]
     paper = {}
     if scenario.motion.case is not None:
-        from raysim.studies.cases import get_case
+        from raysim.scenario.paper_cases import get_case
 
         paper = get_case(scenario.motion.case)["paper"]
     out = {

@@ -17,7 +17,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from raysim.io.files import check_output
-from raysim.io.scenario_keys import did_you_mean
+from raysim.scenario.keys import did_you_mean
 
 __all__ = ["Parser", "NEGATIVE_VALUE", "known_name", "chains_option", "check_output",
            "did_you_mean", "span_option", "span_grid", "MAX_SPAN_VALUES"]

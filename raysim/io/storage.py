@@ -494,10 +494,10 @@ def read_netcdf(path: str | Path) -> xr.Dataset:
 
 
 def scenario_of(ds: xr.Dataset):
-    """The :class:`~raysim.io.scenario.Scenario` stored in a dataset's attributes, or None."""
+    """The :class:`~raysim.scenario.Scenario` stored in a dataset's attributes, or None."""
     text = ds.attrs.get("scenario_json")
     if not text:
         return None
-    from raysim.io.scenario import validate_scenario
+    from raysim.scenario import validate_scenario
 
     return validate_scenario(json.loads(text), source="stored scenario")

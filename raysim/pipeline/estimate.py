@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from raysim.io.scenario import Scenario
+from raysim.scenario import Scenario
 
 __all__ = ["VELOCITY_MODES", "estimate_motion", "estimate_record", "scenario_motion",
            "split_frames"]

@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.scenario import Scenario
 from raysim.pipeline.analysis import analyse
 from raysim.pipeline.estimate import scenario_motion
 from raysim.pipeline.sensors import imu_log
@@ -28,6 +27,7 @@ from raysim.pipeline.sources import (
     frame_source,
     reference_target,
 )
+from raysim.scenario import Scenario
 from raysim.vocabulary import CHAINS, parse_chains
 
 __all__ = ["RenderSummary", "render", "render_dataset", "evaluate"]

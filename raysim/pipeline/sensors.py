@@ -86,7 +86,7 @@ def imu_log(scenario, trajectory=None):
 
     Parameters
     ----------
-    scenario : raysim.io.scenario.Scenario
+    scenario : raysim.scenario.Scenario
     trajectory : raysim.platform.motion.Trajectory, optional
         Default ``scenario.trajectory()``.
 

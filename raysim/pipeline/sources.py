@@ -13,10 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raysim.io.scenario import Scenario
+from raysim.scenario import Scenario
 from raysim.synthesis.frame import RadarFrame
 
-__all__ = ["FeatureUnavailable", "Reference", "frame_source", "reference_target", "LazyFrames",
+__all__ = ["FeatureUnavailable", "Reference", "frame_source", "point_targets",
+           "reference_target", "LazyFrames",
            "render_frames"]
 
 
@@ -50,6 +51,26 @@ class Reference:
 
 
 # ------------------------------------------------------------------- sources
+def point_targets(scenario: Scenario) -> list:
+    """The scenario's ``[[scene.targets]]`` as oracle point targets.
+
+    Each target is placed from the nominal radar phase centre (the lever arm,
+    body frame B [m]) at ``range_m`` [m] and ``az_deg`` / ``el_deg`` [deg]
+    (docs/conventions.md), with its world velocity [m/s] and RCS [dBsm].
+
+    Returns
+    -------
+    list of raysim.echoes.oracle.PointTarget
+        One per target, in file order (a scene of kind ``points`` has targets).
+    """
+    from raysim.echoes.oracle import PointTarget
+
+    return [PointTarget.at(t.range_m, math.radians(t.az_deg), math.radians(t.el_deg),
+                           velocity=t.velocity_mps, rcs_dbsm=t.rcs_dbsm,
+                           radar_origin=scenario.lever_arm)
+            for t in scenario.scene.targets]
+
+
 def _rt_scene(scenario: Scenario):
     try:
         from raysim.echoes.rt.render import render_scene
@@ -155,7 +176,7 @@ def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFr
     traj = scenario.trajectory() if trajectory is None else trajectory
     lever = scenario.lever_arm
     if scenario.scene.kind == "points":
-        targets = scenario.point_targets()
+        targets = point_targets(scenario)
 
         def source(f: int) -> RadarFrame:
             return simulate_point_targets(cfg, arr, targets, traj, lever_arm=lever, frame=f,

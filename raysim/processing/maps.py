@@ -19,9 +19,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
+from raysim.processing.metrics import image_entropy, parabolic_offset
 from raysim.processing.windows import window
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
+
+#: Axis name -> (CF unit, long name) of a map coordinate (SI, as stored in ``Map.coords``).
+AXIS_COORDS = {"range": ("m", "range from the radar phase centre"),
+               "doppler": ("m s-1", "range rate of the Doppler bin"),
+               "azimuth": ("rad", "azimuth (docs/conventions.md)"),
+               "elevation": ("rad", "elevation (docs/conventions.md)")}
 
 #: Worker threads for scipy.fft (the machine has 2 cores).
 FFT_WORKERS = -1
@@ -58,16 +65,66 @@ class Map:
         return np.maximum(10 * np.log10(np.maximum(v, 1e-30)), floor_db)
 
     def peak(self) -> dict[str, float]:
-        """Interpolated peak position per axis (see :func:`raysim.processing.metrics.map_peak`)."""
-        from raysim.processing.metrics import map_peak
-
+        """Interpolated peak position per axis (see :func:`map_peak`)."""
         return map_peak(self)
 
     def entropy(self) -> float:
         """Shannon entropy of the normalised intensity [nats]."""
-        from raysim.processing.metrics import image_entropy
-
         return image_entropy(self.values)
+
+    def to_xarray(self, name: str = "power"):
+        """The map as a labelled :class:`xarray.DataArray`.
+
+        Dimensions are :attr:`dims` (``range``, ``doppler``, ``azimuth``,
+        ``elevation`` of docs/conventions.md) with :attr:`coords` as their
+        coordinates, in SI (``range`` [m], ``doppler`` range rate [m/s],
+        ``azimuth`` / ``elevation`` [rad]); each coordinate's ``units`` and
+        ``long_name`` are in its attrs. The values are not copied.
+
+        Returns
+        -------
+        xarray.DataArray
+            Shape ``values.shape``, named ``name``.
+        """
+        import xarray as xr
+
+        coords = {}
+        for d in self.dims:
+            if d in self.coords:
+                unit, long_name = AXIS_COORDS.get(d, ("1", d))
+                coords[d] = (d, np.asarray(self.coords[d]),
+                             {"units": unit, "long_name": long_name})
+        return xr.DataArray(self.values, dims=self.dims, coords=coords, name=name,
+                            attrs={"long_name": "power, linear (|.|^2 of the processed "
+                                                "samples)"})
+
+
+def map_peak(m: Map) -> dict[str, float]:
+    """Interpolated peak of a map: coordinate per axis, parabola on dB values.
+
+    Returns
+    -------
+    dict
+        Axis name -> peak coordinate (in the axis unit), plus ``"value"`` (linear peak power).
+    """
+    v = m.values
+    idx = np.unravel_index(int(np.argmax(v)), v.shape)
+    db = 10 * np.log10(np.maximum(v, 1e-300))
+    out: dict[str, float] = {}
+    for ax, name in enumerate(m.dims):
+        coord = np.asarray(m.coords[name], dtype=float)
+        i = idx[ax]
+        frac = 0.0
+        if 0 < i < v.shape[ax] - 1:
+            lo = list(idx)
+            hi = list(idx)
+            lo[ax] -= 1
+            hi[ax] += 1
+            frac = parabolic_offset(db[tuple(lo)], db[idx], db[tuple(hi)])
+        step = coord[1] - coord[0] if coord.size > 1 else 0.0
+        out[name] = float(coord[i] + frac * step)
+    out["value"] = float(v[idx])
+    return out
 
 
 def range_compress(data: np.ndarray, *, window_name: str | None = "hann",

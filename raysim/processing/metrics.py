@@ -6,20 +6,15 @@
 * Doppler mainlobe width: -3 dB width [Hz] of that power spectrum, linear
   interpolation at both crossings (Hann, no motion: about 1.44 bins);
 * angle error: great-circle distance [deg] between the interpolated map peak
-  and the true direction;
+  (:func:`raysim.processing.maps.map_peak`) and the true direction;
 * image entropy: Shannon entropy [nats] of ``p = |I|^2 / sum |I|^2``.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from raysim.processing.windows import window
-
-if TYPE_CHECKING:
-    from raysim.processing.maps import Map
 
 #: Slow-time zero-padding factor of the Doppler metrics.
 DOPPLER_PAD = 16
@@ -31,34 +26,6 @@ def parabolic_offset(y_minus: float, y0: float, y_plus: float) -> float:
     if den >= 0:  # not a strict maximum
         return 0.0
     return float(np.clip(0.5 * (y_minus - y_plus) / den, -0.5, 0.5))
-
-
-def map_peak(m: Map) -> dict[str, float]:
-    """Interpolated peak of a map: coordinate per axis, parabola on dB values.
-
-    Returns
-    -------
-    dict
-        Axis name -> peak coordinate (in the axis unit), plus ``"value"`` (linear peak power).
-    """
-    v = m.values
-    idx = np.unravel_index(int(np.argmax(v)), v.shape)
-    db = 10 * np.log10(np.maximum(v, 1e-300))
-    out: dict[str, float] = {}
-    for ax, name in enumerate(m.dims):
-        coord = np.asarray(m.coords[name], dtype=float)
-        i = idx[ax]
-        frac = 0.0
-        if 0 < i < v.shape[ax] - 1:
-            lo = list(idx)
-            hi = list(idx)
-            lo[ax] -= 1
-            hi[ax] += 1
-            frac = parabolic_offset(db[tuple(lo)], db[idx], db[tuple(hi)])
-        step = coord[1] - coord[0] if coord.size > 1 else 0.0
-        out[name] = float(coord[i] + frac * step)
-    out["value"] = float(v[idx])
-    return out
 
 
 def doppler_power_spectrum(slow_time: np.ndarray, chirp_interval: float, *,

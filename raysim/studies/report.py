@@ -117,7 +117,7 @@ def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
 def _paper_values(scenario) -> dict:
     if scenario is None or scenario.motion.case is None:
         return {}
-    from raysim.studies.cases import paper_values
+    from raysim.scenario.paper_cases import paper_values
 
     return paper_values(scenario.motion.case)
 

@@ -1,7 +1,7 @@
 """Reproduction of the paper's experiments with and without motion compensation.
 
-Every case of :mod:`raysim.studies.cases` is a scenario
-(:func:`raysim.io.scenario.scenario_from_case`); its frames are rendered by
+Every case of :mod:`raysim.scenario.paper_cases` is a scenario
+(:func:`raysim.scenario.scenario_from_case`); its frames are rendered by
 the pipeline's echo source (:func:`raysim.pipeline.sources.frame_source`), so
 ``raysim simulate --case NAME`` and ``raysim reproduce`` see the same frames.
 An IMU (preset of :mod:`raysim.platform.imu`) samples the scenario's motion,
@@ -49,7 +49,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from raysim.echoes.oracle import direction
-from raysim.io.scenario import Scenario, scenario_from_case
 from raysim.pipeline.analysis import SINGLE_CHIRP_HALF_WIDTH_DEG, SINGLE_CHIRP_STEP_DEG, angle_chirp
 from raysim.pipeline.analysis import local_axis as _axis
 from raysim.pipeline.chains import project
@@ -59,7 +58,8 @@ from raysim.pipeline.sources import frame_source, reference_target
 from raysim.platform.imu import get_preset
 from raysim.processing import metrics
 from raysim.processing.maps import Map, range_compress
-from raysim.studies.cases import PAPER_CASES, get_case
+from raysim.scenario import Scenario, scenario_from_case
+from raysim.scenario.paper_cases import PAPER_CASES, get_case
 from raysim.studies.reproduce_output import format_table, write_case_figures, write_results
 from raysim.vocabulary import MAPS, REFERENCE, ChainSpec, metric_unit, parse_chain, parse_chains
 
@@ -359,7 +359,7 @@ def run_case(name: str, *, imu: str = "ideal", seeds=(0,),
     Parameters
     ----------
     name : str
-        Paper case (key of :data:`raysim.studies.cases.PAPER_CASES`).
+        Paper case (key of :data:`raysim.scenario.paper_cases.PAPER_CASES`).
     imu : str
         IMU preset name (``ideal``, ``tactical``, ``consumer_mems``).
     seeds : sequence of int
@@ -412,7 +412,7 @@ def reproduce(cases=None, *, imu: str = "ideal", seeds: int = 1,
     Parameters
     ----------
     cases : sequence of str, optional
-        Case names (default all of :data:`raysim.studies.cases.PAPER_CASES`).
+        Case names (default all of :data:`raysim.scenario.paper_cases.PAPER_CASES`).
     imu : str
         IMU preset.
     seeds : int

@@ -246,14 +246,15 @@ def measure_decimation(*, quick: bool) -> dict:
 def measure_motion(*, quick: bool) -> dict:
     """Stop-and-hop against intra-chirp motion (one target, pitch 10 deg at 20 Hz)."""
     from raysim.echoes.oracle import simulate_point_targets
-    from raysim.io.scenario import scenario_from_case
+    from raysim.pipeline.sources import point_targets
+    from raysim.scenario import scenario_from_case
     from raysim.studies.workloads import paper_setup
 
     case = scenario_from_case("rotation_y")
     n_c = 8 if quick else 32
     cfg = case.radar_config().with_(num_chirps=n_c)
     arr = paper_setup(n_c)[1]                      # the paper's 20 x 20 UPA
-    tgt = case.point_targets()
+    tgt = point_targets(case)
     traj = case.trajectory()
     scale = case.radar.num_chirps / n_c
     t_ref, ref = _cpu(simulate_point_targets, cfg, arr, tgt, traj,

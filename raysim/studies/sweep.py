@@ -49,8 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from raysim.io.scenario import Scenario, parse_value, validate_scenario
 from raysim.pipeline.analysis import ANALYSIS_METRICS
+from raysim.scenario import Scenario, parse_value, validate_scenario
 from raysim.vocabulary import metric_unit, parse_chains
 
 __all__ = ["SweepSpec", "SweepPoint", "SweepResult", "parse_values", "sweep_points",

@@ -21,7 +21,7 @@ HOVER_ALTITUDE = 20.0
 def paper_setup(num_chirps: int = 256):
     """Paper radar (Table 2), 20 x 20 virtual UPA, hover-jitter trajectory, lever arm."""
     from raysim.platform.motion import sinusoid
-    from raysim.studies.cases import DEFAULT_LEVER_ARM
+    from raysim.scenario.paper_cases import DEFAULT_LEVER_ARM
 
     cfg = PAPER_RADAR.with_(num_chirps=int(num_chirps))
     arr = upa(20, 20, wavelength=cfg.wavelength)

@@ -60,6 +60,48 @@ class RadarFrame:
 
     dims = ("chirp", "channel", "sample")
 
+    def to_xarray(self):
+        """The frame as a labelled :class:`xarray.DataArray` ``if_data``.
+
+        Dimensions ``chirp, channel, sample`` (docs/conventions.md), as in a
+        store's ``if_data`` without its ``frame`` axis. Coordinates:
+        ``chirp_time`` ``[chirp]`` (chirp start, truth clock [s]), ``sample``
+        (fast time within the chirp [s]), ``tx_slot`` ``[channel]`` (TDM
+        transmit slot) and ``virtual_x``, ``virtual_y``, ``virtual_z``
+        ``[channel]`` (virtual phase centres in frame A [m]); units in each
+        coordinate's attrs. Attributes: ``frame_index``, ``lever_arm_m``,
+        ``array_name``, ``carrier_frequency_hz``, ``wavelength_m``. The data is
+        not copied.
+
+        Returns
+        -------
+        xarray.DataArray
+            Shape ``[chirp, channel, sample]``, complex64 (float32 for a
+            real-sampled radar) [sqrt(W)].
+        """
+        import xarray as xr
+
+        virt = np.asarray(self.array.virtual_positions, dtype=float)
+        coords = {
+            "chirp_time": ("chirp", np.asarray(self.chirp_times, dtype=float),
+                           {"units": "s", "long_name": "chirp start time, truth clock"}),
+            "sample": ("sample", self.fast_time,
+                       {"units": "s", "long_name": "fast time: sample time within the chirp"}),
+            "tx_slot": ("channel", np.asarray(self.array.tx_slot, dtype=np.int64),
+                        {"units": "1", "long_name": "TDM transmit slot"}),
+        }
+        for i, axis in enumerate("xyz"):
+            coords[f"virtual_{axis}"] = ("channel", virt[:, i], {
+                "units": "m", "long_name": f"virtual phase centre {axis} in A"})
+        return xr.DataArray(self.data, dims=self.dims, coords=coords, name="if_data", attrs={
+            "units": "V", "long_name": "dechirped IF samples s_tx conj(s_rx)",
+            "comment": "amplitude in sqrt(W): |if_data|^2 is the power in W",
+            "frame_index": int(self.frame_index),
+            "lever_arm_m": np.asarray(self.lever_arm, dtype=float).tolist(),
+            "array_name": self.array.name,
+            "carrier_frequency_hz": float(self.config.carrier_frequency),
+            "wavelength_m": float(self.config.wavelength)})
+
     @property
     def fast_time(self) -> np.ndarray:
         """Sample times within a chirp, shape ``[sample]`` [s]."""

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from raysim.io.scenario import loads_scenario
+from raysim.scenario import loads_scenario
 
 SCENE = '[scene]\nname = "flat_reflectors"\n'
 MOVER = '[[scene.movers]]\nstart_m = [-1.0, 6.0, 15.0]\nheading_deg = 90\nspeed_mps = 8.0\n'

@@ -256,8 +256,8 @@ ROTOR = '[[scene.rotors]]\nhub_m = [2.0, 1.0, 10.0]\nrate_rps = 40\nblade_length
 
 
 def test_rotor_keys_reach_the_clutter_model():
-    from raysim.io.scenario import loads_scenario
     from raysim.pipeline.sources import _clutter
+    from raysim.scenario import loads_scenario
 
     sc = loads_scenario(SCENE + ROTOR + "blades = 3\n" + ROTOR.replace(
         "rate_rps = 40", "rate_radps = 62.83185307179586").replace("[2.0", "[4.0")
@@ -282,7 +282,7 @@ def test_rotor_keys_reach_the_clutter_model():
     (SCENE + '[scene.clutter]\nmode = "sionna"\n' + ROTOR, "mode = 'field'"),
 ])
 def test_rotor_scenario_bad_values_are_named(text, match):
-    from raysim.io.scenario import loads_scenario
+    from raysim.scenario import loads_scenario
 
     with pytest.raises(ValueError, match=match):
         loads_scenario(text)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from raysim.io.scenario import loads_scenario
+from raysim.scenario import loads_scenario
 
 SCENE = '[scene]\nname = "flat_reflectors"\n'
 

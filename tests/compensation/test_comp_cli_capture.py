@@ -177,7 +177,7 @@ rate_hz = 2000.0
 def test_rendered_tdm_store_is_compensated_per_slot(tmp_path):
     """`raysim render` of the TDM case, then `raysim compensate` of the store (its IMU log,
     the true initial velocity and attitude): azimuth error within the TDM tolerance."""
-    from raysim.io.scenario import loads_scenario
+    from raysim.scenario import loads_scenario
 
     (tmp_path / "tdm.toml").write_text(TDM_SCENARIO)
     store = tmp_path / "tdm.zarr"

@@ -190,3 +190,30 @@ def test_projection_bad_input(kwargs, match):
             kw[key] = val
     with pytest.raises(ValueError, match=match):
         beam_projection(kw.pop("rc"), kw.pop("element_positions"), **kw)
+
+
+def test_beam_cube_to_xarray():
+    """BeamCube.to_xarray: the axes of docs/conventions.md, coordinates with units, the data."""
+    from compensation.projection import BeamCube
+
+    rng = np.random.default_rng(2)
+    shape = (4, 3, 5, 2)
+    data = (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)).astype(np.complex64)
+    cube = BeamCube(data, np.arange(4) * 1e-4, np.array([10.0, 10.5, 11.0]),
+                    np.deg2rad(np.linspace(-20, 20, 5)), np.deg2rad([0.0, 5.0]), LAM,
+                    warnings=("hover window", "small-angle"))
+    da = cube.to_xarray()
+    assert da.dims == ("chirp", "range", "azimuth", "elevation") and da.name == "beams"
+    assert da.dtype == np.complex64
+    np.testing.assert_array_equal(da.values, data)
+    for name, unit in (("range", "m"), ("azimuth", "rad"), ("elevation", "rad")):
+        np.testing.assert_array_equal(da[name].values, getattr(cube, name))
+        assert da[name].attrs["units"] == unit
+    np.testing.assert_array_equal(da["chirp_time"].values, cube.chirp_time)
+    assert da["chirp_time"].attrs["units"] == "s"
+    assert da.attrs["wavelength_m"] == LAM and da.attrs["warnings"] == "hover window; small-angle"
+    back = BeamCube(da.values, da["chirp_time"].values, da["range"].values,
+                    da["azimuth"].values, da["elevation"].values, da.attrs["wavelength_m"],
+                    tuple(da.attrs["warnings"].split("; ")))
+    np.testing.assert_array_equal(back.doppler(), cube.doppler())
+    assert back.warnings == cube.warnings

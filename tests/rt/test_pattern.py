@@ -219,7 +219,7 @@ _TARGET = "[[scene.targets]]\nrange_m = 10.0\naz_deg = 0.0\nel_deg = 0.0\n"
 
 
 def test_scenario_element_pattern_key(tmp_path):
-    from raysim.io.scenario import load_scenario, loads_scenario
+    from raysim.scenario import load_scenario, loads_scenario
 
     cfg = loads_scenario('[radar]\nelement_pattern = "tr38901"\n' + _TARGET).radar_config()
     assert cfg.element_pattern == "tr38901" and cfg.antenna_gain_dbi == pytest.approx(8.0)

@@ -151,7 +151,7 @@ def po_material(name: str, frequency: float) -> PoMaterial:
         Unknown name, or an ITU material undefined at the frequency.
     """
     if name not in PO_MATERIAL_NAMES:
-        from raysim.io.scenario_keys import did_you_mean
+        from raysim.scenario.keys import did_you_mean
 
         raise ValueError(f"material: unknown name {name!r}; expected one of "
                          f"{sorted(PO_MATERIAL_NAMES)}{did_you_mean(name, PO_MATERIAL_NAMES)}")

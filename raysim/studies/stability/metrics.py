@@ -34,13 +34,8 @@ from raysim.echoes.gated import gated_cube, nearest_range_bin
 from raysim.echoes.oracle import direction
 from raysim.pipeline.analysis import angle_chirp
 from raysim.pipeline.chains import project
-from raysim.processing.maps import Map
-from raysim.processing.metrics import (
-    doppler_mainlobe_width,
-    image_entropy,
-    map_peak,
-    pseudo_velocity,
-)
+from raysim.processing.maps import Map, map_peak
+from raysim.processing.metrics import doppler_mainlobe_width, image_entropy, pseudo_velocity
 from raysim.studies.stability.motion import point_motion
 from raysim.studies.stability.point import StabilityPoint
 from raysim.vocabulary import ChainSpec, parse_chain, parse_chains

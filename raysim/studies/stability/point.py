@@ -2,7 +2,7 @@
 
 :class:`StabilityPoint` is a light dataclass (built thousands of times per
 map) whose scalar fields carry the names and units of the TOML scenario model
-(:class:`raysim.io.scenario.Scenario`), flattened: ``target_range_m`` is
+(:class:`raysim.scenario.Scenario`), flattened: ``target_range_m`` is
 ``scene.targets[0].range_m``, ``imu_rate_hz`` is ``imu.rate_hz``, and so on.
 Where the TOML model has a section it holds the library object that section
 converts to (``config`` = ``Scenario.radar_config()``, ``array`` =
@@ -166,7 +166,7 @@ class StabilityPoint:
 
         Parameters
         ----------
-        scenario : raysim.io.scenario.Scenario
+        scenario : raysim.scenario.Scenario
             A ``points`` scene with exactly one static target and a ``upa`` array.
         lever_arm_error_m, init, t0_s
             The study's knobs (see the class).
@@ -179,10 +179,10 @@ class StabilityPoint:
             ``scenario.trajectory()``, the target, lever arm and IMU fields of
             the file, ``seed`` = ``scenario.imu_seed``.
         """
-        from raysim.io.scenario import Scenario
+        from raysim.scenario import Scenario
 
         if not isinstance(scenario, Scenario):
-            raise ValueError(f"scenario must be a raysim.io.scenario.Scenario, got "
+            raise ValueError(f"scenario must be a raysim.scenario.Scenario, got "
                              f"{type(scenario).__name__}")
         targets = scenario.scene.targets
         if scenario.scene.kind != "points" or len(targets) != 1:

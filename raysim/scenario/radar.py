@@ -1,6 +1,6 @@
 """The ``[radar]`` section of scenario files and the base of every section.
 
-Split from :mod:`raysim.io.scenario` (which re-exports :class:`RadarSection`):
+Part of the scenario model (:mod:`raysim.scenario.model` uses :class:`RadarSection`):
 the FMCW waveform keys and the element pattern with its gain.
 """
 

@@ -1,4 +1,4 @@
-"""Scenario files: one TOML file describes a whole simulation run.
+"""The scenario model: one TOML file describes a whole simulation run.
 
 A scenario fixes the radar waveform, the antenna array, the scene (point
 targets, a bundled ray-tracing scene or a mesh file), the platform motion, the
@@ -11,7 +11,8 @@ expected, e.g. ``radar.sample_rate_hz: got -1, expected > 0``.
 File units follow docs/conventions.md: SI with the unit in the key name
 (``sample_rate_hz``, ``range_m``), angles in degrees (``az_deg``,
 ``amplitude_deg``). :meth:`Scenario.radar_config`, :meth:`Scenario.trajectory`
-and friends convert to the SI / radian objects of the library.
+and friends convert to the SI / radian objects of the library. Files are read
+by :mod:`raysim.scenario.reader`.
 
 Example
 -------
@@ -42,38 +43,31 @@ Example
 
 from __future__ import annotations
 
-import copy
 import json
 import math
-import tomllib
-from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
 
-from raysim.io.scenario_keys import (
+from raysim.radar.config import RCS_DBSM_RANGE
+from raysim.scenario.keys import (
     ClutterSection,
     MoverSection,
     RotorSection,
     did_you_mean,
     dumps_toml,
     format_validation_error,
-    get_key,
-    parse_assignment,
-    parse_value,
     set_key,
 )
-from raysim.io.scenario_meshes import MeshSpec
-from raysim.io.scenario_radar import RadarSection, _in_range, _Section
-from raysim.radar.config import RCS_DBSM_RANGE
+from raysim.scenario.meshes import MeshSpec
+from raysim.scenario.paper_cases import PAPER_CASES, get_case
+from raysim.scenario.radar import RadarSection, _in_range, _Section
 
 __all__ = [
     "RadarSection", "ArraySection", "TargetSpec", "SceneSection", "SinusoidSpec",
     "HoverJitterSection", "MotionSection", "SensorErrorsSection", "ImuSection",
-    "OutputSection", "Scenario", "load_scenario", "loads_scenario", "validate_scenario",
-    "scenario_from_case", "set_key", "get_key", "dumps_toml", "format_validation_error",
-    "ANGLE_AXES", "TRANSLATION_AXES", "parse_value", "parse_assignment",
+    "OutputSection", "Scenario", "validate_scenario", "ANGLE_AXES", "TRANSLATION_AXES",
 ]
 
 #: Motion axes whose amplitudes are angles (given in degrees in files).
@@ -140,10 +134,10 @@ class SceneSection(_Section):
     ``name`` one of ``raysim.echoes.rt.scenes.SCENES``; ``kind = "mesh"`` with
     ``path`` to a Mitsuba XML scene or a mesh file (relative paths are taken
     from the scenario file's folder); ``kind = "meshes"`` with ``[[scene.meshes]]``
-    (users' mesh files, :mod:`raysim.io.scenario_meshes`). ``kind`` may be omitted:
+    (users' mesh files, :mod:`raysim.scenario.meshes`). ``kind`` may be omitted:
     it is inferred from which key is given. ``[[scene.movers]]``: cars driving
-    through a ray-traced scene (:class:`raysim.io.scenario_keys.MoverSection`);
-    ``[[scene.rotors]]``: rotating parts (:class:`raysim.io.scenario_keys.RotorSection`).
+    through a ray-traced scene (:class:`raysim.scenario.keys.MoverSection`);
+    ``[[scene.rotors]]``: rotating parts (:class:`raysim.scenario.keys.RotorSection`).
     """
 
     kind: Literal["points", "bundled", "mesh", "meshes"] | None = None
@@ -233,7 +227,7 @@ class MotionSection(_Section):
     """``[motion]``: platform motion, the sum of every part given.
 
     ``case``: the motion of a paper case (the ``motion`` keys of
-    ``raysim.studies.cases.PAPER_CASES[case]["scenario"]``);
+    ``raysim.scenario.paper_cases.PAPER_CASES[case]["scenario"]``);
     ``[[motion.sinusoids]]``: extra sinusoids; ``velocity_mps``: constant world
     velocity [m/s]; ``[motion.hover_jitter]``: stochastic jitter. Nothing given
     means a stationary platform.
@@ -248,8 +242,6 @@ class MotionSection(_Section):
     @classmethod
     def _known_case(cls, v: str | None) -> str | None:
         if v is not None:
-            from raysim.studies.cases import PAPER_CASES
-
             if v not in PAPER_CASES:
                 raise ValueError(f"a paper case name, one of {sorted(PAPER_CASES)}"
                                  f"{did_you_mean(v, PAPER_CASES)}")
@@ -398,7 +390,6 @@ class Scenario(_Section):
         velocity has none. ``(0.0, "")`` for a platform without oscillation.
         """
         from raysim.platform.motion import HoverJitterSpec
-        from raysim.studies.cases import get_case
 
         m = self.motion
         sines = list(m.sinusoids)
@@ -464,7 +455,6 @@ class Scenario(_Section):
             hover_jitter,
             stationary,
         )
-        from raysim.studies.cases import get_case
 
         def sines(specs: list[SinusoidSpec]) -> Trajectory:
             comps = tuple(Sinusoid(s.axis, s.amplitude_si, s.frequency_hz,
@@ -496,15 +486,6 @@ class Scenario(_Section):
         for p in parts[1:]:
             traj = traj + p
         return traj
-
-    def point_targets(self) -> list:
-        """Point targets (:class:`~raysim.echoes.oracle.PointTarget`); empty unless ``points``."""
-        from raysim.echoes.oracle import PointTarget
-
-        return [PointTarget.at(t.range_m, math.radians(t.az_deg), math.radians(t.el_deg),
-                               velocity=t.velocity_mps, rcs_dbsm=t.rcs_dbsm,
-                               radar_origin=self.lever_arm)
-                for t in self.scene.targets]
 
     def imu_spec(self):
         """The :class:`raysim.platform.imu.ImuSpec` (requires :mod:`raysim.platform.imu`)."""
@@ -544,7 +525,7 @@ class Scenario(_Section):
         return json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"))
 
     def to_toml(self) -> str:
-        """TOML text that :func:`loads_scenario` reads back to an equal scenario."""
+        """TOML text that :func:`~raysim.scenario.reader.loads_scenario` reads back equal."""
         return dumps_toml(self.to_dict())
 
     def with_values(self, changes: dict[str, Any]) -> Scenario:
@@ -603,76 +584,3 @@ def _known_keys(loc: tuple) -> list[str]:
                 model = typ
                 break
     return list(model.model_fields) if model is not None else []
-
-
-def loads_scenario(text: str, source: str = "scenario", base_dir: Path | None = None
-                   ) -> Scenario:
-    """Parse and validate TOML text; relative ``scene.path`` is taken from ``base_dir``."""
-    text = text.removeprefix("\ufeff")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{source}: not valid TOML: {exc}") from None
-    for sec, key in (("scene", "path"), ("radar", "element_pattern")):   # files: relative paths
-        p = data[sec].get(key) if isinstance(data.get(sec), dict) else None
-        if base_dir is not None and isinstance(p, str) and not Path(p).is_absolute() \
-                and (key == "path" or p.lower().endswith(".csv")):
-            data[sec][key] = str((Path(base_dir) / p).resolve())
-    scene = data.get("scene") if isinstance(data.get("scene"), dict) else {}
-    for m in scene.get("meshes") or [] if base_dir is not None else []:
-        if isinstance(m, dict) and isinstance(m.get("file"), str):
-            m["file"] = str((Path(base_dir) / m["file"]).resolve())
-    return validate_scenario(data, source)
-
-
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario TOML file.
-
-    Raises
-    ------
-    ValueError
-        File missing or unreadable, invalid TOML, or invalid values (each
-        offending key path named with its value and what was expected).
-    """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")      # a UTF-8 byte-order mark is fine
-    except OSError as exc:
-        raise ValueError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"scenario file {str(path)!r} is not UTF-8 text: byte "
-                         f"{exc.object[exc.start:exc.start + 1]!r} at offset {exc.start}; "
-                         f"save it as UTF-8") from None
-    return loads_scenario(text, source=str(path), base_dir=path.parent)
-
-
-def scenario_from_case(name: str, **overrides: Any) -> Scenario:
-    """The scenario of a paper case (radar, 20 x 20 UPA, target, motion, frames, lever arm).
-
-    Built from the case's scenario keys (``raysim.studies.cases.get_case(name)``)
-    with ``motion.case = name`` standing for the case's motion sinusoids, so
-    the TOML form reads like ``examples/case_<name>.toml``.
-
-    Parameters
-    ----------
-    name : str
-        Key of :data:`raysim.studies.cases.PAPER_CASES`.
-    **overrides
-        Not accepted; use :meth:`Scenario.with_values` for changes.
-    """
-    from raysim.studies.cases import get_case
-
-    if overrides:
-        raise ValueError(f"scenario_from_case takes no overrides, got {sorted(overrides)}; "
-                         f"use Scenario.with_values")
-    from raysim.studies.cases import PAPER_CASES
-
-    if not isinstance(name, str) or name not in PAPER_CASES:
-        raise ValueError(f"unknown paper case {name!r}; expected one of {sorted(PAPER_CASES)}"
-                         f"{did_you_mean(name, PAPER_CASES)}")
-    case = get_case(name)
-    data = case["scenario"]
-    data.update(name=name, description=case["description"], motion={"case": name})
-    return validate_scenario(copy.deepcopy(data), source=f"paper case {name!r}")
-
-

@@ -16,7 +16,7 @@ from typing import Literal
 
 from pydantic import Field, field_validator
 
-from raysim.io.scenario_radar import _Section
+from raysim.scenario.radar import _Section
 
 __all__ = ["MeshSpec", "MESH_MATERIALS"]
 
