@@ -121,6 +121,8 @@ def _clutter_words(settings: ReportSettings) -> str:
     """The report's ground clutter model in words."""
     if settings.clutter == "sionna":
         return "Sionna's own diffuse paths and ground mirror"
+    if settings.clutter == "none":
+        return "none (specular paths of the scene only)"
     return (f"persistent clutter field, {settings.clutter_per_cell:g} scatterers per range x "
             "angle cell, rough-surface mirror, target-ground ghosts")
 
@@ -151,7 +153,9 @@ def _scenario_lines(results: dict, settings: ReportSettings) -> list[str]:
         out += [f"Scenario `{s}` ({sc.name}): {what}; {st.num_chirps} chirps x "
                 f"{st.radar().chirp_interval * 1e6:.0f} us, {arr.name} "
                 f"({arr.num_channels} channels), {sc.frames} frame(s), motion "
-                f"{sc.trajectory().name}, IMU `{st.imu}`.", ""]
+                f"{sc.trajectory().name}, IMU `{st.imu}`"
+                + ("." if sc.scene.kind == "points" else
+                   f"; ground clutter: {_clutter_words(st)}."), ""]
     return out
 
 
@@ -192,16 +196,21 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
     """
     chains = _chain_keys(results)
     cols = [REFERENCE] + chains
-    lines = ["# Scene entropy report", "",
-             f"Radar: {settings.num_chirps} chirps x "
-             f"{settings.radar().chirp_interval * 1e6:.0f} us, "
-             f"{settings.array_size}x{settings.array_size} UPA, 600 samples (range window "
-             f"{settings.range_window[0]:g}-{settings.range_window[1]:g} m), grid "
-             f"+-{settings.grid_half_width_deg:g} deg step {settings.grid_step_deg:g} deg, "
-             f"hover jitter seed {settings.jitter_seed}, IMU `{settings.imu}`.", "",
+    bundled = any(_is_report_scene(r.settings, settings) for r in results.values())
+    radar = ([f"Radar: {settings.num_chirps} chirps x "
+              f"{settings.radar().chirp_interval * 1e6:.0f} us, "
+              f"{settings.array_size}x{settings.array_size} UPA, 600 samples (range window "
+              f"{settings.range_window[0]:g}-{settings.range_window[1]:g} m), grid "
+              f"+-{settings.grid_half_width_deg:g} deg step {settings.grid_step_deg:g} deg, "
+              f"hover jitter seed {settings.jitter_seed}, IMU `{settings.imu}`.", ""]
+             if bundled else
+             [f"Processing: range window {settings.range_window[0]:g}-"
+              f"{settings.range_window[1]:g} m, grid +-{settings.grid_half_width_deg:g} deg "
+              f"step {settings.grid_step_deg:g} deg.", ""])
+    lines = ["# Scene entropy report", "", *radar,
              f"Reference `{REFERENCE}`: the same scene with the platform at rest; chains "
              f"{', '.join(f'`{c}`' for c in chains)} process the hovering platform.", "",
-             f"Ground clutter: {_clutter_words(settings)}.", "",
+             *([f"Ground clutter: {_clutter_words(settings)}.", ""] if bundled else []),
              *_scenario_lines(results, settings),
              f"Entropy margin of the exact chain: {ENTROPY_MARGIN_NATS} nats. Dense clutter "
              "near nadir changes its speckle under the hover displacement (scatterers "
