@@ -79,7 +79,8 @@ def test_point_metrics_equal_simulate(tmp_path, capsys, array, frames):
 
 
 def test_scenario_errors_are_named(tmp_path, capsys):
-    """A missing scenario file, a car on point targets and a bad range window exit 2."""
+    """A missing scenario file, a car, a jitter seed or jitter axes on point targets without
+    hover jitter, and a bad range window exit 2 naming the setting."""
     assert main(["scene-report", "--scenario", str(tmp_path / "nope.toml"),
                  "--out", str(tmp_path / "o")]) == 2
     assert "nope.toml" in capsys.readouterr().err
@@ -91,3 +92,9 @@ def test_scenario_errors_are_named(tmp_path, capsys):
     assert main(["scene-report", "--scenario", str(path), "--range-window", "20,10",
                  "--out", str(tmp_path / "o")]) == 2
     assert "--range-window" in capsys.readouterr().err
+    assert main(["scene-report", "--scenario", str(path), "--jitter-seed", "3",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "hover_jitter" in capsys.readouterr().err
+    assert main(["scene-report", "--scenario", str(path), "--jitter-axes", "z",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "jitter_axes" in capsys.readouterr().err

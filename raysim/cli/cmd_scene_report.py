@@ -74,14 +74,16 @@ def register(subparsers) -> None:
                    f"and paper:published (default: {','.join(CHAINS)}); the {REFERENCE} "
                    "reference is always computed")
     p.add_argument("--quick", action="store_true",
-                   help="64 chirps, 8x8 UPA, 20k rays, 6 deg grid (about 20 s per scene on 2 "
-                   "cores) instead of 128 chirps, 12x12 UPA, 100k rays, 3 deg grid")
+                   help="bundled scenes: 64 chirps, 8x8 UPA, 20k rays, 6 deg grid (about 20 s "
+                   "per scene on 2 cores) instead of 128 chirps, 12x12 UPA, 100k rays, 3 deg "
+                   "grid; scenario files: 20k rays and the 6 deg grid")
     p.add_argument("--imu", default=None, metavar="PRESET",
                    help="IMU preset of the pose estimate (default: ideal for the bundled "
                    "scenes, a scenario file's own)")
     p.add_argument("--jitter-axes", default=None, metavar="LIST",
-                   help="comma list of the axes the hover jitter moves, from x, y, z, roll, "
-                   "pitch, yaw (default: all; z,roll,pitch,yaw keeps the horizontal position)")
+                   help="comma list of the axes the hover motion moves, from x, y, z, roll, "
+                   "pitch, yaw (default: all; z,roll,pitch,yaw keeps the horizontal position; "
+                   "traced scenes only)")
     p.add_argument("--jitter-seed", type=int, default=None, metavar="N",
                    help="seed of the hover jitter (default: 7, or a scenario file's own)")
     p.add_argument("--range-window", default=None, metavar="LOW,HIGH",

@@ -206,6 +206,10 @@ class ReportSettings:
                 math.isfinite(self.mover_speed) and 0 < self.mover_speed <= MAX_MOVER_SPEED):
             raise ValueError(f"mover_speed must be None or in (0, {MAX_MOVER_SPEED}] m/s, "
                              f"got {self.mover_speed!r}")
+        if self.jitter_axes != AXES and self.scenario.scene.kind == "points":
+            raise ValueError(f"jitter_axes selects the moving axes of a traced scene's twin; "
+                             f"scenario {self.scenario.name!r} has point targets, which run "
+                             f"the scenario's own motion, got {self.jitter_axes!r}")
         if self.mover_speed is not None and self.scenario.scene.kind == "points":
             raise ValueError(f"mover_speed drives a car through a ray-traced scene; scenario "
                              f"{self.scenario.name!r} has point targets (scene.kind 'points')")
@@ -298,6 +302,9 @@ class ReportSettings:
             if name == "clutter" and value not in REPORT_CLUTTER + ("none",):
                 raise ValueError(f"clutter must be one of {REPORT_CLUTTER + ('none',)}, "
                                  f"got {value!r}")
+            if name == "jitter_seed" and scenario.motion.hover_jitter is None:
+                raise ValueError(f"jitter_seed: scenario {scenario.name!r} has no "
+                                 f"[motion.hover_jitter] to seed, got {value!r}")
             value = list(value) if isinstance(value, tuple) else value
             try:
                 scenario = scenario.with_values({k: value for k in SCENARIO_KEYS[name]})
