@@ -17,7 +17,6 @@ import argparse
 import json
 import os
 import time
-from dataclasses import replace
 
 import numpy as np
 
@@ -41,7 +40,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scene", default="flat_reflectors")
     a = p.parse_args()
-    s = replace(QUICK, clutter="field")
+    s = QUICK.with_values(clutter="field")
     cfg, arr, lever = s.radar(), s.array(), np.asarray(s.lever_arm)
     t0 = float(cfg.chirp_times()[0])
     model = GroundClutter(FieldSettings(scatterers_per_cell=s.clutter_per_cell,

@@ -165,11 +165,20 @@ METRICS = {
     "entropy_ae_nats": ("nats", "image entropy of the accumulated AE map: beams summed "
                                 "coherently over each frame's chirps (zero-Doppler beam), "
                                 "power summed over frames"),
-    "entropy_rd_nats": ("nats", "image entropy of the RD map"),
-    "entropy_ra_nats": ("nats", "image entropy of the RA map"),
+    "entropy_rd_nats": ("nats", "image entropy of the RD map of the beam towards the "
+                                "target (frame 0, all range bins)"),
+    "scene_entropy_rd_nats": ("nats", "image entropy of a scene's RD map: Hann Doppler power "
+                                      "summed over every beam of the global grid, range "
+                                      "window"),
+    "scene_entropy_ra_nats": ("nats", "image entropy of a scene's RA map: coherent "
+                                      "(zero-Doppler) beam power summed over elevation, "
+                                      "range window"),
+    "scene_entropy_ae_nats": ("nats", "image entropy of a scene's AE map: coherent "
+                                      "(zero-Doppler) beam power summed over the range "
+                                      "window"),
     "peak_power_db": ("dB(W)", "received power at the target's range peak"),
-    "ridge_leakage_db": ("dB", "RD-map power outside the zero-Doppler ridge (Doppler bins "
-                               "-1..+1) relative to the map's total"),
+    "ridge_leakage_db": ("dB", "power of a scene's RD map outside the zero-Doppler ridge "
+                               "(Doppler bins -1..+1) relative to the map's total"),
     "width_improvement_pct": ("%", "Doppler width reduction against chain none: "
                                    "100 (w_none - w) / w_none"),
     "width_vs_stationary": ("1", "Doppler width over that of the stationary reference"),

@@ -17,8 +17,8 @@ from raysim.scenario import Scenario
 from raysim.synthesis.frame import RadarFrame
 
 __all__ = ["FeatureUnavailable", "Reference", "frame_source", "point_targets",
-           "reference_target", "LazyFrames",
-           "render_frames"]
+           "reference_target", "LazyFrames", "render_frames", "nominal_at", "path_kinds",
+           "hover_twin"]
 
 
 class FeatureUnavailable(RuntimeError):
@@ -258,3 +258,193 @@ def render_frames(scenario: Scenario, trajectory=None) -> list[RadarFrame]:
     return [source(f) for f in range(scenario.frames)]
 
 
+# ------------------------------------------------- stationary / hover twin
+def nominal_at(trajectory, t0: float, axes=None):
+    """``trajectory`` moved to start at the nominal pose at ``t0``, on chosen axes only.
+
+    Constant offsets (:class:`raysim.platform.motion.Ramp`) remove its pose at
+    ``t0`` on the kept axes, so a radar on it and a stationary radar share the
+    pose of the first chirp and differ only by the motion within the frame (a
+    static offset would shift the range profile by a fraction of a bin, which
+    is no Doppler effect).
+
+    Parameters
+    ----------
+    trajectory : raysim.platform.motion.Trajectory
+    t0 : float
+        Time at which the pose is nominal [s].
+    axes : sequence of str, optional
+        Axes of :data:`raysim.platform.motion.AXES` that move (default all six);
+        the components on the others are dropped.
+
+    Returns
+    -------
+    raysim.platform.motion.Trajectory
+    """
+    from raysim.platform.motion import AXES, Ramp, Trajectory
+
+    axes = AXES if axes is None else tuple(axes)
+    if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
+        raise ValueError(f"axes must be distinct names from {AXES}, got {axes!r}")
+    if not math.isfinite(t0):
+        raise ValueError(f"t0 must be a finite time [s], got {t0!r}")
+    q0 = trajectory.states([t0])[0][0]
+    moved = Trajectory(tuple(c for c in trajectory.components if c.axis in axes),
+                       name=trajectory.name if len(axes) == len(AXES)
+                       else f"{trajectory.name} ({', '.join(axes)})")
+    return moved + Trajectory(tuple(Ramp(a, offset=-float(v)) for a, v in zip(AXES, q0,
+                                                                              strict=True)
+                                    if a in axes), name="nominal pose at t0")
+
+
+def path_kinds(paths) -> dict:
+    """Path count per interaction kind of a :class:`raysim.echoes.rt.trace.PathSet`.
+
+    ``specular`` (single-bounce ground mirror), ``diffuse``, ``target`` and
+    ``other_specular`` counts.
+    """
+    from raysim.echoes.rt.trace import DIFFUSE, SENSING, SPECULAR
+
+    k = paths.kind
+    return {"specular": int(np.sum(k == SPECULAR)), "diffuse": int(np.sum((k & DIFFUSE) != 0)),
+            "target": int(np.sum((k & SENSING) != 0)),
+            "other_specular": int(np.sum(((k & SPECULAR) != 0) & (k != SPECULAR)
+                                         & ((k & (DIFFUSE | SENSING)) == 0)))}
+
+
+def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = None,
+               nufft_eps: float = 1e-5, path_chunk: int = 1024, movers=(),
+               progress: Callable[[str], None] | None = None) -> dict:
+    """Frame 0 of a scenario seen by a stationary and by a moving radar, from one trace.
+
+    Ray-traced scenes (``bundled``, ``mesh``, ``meshes``) are traced once at
+    the nominal pose at the first chirp (the scenario's tracer, clutter field,
+    movers and rotors); the frozen paths and the moving objects' tracks are
+    re-projected (:func:`raysim.echoes.rt.reproject.synthesize_paths`, exact
+    image method for the specular ground return) onto a radar at rest
+    (:func:`raysim.platform.motion.stationary`) and onto ``trajectory``, so the
+    two frames differ only by the platform motion within the frame. Point
+    scenes render frame 0 with the oracle of :func:`frame_source` twice (the
+    frames ``raysim simulate`` renders when ``trajectory`` is the scenario's).
+    With ``scenario.noise`` both frames get the same receiver noise (seed
+    ``scenario.seed``).
+
+    Parameters
+    ----------
+    scenario : Scenario
+    trajectory : raysim.platform.motion.Trajectory
+        Motion of the moving radar (e.g. :func:`nominal_at` of the scenario's).
+    samples_per_src : int, optional
+        Rays shot by the tracer (default the tracer's).
+    nufft_eps : float
+        Relative error of the IF synthesis.
+    path_chunk : int
+        Paths re-projected and synthesised at once.
+    movers : sequence
+        Extra moving objects of a traced scene, driving through it in both
+        frames: :class:`raysim.echoes.clutter.movers.CarMover`,
+        :class:`raysim.echoes.clutter.tracks.MovingObject`, or a callable
+        ``mover(scene, ground, t0)`` returning one of them or None (for objects
+        placed on the loaded scene's ground).
+    progress : callable, optional
+        ``progress(message)`` after each step.
+
+    Returns
+    -------
+    dict
+        ``"stationary"``, ``"hover"``: :class:`~raysim.synthesis.frame.RadarFrame`
+        (``data`` ``[chirp, channel, sample]``); ``"reference"``
+        (:class:`Reference` or None); ``"seconds"`` (trace and synthesis wall
+        times [s]). Traced scenes also: ``"paths"``
+        (:class:`raysim.echoes.rt.trace.PathSet`), ``"path_kinds"`` (path count
+        per kind: ``specular``, ``diffuse``, ``target``, ``other_specular``),
+        ``"tracks"``, ``"movers"`` (the MovingObject of every extra mover),
+        ``"scene"`` (the loaded scene), ``"clutter"`` (the field's report,
+        empty without it).
+
+    Raises
+    ------
+    FeatureUnavailable
+        For a ray-traced scene when Sionna RT cannot be used here.
+    """
+    import functools
+    import time
+    from dataclasses import replace
+
+    from raysim.echoes.oracle import add_noise
+    from raysim.platform.motion import stationary
+    from raysim.synthesis.frame import adc_samples
+
+    if samples_per_src is not None and not (isinstance(samples_per_src, (int, np.integer))
+                                            and samples_per_src >= 1):
+        raise ValueError(f"samples_per_src must be a positive integer, got {samples_per_src!r}")
+    cfg = scenario.radar_config()
+    arr = scenario.virtual_array()
+    lever = scenario.lever_arm
+    seconds: dict = {}
+    if scenario.scene.kind == "points":
+        out = {}
+        for name, motion in (("stationary", stationary()), ("hover", trajectory)):
+            t = time.perf_counter()
+            out[name] = frame_source(scenario, motion)(0)
+            seconds[f"synthesis_{name}"] = time.perf_counter() - t
+            if progress:
+                progress(f"synthesised {name}")
+        return dict(out, reference=reference_target(scenario), seconds=seconds)
+
+    from raysim.echoes.clutter.model import GroundClutter
+    from raysim.echoes.clutter.tracks import synthesize_tracks
+    from raysim.echoes.rt.reproject import synthesize_paths
+    from raysim.synthesis.select import synthesize
+
+    t = time.perf_counter()
+    scene, tracer, _ = _rt_scene(scenario)
+    if samples_per_src is not None:
+        tracer = replace(tracer, samples_per_src=int(samples_per_src))
+    clutter = _clutter(scenario)
+    model = clutter if isinstance(clutter, GroundClutter) else None
+    if model is not None:
+        tracer = model.tracer(tracer)
+    elif clutter == "none":
+        tracer = replace(tracer, diffuse=False)
+    t0 = float(cfg.chirp_times()[0])
+    rest = stationary()
+    paths = tracer(scene, cfg, rest, lever, time=t0)
+    tracks = []
+    if model is not None:
+        paths, tracks = model.paths(scene, paths, cfg, arr, rest, lever, time=t0)
+    radar_w = rest.point_world([t0], lever)[0, 0]
+    ground = None                      # cars are located on and traced with the ground
+    if movers:
+        from raysim.echoes.clutter.ground import GroundSurface
+
+        ground = model.ground if model is not None else GroundSurface.from_scene(scene)
+    cars = [m(scene, ground, t0) if callable(m) and not hasattr(m, "tracks") else m
+            for m in movers]
+    objects = [m.moving_object(cfg, radar_w, time=t0, ground=ground)
+               if hasattr(m, "moving_object") else m for m in cars if m is not None]
+    tracks = tracks + [m.tracks(cfg, radar_w, time=t0) for m in objects]
+    seconds["trace"] = time.perf_counter() - t
+    if progress:
+        progress("traced")
+    # moving points at this eps; frozen paths: synthesize_paths takes the compact way
+    # (fused kernel, no [path, chirp, channel] delays) for the clutter field
+    synth = functools.partial(synthesize, eps=nufft_eps)
+    out = {"paths": paths, "path_kinds": path_kinds(paths), "tracks": tracks, "scene": scene,
+           "movers": objects, "clutter": model.summary() if model is not None else {},
+           "reference": reference_target(scenario, scene)}
+    for name, motion in (("stationary", rest), ("hover", trajectory)):
+        t = time.perf_counter()
+        data, _ = synthesize_paths(paths, cfg, arr, motion, lever, path_chunk=path_chunk,
+                                   eps=nufft_eps)
+        synthesize_tracks(tracks, cfg, arr, motion, lever, out=data, synthesizer=synth)
+        if scenario.noise:
+            add_noise(data, cfg, scenario.seed)
+        out[name] = RadarFrame(adc_samples(data, cfg), cfg, arr, cfg.chirp_times(), lever, 0,
+                               {"scene": scene.name, "trajectory": motion.name,
+                                "num_paths": paths.num_paths})
+        seconds[f"synthesis_{name}"] = time.perf_counter() - t
+        if progress:
+            progress(f"synthesised {name}")
+    out["seconds"] = seconds
+    return out

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -50,7 +49,7 @@ NO_HORIZONTAL = ("z", "roll", "pitch", "yaw")
 @pytest.fixture(scope="module")
 def level_results(warm_kernels):
     """The same with the jitter's horizontal displacement removed (NO_HORIZONTAL axes)."""
-    return _all_scenes(replace(SETTINGS, jitter_axes=NO_HORIZONTAL))
+    return _all_scenes(SETTINGS.with_values(jitter_axes=NO_HORIZONTAL))
 
 
 def test_stationary_clutter_is_a_zero_doppler_ridge(results):
@@ -132,7 +131,7 @@ def test_mover_stands_outside_the_clutter_ridge(warm_kernels):
     """A car driving through the scene (PO + SBR centres on a rigid trajectory) is found off
     the zero-Doppler ridge at its own range rate, stationary and hovering, before and after
     compensation; compensation brings its Doppler back onto its trajectory's."""
-    r = sr.evaluate_scene("flat_reflectors", replace(SETTINGS, mover_speed=MOVER_SPEED),
+    r = sr.evaluate_scene("flat_reflectors", SETTINGS.with_values(mover_speed=MOVER_SPEED),
                           progress=False, chains=["none", "exact"])
     (mover,) = r.movers
     print({k: v for k, v in mover.items() if k != "match"})
@@ -161,8 +160,8 @@ def test_reflectors_are_detected_where_they_are(results):
 
 def test_write_report_files(tmp_path, warm_kernels):
     """Figures, JSON, markdown and HTML written atomically (no temporary files left)."""
-    tiny = replace(SETTINGS, num_chirps=16, array_size=4, samples_per_src=2000,
-                   grid_step_deg=12.0, range_window=(14.0, 20.0))
+    tiny = SETTINGS.with_values(num_chirps=16, array_size=4, samples_per_src=2000,
+                                grid_step_deg=12.0, range_window=(14.0, 20.0))
     summary = sr.write_scene_report(tmp_path, scenes=["flat_reflectors"], settings=tiny,
                                     progress=False)
     names = sorted(p.name for p in tmp_path.iterdir())
@@ -174,7 +173,7 @@ def test_write_report_files(tmp_path, warm_kernels):
     assert data["flat_reflectors"]["reference"]["key"] == REFERENCE
     assert summary["flat_reflectors"]["chains"] == data["flat_reflectors"]["chains"]
     assert summary["flat_reflectors"]["reference"] == data["flat_reflectors"]["reference"]
-    metric_names = {f"entropy_{m}_nats" for m in sr.REPORT_MAPS} | {"ridge_leakage_db"}
+    metric_names = {f"scene_entropy_{m}_nats" for m in sr.REPORT_MAPS} | {"ridge_leakage_db"}
     assert set(data["flat_reflectors"]["reference"]["metrics"]) == metric_names
     for m in metric_names:
         metric_unit(m)                                        # every name is in METRICS
@@ -198,21 +197,25 @@ def test_cfar_finds_a_point_in_noise():
 def test_bad_input_is_named(capsys):
     """Settings and names are checked with messages that name the value."""
     with pytest.raises(ValueError, match="num_chirps"):
-        sr.ReportSettings(num_chirps=4)
+        sr.FULL.with_values(num_chirps=4)
     with pytest.raises(ValueError, match="range_window"):
         sr.ReportSettings(range_window=(30.0, 20.0))
     with pytest.raises(ValueError, match="grid_step_deg"):
         sr.ReportSettings(grid_step_deg=0.0)
     with pytest.raises(ValueError, match="preset"):
-        sr.ReportSettings(imu="perfect")
+        sr.FULL.with_values(imu="perfect")
     with pytest.raises(ValueError, match="mover_speed"):
         sr.ReportSettings(mover_speed=-6.0)
     with pytest.raises(ValueError, match="clutter_per_cell"):
-        sr.ReportSettings(clutter_per_cell=0.0)
+        sr.FULL.with_values(clutter_per_cell=0.0)
     with pytest.raises(ValueError, match="clutter must be one of"):
-        sr.ReportSettings(clutter="mirror")
+        sr.FULL.with_values(clutter="mirror")
     with pytest.raises(ValueError, match="jitter_axes.*'heave'"):
         sr.ReportSettings(jitter_axes=("z", "heave"))
+    with pytest.raises(ValueError, match="unknown report setting.*'array_sise'"):
+        sr.FULL.with_values(array_sise=4)
+    with pytest.raises(ValueError, match="scenario must be a raysim.io.scenario.Scenario"):
+        sr.ReportSettings(scenario={"radar": {}})
     with pytest.raises(ValueError, match="axes must be distinct"):
         sr.hover_trajectory(7, axes=("z", "z"))
     with pytest.raises(ValueError, match="unknown scene 'moon'"):
@@ -240,3 +243,58 @@ def test_maps_are_the_vocabulary_maps():
     assert cmd_scene_report.REPORT_CLUTTER == sr.REPORT_CLUTTER
     assert all(m in MAPS for m in sr.REPORT_MAPS)
     assert MAPS["ae"] == ("azimuth", "elevation")
+
+
+#: A user's scenario: a PLY ground 15.1 m below the radar and an OBJ car on it, hovering.
+MESH_SCENARIO = """
+name = "my meshes"
+seed = 3
+
+[radar]
+num_chirps = 16
+
+[array]
+nx = 4
+ny = 4
+
+[[scene.meshes]]
+file = "ground.ply"
+material = "dry-soil"
+position_m = [0.0, 0.0, 15.1]
+
+[[scene.meshes]]
+file = "car.obj"
+material = "metal"
+position_m = [3.0, 4.0, 14.3]
+closed = true
+
+[scene]
+max_depth = 1
+
+[motion.hover_jitter]
+seed = 5
+"""
+
+
+def test_scene_report_takes_a_mesh_scenario(tmp_path, capsys, warm_kernels):
+    """`scene-report --scenario` on users' meshes: the twin is traced from the scenario's
+    meshes with its clutter field, every chain is measured, the report names the meshes."""
+    trimesh = pytest.importorskip("trimesh")
+    from raysim.cli import main
+
+    trimesh.creation.box((40.0, 40.0, 0.2)).export(tmp_path / "ground.ply")
+    trimesh.creation.box((4.5, 1.8, 1.4)).export(tmp_path / "car.obj")
+    (tmp_path / "s.toml").write_text(MESH_SCENARIO, encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["scene-report", "--scenario", str(tmp_path / "s.toml"), "--quick",
+                 "--chains", "none,exact", "--out", str(out), "--no-progress",
+                 "--threads", "2"]) == 0
+    assert "my_meshes: scene entropy" in capsys.readouterr().out
+    data = json.loads((out / "my_meshes.json").read_text())
+    assert set(data["chains"]) == {"none", "exact"}
+    assert data["settings"]["scenario"]["scene"]["kind"] == "meshes"
+    assert data["path_kinds"]["diffuse"] > 0 and data["clutter"]["num_scatterers"] > 0
+    assert data["point_metrics"] == {}                       # no point target in the scene
+    md = (out / "report.md").read_text()
+    assert "`ground.ply`" in md and "`car.obj`" in md
+    assert (out / "my_meshes_ae.png").read_bytes()[:4] == b"\x89PNG"

@@ -1,30 +1,54 @@
-"""One scene of the report: the stationary reference and every chain, targets matched."""
+"""One scene or scenario of the report: the stationary reference and every chain, targets matched.
+
+A bundled scene (:func:`evaluate_scene`) or any scenario (:func:`evaluate_scenario`:
+point targets, a bundled scene, users' meshes) goes through the pipeline's
+stages: the stationary / hover twin (:func:`raysim.pipeline.sources.hover_twin`),
+the IMU record (:func:`raysim.pipeline.sensors.imu_record`), the pose estimate
+(:mod:`raysim.pipeline.estimate`), the chains (:func:`raysim.pipeline.chains.project`),
+the scene measurement (:mod:`raysim.measure.scene`, :mod:`raysim.measure.ridge`)
+and, for the scenario's reference target, the point measurement of ``raysim simulate``.
+"""
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from raysim.processing.maps import range_compress
 from raysim.vocabulary import CHAINS, REFERENCE, parse_chains
 
-from .process import ChainResult, chain_result
+from .process import ChainResult, chain_result, point_metrics, report_cube
 from .settings import (
     CFAR_THRESHOLD_DB,
     ENTROPY_MARGIN_NATS,
     QUICK,
     REPORT_MAPS,
     RIDGE_HALF_WIDTH_BINS,
+    SCENARIO_KEYS,
     ReportSettings,
 )
-from .simulate import hover_trajectory, path_kinds, scene_motion, simulate_scene
+from .simulate import report_trajectory, scene_motion, simulate_scene
 
-__all__ = ["SceneResult", "evaluate_scene", "mover_truth", "find_mover",
-           "MOVER_CENTRE_SPAN_DB"]
+__all__ = ["SceneResult", "evaluate_scene", "evaluate_scenario", "settings_dict",
+           "mover_truth", "find_mover", "MOVER_CENTRE_SPAN_DB"]
+
+
+def settings_dict(settings: ReportSettings) -> dict:
+    """JSON-ready settings: the knobs, the scenario shortcuts and the scenario itself."""
+    out = {f.name: getattr(settings, f.name) for f in fields(settings) if f.name != "scenario"}
+    out.update({k: getattr(settings, k) for k in SCENARIO_KEYS})
+    out["scenario"] = settings.scenario.to_dict()
+    return out
+
+
+def _finite(d: dict) -> dict:
+    """Non-finite floats as None (JSON has no NaN)."""
+    return {k: (float(v) if isinstance(v, (int, float)) and math.isfinite(v) else None)
+            for k, v in d.items()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,6 +87,13 @@ class SceneResult:
         The clutter field's report (:attr:`raysim.echoes.clutter.field.ClutterField.report`
         plus ``builds``: count, expected count, density scale, resolution cell,
         build time); empty with Sionna's clutter.
+    point : dict
+        Point metrics of the scenario's reference target
+        (:func:`raysim.pipeline.sources.reference_target`): ``reference``
+        (``range_m``, ``az_deg``, ``el_deg``) and ``metrics``: key (the
+        reference and every chain) -> metric name -> value
+        (:data:`raysim.vocabulary.METRICS`, the point measurement of ``raysim
+        simulate``); empty when the scenario has no target.
     """
 
     scene: str
@@ -76,6 +107,7 @@ class SceneResult:
     seconds: dict
     movers: list = field(default_factory=list)
     clutter: dict = field(default_factory=dict)
+    point: dict = field(default_factory=dict)
 
     def exact_within_margin(self) -> bool | None:
         """True when every map entropy of ``exact`` is within the margin of the reference.
@@ -93,7 +125,8 @@ class SceneResult:
         ``reference``: ``{"key": "stationary", "metrics", "detections"}``;
         ``chains``: chain key -> ``{"metrics", "minus_reference", "detections"}``
         where ``minus_reference`` holds the differences of every metric to the
-        reference's.
+        reference's; ``point_metrics``: ``{"reference": target, "metrics": {key:
+        {name: value}}}`` for a scenario with a target (NaN written as null).
         """
         ref = self.reference.metrics()
         chains = {}
@@ -103,7 +136,7 @@ class SceneResult:
                          "detections": r.detections}
         return {
             "scene": self.scene,
-            "settings": asdict(self.settings),
+            "settings": settings_dict(self.settings),
             "num_paths": self.num_paths,
             "path_kinds": self.path_kinds,
             "motion_rms": self.motion_rms,
@@ -115,14 +148,25 @@ class SceneResult:
             "targets": self.targets,
             "movers": self.movers,
             "clutter": self.clutter,
+            "point_metrics": ({"reference": self.point["reference"],
+                               "metrics": {k: _finite(v)
+                                           for k, v in self.point["metrics"].items()}}
+                              if self.point else {}),
             "seconds": self.seconds,
         }
 
 
 def _targets(scene, settings: ReportSettings) -> list:
-    from raysim.echoes.oracle import az_el
+    """Known reflectors of a traced scene, or the point targets of a point scenario."""
+    from raysim.echoes.oracle import az_el, direction
 
     lever = np.asarray(settings.lever_arm, dtype=float)
+    if scene is None:
+        return [{"name": f"target {i}", "position_m": (lever + t.range_m * direction(
+                     math.radians(t.az_deg), math.radians(t.el_deg))).tolist(),
+                 "range_m": float(t.range_m), "az_deg": float(t.az_deg),
+                 "el_deg": float(t.el_deg), "rcs_dbsm": float(t.rcs_dbsm)}
+                for i, t in enumerate(settings.scenario.scene.targets)]
     out = []
     for t in scene.targets:
         v = t.position - lever
@@ -245,13 +289,14 @@ def find_mover(truth: dict, result: ChainResult, range_resolution: float) -> dic
 
 def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bool = True,
                    chains: Sequence[str] | str = CHAINS) -> SceneResult:
-    """Simulate and process one scene: the stationary reference and every chain.
+    """Simulate and process one bundled scene: the stationary reference and every chain.
 
     Parameters
     ----------
     scene : str
         Registry name (``flat_reflectors``, ``parking_lot``, ``rough_terrain``).
     settings : ReportSettings
+        Its scenario's scene is replaced by ``scene`` (:meth:`ReportSettings.for_scene`).
     progress : bool
         Show a tqdm bar on stderr.
     chains : sequence of str or str
@@ -268,22 +313,93 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
 
     if scene not in SCENES:
         raise ValueError(f"unknown scene {scene!r}; expected one of {sorted(SCENES)}")
+    return evaluate_scenario(settings.for_scene(scene), progress=progress, chains=chains,
+                             label=scene)
+
+
+def _point_frames(settings: ReportSettings, trajectory, sim: dict):
+    """Frames, stationary frames and motion of the point measurement.
+
+    Point scenarios: all frames of the scenario as ``raysim simulate`` renders
+    them (:class:`raysim.pipeline.sources.LazyFrames`), and the motion
+    :func:`raysim.pipeline.run.evaluate` estimates (the scenario's IMU log over
+    every frame, :func:`raysim.pipeline.estimate.scenario_motion` at every TDM
+    slot). Traced scenarios: the twin's frames and the report's own estimate.
+    """
+    from raysim.pipeline.estimate import scenario_motion
+    from raysim.pipeline.sensors import imu_log
+    from raysim.pipeline.sources import LazyFrames, frame_source
+    from raysim.platform.kinematics import slot_times
+    from raysim.platform.motion import stationary
+
+    scenario = settings.scenario
+    config = settings.radar()
+    if scenario.scene.kind != "points":
+        return [sim["hover"]], [sim["stationary"]], None
+    frames = LazyFrames(frame_source(scenario, trajectory), scenario.frames)
+    still = LazyFrames(frame_source(scenario, stationary()), scenario.frames)
+    times = slot_times(frames.chirp_times(), frames[0].array.num_slots,
+                       config.slot_interval).ravel()
+    motion = scenario_motion(scenario, imu_log(scenario, trajectory), times, trajectory)
+    return frames, still, motion
+
+
+def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
+                      chains: Sequence[str] | str = CHAINS, label: str | None = None
+                      ) -> SceneResult:
+    """Simulate and process the scenario of ``settings``: the stationary reference and every chain.
+
+    Frame 0 of the scenario is seen by a radar at rest and by the moving radar
+    (:func:`raysim.studies.scene_report.simulate.report_trajectory`) through the
+    pipeline's twin; the pose at every chirp is estimated from the scenario's
+    IMU; every chain and the reference are measured over the scene
+    (:func:`chain_result`). With a reference target
+    (:func:`raysim.pipeline.sources.reference_target`), the point metrics of
+    every chain and of the reference follow (:func:`point_metrics`): for a
+    point scenario on all its frames with the motion of ``raysim simulate``,
+    so they equal that command's values; for a traced scenario on the twin's
+    frame.
+
+    Parameters
+    ----------
+    settings : ReportSettings
+    progress : bool
+        Show a tqdm bar on stderr.
+    chains : sequence of str or str
+        Chains of the moving platform (default all of :data:`raysim.vocabulary.CHAINS`).
+    label : str, optional
+        Name of the result (default the scenario's name).
+
+    Returns
+    -------
+    SceneResult
+    """
     specs = sorted(parse_chains(chains), key=lambda s: (CHAINS.index(s.name), s.key))
     from tqdm.auto import tqdm
 
-    bar = tqdm(total=4 + len(specs), desc=scene, file=sys.stderr, disable=not progress,
+    scenario = settings.scenario
+    label = scenario.name if label is None else label
+    bar = tqdm(total=4 + len(specs), desc=label, file=sys.stderr, disable=not progress,
                leave=False)
-    trajectory = hover_trajectory(settings.jitter_seed, float(settings.radar().chirp_times()[0]),
-                                  settings.jitter_axes)
-    sim = simulate_scene(scene, settings, trajectory,
-                         progress=lambda msg: (bar.set_postfix_str(msg), bar.update()))
     config, array = settings.radar(), settings.array()
+    trajectory = report_trajectory(settings)
+    sim = simulate_scene(settings, trajectory,
+                         progress=lambda msg: (bar.set_postfix_str(msg), bar.update()))
+    if scenario.scene.kind == "points":
+        bar.update()                                   # no trace
     t_chirp = config.chirp_times()
     t = time.perf_counter()
-    motion = scene_motion(trajectory, t_chirp, settings)
+    frames, still, point_motion = _point_frames(settings, trajectory, sim)
+    slots = array.num_slots
+    if point_motion is None:                           # the report's estimate, every slot
+        from raysim.platform.kinematics import slot_times
+
+        point_motion = scene_motion(trajectory, slot_times(t_chirp, slots,
+                                                           config.slot_interval).ravel(),
+                                    settings)
+    motion = point_motion.select(np.arange(config.num_chirps) * slots)   # frame 0, slot 0
     seconds = dict(sim["seconds"], imu=time.perf_counter() - t)
-    taper = settings.channel_taper().astype(np.float32)[None, :, None]
-    rc = {k: range_compress(sim[k]) * taper for k in ("stationary", "hover")}
+    rc = {k: report_cube(sim[k].data, settings) for k in ("stationary", "hover")}
     bar.set_postfix_str(REFERENCE)
     reference = chain_result(REFERENCE, rc["stationary"], None, settings, config, array)
     seconds[REFERENCE] = reference.seconds
@@ -294,11 +410,22 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
         results[s.key] = chain_result(s, rc["hover"], motion, settings, config, array)
         seconds[s.key] = results[s.key].seconds
         bar.update()
+    point = {}
+    target = sim.get("reference")
+    if target is not None:
+        t = time.perf_counter()
+        metrics = {REFERENCE: point_metrics(still, target, "none", None)}
+        for s in specs:
+            metrics[s.key] = point_metrics(frames, target, s,
+                                           point_motion if s.compensated else None)
+        point = {"reference": {"range_m": target.range_m, "az_deg": target.az_deg,
+                               "el_deg": target.el_deg}, "metrics": metrics}
+        seconds["point_metrics"] = time.perf_counter() - t
     bar.close()
-    targets = _targets(sim["scene"], settings)
+    targets = _targets(sim.get("scene"), settings)
     _match(targets, reference, results, settings)
     movers = []
-    for m in sim["movers"]:
+    for m in sim.get("movers", []):
         truth = mover_truth(m, settings, config)
         truth["match"] = {k: find_mover(truth, r, config.range_resolution)
                           for k, r in {REFERENCE: reference, **results}.items()}
@@ -311,5 +438,7 @@ def evaluate_scene(scene: str, settings: ReportSettings = QUICK, *, progress: bo
                   "yaw_pitch_roll_deg": np.sqrt(np.mean(ypr**2, axis=0)).tolist(),
                   "velocity_mps": float(np.sqrt(np.mean(np.sum(
                       trajectory.velocity(t_chirp) ** 2, axis=1))))}
-    return SceneResult(scene, settings, reference, results, targets, sim["paths"].num_paths,
-                       path_kinds(sim["paths"]), motion_rms, seconds, movers, sim["clutter"])
+    paths = sim.get("paths")
+    return SceneResult(label, settings, reference, results, targets,
+                       0 if paths is None else paths.num_paths, sim.get("path_kinds", {}),
+                       motion_rms, seconds, movers, sim.get("clutter", {}), point)

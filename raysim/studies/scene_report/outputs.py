@@ -4,15 +4,17 @@ from __future__ import annotations
 
 import html
 import os
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from raysim.io.files import atomic_savefig, atomic_write_json, atomic_write_text
+from raysim.measure.scene import SCENE_METRICS
 from raysim.vocabulary import CHAINS, MAP_TITLES, REFERENCE, chain_label, parse_chains
 
-from .evaluate import SceneResult, evaluate_scene
+from .evaluate import SceneResult, evaluate_scenario, evaluate_scene
 from .settings import (
     ENTROPY_MARGIN_NATS,
     FULL,
@@ -21,7 +23,26 @@ from .settings import (
     ReportSettings,
 )
 
-__all__ = ["plot_scene", "report_markdown", "report_html", "write_scene_report"]
+__all__ = ["POINT_TABLE_METRICS", "plot_scene", "report_markdown", "report_html",
+           "write_scene_report", "result_label"]
+
+#: Point metrics of the reference target shown in ``report.md`` (all are in the JSON).
+POINT_TABLE_METRICS = ("range_m", "az_deg", "el_deg", "angle_error_deg",
+                       "map_angle_error_deg", "pseudo_velocity_mps", "doppler_width_hz",
+                       "entropy_ae_nats", "entropy_rd_nats")
+
+
+def result_label(name: str, taken=()) -> str:
+    """A file-name-safe label for a scene or scenario name, unique among ``taken``.
+
+    Characters other than letters, digits, ``_``, ``.`` and ``-`` become ``_``;
+    a clash gets a suffix ``_2``, ``_3`` ...
+    """
+    base = re.sub(r"[^A-Za-z0-9_.-]+", "_", str(name)).strip("._") or "scenario"
+    label, k = base, 2
+    while label in taken:
+        label, k = f"{base}_{k}", k + 1
+    return label
 
 
 def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
@@ -100,8 +121,61 @@ def _clutter_words(settings: ReportSettings) -> str:
     """The report's ground clutter model in words."""
     if settings.clutter == "sionna":
         return "Sionna's own diffuse paths and ground mirror"
+    if settings.clutter == "none":
+        return "none (specular paths of the scene only)"
     return (f"persistent clutter field, {settings.clutter_per_cell:g} scatterers per range x "
             "angle cell, rough-surface mirror, target-ground ghosts")
+
+
+def _is_report_scene(st: ReportSettings, settings: ReportSettings) -> bool:
+    """True when ``st`` is ``settings`` on one of the bundled scenes."""
+    if st.scenario.scene.kind != "bundled" or settings.scenario.scene.kind != "bundled":
+        return False
+    return st == settings.for_scene(st.scenario.scene.name)
+
+
+def _scenario_lines(results: dict, settings: ReportSettings) -> list[str]:
+    """One line per result whose scenario is not the report's own (scenario files)."""
+    out = []
+    for s, r in results.items():
+        st = r.settings
+        if _is_report_scene(st, settings):
+            continue
+        sc, arr = st.scenario, st.array()
+        what = {"points": f"{len(sc.scene.targets)} point target(s)",
+                "bundled": f"bundled scene `{sc.scene.name}`",
+                "mesh": "a mesh scene", "meshes": f"{len(sc.scene.meshes)} user mesh(es)"
+                }[sc.scene.kind]
+        if sc.scene.kind == "meshes":
+            what += " (" + ", ".join(f"`{m.name}`" if getattr(m, "name", None) else
+                                     f"`{os.path.basename(m.file)}`"
+                                     for m in sc.scene.meshes) + ")"
+        out += [f"Scenario `{s}` ({sc.name}): {what}; {st.num_chirps} chirps x "
+                f"{st.radar().chirp_interval * 1e6:.0f} us, {arr.name} "
+                f"({arr.num_channels} channels), {sc.frames} frame(s), motion "
+                f"{sc.trajectory().name}, IMU `{st.imu}`"
+                + ("." if sc.scene.kind == "points" else
+                   f"; ground clutter: {_clutter_words(st)}."), ""]
+    return out
+
+
+def _point_lines(results: dict, cols: list) -> list[str]:
+    """The table of the reference targets' point metrics (scenarios with a target)."""
+    have = {s: r for s, r in results.items() if r.point}
+    if not have:
+        return []
+    lines = ["", "Point metrics of each scenario's reference target (its first target, as "
+             "`raysim simulate` measures it; units in `raysim.vocabulary.METRICS`)", "",
+             "| scene | target (range, az, el) | metric | " + " | ".join(cols) + " |",
+             "|---|---|---|" + "---|" * len(cols)]
+    for s, r in have.items():
+        ref = r.point["reference"]
+        where = f"{ref['range_m']:.2f} m, {ref['az_deg']:.1f}, {ref['el_deg']:.1f} deg"
+        for m in POINT_TABLE_METRICS:
+            cells = " | ".join(f"{r.point['metrics'][c][m]:.4g}"
+                               if c in r.point["metrics"] else "-" for c in cols)
+            lines.append(f"| {s} | {where} | {m} | {cells} |")
+    return lines
 
 
 def report_markdown(results: dict, settings: ReportSettings) -> str:
@@ -122,16 +196,22 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
     """
     chains = _chain_keys(results)
     cols = [REFERENCE] + chains
-    lines = ["# Scene entropy report", "",
-             f"Radar: {settings.num_chirps} chirps x "
-             f"{settings.radar().chirp_interval * 1e6:.0f} us, "
-             f"{settings.array_size}x{settings.array_size} UPA, 600 samples (range window "
-             f"{settings.range_window[0]:g}-{settings.range_window[1]:g} m), grid "
-             f"+-{settings.grid_half_width_deg:g} deg step {settings.grid_step_deg:g} deg, "
-             f"hover jitter seed {settings.jitter_seed}, IMU `{settings.imu}`.", "",
+    bundled = any(_is_report_scene(r.settings, settings) for r in results.values())
+    radar = ([f"Radar: {settings.num_chirps} chirps x "
+              f"{settings.radar().chirp_interval * 1e6:.0f} us, "
+              f"{settings.array_size}x{settings.array_size} UPA, 600 samples (range window "
+              f"{settings.range_window[0]:g}-{settings.range_window[1]:g} m), grid "
+              f"+-{settings.grid_half_width_deg:g} deg step {settings.grid_step_deg:g} deg, "
+              f"hover jitter seed {settings.jitter_seed}, IMU `{settings.imu}`.", ""]
+             if bundled else
+             [f"Processing: range window {settings.range_window[0]:g}-"
+              f"{settings.range_window[1]:g} m, grid +-{settings.grid_half_width_deg:g} deg "
+              f"step {settings.grid_step_deg:g} deg.", ""])
+    lines = ["# Scene entropy report", "", *radar,
              f"Reference `{REFERENCE}`: the same scene with the platform at rest; chains "
              f"{', '.join(f'`{c}`' for c in chains)} process the hovering platform.", "",
-             f"Ground clutter: {_clutter_words(settings)}.", "",
+             *([f"Ground clutter: {_clutter_words(settings)}.", ""] if bundled else []),
+             *_scenario_lines(results, settings),
              f"Entropy margin of the exact chain: {ENTROPY_MARGIN_NATS} nats. Dense clutter "
              "near nadir changes its speckle under the hover displacement (scatterers "
              "within one beam move by different fractions of a wavelength), which no "
@@ -145,7 +225,7 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
             cells = " | ".join(f"{res[c].entropy[m]:.4f}" if c in res else "-" for c in cols)
             diff = (r.chains["exact"].entropy[m] - r.reference.entropy[m]
                     if "exact" in r.chains else float("nan"))
-            lines.append(f"| {s} | entropy_{m}_nats | {cells} | {diff:+.4f} |")
+            lines.append(f"| {s} | {SCENE_METRICS[m]} | {cells} | {diff:+.4f} |")
     lines += ["", "ridge_leakage_db: RD power outside Doppler bins -1..+1 relative to the "
               "total [dB]", "",
               "| scene | " + " | ".join(cols) + " |", "|---|" + "---|" * len(cols)]
@@ -153,6 +233,7 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
         res = {REFERENCE: r.reference, **r.chains}
         lines.append(f"| {s} | " + " | ".join(
             f"{res[c].ridge_leakage_db:.1f}" if c in res else "-" for c in cols) + " |")
+    lines += _point_lines(results, cols)
     fields = {s: r.clutter for s, r in results.items() if r.clutter.get("num_scatterers")}
     if fields:
         lines += ["", "Clutter field: scatterers drawn, expected count, density scale (1 "
@@ -240,8 +321,8 @@ def report_html(markdown: str) -> str:
 
 def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | None = None,
                        settings: ReportSettings = FULL, progress: bool = True,
-                       chains: Sequence[str] | str = CHAINS) -> dict:
-    """Evaluate scenes; write figures, JSON, ``report.md`` and ``index.html``.
+                       chains: Sequence[str] | str = CHAINS, scenarios: Sequence = ()) -> dict:
+    """Evaluate scenes and scenarios; write figures, JSON, ``report.md`` and ``index.html``.
 
     Every file is written atomically (temporary file, then ``os.replace``).
 
@@ -250,39 +331,56 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
     out_dir : path-like
         Output folder (created).
     scenes : sequence of str, optional
-        Registry names; default all bundled scenes.
+        Bundled scene names; default all bundled scenes, or none when
+        ``scenarios`` are given.
     settings : ReportSettings
-        :data:`FULL` or :data:`QUICK` or custom.
+        :data:`FULL` or :data:`QUICK` or custom; its scenario serves the
+        bundled scenes, its knobs every scene and scenario.
     progress : bool
         tqdm progress on stderr.
     chains : sequence of str or str
-        Chains of the hovering platform (default all of
+        Chains of the moving platform (default all of
         :data:`raysim.vocabulary.CHAINS`); the stationary reference is always
         computed.
+    scenarios : sequence of raysim.io.scenario.Scenario
+        Scenarios evaluated with their own radar, array, motion, IMU and scene
+        (point targets, a bundled scene or users' meshes) and the knobs of
+        ``settings``; named by their ``name`` (made file-name safe and unique).
 
     Returns
     -------
     dict
-        ``{scene: SceneResult.to_dict()}``.
+        ``{label: SceneResult.to_dict()}``.
     """
     from raysim.echoes.rt.scenes import SCENES
 
-    scenes = list(SCENES) if scenes is None else list(scenes)
+    scenarios = list(scenarios)
+    scenes = (list(SCENES) if scenes is None and not scenarios
+              else list(scenes or ()))
     bad = [s for s in scenes if s not in SCENES]
     if bad:
         raise ValueError(f"unknown scene {bad[0]!r}; expected one of {sorted(SCENES)}")
-    if not scenes:
-        raise ValueError(f"scenes: got {scenes!r}, expected at least one of {sorted(SCENES)}")
+    if not scenes and not scenarios:
+        raise ValueError(f"scenes: got {scenes!r} and no scenario, expected at least one of "
+                         f"{sorted(SCENES)} or a scenario")
     parse_chains(chains)                              # bad names fail before any tracing
+    jobs = []                                         # (label, settings); checked up front
+    for s in scenes:
+        jobs.append((result_label(s, [j[0] for j in jobs]), settings.for_scene(s)))
+    for sc in scenarios:
+        jobs.append((result_label(sc.name, [j[0] for j in jobs]),
+                     settings.with_values(scenario=sc)))
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     results, summary = {}, {}
-    for s in scenes:
-        r = evaluate_scene(s, settings, progress=progress, chains=chains)
-        results[s] = r
-        summary[s] = r.to_dict()
+    for label, st in jobs:
+        r = (evaluate_scene(st.scenario.scene.name, st, progress=progress, chains=chains)
+             if label in scenes else
+             evaluate_scenario(st, progress=progress, chains=chains, label=label))
+        results[label] = r
+        summary[label] = r.to_dict()
         plot_scene(r, out)
-        atomic_write_json(out / f"{s}.json", summary[s], indent=1)
+        atomic_write_json(out / f"{label}.json", summary[label], indent=1)
     atomic_write_json(out / "summary.json", summary, indent=1)
     md = report_markdown(results, settings)
     atomic_write_text(out / "report.md", md)

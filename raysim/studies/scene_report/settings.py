@@ -3,23 +3,39 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from raysim.io.scenario import Scenario
+from raysim.measure.ridge import RIDGE_HALF_WIDTH_BINS
+from raysim.measure.scene import (
+    CFAR_GUARD,
+    CFAR_THRESHOLD_DB,
+    CFAR_TRAIN,
+    GRID_HALF_WIDTH_DEG,
+    GRID_STEP_DEG,
+    MAX_DETECTIONS,
+    RANGE_WINDOW_M,
+    SCENE_MAPS,
+    SPATIAL_WINDOWS,
+    angle_grid,
+    channel_taper,
+)
 from raysim.platform.motion import AXES
-from raysim.radar.arrays import VirtualArray, upa
+from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
 
 __all__ = ["REPORT_MAPS", "ENTROPY_MARGIN_NATS",
            "RIDGE_HALF_WIDTH_BINS", "CFAR_TRAIN", "CFAR_GUARD", "CFAR_THRESHOLD_DB",
            "RD_PLOT_HALF_WIDTH_BINS", "MAX_DETECTIONS",
-           "MOVER_START_NE", "MAX_MOVER_SPEED", "REPORT_CLUTTER", "ReportSettings", "FULL", "QUICK"]
+           "MOVER_START_NE", "MAX_MOVER_SPEED", "REPORT_CLUTTER", "SCENARIO_KEYS",
+           "report_scenario", "ReportSettings", "FULL", "QUICK"]
 
 #: The maps of every chain and of the reference, names from
 #: :data:`raysim.vocabulary.MAPS`: ``rd`` (range, doppler), ``ra`` (range,
 #: azimuth), ``ae`` (azimuth, elevation).
-REPORT_MAPS = ("rd", "ra", "ae")
+REPORT_MAPS = SCENE_MAPS
 #: Largest ``|H_exact - H_stationary|`` (exact chain against the stationary
 #: reference, :data:`raysim.vocabulary.REFERENCE`) of every map of every bundled scene with
 #: the ideal IMU [nats] (checked by ``tests/rt/test_scene_report.py``). Set by
@@ -34,15 +50,8 @@ REPORT_MAPS = ("rd", "ra", "ae")
 #: report flags it). The margin holds, and is tested, for the jitter without horizontal
 #: displacement (``jitter_axes=("z", "roll", "pitch", "yaw")``). See docs/scenes.md.
 ENTROPY_MARGIN_NATS = 0.15
-#: Doppler bins either side of zero counted as the stationary clutter ridge
-#: (the Hann mainlobe: bins -1, 0, +1).
-RIDGE_HALF_WIDTH_BINS = 1
-#: CFAR: training and guard cells along range, and threshold over the local mean [dB].
-CFAR_TRAIN, CFAR_GUARD, CFAR_THRESHOLD_DB = 12, 3, 12.0
 #: Half-width of the Doppler axis shown in the RD figures [Doppler bins].
 RD_PLOT_HALF_WIDTH_BINS = 12
-#: Detections kept per chain (strongest first).
-MAX_DETECTIONS = 12
 #: Start of the report's mover on the ground, north and east of the nadir point [m]: the
 #: parking lot's lane between its two rows of cars (rows at 6 m south and 4 m north).
 MOVER_START_NE = (-1.0, 6.0)
@@ -52,46 +61,87 @@ MAX_MOVER_SPEED = 40.0
 REPORT_CLUTTER = ("field", "sionna")
 
 
+#: Keyword -> scenario key paths of :meth:`ReportSettings.with_values` (the report's
+#: radar, array, motion, IMU and scene settings live in its scenario).
+SCENARIO_KEYS = {
+    "num_chirps": ("radar.num_chirps",), "idle_time": ("radar.idle_time_s",),
+    "array_size": ("array.nx", "array.ny"), "lever_arm": ("lever_arm_m",),
+    "jitter_seed": ("motion.hover_jitter.seed",), "imu": ("imu.preset",),
+    "imu_rate": ("imu.rate_hz",), "imu_seed": ("imu.seed",), "trace_seed": ("seed",),
+    "max_depth": ("scene.max_depth",), "clutter": ("scene.clutter.mode",),
+    "clutter_per_cell": ("scene.clutter.per_cell",),
+}
+
+
+def report_scenario(scene: str = "flat_reflectors", *, num_chirps: int = 128,
+                    idle_time: float = 60e-6, array_size: int = 12) -> Scenario:
+    """The report's scenario of a bundled scene.
+
+    The paper's waveform (77 GHz, 1 GHz, 60 us, 10 MHz, 600 samples, the patch
+    element pattern) with ``num_chirps`` chirps every ``60 us + idle_time``;
+    a half-wavelength ``array_size x array_size`` virtual UPA (x major, y
+    minor); the radar phase centre 0.10 m below the body origin; the hover
+    jitter of a small multirotor (:func:`raysim.platform.motion.hover_jitter`,
+    seed 7); the ideal IMU at 4 kHz (seed 1, above 20x the 160 Hz vibration
+    band); single-bounce tracing (``max_depth`` 1) with the persistent clutter
+    field of 10 scatterers per cell; seed 42 for the rays, diffuse phases and
+    the field; one frame, no receiver noise.
+
+    Parameters
+    ----------
+    scene : str
+        Bundled scene name (:data:`raysim.echoes.rt.scenes.SCENES`).
+    num_chirps : int
+        Chirps per frame.
+    idle_time : float
+        Idle time between chirps [s].
+    array_size : int
+        UPA side [elements].
+    """
+    from raysim.io.scenario import validate_scenario
+
+    return validate_scenario({
+        "name": scene, "frames": 1, "seed": 42, "noise": False,
+        "lever_arm_m": [0.0, 0.0, 0.10],
+        "radar": {"num_chirps": num_chirps, "idle_time_s": idle_time},
+        "array": {"kind": "upa", "nx": array_size, "ny": array_size},
+        "scene": {"kind": "bundled", "name": scene, "max_depth": 1,
+                  "clutter": {"mode": "field", "per_cell": 10.0}},
+        "motion": {"hover_jitter": {"seed": 7, "scale": 1.0}},
+        "imu": {"preset": "ideal", "rate_hz": 4000.0, "seed": 1},
+    }, source="scene report scenario")
+
+
 @dataclass(frozen=True)
 class ReportSettings:
-    """Radar, motion, tracing and processing settings of the scene report.
+    """The report's scenario plus the knobs of the study.
+
+    The radar, array, lever arm, platform motion (hover jitter and its seed),
+    IMU and scene (tracing depth, clutter mode and density, seeds) are the
+    :class:`raysim.io.scenario.Scenario`'s; the attributes below are what the
+    report adds. Read-only shortcuts (``num_chirps``, ``array_size``,
+    ``lever_arm``, ``jitter_seed``, ``imu``, ``imu_rate``, ``imu_seed``,
+    ``trace_seed``, ``max_depth``, ``clutter``, ``clutter_per_cell``) read the
+    scenario; :meth:`with_values` changes either.
 
     Attributes
     ----------
-    num_chirps : int
-        Chirps per frame (slow-time length).
-    idle_time : float
-        Idle time between chirps [s]; the chirp interval is ``60 us + idle``.
-        The defaults keep the frame duration of the paper's radar (256 x 60 us
-        = 15.36 ms: 128 x 120 us, or 64 x 240 us with :data:`QUICK`), over
-        which the hover jitter moves the radar by about 3 mm.
-    array_size : int
-        Virtual UPA of ``array_size x array_size`` half-wavelength elements.
+    scenario : raysim.io.scenario.Scenario
+        Radar, array, motion, IMU and scene (:func:`report_scenario` for a
+        bundled scene). The bundled scenes of ``--scenes`` replace its scene name.
     samples_per_src : int
         Rays shot by the tracer (about 8 % become ground paths).
-    max_depth : int
-        Bounces of scene-geometry paths.
     grid_half_width_deg, grid_step_deg : float
         Global azimuth/elevation grid ``-w..+w`` in steps of ``step`` [deg].
     range_window : (float, float)
-        Processed range window [m] (all 600 samples are synthesised and range
+        Processed range window [m] (all samples are synthesised and range
         compressed; beams are formed on the gates inside the window only).
-    lever_arm : tuple of float
-        Radar phase centre in the body frame B [m].
-    jitter_seed : int
-        Seed of :func:`raysim.platform.motion.hover_jitter`.
     jitter_axes : tuple of str
-        Axes of :data:`raysim.platform.motion.AXES` the hover jitter moves (default
-        all six; e.g. ``("z", "roll", "pitch", "yaw")`` keeps the radar's
-        horizontal position, to separate what compensation can undo).
-    imu : str
-        IMU preset (:data:`raysim.platform.imu.PRESETS`).
-    imu_rate : float
-        IMU output rate [Hz] (above 20x the 160 Hz vibration band).
-    imu_seed : int
-        Seed of the IMU error draws.
-    trace_seed : int
-        Seed of the ray sampling and diffuse phases.
+        Axes of :data:`raysim.platform.motion.AXES` the scenario's motion moves
+        (default all six; e.g. ``("z", "roll", "pitch", "yaw")`` keeps the
+        radar's horizontal position, to separate what compensation can undo).
+        Traced scenes only (a point scenario runs its own motion, as ``raysim
+        simulate`` does).
     nufft_eps : float
         Relative error of the IF synthesis (NUFFT, or the fused kernel where the
         paths go the compact way).
@@ -99,64 +149,44 @@ class ReportSettings:
         Paths re-projected and synthesised at once.
     gate_block : int
         Range gates beamformed at once (bounds memory).
-    clutter : {"field", "sionna"}
-        Ground clutter and multipath: the persistent clutter field
-        (:mod:`raysim.echoes.clutter`: seeded scatterers with calibrated sigma0,
-        rough-surface specular, target-ground ghosts), or Sionna's own diffuse
-        paths and mirror (the values of ``render_scene(clutter=...)``).
-    clutter_per_cell : float
-        Scatterers of the field per range x angle cell where the two-way
-        element pattern is within ``FULL_DENSITY_DB`` of its peak (10 gives
-        Rayleigh cells).
-    mover_speed : float or None
-        Ground speed [m/s] of a car (:class:`raysim.echoes.clutter.movers.CarMover`)
-        driving east along :data:`MOVER_START_NE` through the scene in both
-        frames, or None for no mover.
     spatial_window : str or None
         Amplitude taper over the virtual channels before beamforming, the same
         for every chain: ``"taylor"`` (30 dB, ``nbar = 4`` along x and y) or
         ``None`` (uniform, -13 dB sidelobes). Sidelobes see the platform
         motion from their own direction, which no beam-domain compensation
         removes, so low sidelobes matter for clutter.
+    mover_speed : float or None
+        Ground speed [m/s] of a car (:class:`raysim.echoes.clutter.movers.CarMover`)
+        driving east along :data:`MOVER_START_NE` through the scene in both
+        frames, or None for no mover.
     """
 
-    num_chirps: int = 128
-    idle_time: float = 60e-6
-    array_size: int = 12
+    scenario: Scenario = field(default_factory=report_scenario)
     samples_per_src: int = 100_000
-    max_depth: int = 1
-    grid_half_width_deg: float = 60.0
-    grid_step_deg: float = 3.0
-    range_window: tuple[float, float] = (12.0, 45.0)
-    lever_arm: tuple[float, float, float] = (0.0, 0.0, 0.10)
-    jitter_seed: int = 7
+    grid_half_width_deg: float = GRID_HALF_WIDTH_DEG
+    grid_step_deg: float = GRID_STEP_DEG
+    range_window: tuple[float, float] = RANGE_WINDOW_M
     jitter_axes: tuple[str, ...] = AXES
-    imu: str = "ideal"
-    imu_rate: float = 4000.0
-    imu_seed: int = 1
-    trace_seed: int = 42
     nufft_eps: float = 1e-5
     path_chunk: int = 1024
     gate_block: int = 16
     spatial_window: str | None = "taylor"
-    clutter: str = "field"
-    clutter_per_cell: float = 10.0
     mover_speed: float | None = None
 
     def __post_init__(self) -> None:
-        for name in ("num_chirps", "array_size", "samples_per_src", "max_depth", "path_chunk",
-                     "gate_block"):
+        from raysim.io.scenario import Scenario
+
+        if not isinstance(self.scenario, Scenario):
+            raise ValueError(f"scenario must be a raysim.io.scenario.Scenario, "
+                             f"got {type(self.scenario).__name__}")
+        for name in ("samples_per_src", "path_chunk", "gate_block"):
             v = getattr(self, name)
-            if not isinstance(v, (int, np.integer)) or v < 1:
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
                 raise ValueError(f"{name} must be a positive integer, got {v!r}")
         if self.num_chirps < 8:
-            raise ValueError(f"num_chirps must be >= 8 for a Doppler map, got {self.num_chirps}")
-        if not (math.isfinite(self.idle_time) and self.idle_time >= 0):
-            raise ValueError(f"idle_time must be >= 0 s, got {self.idle_time!r}")
-        if not 0 < self.grid_step_deg <= self.grid_half_width_deg <= 80:
-            raise ValueError(f"need 0 < grid_step_deg <= grid_half_width_deg <= 80, got "
-                             f"grid_step_deg={self.grid_step_deg!r}, "
-                             f"grid_half_width_deg={self.grid_half_width_deg!r}")
+            raise ValueError(f"num_chirps (radar.num_chirps) must be >= 8 for a Doppler map, "
+                             f"got {self.num_chirps}")
+        angle_grid(self.grid_half_width_deg, self.grid_step_deg)      # checks the grid
         lo, hi = self.range_window
         if not 0 <= lo < hi:
             raise ValueError(f"range_window must satisfy 0 <= low < high [m], "
@@ -164,12 +194,7 @@ class ReportSettings:
         if hi >= self.radar().max_range:
             raise ValueError(f"range_window upper edge {hi!r} m must be below the radar's "
                              f"max_range {self.radar().max_range:.1f} m")
-        from raysim.platform.imu import get_preset
-
-        get_preset(self.imu)
-        if not self.imu_rate > 0:
-            raise ValueError(f"imu_rate must be > 0 Hz, got {self.imu_rate!r}")
-        if self.spatial_window not in ("taylor", None):
+        if self.spatial_window not in SPATIAL_WINDOWS:
             raise ValueError(f"spatial_window must be 'taylor' or None, "
                              f"got {self.spatial_window!r}")
         axes = self.jitter_axes
@@ -177,53 +202,156 @@ class ReportSettings:
                 and len(set(axes)) == len(axes)):
             raise ValueError(f"jitter_axes must be a tuple of distinct names from {AXES}, "
                              f"got {axes!r}")
-        if self.clutter not in REPORT_CLUTTER:
-            raise ValueError(f"clutter must be one of {REPORT_CLUTTER}, got {self.clutter!r}")
-        if not (isinstance(self.clutter_per_cell, (int, float)) and not isinstance(
-                self.clutter_per_cell, bool) and math.isfinite(self.clutter_per_cell)
-                and 0 < self.clutter_per_cell <= 1000):
-            raise ValueError(f"clutter_per_cell must be in (0, 1000] scatterers per cell, "
-                             f"got {self.clutter_per_cell!r}")
         if self.mover_speed is not None and not (
                 math.isfinite(self.mover_speed) and 0 < self.mover_speed <= MAX_MOVER_SPEED):
             raise ValueError(f"mover_speed must be None or in (0, {MAX_MOVER_SPEED}] m/s, "
                              f"got {self.mover_speed!r}")
+        if self.jitter_axes != AXES and self.scenario.scene.kind == "points":
+            raise ValueError(f"jitter_axes selects the moving axes of a traced scene's twin; "
+                             f"scenario {self.scenario.name!r} has point targets, which run "
+                             f"the scenario's own motion, got {self.jitter_axes!r}")
+        if self.mover_speed is not None and self.scenario.scene.kind == "points":
+            raise ValueError(f"mover_speed drives a car through a ray-traced scene; scenario "
+                             f"{self.scenario.name!r} has point targets (scene.kind 'points')")
         if not 1e-7 <= self.nufft_eps < 1:
             raise ValueError(f"nufft_eps must lie in [1e-7, 1), got {self.nufft_eps!r}")
 
-    def radar(self) -> RadarConfig:
-        """Paper waveform (77 GHz, 1 GHz, 60 us, 10 MHz, 600 samples) with these chirps.
+    # ---------------------------------------------------- scenario shortcuts
+    @property
+    def num_chirps(self) -> int:
+        """Chirps per frame (``radar.num_chirps``)."""
+        return int(self.scenario.radar.num_chirps)
 
-        The radar's default element pattern (:mod:`raysim.radar.pattern`, the
-        patch element) weights every path by its two-way gain.
+    @property
+    def idle_time(self) -> float:
+        """Idle time between chirps [s] (``radar.idle_time_s``)."""
+        return float(self.scenario.radar.idle_time_s)
+
+    @property
+    def array_size(self) -> int:
+        """Side of a square UPA, else the smaller grid side (at least 1) [elements]."""
+        g = self.array().grid_shape
+        return int(min(g)) if g is not None else 1
+
+    @property
+    def lever_arm(self) -> tuple[float, float, float]:
+        """Radar phase centre in B [m] (``lever_arm_m``)."""
+        return tuple(float(v) for v in self.scenario.lever_arm_m)
+
+    @property
+    def jitter_seed(self) -> int | None:
+        """Seed of the hover jitter (``motion.hover_jitter.seed``, else ``seed``), or None."""
+        hj = self.scenario.motion.hover_jitter
+        if hj is None:
+            return None
+        return self.scenario.seed if hj.seed is None else int(hj.seed)
+
+    @property
+    def imu(self) -> str:
+        """IMU preset (``imu.preset``)."""
+        return self.scenario.imu.preset
+
+    @property
+    def imu_rate(self) -> float:
+        """IMU output rate [Hz] (``imu.rate_hz``)."""
+        return float(self.scenario.imu.rate_hz)
+
+    @property
+    def imu_seed(self) -> int:
+        """Seed of the IMU error draws (``imu.seed``, else ``seed + 1``)."""
+        return int(self.scenario.imu_seed)
+
+    @property
+    def trace_seed(self) -> int:
+        """Seed of the rays, diffuse phases and clutter field (``seed``)."""
+        return int(self.scenario.seed)
+
+    @property
+    def max_depth(self) -> int:
+        """Bounces of scene-geometry paths (``scene.max_depth``, at least 1)."""
+        return max(1, int(self.scenario.scene.max_depth))
+
+    @property
+    def clutter(self) -> str:
+        """Ground clutter mode (``scene.clutter.mode``: ``field``, ``sionna``, ``none``)."""
+        return self.scenario.scene.clutter.mode
+
+    @property
+    def clutter_per_cell(self) -> float:
+        """Clutter-field scatterers per range x angle cell (``scene.clutter.per_cell``)."""
+        return float(self.scenario.scene.clutter.per_cell)
+
+    def with_values(self, **changes) -> ReportSettings:
+        """Copy with knobs and scenario values changed, validated again.
+
+        Keywords are knob names (the attributes) or the shortcuts of
+        :data:`SCENARIO_KEYS` (``num_chirps=64``, ``array_size=8``,
+        ``imu="tactical"``, ``clutter="sionna"`` ...); errors name the keyword,
+        its scenario key, the value and what was expected.
         """
-        return RadarConfig(num_chirps=int(self.num_chirps), idle_time=float(self.idle_time))
+        knobs = {k: v for k, v in changes.items() if k not in SCENARIO_KEYS}
+        unknown = sorted(set(knobs) - {f.name for f in fields(self)})
+        if unknown:
+            raise ValueError(f"unknown report setting(s) {unknown}; expected knobs "
+                             f"{sorted(f.name for f in fields(self))} or scenario shortcuts "
+                             f"{sorted(SCENARIO_KEYS)}")
+        scenario = knobs.pop("scenario", self.scenario)
+        for name, value in changes.items():
+            if name not in SCENARIO_KEYS:
+                continue
+            if name == "clutter" and value not in REPORT_CLUTTER + ("none",):
+                raise ValueError(f"clutter must be one of {REPORT_CLUTTER + ('none',)}, "
+                                 f"got {value!r}")
+            if name == "jitter_seed" and scenario.motion.hover_jitter is None:
+                raise ValueError(f"jitter_seed: scenario {scenario.name!r} has no "
+                                 f"[motion.hover_jitter] to seed, got {value!r}")
+            value = list(value) if isinstance(value, tuple) else value
+            try:
+                scenario = scenario.with_values({k: value for k in SCENARIO_KEYS[name]})
+            except ValueError as exc:
+                raise ValueError(f"{name} ({', '.join(SCENARIO_KEYS[name])}): got {value!r}: "
+                                 f"{exc}") from None
+        return replace(self, scenario=scenario, **knobs)
+
+    def for_scene(self, scene: str) -> ReportSettings:
+        """These settings with the scenario's scene the bundled ``scene`` (and its name)."""
+        from raysim.echoes.rt.scenes import SCENES
+
+        if scene not in SCENES:
+            raise ValueError(f"unknown scene {scene!r}; expected one of {sorted(SCENES)}")
+        if self.scenario.scene.kind != "bundled":
+            raise ValueError(f"for_scene needs a bundled-scene scenario, got scene.kind "
+                             f"{self.scenario.scene.kind!r}")
+        return replace(self, scenario=self.scenario.with_values(
+            {"scene.name": scene, "name": scene}))
+
+    # ------------------------------------------------------------ derived
+    def radar(self) -> RadarConfig:
+        """The scenario's waveform (:meth:`raysim.io.scenario.Scenario.radar_config`).
+
+        The radar's element pattern (:mod:`raysim.radar.pattern`, the patch
+        element by default) weights every path by its two-way gain.
+        """
+        return self.scenario.radar_config()
 
     def array(self) -> VirtualArray:
-        """Half-wavelength ``array_size x array_size`` virtual UPA (x major, y minor)."""
-        return upa(self.array_size, self.array_size, wavelength=self.radar().wavelength)
+        """The scenario's virtual array (:meth:`raysim.io.scenario.Scenario.virtual_array`)."""
+        return self.scenario.virtual_array()
 
     def channel_taper(self) -> np.ndarray:
         """Channel weights, shape ``[channel]`` (x index major, y minor), mean 1."""
-        n = self.array_size
-        if self.spatial_window is None:
-            return np.ones(n * n)
-        from scipy.signal.windows import taylor
-
-        w = taylor(n, nbar=4, sll=30, norm=False)
-        ww = np.outer(w, w).ravel()
-        return ww / ww.mean()
+        return channel_taper(self.array(), self.spatial_window)
 
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
         """Azimuth and elevation axes of the global grid [rad]."""
-        n = int(round(self.grid_half_width_deg / self.grid_step_deg))
-        ax = np.deg2rad(np.arange(-n, n + 1) * self.grid_step_deg)
-        return ax, ax.copy()
+        return angle_grid(self.grid_half_width_deg, self.grid_step_deg)
 
 
 #: Settings of ``raysim scene-report`` (all scenes: 9.5 minutes on 2 busy cores, mostly
 #: IF synthesis of 8,300 paths x 128 chirps x 144 channels x 600 samples).
 FULL = ReportSettings()
-#: Settings of ``raysim scene-report --quick`` and of the tests (15-30 s per scene).
-QUICK = ReportSettings(num_chirps=64, idle_time=180e-6, array_size=8, samples_per_src=20_000,
-                       grid_step_deg=6.0)
+#: Settings of ``raysim scene-report --quick`` and of the tests (15-30 s per scene): 64
+#: chirps every 240 us (the frame of the paper's radar, 15.36 ms), an 8 x 8 UPA, 20k rays,
+#: a 6-degree grid.
+QUICK = ReportSettings(report_scenario(num_chirps=64, idle_time=180e-6, array_size=8),
+                       samples_per_src=20_000, grid_step_deg=6.0)

@@ -1,49 +1,32 @@
-"""Scene simulation of the report: hover trajectory, IMU pose estimate, traced IF frames."""
+"""Scene simulation of the report: the hover motion, its IMU estimate, the twin frames.
+
+The frames come from the pipeline's stationary / hover twin
+(:func:`raysim.pipeline.sources.hover_twin`), the IMU record from
+:func:`raysim.pipeline.sensors.imu_record` and the pose estimate from
+:func:`raysim.pipeline.estimate.estimate_motion`.
+"""
 
 from __future__ import annotations
 
-import functools
 import math
-import time
 
 import numpy as np
 
+from raysim.pipeline.sources import path_kinds
+
 from .settings import MOVER_START_NE, ReportSettings
 
-__all__ = ["hover_trajectory", "imu_samples", "scene_motion", "simulate_scene", "path_kinds",
-           "report_mover"]
-
-
-def path_kinds(paths) -> dict:
-    """Path count per interaction kind.
-
-    Parameters
-    ----------
-    paths : raysim.echoes.rt.trace.PathSet
-
-    Returns
-    -------
-    dict
-        ``specular`` (ground), ``diffuse``, ``target`` and ``other_specular`` counts.
-    """
-    from raysim.echoes.rt.trace import DIFFUSE, SENSING, SPECULAR
-
-    k = paths.kind
-    return {"specular": int(np.sum(k == SPECULAR)), "diffuse": int(np.sum((k & DIFFUSE) != 0)),
-            "target": int(np.sum((k & SENSING) != 0)),
-            "other_specular": int(np.sum(((k & SPECULAR) != 0) & (k != SPECULAR)
-                                         & ((k & (DIFFUSE | SENSING)) == 0)))}
+__all__ = ["hover_trajectory", "report_trajectory", "imu_samples", "scene_motion",
+           "simulate_scene", "path_kinds", "report_mover"]
 
 
 def hover_trajectory(seed: int, t0: float = 0.0, axes=None):
     """Seeded hover jitter that starts at the nominal hover pose at ``t0``.
 
-    :func:`raysim.platform.motion.hover_jitter` wanders centimetres and degrees away
-    from the hover point; constant offsets (:class:`raysim.platform.motion.Ramp`)
-    remove its pose at ``t0`` on all six axes, so the stationary and the
-    hovering radar share the first chirp's pose and differ only by the motion
-    within the frame (a static offset would shift the range profile by a
-    fraction of a bin, which is no Doppler effect).
+    :func:`raysim.platform.motion.hover_jitter` (default spectrum) through
+    :func:`raysim.pipeline.sources.nominal_at`: its pose at ``t0`` removed on
+    the moving axes, so the stationary and the hovering radar share the first
+    chirp's pose and differ only by the motion within the frame.
 
     Parameters
     ----------
@@ -59,19 +42,30 @@ def hover_trajectory(seed: int, t0: float = 0.0, axes=None):
     -------
     raysim.platform.motion.Trajectory
     """
-    from raysim.platform.motion import AXES, Ramp, Trajectory, hover_jitter
+    from raysim.pipeline.sources import nominal_at
+    from raysim.platform.motion import hover_jitter
 
-    axes = AXES if axes is None else tuple(axes)
-    if not axes or any(a not in AXES for a in axes) or len(set(axes)) != len(axes):
-        raise ValueError(f"axes must be distinct names from {AXES}, got {axes!r}")
-    jitter = hover_jitter(seed)
-    q0 = jitter.states([t0])[0][0]
-    moved = Trajectory(tuple(c for c in jitter.components if c.axis in axes),
-                       name=jitter.name if len(axes) == len(AXES)
-                       else f"{jitter.name} ({', '.join(axes)})")
-    return moved + Trajectory(tuple(Ramp(a, offset=-float(v)) for a, v in zip(AXES, q0,
-                                                                              strict=True)
-                                    if a in axes), name="nominal pose at t0")
+    return nominal_at(hover_jitter(seed), t0, axes)
+
+
+def report_trajectory(settings: ReportSettings):
+    """Motion of the report's moving radar.
+
+    Traced scenes: the scenario's motion on ``settings.jitter_axes``, at the
+    nominal pose at the first chirp (:func:`raysim.pipeline.sources.nominal_at`).
+    Point scenes: the scenario's motion itself (the frames of ``raysim simulate``).
+
+    Returns
+    -------
+    raysim.platform.motion.Trajectory
+    """
+    from raysim.pipeline.sources import nominal_at
+
+    scenario = settings.scenario
+    if scenario.scene.kind == "points":
+        return scenario.trajectory()
+    t0 = float(settings.radar().chirp_times()[0])
+    return nominal_at(scenario.trajectory(), t0, settings.jitter_axes)
 
 
 def imu_samples(trajectory, chirp_times, settings: ReportSettings):
@@ -82,19 +76,21 @@ def imu_samples(trajectory, chirp_times, settings: ReportSettings):
     trajectory : raysim.platform.motion.Trajectory
     chirp_times : ndarray, shape ``[chirp]`` [s]
     settings : ReportSettings
-        ``imu``, ``imu_rate`` and ``imu_seed`` are used.
+        The scenario's IMU (preset, rate, seed, clock errors).
 
     Returns
     -------
-    time : ndarray, shape ``[sample]`` [s]
+    time : ndarray, shape ``[sample]`` [s, IMU clock]
     gyro : ndarray, shape ``[sample, 3]`` [rad/s]
     accel : ndarray, shape ``[sample, 3]`` [m/s^2]
-        Covering the chirps with the margin of :func:`raysim.pipeline.sensors.imu_margin_s`.
+        From :func:`raysim.pipeline.sensors.imu_record`.
     """
     from raysim.pipeline.sensors import imu_record
 
-    return imu_record(trajectory, settings.imu, rate=settings.imu_rate, times=chirp_times,
-                      seed=settings.imu_seed).to_arrays()
+    s = settings.scenario
+    return imu_record(trajectory, s.imu_spec(), rate=s.imu.rate_hz, times=chirp_times,
+                      seed=s.imu_seed, time_offset=s.imu.time_offset_s,
+                      clock_drift_ppm=s.imu.clock_drift_ppm).to_arrays()
 
 
 def scene_motion(trajectory, chirp_times, settings: ReportSettings):
@@ -107,7 +103,7 @@ def scene_motion(trajectory, chirp_times, settings: ReportSettings):
         controller would).
     chirp_times : ndarray, shape ``[chirp]`` [s]
     settings : ReportSettings
-        ``imu``, ``imu_rate``, ``imu_seed`` and ``lever_arm`` are used.
+        The scenario's IMU and lever arm.
 
     Returns
     -------
@@ -118,19 +114,8 @@ def scene_motion(trajectory, chirp_times, settings: ReportSettings):
 
     t = np.asarray(chirp_times, dtype=float)
     return estimate_motion(*imu_samples(trajectory, t, settings), t,
-                           lever_arm=np.asarray(settings.lever_arm), trajectory=trajectory,
-                           velocity="given")
-
-
-def _clutter_model(settings: ReportSettings):
-    """The report's :class:`raysim.echoes.clutter.model.GroundClutter`, or None (Sionna diffuse)."""
-    if settings.clutter == "sionna":
-        return None
-    from raysim.echoes.clutter.field import FieldSettings
-    from raysim.echoes.clutter.model import GroundClutter
-
-    return GroundClutter(FieldSettings(scatterers_per_cell=settings.clutter_per_cell,
-                                       seed=settings.trace_seed))
+                           lever_arm=settings.scenario.lever_arm, trajectory=trajectory,
+                           time_offset=settings.scenario.imu.time_offset_s, velocity="given")
 
 
 def report_mover(scene, settings: ReportSettings, t0: float = 0.0, ground=None):
@@ -168,91 +153,38 @@ def report_mover(scene, settings: ReportSettings, t0: float = 0.0, ground=None):
                                              speed=float(settings.mover_speed), t0=t0))
 
 
-def simulate_scene(scene: str, settings: ReportSettings, trajectory, *, progress=None,
-                   movers=()) -> dict:
-    """Trace ``scene`` once at the nominal pose and synthesise both IF frames.
+def simulate_scene(settings: ReportSettings, trajectory, *, progress=None, movers=()) -> dict:
+    """The twin frames of the report's scenario (:func:`raysim.pipeline.sources.hover_twin`).
 
-    Both frames share the one trace (and the moving objects' scattering centres,
-    traced at the same instant), so they differ only by the platform motion
-    within the frame.
+    Traced scenes are traced once at the nominal pose; both frames share the
+    trace (and the moving objects' scattering centres, traced at the same
+    instant), so they differ only by the platform motion within the frame.
 
     Parameters
     ----------
-    scene : str
-        Registry name.
     settings : ReportSettings
+        Scenario, rays, NUFFT tolerance, path chunk and the report's car
+        (``mover_speed``, :func:`report_mover`).
     trajectory : raysim.platform.motion.Trajectory
-        Hover motion of the moving platform.
+        Motion of the moving platform (:func:`report_trajectory`).
     progress : callable, optional
         ``progress(message)`` after each step.
     movers : sequence
-        Moving objects besides the report's car (:func:`report_mover`):
-        :class:`raysim.echoes.clutter.movers.CarMover` or
-        :class:`raysim.echoes.clutter.tracks.MovingObject`, driving through the
-        scene in both frames, traced (PO + SBR for a CarMover, with its local
-        ground: car-ground ghosts) from the nominal pose at the first chirp.
+        Moving objects besides the report's car, as for ``hover_twin``.
 
     Returns
     -------
     dict
-        ``"stationary"``, ``"hover"``: IF cubes ``[chirp, channel, sample]``
-        complex64 [sqrt(W)]; ``"paths"`` (:class:`raysim.echoes.rt.trace.PathSet`),
-        ``"tracks"`` (list of :class:`raysim.echoes.clutter.tracks.Tracks`),
-        ``"movers"`` (the :class:`raysim.echoes.clutter.tracks.MovingObject` of
-        every mover, the report's car included),
-        ``"scene"`` (:class:`raysim.echoes.rt.scenes.RadarScene`), ``"clutter"``
-        (the field's report, empty without it), ``"seconds"``.
+        As :func:`raysim.pipeline.sources.hover_twin`: ``"stationary"`` and
+        ``"hover"`` RadarFrames ``[chirp, channel, sample]``, ``"reference"``,
+        ``"seconds"`` and, for traced scenes, ``"paths"``, ``"path_kinds"``,
+        ``"tracks"``, ``"movers"``, ``"scene"``, ``"clutter"``.
     """
-    from raysim.echoes.clutter.tracks import synthesize_tracks
-    from raysim.echoes.rt.reproject import synthesize_paths
-    from raysim.echoes.rt.scenes import load_scene
-    from raysim.echoes.rt.trace import MonostaticTracer
-    from raysim.platform.motion import stationary
-    from raysim.synthesis.select import synthesize
+    from raysim.pipeline.sources import hover_twin
 
-    config = settings.radar()
-    array = settings.array()
-    lever = np.asarray(settings.lever_arm, dtype=float)
-    model = _clutter_model(settings)
-    seconds = {}
-    t = time.perf_counter()
-    t0 = float(config.chirp_times()[0])
-    loaded = load_scene(scene, frequency=config.carrier_frequency)
-    tracer = MonostaticTracer(max_depth=settings.max_depth,
-                              samples_per_src=settings.samples_per_src, seed=settings.trace_seed)
-    tracks = []
-    if model is not None:
-        tracer = model.tracer(tracer)
-    paths = tracer(loaded, config, stationary(), lever, time=t0)
-    if model is not None:
-        paths, tracks = model.paths(loaded, paths, config, array, stationary(), lever, time=t0)
-    radar_w = stationary().point_world([t0], lever)[0, 0]
-    ground = None                      # cars are located on and traced with the ground
-    if settings.mover_speed is not None or any(hasattr(m, "moving_object") for m in movers):
-        from raysim.echoes.clutter.ground import GroundSurface
-
-        ground = model.ground if model is not None else GroundSurface.from_scene(loaded)
-    car = report_mover(loaded, settings, t0, ground)
-    cars = [*movers, *([car] if car is not None else [])]
-    objects = [m.moving_object(config, radar_w, time=t0, ground=ground)
-               if hasattr(m, "moving_object") else m for m in cars]
-    tracks = tracks + [m.tracks(config, radar_w, time=t0) for m in objects]
-    seconds["trace"] = time.perf_counter() - t
-    if progress:
-        progress("traced")
-    # moving points at the report's eps; frozen paths: synthesize_paths takes the compact
-    # way (fused kernel, no [path, chirp, channel] delays) for the clutter field
-    synth = functools.partial(synthesize, eps=settings.nufft_eps)
-    out = {"paths": paths, "tracks": tracks, "scene": loaded, "movers": objects,
-           "clutter": model.summary() if model is not None else {}}
-    for name, motion in (("stationary", stationary()), ("hover", trajectory)):
-        t = time.perf_counter()
-        out[name], _ = synthesize_paths(paths, config, array, motion, lever,
-                                        path_chunk=settings.path_chunk, eps=settings.nufft_eps)
-        synthesize_tracks(tracks, config, array, motion, lever, out=out[name],
-                          synthesizer=synth)
-        seconds[f"synthesis_{name}"] = time.perf_counter() - t
-        if progress:
-            progress(f"synthesised {name}")
-    out["seconds"] = seconds
-    return out
+    extra = list(movers)
+    if settings.mover_speed is not None:
+        extra.append(lambda scene, ground, t0: report_mover(scene, settings, t0, ground))
+    return hover_twin(settings.scenario, trajectory, samples_per_src=settings.samples_per_src,
+                      nufft_eps=settings.nufft_eps, path_chunk=settings.path_chunk,
+                      movers=extra, progress=progress)

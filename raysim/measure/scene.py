@@ -1,0 +1,381 @@
+"""Maps of a whole scene through one chain, their entropies and CFAR detections.
+
+The one definition of the scene-map metrics (``scene_entropy_rd_nats``,
+``scene_entropy_ra_nats``, ``scene_entropy_ae_nats``; names and units in
+:data:`raysim.vocabulary.METRICS`, maths in docs/conventions.md). They differ
+from the point-target metrics of the same map (:mod:`raysim.measure.point`,
+``entropy_rd_nats``, ``entropy_ae_nats``): a point target's RD map is the one
+beam towards the target and its AE map one range gate, while a scene's maps
+cover every beam of a global grid and every gate of a range window.
+
+Procedure (:func:`measure_scene`): the range-compressed cube
+``[chirp, channel, range]`` (Hann in fast time, channel taper
+:func:`channel_taper` applied) is beamformed through one chain
+(:func:`raysim.pipeline.chains.project`) on the gates of the range window and
+the global azimuth / elevation grid, block by block of gates
+(:func:`beam_blocks`). From the beams ``[chirp, range, azimuth, elevation]``:
+
+* ``rd`` ``[range, doppler]``: Hann-windowed Doppler power summed over all
+  beams (Doppler axis as range rate, m/s);
+* the coherent cube ``[range, azimuth, elevation]``: zero-Doppler
+  (Hann-weighted chirp sum) beam power;
+* ``ra`` ``[range, azimuth]``: the coherent cube summed over elevation;
+* ``ae`` ``[azimuth, elevation]``: the coherent cube summed over the range window.
+
+Each map's image entropy (:func:`raysim.processing.metrics.image_entropy`) is
+its ``scene_entropy_<map>_nats``; ``ridge_leakage_db`` is
+:func:`raysim.measure.ridge.ridge_leakage_db` of ``rd``. Discrete scatterers are
+found by a cell-averaging CFAR along range on the coherent cube
+(:func:`cfar_detect`, parameters :data:`CFAR_TRAIN`, :data:`CFAR_GUARD`,
+:data:`CFAR_THRESHOLD_DB`; the :data:`MAX_DETECTIONS` strongest kept).
+
+The ``paper`` chain's slow-time phase is corrected towards one direction; a
+scene has no per-target angle estimate, so the correction is re-pointed per
+beam: every beam ``(az, el)`` is multiplied by
+``exp(-j 4 pi (dR_n(u) - dR_n(u_0)) / lambda)`` (:func:`compensation.range_change`),
+i.e. the paper's per-target correction evaluated for every grid direction
+``u``, with ``u_0`` :data:`BORESIGHT`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from raysim.measure.ridge import ridge_leakage_db
+from raysim.processing.maps import Map, range_compress
+from raysim.processing.metrics import image_entropy
+from raysim.vocabulary import MAPS, REFERENCE, ChainSpec, parse_chain
+
+__all__ = ["SCENE_MAPS", "SCENE_METRICS", "scene_metric", "CFAR_TRAIN", "CFAR_GUARD",
+           "CFAR_THRESHOLD_DB", "MAX_DETECTIONS", "BORESIGHT", "GRID_HALF_WIDTH_DEG",
+           "GRID_STEP_DEG", "RANGE_WINDOW_M", "SPATIAL_WINDOWS", "TAYLOR_SLL_DB",
+           "TAYLOR_NBAR", "SceneMeasurement", "angle_grid", "channel_taper",
+           "range_compressed", "beam_blocks", "cfar_detect", "measure_scene"]
+
+#: The maps of a scene (names and dimensions from :data:`raysim.vocabulary.MAPS`).
+SCENE_MAPS = ("rd", "ra", "ae")
+#: Map name -> its scene entropy metric (:data:`raysim.vocabulary.METRICS`).
+SCENE_METRICS = {m: f"scene_entropy_{m}_nats" for m in SCENE_MAPS}
+#: CFAR: training and guard cells on each side along range.
+CFAR_TRAIN, CFAR_GUARD = 12, 3
+#: CFAR threshold over the mean of the training cells [dB].
+CFAR_THRESHOLD_DB = 12.0
+#: Detections kept per measurement (strongest first).
+MAX_DETECTIONS = 12
+#: Direction in A of the ``paper`` chain's own slow-time correction and tilt check
+#: (straight down the radar boresight); re-pointed per beam afterwards.
+BORESIGHT = (0.0, 0.0, 1.0)
+#: Default global grid: azimuth and elevation ``-w .. +w`` [deg] in steps [deg].
+GRID_HALF_WIDTH_DEG, GRID_STEP_DEG = 60.0, 3.0
+#: Default processed range window [m].
+RANGE_WINDOW_M = (12.0, 45.0)
+#: Channel tapers: ``"taylor"`` (:data:`TAYLOR_SLL_DB`, :data:`TAYLOR_NBAR` along x
+#: and y) or None (uniform, -13 dB sidelobes).
+SPATIAL_WINDOWS = ("taylor", None)
+#: Taylor taper: sidelobe level [dB below the peak] and nearly-constant sidelobes.
+TAYLOR_SLL_DB, TAYLOR_NBAR = 30, 4
+
+
+def scene_metric(map_name: str) -> str:
+    """``"rd"`` -> ``"scene_entropy_rd_nats"``; errors name the map and the known ones."""
+    try:
+        return SCENE_METRICS[map_name]
+    except KeyError:
+        raise ValueError(f"scene map: got {map_name!r}, expected one of "
+                         f"{list(SCENE_MAPS)}") from None
+
+
+@dataclass(frozen=True, eq=False)
+class SceneMeasurement:
+    """Maps, entropies and detections of one chain (or of the stationary reference).
+
+    Attributes
+    ----------
+    key : str
+        A chain key (:attr:`raysim.vocabulary.ChainSpec.key`: ``none``,
+        ``paper``, ``paper:published``, ``exact``) or
+        :data:`raysim.vocabulary.REFERENCE` for the stationary platform.
+    maps : dict
+        ``"rd"`` (dims ``range, doppler``), ``"ra"`` (``range, azimuth``), ``"ae"``
+        (``azimuth, elevation``) -> :class:`raysim.processing.maps.Map` of beam power [W]
+        (channel-averaged beams of IF amplitudes in sqrt(W)); axes in m, m/s, rad.
+    cube : ndarray, shape ``[range, azimuth, elevation]``
+        Coherent (zero-Doppler, Hann-weighted) beam power [W].
+    entropy : dict
+        Map name -> image entropy [nats] (reported as :data:`SCENE_METRICS`).
+    detections : list of dict
+        CFAR detections, strongest first: ``range_m``, ``az_deg``, ``el_deg``,
+        ``velocity_mps`` (range rate at the RD peak of the detection's gate),
+        ``power_db`` (relative to the cube's maximum), ``position_m`` (in W, from
+        the nominal radar phase centre).
+    ridge_leakage_db : float
+        RD power outside the zero-Doppler ridge relative to the total [dB].
+    seconds : float
+        Processing time [s].
+    """
+
+    key: str
+    maps: dict
+    cube: np.ndarray
+    entropy: dict
+    detections: list
+    ridge_leakage_db: float
+    seconds: float
+
+    def metrics(self) -> dict:
+        """``{metric name: value}``, names from :data:`raysim.vocabulary.METRICS`.
+
+        ``scene_entropy_rd_nats``, ``scene_entropy_ra_nats``,
+        ``scene_entropy_ae_nats`` [nats] and ``ridge_leakage_db`` [dB].
+        """
+        out = {SCENE_METRICS[m]: float(self.entropy[m]) for m in SCENE_MAPS}
+        out["ridge_leakage_db"] = float(self.ridge_leakage_db)
+        return out
+
+
+def angle_grid(half_width_deg: float = GRID_HALF_WIDTH_DEG,
+               step_deg: float = GRID_STEP_DEG) -> tuple[np.ndarray, np.ndarray]:
+    """Azimuth and elevation axes ``k step`` within ``+-half_width`` [rad].
+
+    Both of shape ``[angle]``; ``half_width_deg`` and ``step_deg`` in degrees.
+    """
+    if not 0 < step_deg <= half_width_deg <= 80:
+        raise ValueError(f"need 0 < grid_step_deg <= grid_half_width_deg <= 80, got "
+                         f"grid_step_deg={step_deg!r}, grid_half_width_deg={half_width_deg!r}")
+    n = int(round(half_width_deg / step_deg))
+    ax = np.deg2rad(np.arange(-n, n + 1) * step_deg)
+    return ax, ax.copy()
+
+
+def channel_taper(array, window: str | None = "taylor") -> np.ndarray:
+    """Channel weights of ``array``, shape ``[channel]``, mean 1.
+
+    ``"taylor"``: the outer product of Taylor tapers (:data:`TAYLOR_SLL_DB`,
+    :data:`TAYLOR_NBAR`) along x and y of the array's grid (x index major,
+    y minor); uniform for an array without a grid (``grid_shape`` None) or
+    ``window=None``.
+    """
+    if window not in SPATIAL_WINDOWS:
+        raise ValueError(f"spatial_window must be one of {list(SPATIAL_WINDOWS)}, "
+                         f"got {window!r}")
+    if window is None or array.grid_shape is None:
+        return np.ones(array.num_channels)
+    from scipy.signal.windows import taylor
+
+    nx, ny = array.grid_shape
+    ww = np.outer(taylor(nx, nbar=TAYLOR_NBAR, sll=TAYLOR_SLL_DB, norm=False),
+                  taylor(ny, nbar=TAYLOR_NBAR, sll=TAYLOR_SLL_DB, norm=False)).ravel()
+    return ww / ww.mean()
+
+
+def range_compressed(data: np.ndarray, taper: np.ndarray) -> np.ndarray:
+    """Range-compressed cube with the channel taper applied.
+
+    Parameters
+    ----------
+    data : ndarray, shape ``[chirp, channel, sample]``
+        IF cube [sqrt(W)].
+    taper : ndarray, shape ``[channel]``
+        From :func:`channel_taper`.
+
+    Returns
+    -------
+    ndarray, shape ``[chirp, channel, range]``, complex64
+        :func:`raysim.processing.maps.range_compress` (Hann) times the taper.
+    """
+    w = np.asarray(taper, dtype=np.float32)
+    if w.shape != (data.shape[1],):
+        raise ValueError(f"taper must have shape [channel] = ({data.shape[1]},), "
+                         f"got {w.shape}")
+    return range_compress(data) * w[None, :, None]
+
+
+def _repointing(spec: ChainSpec, motion, azimuth, elevation, wavelength: float) -> np.ndarray:
+    """Per-beam slow-time phase of the ``paper`` chain, shape ``[chirp, 1, az, el]`` complex64.
+
+    ``exp(-j 4 pi (dR_n(u) - dR_n(u_0)) / lambda)`` with ``u`` every grid
+    direction and ``u_0`` :data:`BORESIGHT` (the direction
+    :func:`raysim.pipeline.chains.project` corrected towards).
+    """
+    from compensation import range_change
+    from compensation.geometry import grid_directions
+
+    u = np.asarray(grid_directions(azimuth, elevation)).reshape(len(azimuth), len(elevation), 3)
+    dr0 = range_change(motion, BORESIGHT, rotation_phase=spec.rotation_phase)
+    dr = np.stack([np.stack([range_change(motion, u[i, j], rotation_phase=spec.rotation_phase)
+                             for j in range(len(elevation))], -1)
+                   for i in range(len(azimuth))], -2)                     # [chirp, az, el]
+    ddr = dr - dr0[:, None, None]
+    return np.exp(-4j * np.pi * ddr / wavelength).astype(np.complex64)[:, None]
+
+
+def beam_blocks(chain, rc: np.ndarray, positions: np.ndarray, motion, config,
+                range_axis: np.ndarray, gates: np.ndarray, azimuth: np.ndarray,
+                elevation: np.ndarray, grid_shape, gate_block: int):
+    """Beams of one chain, block by block of range gates.
+
+    Parameters
+    ----------
+    chain : str or ChainSpec
+        ``none``, ``paper``, ``paper:published`` or ``exact``.
+    rc : ndarray, shape ``[chirp, channel, range]``
+        Range-compressed cube (complex64, channel taper applied).
+    positions : ndarray, shape ``[channel, 3]``
+        Virtual element positions [m].
+    motion : compensation.PlatformMotion or None
+        Pose estimate at the chirps (unused by ``none``).
+    config : raysim.radar.config.RadarConfig
+    range_axis : ndarray, shape ``[range]``
+        Range of every bin of ``rc`` [m].
+    gates : ndarray of int, shape ``[gate]``
+        Bins of ``rc`` to beamform.
+    azimuth, elevation : ndarray
+        Global grid [rad].
+    grid_shape : (int, int) or None
+        ``(nx, ny)`` of a virtual UPA.
+    gate_block : int
+        Gates per block.
+
+    Yields
+    ------
+    (ndarray of int, compensation.BeamCube)
+        The block's gates and its beams ``[chirp, gate, azimuth, elevation]``.
+    """
+    from raysim.pipeline.chains import project
+
+    spec = parse_chain(chain)
+    if not (isinstance(gate_block, (int, np.integer)) and gate_block >= 1):
+        raise ValueError(f"gate_block must be a positive integer, got {gate_block!r}")
+    lam = config.center_wavelength
+    repoint = (_repointing(spec, motion, azimuth, elevation, lam) if spec.name == "paper"
+               else None)
+    for g0 in range(0, gates.size, gate_block):
+        sel = gates[g0:g0 + gate_block]
+        bc = project(spec, rc, positions, wavelength=lam, range_axis=range_axis,
+                     azimuth=azimuth, elevation=elevation,
+                     motion=motion if spec.compensated else None,
+                     direction=BORESIGHT if spec.name == "paper" else None,
+                     grid_shape=grid_shape, range_gates=sel)
+        if repoint is not None:
+            bc = replace(bc, data=bc.data * repoint)
+        yield sel, bc
+
+
+def cfar_detect(cube: np.ndarray, *, train: int = CFAR_TRAIN, guard: int = CFAR_GUARD,
+                threshold_db: float = CFAR_THRESHOLD_DB) -> np.ndarray:
+    """Cell-averaging CFAR along range plus 3 x 3 x 3 local-maximum test.
+
+    Parameters
+    ----------
+    cube : ndarray, shape ``[range, azimuth, elevation]``
+        Non-negative power.
+    train, guard : int
+        Training and guard cells on each side along range.
+    threshold_db : float
+        Detection threshold over the mean of the training cells [dB].
+
+    Returns
+    -------
+    ndarray of int, shape ``[detection, 3]``
+        Indices ``(range, azimuth, elevation)``, strongest first.
+    """
+    from scipy.ndimage import maximum_filter, uniform_filter1d
+
+    p = np.asarray(cube, dtype=float)
+    if p.ndim != 3 or np.any(p < 0):
+        raise ValueError(f"cube must be a non-negative [range, azimuth, elevation] array, got "
+                         f"shape {p.shape}")
+    if train < 1 or guard < 0:
+        raise ValueError(f"need train >= 1 and guard >= 0, got train={train!r}, guard={guard!r}")
+    big = uniform_filter1d(p, 2 * (train + guard) + 1, axis=0, mode="nearest") * (
+        2 * (train + guard) + 1)
+    small = uniform_filter1d(p, 2 * guard + 1, axis=0, mode="nearest") * (2 * guard + 1)
+    noise = np.maximum((big - small) / (2 * train), np.finfo(float).tiny)
+    hit = (p > noise * 10 ** (threshold_db / 10)) & (p == maximum_filter(p, size=3,
+                                                                          mode="nearest"))
+    idx = np.argwhere(hit)
+    order = np.argsort(-p[hit])
+    return idx[order]
+
+
+def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.ndarray,
+                  elevation: np.ndarray, range_window: tuple[float, float], lever_arm,
+                  gate_block: int = 16) -> SceneMeasurement:
+    """Beams, maps, entropies, ridge leakage and detections of one chain (or the reference).
+
+    Parameters
+    ----------
+    chain : str or ChainSpec
+        A chain (``none``, ``paper``, ``paper:published``, ``exact``), or
+        :data:`raysim.vocabulary.REFERENCE` for the stationary platform's frame
+        (beamformed like ``none``).
+    rc : ndarray, shape ``[chirp, channel, range]``
+        Range-compressed cube (:func:`range_compressed`).
+    motion : compensation.PlatformMotion or None
+        Pose estimate at the chirps (needed by ``paper`` and ``exact``).
+    config : raysim.radar.config.RadarConfig
+    array : raysim.radar.arrays.VirtualArray
+    azimuth, elevation : ndarray, shape ``[azimuth]``, ``[elevation]``
+        Global grid [rad] (:func:`angle_grid`).
+    range_window : (float, float)
+        Processed range window [m]; beams are formed on the gates inside it.
+    lever_arm : array_like, shape ``[3]``
+        Radar phase centre in B [m] (detections are placed from it).
+    gate_block : int
+        Range gates beamformed at once (bounds memory).
+
+    Returns
+    -------
+    SceneMeasurement
+    """
+    if chain == REFERENCE:
+        spec, key = parse_chain("none"), REFERENCE
+    else:
+        spec = parse_chain(chain)
+        key = spec.key
+    if spec.compensated and motion is None:
+        raise ValueError(f"chain {spec.key!r} needs motion (the platform pose at every chirp)")
+    t = time.perf_counter()
+    n_range = rc.shape[-1]
+    r_axis = config.bin_ranges(n_range)
+    lo, hi = range_window
+    gates = np.nonzero((r_axis >= lo) & (r_axis <= hi))[0]
+    if gates.size == 0:
+        raise ValueError(f"range_window {tuple(range_window)!r} m holds no range bin; expected "
+                         f"a window within 0..{r_axis[-1]:.1f} m")
+    az, el = np.asarray(azimuth), np.asarray(elevation)
+    rd = np.zeros((gates.size, rc.shape[0]))
+    cube = np.zeros((gates.size, az.size, el.size))
+    rc_win = np.ascontiguousarray(rc[:, :, gates])               # the window only
+    local = np.arange(gates.size)
+    for k, bc in beam_blocks(spec, rc_win, array.virtual_positions, motion, config,
+                             r_axis[gates], local, az, el, array.grid_shape, gate_block):
+        spec_d = bc.doppler()                                # [doppler, g, az, el]
+        rd[k] = np.einsum("dgae->gd", np.abs(spec_d.astype(np.complex128)) ** 2)
+        cube[k] = bc.coherent_power(window="hann")
+    vel = config.velocity_axis(rc.shape[0])
+    rng = r_axis[gates]
+    maps = {
+        "rd": Map(rd, MAPS["rd"], {"range": rng, "doppler": vel}),
+        "ra": Map(cube.sum(axis=2), MAPS["ra"], {"range": rng, "azimuth": az}),
+        "ae": Map(cube.sum(axis=0), MAPS["ae"], {"azimuth": az, "elevation": el}),
+    }
+    entropy = {m: image_entropy(maps[m].values) for m in SCENE_MAPS}
+    leak = ridge_leakage_db(rd)
+    detections = []
+    lever = np.asarray(lever_arm, dtype=float)
+    from raysim.echoes.oracle import direction
+
+    for gi, ai, ei in cfar_detect(cube)[:MAX_DETECTIONS]:
+        u = direction(az[ai], el[ei])
+        d = int(np.argmax(rd[gi]))
+        detections.append({
+            "range_m": float(rng[gi]), "az_deg": float(np.rad2deg(az[ai])),
+            "el_deg": float(np.rad2deg(el[ei])), "velocity_mps": float(vel[d]),
+            "power_db": float(10 * np.log10(cube[gi, ai, ei] / cube.max())),
+            "position_m": (lever + rng[gi] * u).tolist()})
+    return SceneMeasurement(key, maps, cube, entropy, detections, leak,
+                            time.perf_counter() - t)
