@@ -214,7 +214,7 @@ def test_bad_input_is_named(capsys):
         sr.ReportSettings(jitter_axes=("z", "heave"))
     with pytest.raises(ValueError, match="unknown report setting.*'array_sise'"):
         sr.FULL.with_values(array_sise=4)
-    with pytest.raises(ValueError, match="scenario must be a raysim.io.scenario.Scenario"):
+    with pytest.raises(ValueError, match="scenario must be a raysim.scenario.Scenario"):
         sr.ReportSettings(scenario={"radar": {}})
     with pytest.raises(ValueError, match="axes must be distinct"):
         sr.hover_trajectory(7, axes=("z", "z"))

@@ -1,7 +1,7 @@
 """Scene entropy report: ray-traced scenes seen from a hovering drone, compensated or not.
 
 The report is a configuration of the one pipeline: a scenario
-(:class:`raysim.io.scenario.Scenario`: radar, array, motion, IMU, scene) plus
+(:class:`raysim.scenario.Scenario`: radar, array, motion, IMU, scene) plus
 the study's knobs (:class:`ReportSettings`: rays, grid, range window, jitter
 axes, the report's car). For each bundled scene (:data:`raysim.echoes.rt.scenes.SCENES`,
 :func:`report_scenario`) or scenario file, frame 0 is rendered by the

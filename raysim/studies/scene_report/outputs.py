@@ -342,7 +342,7 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
         Chains of the moving platform (default all of
         :data:`raysim.vocabulary.CHAINS`); the stationary reference is always
         computed.
-    scenarios : sequence of raysim.io.scenario.Scenario
+    scenarios : sequence of raysim.scenario.Scenario
         Scenarios evaluated with their own radar, array, motion, IMU and scene
         (point targets, a bundled scene or users' meshes) and the knobs of
         ``settings``; named by their ``name`` (made file-name safe and unique).

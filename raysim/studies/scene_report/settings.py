@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
-from raysim.io.scenario import Scenario
+from raysim.scenario import Scenario
 from raysim.measure.ridge import RIDGE_HALF_WIDTH_BINS
 from raysim.measure.scene import (
     CFAR_GUARD,
@@ -98,7 +98,7 @@ def report_scenario(scene: str = "flat_reflectors", *, num_chirps: int = 128,
     array_size : int
         UPA side [elements].
     """
-    from raysim.io.scenario import validate_scenario
+    from raysim.scenario import validate_scenario
 
     return validate_scenario({
         "name": scene, "frames": 1, "seed": 42, "noise": False,
@@ -118,7 +118,7 @@ class ReportSettings:
 
     The radar, array, lever arm, platform motion (hover jitter and its seed),
     IMU and scene (tracing depth, clutter mode and density, seeds) are the
-    :class:`raysim.io.scenario.Scenario`'s; the attributes below are what the
+    :class:`raysim.scenario.Scenario`'s; the attributes below are what the
     report adds. Read-only shortcuts (``num_chirps``, ``array_size``,
     ``lever_arm``, ``jitter_seed``, ``imu``, ``imu_rate``, ``imu_seed``,
     ``trace_seed``, ``max_depth``, ``clutter``, ``clutter_per_cell``) read the
@@ -126,7 +126,7 @@ class ReportSettings:
 
     Attributes
     ----------
-    scenario : raysim.io.scenario.Scenario
+    scenario : raysim.scenario.Scenario
         Radar, array, motion, IMU and scene (:func:`report_scenario` for a
         bundled scene). The bundled scenes of ``--scenes`` replace its scene name.
     samples_per_src : int
@@ -174,10 +174,10 @@ class ReportSettings:
     mover_speed: float | None = None
 
     def __post_init__(self) -> None:
-        from raysim.io.scenario import Scenario
+        from raysim.scenario import Scenario
 
         if not isinstance(self.scenario, Scenario):
-            raise ValueError(f"scenario must be a raysim.io.scenario.Scenario, "
+            raise ValueError(f"scenario must be a raysim.scenario.Scenario, "
                              f"got {type(self.scenario).__name__}")
         for name in ("samples_per_src", "path_chunk", "gate_block"):
             v = getattr(self, name)
@@ -327,7 +327,7 @@ class ReportSettings:
 
     # ------------------------------------------------------------ derived
     def radar(self) -> RadarConfig:
-        """The scenario's waveform (:meth:`raysim.io.scenario.Scenario.radar_config`).
+        """The scenario's waveform (:meth:`raysim.scenario.Scenario.radar_config`).
 
         The radar's element pattern (:mod:`raysim.radar.pattern`, the patch
         element by default) weights every path by its two-way gain.
@@ -335,7 +335,7 @@ class ReportSettings:
         return self.scenario.radar_config()
 
     def array(self) -> VirtualArray:
-        """The scenario's virtual array (:meth:`raysim.io.scenario.Scenario.virtual_array`)."""
+        """The scenario's virtual array (:meth:`raysim.scenario.Scenario.virtual_array`)."""
         return self.scenario.virtual_array()
 
     def channel_taper(self) -> np.ndarray:
