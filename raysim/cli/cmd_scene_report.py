@@ -139,8 +139,8 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``raysim scene-report``; returns the exit code."""
     from raysim.cli.options import chains_option, check_output, known_name
     from raysim.echoes.rt.scenes import SCENES
-    from raysim.scenario import load_scenario
     from raysim.platform.imu import PRESETS
+    from raysim.scenario import load_scenario
     from raysim.studies.scene_report import FULL, QUICK, write_scene_report
     from raysim.vocabulary import parse_chains
 

@@ -7,7 +7,6 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
-from raysim.scenario import Scenario
 from raysim.measure.ridge import RIDGE_HALF_WIDTH_BINS
 from raysim.measure.scene import (
     CFAR_GUARD,
@@ -25,6 +24,7 @@ from raysim.measure.scene import (
 from raysim.platform.motion import AXES
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import RadarConfig
+from raysim.scenario import Scenario
 
 __all__ = ["REPORT_MAPS", "ENTROPY_MARGIN_NATS",
            "RIDGE_HALF_WIDTH_BINS", "CFAR_TRAIN", "CFAR_GUARD", "CFAR_THRESHOLD_DB",
