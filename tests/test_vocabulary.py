@@ -22,7 +22,7 @@ import zarr
 from scenario_texts import small_scenario
 
 from raysim.cli import main
-from raysim.pipeline.analysis import ANALYSIS_METRICS
+from raysim.measure.point import POINT_METRICS
 from raysim.vocabulary import (
     CHAINS,
     MAP_TITLES,
@@ -83,7 +83,7 @@ def test_metric_unit_of_unknown_name_raises_naming_it():
     assert metric_unit("pseudo_velocity_mps_std") == "m/s"
     with pytest.raises(ValueError, match="'angle_err'"):
         metric_unit("angle_err")
-    assert set(ANALYSIS_METRICS) <= set(METRICS)
+    assert set(POINT_METRICS) <= set(METRICS)
     assert set(MAP_TITLES) == set(MAPS)
 
 
@@ -137,9 +137,9 @@ def test_chain_keys_are_the_vocabulary_and_the_same_everywhere(outputs):
 
 def test_metric_names_and_units_are_the_vocabulary_and_the_same_everywhere(outputs):
     sim = outputs["simulate"]
-    names = set(ANALYSIS_METRICS)
+    names = set(POINT_METRICS)
     assert names <= set(METRICS)
-    assert sim["units"] == {m: METRICS[m][0] for m in ANALYSIS_METRICS}
+    assert sim["units"] == {m: METRICS[m][0] for m in POINT_METRICS}
     for chain, metrics in sim["chains"].items():
         assert set(metrics) == names, chain
     _, report_units = _report_table(outputs["report"])

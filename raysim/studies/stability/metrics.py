@@ -32,7 +32,7 @@ import numpy as np
 
 from raysim.echoes.gated import gated_cube, nearest_range_bin
 from raysim.echoes.oracle import direction
-from raysim.pipeline.analysis import angle_chirp
+from raysim.measure.point import angle_chirp
 from raysim.pipeline.chains import project
 from raysim.processing.maps import Map
 from raysim.processing.metrics import (
