@@ -323,7 +323,7 @@ def _direction(az: float, el: float) -> np.ndarray:
 
 def gate_metrics(gate: PointGate, reference: Reference | None = None, *,
                  chain: str | ChainSpec = "none", motion=None, warnings: list | None = None,
-                 maps: dict | None = None) -> dict:
+                 maps: dict | None = None, accumulate: bool = True) -> dict:
     """The metrics of :data:`GATE_METRICS` of a range gate through one chain.
 
     Definitions (parameters are this module's constants):
@@ -357,8 +357,12 @@ def gate_metrics(gate: PointGate, reference: Reference | None = None, *,
         frame, chirp major, slot minor; required by the compensated chains.
     warnings : list, optional
         Receives the chain's guard warnings (str), each once.
+    accumulate : bool
+        Form the accumulated AE map (False leaves ``map_*`` and
+        ``entropy_ae_nats`` NaN and needs a reference).
     maps : dict, optional
-        Receives ``ae`` (accumulated AE :class:`~raysim.processing.maps.Map`),
+        Receives ``ae`` (accumulated AE :class:`~raysim.processing.maps.Map`,
+        None without ``accumulate``),
         ``slow_time`` (``[chirp]``) and the look direction ``look`` (az, el)
         [rad] and slow-time correction direction ``u_hat`` of the chain.
 
@@ -373,11 +377,15 @@ def gate_metrics(gate: PointGate, reference: Reference | None = None, *,
     Raises
     ------
     ValueError
-        A compensated chain without motion, or motion of the wrong length.
+        A compensated chain without motion, motion of the wrong length, or
+        ``accumulate=False`` without a reference.
     """
     spec = parse_chain(chain)
     if spec.compensated and motion is None:
         raise ValueError(f"chain {spec.key!r} needs motion (the platform pose at every chirp)")
+    if not accumulate and reference is None:
+        raise ValueError("accumulate=False needs a reference (the look direction of the "
+                         "single-chirp estimate is the accumulated peak without one)")
     cfg, arr = gate.config, gate.array
     found = [] if warnings is None else warnings
     bfs = [Beamformer(spec, arr, cfg.center_wavelength, motion=m, warnings=found)
@@ -386,12 +394,14 @@ def gate_metrics(gate: PointGate, reference: Reference | None = None, *,
     snaps = gate.snapshots[:, :, :, None]                       # [frame, chirp, channel, 1]
     toward = reference.direction if reference is not None else None
 
-    grid = map_grid()
-    power = 0.0
-    for k, bf in enumerate(bfs):
-        power = power + _coherent_power(bf, snaps[k], gate_r, grid, toward)
-    ae = Map(power, ("azimuth", "elevation"), {"azimuth": grid, "elevation": grid})
-    pk = ae.peak()
+    ae, pk = None, {"azimuth": math.nan, "elevation": math.nan}
+    if accumulate:
+        grid = map_grid()
+        power = 0.0
+        for k, bf in enumerate(bfs):
+            power = power + _coherent_power(bf, snaps[k], gate_r, grid, toward)
+        ae = Map(power, ("azimuth", "elevation"), {"azimuth": grid, "elevation": grid})
+        pk = ae.peak()
 
     n = gate.num_chirps
     c = angle_chirp(n)
@@ -432,7 +442,7 @@ def gate_metrics(gate: PointGate, reference: Reference | None = None, *,
         "pseudo_velocity_bins": pv / cfg.velocity_resolution,
         "doppler_width_hz": width,
         "doppler_width_bins": width / cfg.doppler_resolution,
-        "entropy_ae_nats": ae.entropy(),
+        "entropy_ae_nats": ae.entropy() if ae is not None else math.nan,
     }
 
 
