@@ -52,7 +52,8 @@ def register(subparsers) -> None:
     p.add_argument("--imu-rate", type=float, default=None, metavar="HZ",
                    help="IMU output rate (default: the scenario's imu.rate_hz, 1000)")
     p.add_argument("--quick", action="store_true",
-                   help="reduced sizes (2.5 MHz sampling, coarser accumulated map)")
+                   help="reduced size: 2.5 MHz sampling (radar.sample_rate_hz), a narrower "
+                   "figure window")
     p.add_argument("--chains", default="none,paper,paper:published,exact", metavar="NAMES",
                    help="comma-separated chains: none, paper, paper:published, exact "
                    "(default: all four)")
