@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from raysim.io.scenario import Scenario
+from raysim.measure.point import measure, point_cells
 from raysim.pipeline.estimate import scenario_motion
 from raysim.pipeline.sensors import imu_log
 from raysim.pipeline.sources import (
@@ -278,8 +279,6 @@ def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None,
         maps}`` with ``return_maps``); chains that cannot run here are
         skipped with a note.
     """
-    from raysim.measure.point import measure, point_cells
-
     specs = parse_chains(chains)
     traj = scenario.trajectory()
     if frames is None:
