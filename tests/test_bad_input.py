@@ -119,6 +119,16 @@ def _analyse_bad(value: float):
     return measure([replace(fr, data=data, frame_index=2)])
 
 
+def _point_gate(snapshots, range_m: float = 10.0):
+    from raysim.measure.point import PointGate
+
+    return PointGate(snapshots, range_m, SMALL, ARR)
+
+
+def _gate_ones():
+    return _point_gate(np.ones((1, SMALL.num_chirps, ARR.num_channels), np.complex64))
+
+
 T_IMU = np.arange(0.0, 0.05, 1e-3)
 
 CASES = [
@@ -213,6 +223,27 @@ CASES = [
         ("frame 2", "chirp 3", "channel 1", "sample 7", "non-finite")),
     Bad("measure-inf-in-if", lambda _: _analyse_bad(math.inf), ValueError,
         ("frame 2", "chirp 3", "channel 1", "sample 7", "inf")),
+    Bad("point-gate-missing-frame-axis",
+        lambda _: _point_gate(np.ones((SMALL.num_chirps, ARR.num_channels))), ValueError,
+        ("snapshots", "[frame, chirp, channel]")),
+    Bad("point-gate-wrong-channels",
+        lambda _: _point_gate(np.ones((1, SMALL.num_chirps, ARR.num_channels + 1))), ValueError,
+        ("snapshots", f"{ARR.num_channels + 1} channels", f"{ARR.num_channels}")),
+    Bad("point-gate-negative-range",
+        lambda _: _point_gate(np.ones((1, SMALL.num_chirps, ARR.num_channels)), -1.0),
+        ValueError, ("range_m", "-1.0")),
+    Bad("gate-metrics-exact-without-motion",
+        lambda _: __import__("raysim.measure.point", fromlist=["x"]).gate_metrics(
+            _gate_ones(), chain="exact"), ValueError, ("'exact'", "motion")),
+    Bad("gate-metrics-no-map-no-reference",
+        lambda _: __import__("raysim.measure.point", fromlist=["x"]).gate_metrics(
+            _gate_ones(), accumulate=False), ValueError, ("accumulate=False", "reference")),
+    Bad("beamformer-paper-without-motion",
+        lambda _: __import__("raysim.pipeline.beams", fromlist=["x"]).Beamformer(
+            "paper", ARR, SMALL.center_wavelength), ValueError, ("'paper'", "motion")),
+    Bad("reproduction-overrides-not-a-mapping",
+        lambda _: __import__("raysim.studies.reproduce", fromlist=["x"]).ReproductionSettings(
+            overrides=[("radar.num_chirps", 64)]), ValueError, ("overrides", "list")),
     Bad("unknown-paper-case",
         lambda _: __import__("raysim.studies.cases", fromlist=["x"]).get_case("roll_x"), ValueError,
         ("'roll_x'", "rotation_y")),

@@ -126,3 +126,33 @@ def test_every_shared_metric_agrees_per_chain(tmp_path, capsys):
                                                              rel=AGREEMENT_RTOL, abs=0.0), \
                         f"{m} of chain {chain}: {a} {got[a][chain][m]!r}, {b} {got[b][chain][m]!r}"
     assert REQUIRED <= compared
+
+
+#: Relative agreement of the accumulated AE map of ``none`` formed from the chirp mean
+#: and from every chirp's beams (complex64 beams).
+LINEAR_MAP_RTOL = 1e-5
+
+
+def test_none_chain_map_of_the_chirp_mean_is_the_mean_of_its_beams():
+    """``gate_metrics`` beamforms the chirp mean for ``none``; a NumPy reference sums beams."""
+    import numpy as np
+
+    from raysim.measure.point import PointGate, gate_metrics, map_grid
+    from raysim.pipeline.sources import Reference
+
+    s = _scenario().with_values({"frames": 1})
+    cfg, arr = s.radar_config(), s.virtual_array()
+    rng = np.random.default_rng(3)
+    snaps = (rng.standard_normal((1, cfg.num_chirps, arr.num_channels))
+             + 1j * rng.standard_normal((1, cfg.num_chirps, arr.num_channels)))
+    maps: dict = {}
+    gate_metrics(PointGate(snaps.astype(np.complex64), 15.0, cfg, arr),
+                 Reference(15.0, 20.0, 0.0), maps=maps)
+    g = map_grid()
+    az, el = np.meshgrid(g, g, indexing="ij")
+    u = np.stack([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)], axis=-1)
+    steer = arr.steering_vector(u.reshape(-1, 3), cfg.center_wavelength)   # [direction, channel]
+    beams = snaps[0].astype(np.complex64) @ np.conj(steer).T / arr.num_channels
+    ref = np.abs(beams.mean(axis=0)) ** 2
+    got = maps["ae"].values.ravel()
+    assert np.allclose(got / got.max(), ref / ref.max(), rtol=0, atol=LINEAR_MAP_RTOL)
