@@ -22,7 +22,7 @@ Pipeline (:mod:`raysim.pipeline`)
     :func:`render` (a scenario's frames into a Zarr store),
     :func:`render_frames` (the frames in memory), :func:`evaluate` (every
     chain's metrics), :func:`estimate_motion` (IMU samples to the platform
-    pose at every chirp), :func:`analyse` (maps and metrics of given frames).
+    pose at every chirp), :func:`measure` (point metrics and maps of given frames).
 
 Packages
 --------
@@ -55,15 +55,15 @@ _ENTRY_POINTS = {
     "evaluate": "raysim.pipeline.run",
     "render_frames": "raysim.pipeline.sources",
     "estimate_motion": "raysim.pipeline.estimate",
-    "analyse": "raysim.pipeline.analysis",
+    "measure": "raysim.measure.point",
 }
 
 __all__ = ["__version__", "Scenario", "load_scenario", "loads_scenario", "scenario_from_case",
            "RadarConfig", "VirtualArray", "RadarFrame", "Map", "render", "evaluate",
-           "render_frames", "estimate_motion", "analyse"]
+           "render_frames", "estimate_motion", "measure"]
 
 if TYPE_CHECKING:
-    from raysim.pipeline.analysis import analyse
+    from raysim.measure.point import measure
     from raysim.pipeline.estimate import estimate_motion
     from raysim.pipeline.run import evaluate, render
     from raysim.pipeline.sources import render_frames

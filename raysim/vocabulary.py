@@ -144,13 +144,14 @@ AXIS_LABELS = {"range": "range [m]", "doppler": "range rate [m/s]",
                "azimuth": "azimuth [deg]", "elevation": "elevation [deg]"}
 
 #: Metric name -> (unit, definition). Every result that reports one of these
-#: quantities uses exactly this name; ``docs/conventions.md`` has the maths.
+#: quantities uses exactly this name; ``docs/conventions.md`` has the maths and the
+#: parameters, :mod:`raysim.measure.point` measures the point metrics.
 METRICS = {
     "range_m": ("m", "range of the target peak (parabola on the dB range profile)"),
     "az_deg": ("deg", "azimuth of the interpolated peak of the single-chirp angle map"),
     "el_deg": ("deg", "elevation of the interpolated peak of the single-chirp angle map"),
     "angle_error_deg": ("deg", "angle between the interpolated peak of the single-chirp "
-                               "angle map (chirp N/2, the paper's chirp 128) and the truth"),
+                               "angle map (chirp N/2 - 1, the paper's chirp 128) and the truth"),
     "angle_error_worst_deg": ("deg", "largest single-chirp angle error over chirps spread "
                                      "over the frame and its extreme attitudes"),
     "map_az_deg": ("deg", "azimuth of the interpolated peak of the accumulated AE map"),

@@ -108,15 +108,25 @@ def _stability_point(**kw):
 
 
 def _analyse_bad(value: float):
-    """``analyse`` of a frame (``frame_index`` 2) with ``value`` at chirp 3, channel 1, sample 7."""
+    """``measure`` of a frame (``frame_index`` 2) with ``value`` at chirp 3, channel 1, sample 7."""
     from dataclasses import replace
 
-    from raysim.pipeline.analysis import analyse
+    from raysim.measure.point import measure
 
     fr = simulate_point_targets(SMALL, ARR, [PointTarget.at(10.0, 0.1, 0.0)])
     data = fr.data.copy()
     data[3, 1, 7] = value
-    return analyse([replace(fr, data=data, frame_index=2)])
+    return measure([replace(fr, data=data, frame_index=2)])
+
+
+def _point_gate(snapshots, range_m: float = 10.0):
+    from raysim.measure.point import PointGate
+
+    return PointGate(snapshots, range_m, SMALL, ARR)
+
+
+def _gate_ones():
+    return _point_gate(np.ones((1, SMALL.num_chirps, ARR.num_channels), np.complex64))
 
 
 T_IMU = np.arange(0.0, 0.05, 1e-3)
@@ -209,10 +219,31 @@ CASES = [
     Bad("metrics-negative-intensity",
         lambda _: __import__("raysim.processing.metrics", fromlist=["x"]).image_entropy(
             np.array([1.0, -1.0])), ValueError, ("intensity", "non-negative")),
-    Bad("analyse-nan-in-if", lambda _: _analyse_bad(math.nan), ValueError,
+    Bad("measure-nan-in-if", lambda _: _analyse_bad(math.nan), ValueError,
         ("frame 2", "chirp 3", "channel 1", "sample 7", "non-finite")),
-    Bad("analyse-inf-in-if", lambda _: _analyse_bad(math.inf), ValueError,
+    Bad("measure-inf-in-if", lambda _: _analyse_bad(math.inf), ValueError,
         ("frame 2", "chirp 3", "channel 1", "sample 7", "inf")),
+    Bad("point-gate-missing-frame-axis",
+        lambda _: _point_gate(np.ones((SMALL.num_chirps, ARR.num_channels))), ValueError,
+        ("snapshots", "[frame, chirp, channel]")),
+    Bad("point-gate-wrong-channels",
+        lambda _: _point_gate(np.ones((1, SMALL.num_chirps, ARR.num_channels + 1))), ValueError,
+        ("snapshots", f"{ARR.num_channels + 1} channels", f"{ARR.num_channels}")),
+    Bad("point-gate-negative-range",
+        lambda _: _point_gate(np.ones((1, SMALL.num_chirps, ARR.num_channels)), -1.0),
+        ValueError, ("range_m", "-1.0")),
+    Bad("gate-metrics-exact-without-motion",
+        lambda _: __import__("raysim.measure.point", fromlist=["x"]).gate_metrics(
+            _gate_ones(), chain="exact"), ValueError, ("'exact'", "motion")),
+    Bad("gate-metrics-no-map-no-reference",
+        lambda _: __import__("raysim.measure.point", fromlist=["x"]).gate_metrics(
+            _gate_ones(), accumulate=False), ValueError, ("accumulate=False", "reference")),
+    Bad("beamformer-paper-without-motion",
+        lambda _: __import__("raysim.pipeline.beams", fromlist=["x"]).Beamformer(
+            "paper", ARR, SMALL.center_wavelength), ValueError, ("'paper'", "motion")),
+    Bad("reproduction-overrides-not-a-mapping",
+        lambda _: __import__("raysim.studies.reproduce", fromlist=["x"]).ReproductionSettings(
+            overrides=[("radar.num_chirps", 64)]), ValueError, ("overrides", "list")),
     Bad("unknown-paper-case",
         lambda _: __import__("raysim.scenario", fromlist=["x"]).get_case("roll_x"), ValueError,
         ("'roll_x'", "rotation_y")),
@@ -540,13 +571,13 @@ def test_rt_empty_mesh_is_named(tmp_path, rt_cpu):
 def test_angle_metrics_need_aperture(nx, ny, az_ok, el_ok):
     """A single channel or a line array reports NaN (not the grid edge) on an axis it
     cannot resolve; the angle errors need both axes."""
-    from raysim.pipeline.analysis import analyse
+    from raysim.measure.point import measure
     from raysim.pipeline.sources import Reference
 
     arr = upa(nx, ny, wavelength=SMALL.wavelength)
     fr = simulate_point_targets(SMALL, arr, [PointTarget.at(10.0, 0.1, 0.05)])
     ref = Reference(range_m=10.0, az_deg=math.degrees(0.1), el_deg=math.degrees(0.05))
-    m = analyse([fr], ref)
+    m = measure([fr], ref)
     for key in ("az_deg", "map_az_deg"):
         assert math.isfinite(m[key]) == az_ok, (key, m[key])
     for key in ("el_deg", "map_el_deg"):

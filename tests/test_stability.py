@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from raysim.echoes.gated import gated_cube
 from raysim.echoes.oracle import simulate_point_targets
-from raysim.pipeline.analysis import angle_chirp
+from raysim.measure.point import angle_chirp
 from raysim.platform.motion import sinusoid, stationary
 from raysim.processing.maps import range_compress
 from raysim.radar.arrays import upa

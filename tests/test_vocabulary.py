@@ -5,7 +5,7 @@ scenario; every chain key and metric name they write must come from
 :mod:`raysim.vocabulary`, and the same quantity must carry the same name (and,
 where two commands compute it for the same scenario, the same value). The
 studies too: ``reproduce`` rows and the stability metrics use the same names,
-and ``simulate`` and ``reproduce`` give the same single-chirp angle on the
+and ``simulate`` and ``reproduce`` give the same metric values on the
 same paper case.
 """
 
@@ -22,7 +22,7 @@ import zarr
 from scenario_texts import small_scenario
 
 from raysim.cli import main
-from raysim.pipeline.analysis import ANALYSIS_METRICS
+from raysim.measure.point import POINT_METRICS
 from raysim.vocabulary import (
     CHAINS,
     MAP_TITLES,
@@ -83,7 +83,7 @@ def test_metric_unit_of_unknown_name_raises_naming_it():
     assert metric_unit("pseudo_velocity_mps_std") == "m/s"
     with pytest.raises(ValueError, match="'angle_err'"):
         metric_unit("angle_err")
-    assert set(ANALYSIS_METRICS) <= set(METRICS)
+    assert set(POINT_METRICS) <= set(METRICS)
     assert set(MAP_TITLES) == set(MAPS)
 
 
@@ -137,9 +137,9 @@ def test_chain_keys_are_the_vocabulary_and_the_same_everywhere(outputs):
 
 def test_metric_names_and_units_are_the_vocabulary_and_the_same_everywhere(outputs):
     sim = outputs["simulate"]
-    names = set(ANALYSIS_METRICS)
+    names = set(POINT_METRICS)
     assert names <= set(METRICS)
-    assert sim["units"] == {m: METRICS[m][0] for m in ANALYSIS_METRICS}
+    assert sim["units"] == {m: METRICS[m][0] for m in POINT_METRICS}
     for chain, metrics in sim["chains"].items():
         assert set(metrics) == names, chain
     _, report_units = _report_table(outputs["report"])
@@ -189,9 +189,9 @@ def test_report_maps_are_titled_by_the_vocabulary(outputs):
 #: Columns of a reproduction row that describe the run rather than measure it.
 REPRODUCE_DESCRIPTORS = {"case", "chain", "imu", "seeds", "num_chirps", "frames",
                          "velocity_bin_mps", "doppler_bin_hz", "warnings"}
-#: Largest difference of one metric between ``simulate`` and ``reproduce`` on the same
-#: case: both extract the range gate in float32, by a matrix product and an FFT.
-SAME_METRIC_TOL_DEG = 1e-5
+#: Relative difference of one metric between ``simulate`` and ``reproduce`` on the same
+#: case: both measure the same frames and IMU log with ``raysim.measure.point``.
+SAME_METRIC_RTOL = 1e-9
 
 
 def _metric_name(key: str) -> str:
@@ -227,8 +227,10 @@ def test_simulate_and_reproduce_agree_on_the_same_case(reproduction, capsys):
     sim = json.loads(capsys.readouterr().out)
     for row in reproduction["rows"]:
         got = sim["chains"][row["chain"]]
-        for m in ("angle_error_deg", "az_deg", "el_deg"):
-            assert got[m] == pytest.approx(row[m], abs=SAME_METRIC_TOL_DEG), (row["chain"], m)
+        for m in ("angle_error_deg", "az_deg", "el_deg", "entropy_ae_nats", "map_az_deg",
+                  "map_el_deg", "pseudo_velocity_mps", "doppler_width_hz"):
+            assert got[m] == pytest.approx(row[m], rel=SAME_METRIC_RTOL, abs=0.0), \
+                (row["chain"], m)
 
 
 def test_stability_names_are_the_vocabulary():

@@ -49,10 +49,11 @@ def register(subparsers) -> None:
     p.add_argument("--velocity", choices=("given", "hover"), default="given",
                    help="initial velocity: from the flight controller (truth at t=0, default) "
                    "or the hover assumption (zero mean over the IMU record)")
-    p.add_argument("--imu-rate", type=float, default=1000.0, metavar="HZ",
-                   help="IMU output rate (default: 1000)")
+    p.add_argument("--imu-rate", type=float, default=None, metavar="HZ",
+                   help="IMU output rate (default: the scenario's imu.rate_hz, 1000)")
     p.add_argument("--quick", action="store_true",
-                   help="reduced sizes (2.5 MHz sampling, coarser accumulated map)")
+                   help="reduced size: 2.5 MHz sampling (radar.sample_rate_hz), a narrower "
+                   "figure window")
     p.add_argument("--chains", default="none,paper,paper:published,exact", metavar="NAMES",
                    help="comma-separated chains: none, paper, paper:published, exact "
                    "(default: all four)")
@@ -71,7 +72,7 @@ def run(args) -> int:
     seeds = args.seeds if args.seeds is not None else (1 if args.imu == "ideal" else 20)
     if seeds < 1:
         raise ValueError(f"--seeds must be >= 1, got {seeds}")
-    if args.imu_rate <= 0:
+    if args.imu_rate is not None and not args.imu_rate > 0:
         raise ValueError(f"--imu-rate must be a positive rate in Hz, got {args.imu_rate}")
     chains = chains_option(args.chains)
     cases = None if not args.cases else [c.strip() for c in args.cases.split(",") if c.strip()]
@@ -79,7 +80,8 @@ def run(args) -> int:
         known_name(case, PAPER_CASES, "--cases", "case")
     check_output(args.out, "dir", "--out")
     make = ReproductionSettings.quick if args.quick else ReproductionSettings
-    settings = make(imu_rate=args.imu_rate, velocity=args.velocity)
+    overrides = {} if args.imu_rate is None else {"imu.rate_hz": float(args.imu_rate)}
+    settings = make(overrides=overrides, velocity=args.velocity)
     result = reproduce(cases, imu=args.imu, seeds=seeds, settings=settings, out_dir=args.out,
                        figures=not args.no_figures, chains=chains,
                        progress=lambda msg: print(msg, file=sys.stderr, flush=True))

@@ -181,7 +181,7 @@ def print_warnings(warnings: dict, file=None) -> int:
 def run(args) -> int:
     """Run ``raysim simulate``; returns the exit code."""
     from raysim.cli.options import chains_option
-    from raysim.pipeline.analysis import ANALYSIS_METRICS
+    from raysim.measure.point import POINT_METRICS
     from raysim.pipeline.run import evaluate
     from raysim.pipeline.sources import FeatureUnavailable
     from raysim.vocabulary import metric_unit
@@ -208,7 +208,7 @@ def run(args) -> int:
                   "num_samples": scenario.radar_config().num_samples,
                   "num_channels": scenario.virtual_array().num_channels,
                   "frames": scenario.frames},
-        "units": {m: metric_unit(m) for m in ANALYSIS_METRICS},
+        "units": {m: metric_unit(m) for m in POINT_METRICS},
         "chains": result["chains"],
         "warnings": result["warnings"],
         "paper": paper,
@@ -228,7 +228,7 @@ def run(args) -> int:
     names = list(result["chains"])
     print()
     print(f"{'metric':<24}" + "".join(f"{n:>16}" for n in names))
-    for key, unit in ((m, metric_unit(m)) for m in ANALYSIS_METRICS):
+    for key, unit in ((m, metric_unit(m)) for m in POINT_METRICS):
         row = f"{key + ' [' + unit + ']':<24}"
         for n in names:
             v = result["chains"][n][key]

@@ -155,7 +155,8 @@ def estimate_record(imu_time, gyro, accel, frame_times, *, lever_arm, trajectory
     return split_motion(motion, [f.size for f in frames])
 
 
-def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory=None):
+def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory=None, *,
+                    velocity: str = "given"):
     """:func:`estimate_motion` for a scenario and its IMU log.
 
     Parameters
@@ -166,6 +167,10 @@ def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory
         ``imu_time`` [s, IMU clock], ``imu_gyro`` [rad/s], ``imu_accel`` [m/s^2].
     chirp_times : ndarray, shape ``[chirp]``
         Chirp start times of all frames, in order [s].
+    trajectory : raysim.platform.motion.Trajectory, optional
+        Default ``scenario.trajectory()``.
+    velocity : {"given", "hover"}
+        Initial-velocity handling (:data:`VELOCITY_MODES`).
 
     Returns
     -------
@@ -174,4 +179,5 @@ def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory
     traj = scenario.trajectory() if trajectory is None else trajectory
     return estimate_motion(imu["imu_time"].values, imu["imu_gyro"].values,
                            imu["imu_accel"].values, chirp_times, lever_arm=scenario.lever_arm,
-                           trajectory=traj, time_offset=scenario.imu.time_offset_s)
+                           trajectory=traj, time_offset=scenario.imu.time_offset_s,
+                           velocity=velocity)

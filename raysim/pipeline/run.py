@@ -5,7 +5,7 @@
 (:mod:`~raysim.pipeline.sources`) -> IF frames -> IMU log
 (:mod:`~raysim.pipeline.sensors`) -> motion estimate
 (:mod:`~raysim.pipeline.estimate`) -> chain (:mod:`~raysim.pipeline.chains`)
--> maps and metrics (:mod:`~raysim.pipeline.analysis`).
+-> point metrics and maps (:mod:`raysim.measure.point`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.pipeline.analysis import analyse
+from raysim.measure.point import measure, point_cells
 from raysim.pipeline.estimate import scenario_motion
 from raysim.pipeline.sensors import imu_log
 from raysim.pipeline.sources import (
@@ -248,7 +248,8 @@ def motion_times(frame, chirp_times: np.ndarray) -> np.ndarray:
 
 
 def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None, imu=None,
-             reference: Reference | None = None, return_maps: bool = False) -> dict:
+             reference: Reference | None = None, return_maps: bool = False,
+             velocity: str = "given") -> dict:
     """Render a scenario in memory (unless ``frames`` are given) and measure every chain.
 
     Parameters
@@ -265,7 +266,10 @@ def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None,
         Truth target when ``frames`` are given (default: the scenario's first
         point target).
     return_maps : bool
-        Also return the maps of every chain (see :func:`analyse`).
+        Also return the maps of every chain (see :func:`raysim.measure.point.measure`).
+    velocity : {"given", "hover"}
+        Initial velocity of the strapdown integration
+        (:data:`raysim.pipeline.estimate.VELOCITY_MODES`).
 
     Returns
     -------
@@ -285,6 +289,7 @@ def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None,
     out: dict = {"reference": reference, "chains": {}, "warnings": {}, "notes": []}
     if return_maps:
         out["maps"] = {}
+    cells = point_cells(frames, reference)          # every frame read once for all chains
     motion = None
     for spec in specs:
         found: list[str] = []
@@ -296,9 +301,10 @@ def evaluate(scenario: Scenario, *, chains: Sequence[str] = CHAINS, frames=None,
                     raise FeatureUnavailable("raysim.platform.imu is not available")
                 times = (frames.chirp_times() if isinstance(frames, LazyFrames)
                          else np.concatenate([fr.chirp_times for fr in frames]))
-                motion = scenario_motion(scenario, imu, motion_times(frames[0], times), traj)
+                motion = scenario_motion(scenario, imu, motion_times(frames[0], times), traj,
+                                         velocity=velocity)
                 found.extend(motion.warnings)
-            res = analyse(frames, reference, chain=spec, motion=motion if spec.compensated
+            res = measure(cells, reference, chain=spec, motion=motion if spec.compensated
                           else None, return_maps=return_maps, warnings=found)
         except FeatureUnavailable as exc:
             out["notes"].append(f"{spec.key}: {exc}")

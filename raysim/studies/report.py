@@ -4,7 +4,7 @@ A report holds, for every available chain (``none``, ``paper``,
 ``paper:published``, ``exact``): the RA, RE, RD and AE maps
 (:data:`raysim.vocabulary.MAPS`, drawn by :func:`raysim.studies.figures.plot_map`
 with the axes of :data:`raysim.vocabulary.FIGURE_AXES`), Doppler cuts of the
-reference target, the metric table of :func:`raysim.pipeline.analysis.analyse`
+reference target, the metric table of :func:`raysim.measure.point.measure`
 (names and units of :data:`raysim.vocabulary.METRICS`, with the values the
 paper reports for a paper case), the compensation's guard warnings per chain,
 the run parameters (motion label, scenario TOML, derived radar quantities)
@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.pipeline.analysis import ANALYSIS_METRICS
+from raysim.measure.point import POINT_METRICS
 from raysim.pipeline.sources import LazyFrames, Reference
 from raysim.synthesis.frame import RadarFrame
 from raysim.vocabulary import (
@@ -179,7 +179,7 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
     store of any length holds about two frames in memory.
     """
     from raysim.io.storage import scenario_of
-    from raysim.pipeline.analysis import analyse
+    from raysim.measure.point import measure
     from raysim.pipeline.run import evaluate
 
     keys = [c.key for c in parse_chains(chains)]
@@ -192,7 +192,7 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
                         float(ds.attrs["reference_el_deg"]))
     title = str(ds.attrs.get("scenario_name", "stored frames"))
     if scenario is None:
-        m, maps = analyse(frames, ref, return_maps=True)
+        m, maps = measure(frames, ref, return_maps=True)
         res = {"reference": ref, "chains": {"none": m}, "maps": {"none": maps},
                "warnings": {"none": []},
                "notes": ["the store carries no scenario: compensation chains skipped"]}
@@ -440,7 +440,7 @@ def build_report(data: ReportData) -> str:
     parts.append("<h2>Metrics</h2><table class='metrics'><tr><th>metric</th><th>unit</th>"
                  + "".join(f"<th>{html.escape(c)}</th>" for c in chains)
                  + "<th>definition</th></tr>")
-    for key, unit in ((m, metric_unit(m)) for m in ANALYSIS_METRICS):
+    for key, unit in ((m, metric_unit(m)) for m in POINT_METRICS):
         parts.append(f"<tr><td>{key}</td><td>{html.escape(unit)}</td>"
                      + "".join(f"<td>{_fmt(metrics[c][key])}</td>" for c in chains)
                      + f"<td class='muted' style='text-align:left'>"

@@ -1,13 +1,16 @@
 """Reproduction of the paper's experiments with and without motion compensation.
 
 Every case of :mod:`raysim.scenario.paper_cases` is a scenario
-(:func:`raysim.scenario.scenario_from_case`); its frames are rendered by
-the pipeline's echo source (:func:`raysim.pipeline.sources.frame_source`), so
-``raysim simulate --case NAME`` and ``raysim reproduce`` see the same frames.
-An IMU (preset of :mod:`raysim.platform.imu`) samples the scenario's motion,
-:func:`raysim.pipeline.estimate.estimate_motion` integrates it to the pose at
-every chirp, and the chains of :mod:`raysim.vocabulary` are applied by
-:func:`raysim.pipeline.chains.project` on the same cubes:
+(:func:`raysim.scenario.scenario_from_case`) plus the study's knobs
+(:class:`ReproductionSettings`). Its frames are rendered by the pipeline's
+echo source (:func:`raysim.pipeline.sources.frame_source`), its IMU log by
+:func:`raysim.pipeline.sensors.imu_log` (IMU seed ``k`` of a run is the
+scenario's ``imu_seed + k``), integrated by
+:func:`raysim.pipeline.estimate.scenario_motion` to the pose at every TDM slot
+of every chirp, and every metric is measured by :mod:`raysim.measure.point`:
+``raysim simulate --case NAME`` and ``raysim reproduce`` see the same frames,
+the same motion and print the same values. The chains of
+:mod:`raysim.vocabulary` are:
 
 ``none``
     conventional beam scan and Doppler FFT;
@@ -21,18 +24,13 @@ every chirp, and the chains of :mod:`raysim.vocabulary` are applied by
 ``exact``
     the rigid-body projection using all six degrees of freedom.
 
-Metrics (names and units in :data:`raysim.vocabulary.METRICS`):
-``pseudo_velocity_mps`` / ``_bins`` and ``doppler_width_hz`` of the target's
-slow-time signal (target range gate, beam towards the true direction);
-``angle_error_deg``, ``az_deg``, ``el_deg`` of the single-chirp AE map of
-chirp :func:`raysim.pipeline.analysis.angle_chirp` (the paper's chirp 128) on
-the grid of :data:`~raysim.pipeline.analysis.SINGLE_CHIRP_HALF_WIDTH_DEG` /
-:data:`~raysim.pipeline.analysis.SINGLE_CHIRP_STEP_DEG` around the truth, as
-in :func:`raysim.pipeline.analysis.analyse`; ``entropy_ae_nats``,
-``map_az_deg``, ``map_el_deg`` of the AE map at the target gate, coherently
-integrated over each frame and summed in power over the frames (20 frames
-for the yaw case). The stationary platform is the reference
-(:data:`raysim.vocabulary.REFERENCE`), rendered from the same scenario at rest.
+Metrics (names and units in :data:`raysim.vocabulary.METRICS`, definitions in
+:func:`raysim.measure.point.gate_metrics`, parameters in docs/conventions.md):
+``pseudo_velocity_mps`` / ``_bins``, ``doppler_width_hz``,
+``angle_error_deg``, ``az_deg``, ``el_deg``, ``entropy_ae_nats``,
+``map_az_deg``, ``map_el_deg``. The stationary platform is the reference
+(:data:`raysim.vocabulary.REFERENCE`): the same scenario at rest, its one
+frame standing for every frame.
 
 Initial conditions of the strapdown integration (the flight controller's
 state at ``t = 0``): attitude, position and velocity from the truth
@@ -44,277 +42,210 @@ from __future__ import annotations
 import math
 import os
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from raysim.echoes.oracle import direction
-from raysim.pipeline.analysis import SINGLE_CHIRP_HALF_WIDTH_DEG, SINGLE_CHIRP_STEP_DEG, angle_chirp
-from raysim.pipeline.analysis import local_axis as _axis
-from raysim.pipeline.chains import project
-from raysim.pipeline.estimate import VELOCITY_MODES, estimate_motion
-from raysim.pipeline.sensors import imu_record
-from raysim.pipeline.sources import frame_source, reference_target
+from raysim.measure.point import PointCells, PointGate, gate_metrics, point_cells
+from raysim.pipeline.estimate import VELOCITY_MODES, scenario_motion
+from raysim.pipeline.run import motion_times
+from raysim.pipeline.sensors import imu_log
+from raysim.pipeline.sources import LazyFrames, Reference, frame_source, reference_target
 from raysim.platform.imu import get_preset
 from raysim.processing import metrics
-from raysim.processing.maps import Map, range_compress
 from raysim.scenario import Scenario, scenario_from_case
 from raysim.scenario.paper_cases import PAPER_CASES, get_case
 from raysim.studies.reproduce_output import format_table, write_case_figures, write_results
-from raysim.vocabulary import MAPS, REFERENCE, ChainSpec, metric_unit, parse_chain, parse_chains
+from raysim.vocabulary import REFERENCE, metric_unit, parse_chains
 
-__all__ = ["DEFAULT_CHAINS", "ROW_METRICS", "IMU_RATE", "ReproductionSettings", "case_scenario",
+__all__ = ["DEFAULT_CHAINS", "ROW_METRICS", "ReproductionSettings", "case_scenario",
            "prepare_case", "platform_motion", "run_case", "reproduce", "format_table",
            "write_results", "write_case_figures"]
 
 #: Chains evaluated for every case, in table order (:func:`raysim.vocabulary.parse_chains`).
 DEFAULT_CHAINS = ("none", "paper", "paper:published", "exact")
-#: IMU sample rate of the reproduction [Hz].
-IMU_RATE = 1000.0
 #: Metrics of every row (mean and ``_std`` over seeds), names of :data:`raysim.vocabulary.METRICS`.
 ROW_METRICS = ("pseudo_velocity_mps", "pseudo_velocity_bins", "doppler_width_hz",
                "width_improvement_pct", "width_vs_stationary", "angle_error_deg", "az_deg",
                "el_deg", "entropy_ae_nats", "entropy_vs_stationary", "map_az_deg", "map_el_deg")
+#: Metrics of :func:`raysim.measure.point.gate_metrics` a row reports.
+_MEASURED = ("pseudo_velocity_mps", "pseudo_velocity_bins", "doppler_width_hz",
+             "angle_error_deg", "az_deg", "el_deg", "entropy_ae_nats", "map_az_deg", "map_el_deg")
 
 
 @dataclass(frozen=True)
 class ReproductionSettings:
-    """Sizes and grids of a reproduction run.
+    """The study's knobs beside each case's scenario.
 
     Attributes
     ----------
-    sample_rate : float or None
-        ADC rate override [Hz] (None keeps the paper's 10 MHz). A lower rate
-        keeps range resolution and every motion effect, only shrinking the
-        unambiguous range window.
+    overrides : mapping
+        Scenario key path -> value applied to every case
+        (:meth:`raysim.scenario.Scenario.with_values`), e.g.
+        ``{"radar.sample_rate_hz": 2.5e6, "imu.rate_hz": 500.0}``. A lower ADC
+        rate keeps range resolution and every motion effect, only shrinking
+        the unambiguous range window.
     yaw_frames : int or None
-        Frames accumulated in multi-frame cases (None keeps the case's 20).
-    angle_half_width_deg, angle_step_deg : float
-        Local azimuth/elevation grid around the truth for the single-chirp
-        angle estimate [deg]; default the pipeline's grid
-        (:data:`~raysim.pipeline.analysis.SINGLE_CHIRP_HALF_WIDTH_DEG`,
-        :data:`~raysim.pipeline.analysis.SINGLE_CHIRP_STEP_DEG`).
-    map_half_width_deg, map_step_deg : float
-        Azimuth-elevation grid of the accumulated AE map (entropy) [deg].
-    map_taper_sll_db : float or None
-        Sidelobe level of the separable Taylor taper (nbar 4) used for the
-        accumulated AE map [dB]; None for uniform weights.
+        Frames of the multi-frame cases (None keeps the case's 20); single-frame
+        cases keep one.
     range_half_width : float
         Range window of the RA/RD figures around the target [m].
-    imu_rate : float
-        IMU output rate [Hz].
     velocity : {"given", "hover"}
         Initial-velocity handling of the strapdown integration.
     """
 
-    sample_rate: float | None = None
+    overrides: Mapping[str, Any] = field(default_factory=dict)
     yaw_frames: int | None = None
-    angle_half_width_deg: float = SINGLE_CHIRP_HALF_WIDTH_DEG
-    angle_step_deg: float = SINGLE_CHIRP_STEP_DEG
-    map_half_width_deg: float = 30.0
-    map_step_deg: float = 1.0
-    map_taper_sll_db: float | None = 35.0
     range_half_width: float = 3.0
-    imu_rate: float = IMU_RATE
     velocity: str = "given"
 
     def __post_init__(self) -> None:
         if self.velocity not in VELOCITY_MODES:
             raise ValueError(f"velocity: got {self.velocity!r}, expected one of "
                              f"{list(VELOCITY_MODES)}")
-        if not (self.imu_rate > 0 and math.isfinite(self.imu_rate)):
-            raise ValueError(f"imu_rate: got {self.imu_rate!r}, expected a positive rate in Hz")
+        if not isinstance(self.overrides, Mapping):
+            raise ValueError(f"overrides: got {type(self.overrides).__name__}, expected a "
+                             f"mapping of scenario key paths to values")
+        object.__setattr__(self, "overrides", dict(self.overrides))
+        if self.yaw_frames is not None and int(self.yaw_frames) < 1:
+            raise ValueError(f"yaw_frames: got {self.yaw_frames!r}, expected >= 1 or None")
+        if not (self.range_half_width > 0 and math.isfinite(self.range_half_width)):
+            raise ValueError(f"range_half_width: got {self.range_half_width!r}, expected a "
+                             f"positive distance [m]")
 
     @classmethod
     def quick(cls, **changes) -> ReproductionSettings:
-        """Reduced sizes for tests: 2.5 MHz sampling, coarser accumulated map."""
-        base = dict(sample_rate=2.5e6, map_step_deg=2.0, map_half_width_deg=24.0,
-                    range_half_width=1.5)
+        """Reduced sizes for tests: 2.5 MHz sampling, a narrower figure window."""
+        overrides = {"radar.sample_rate_hz": 2.5e6, **changes.pop("overrides", {})}
+        base = dict(overrides=overrides, range_half_width=1.5)
         base.update(changes)
         return cls(**base)
 
 
-@dataclass
-class _CaseData:
+@dataclass(eq=False)
+class _Case:
+    """A rendered case: its scenario, the target's cells and the stationary reference."""
+
     name: str
     scenario: Scenario
     paper: dict                    # chain -> metric -> the paper's value
-    config: object
-    trajectory: object
-    lever_arm: np.ndarray
-    positions: np.ndarray
-    grid_shape: tuple
-    range_axis: np.ndarray
-    gate: int
-    window: np.ndarray
-    rc_window: np.ndarray          # [chirp, channel, window] frame 0
-    rc_gate: np.ndarray            # [frame, chirp, channel, 1]
-    chirp_times: np.ndarray        # [frame, chirp]
-    target_az: float               # [rad]
-    target_el: float               # [rad]
-    u_true: np.ndarray
-    az_a: np.ndarray
-    el_a: np.ndarray
-    az_m: np.ndarray
-    el_m: np.ndarray
-    map_weights: np.ndarray | None = None
+    reference: Reference
+    cells: PointCells              # the target's gate in every frame, frame 0's cube
+    chirp_times: np.ndarray        # [frame * chirp] [s]
+    window: np.ndarray             # range bins of the figures
     stationary: dict = field(default_factory=dict)
+
+    @property
+    def config(self):
+        return self.cells.gate.config
+
+    @property
+    def array(self):
+        return self.cells.gate.array
+
+    @property
+    def frames(self) -> int:
+        return self.cells.gate.num_frames
+
+    @property
+    def target_az(self) -> float:
+        """Reference azimuth [rad]."""
+        return math.radians(self.reference.az_deg)
+
+    @property
+    def target_el(self) -> float:
+        """Reference elevation [rad]."""
+        return math.radians(self.reference.el_deg)
+
+    @property
+    def range_axis(self) -> np.ndarray:
+        return self.cells.range_axis
+
+    @property
+    def rc_window(self) -> np.ndarray:
+        """Frame 0's cells of the figure window, ``[chirp, channel, range]``."""
+        return self.cells.cube[:, :, self.window]
 
 
 def case_scenario(name: str, settings: ReproductionSettings | None = None) -> Scenario:
-    """The scenario of a paper case with the settings' sample rate and frame count."""
+    """The scenario of a paper case with the settings' overrides and frame count."""
     settings = ReproductionSettings() if settings is None else settings
     s = scenario_from_case(name)
-    changes: dict = {}
-    if settings.sample_rate is not None:
-        changes["radar.sample_rate_hz"] = float(settings.sample_rate)
+    changes = dict(settings.overrides)
     if settings.yaw_frames is not None and s.frames > 1:
         changes["frames"] = int(settings.yaw_frames)
     return s.with_values(changes) if changes else s
 
 
-def _render(scenario: Scenario, trajectory, gate: int, window: np.ndarray):
-    """Range-compressed cells of every frame: the gate of all frames, the window of frame 0."""
-    source = frame_source(scenario, trajectory)
-    rc_gate, times, rc_window = [], [], None
-    for f in range(scenario.frames):
-        fr = source(f)
-        rc = range_compress(fr.data)
-        if f == 0:
-            rc_window = np.ascontiguousarray(rc[:, :, window])
-        rc_gate.append(np.ascontiguousarray(rc[:, :, gate:gate + 1]))
-        times.append(fr.chirp_times)
-        del fr, rc
-    return rc_window, np.stack(rc_gate), np.stack(times)
+def _frames(scenario: Scenario) -> LazyFrames:
+    return LazyFrames(frame_source(scenario, scenario.trajectory()), scenario.frames)
 
 
-def _taper(grid_shape, sll_db):
-    """Separable Taylor taper ``[channel]`` (x major, y minor), or None."""
-    if sll_db is None:
-        return None
-    from scipy.signal.windows import taylor
-
-    nx, ny = grid_shape
-    return np.outer(taylor(nx, nbar=4, sll=sll_db), taylor(ny, nbar=4, sll=sll_db)).ravel()
-
-
-def prepare_case(name: str, settings: ReproductionSettings) -> _CaseData:
-    """Render a case's frames (and its stationary reference) once, keeping the gated cells."""
-    case = get_case(name)
+def prepare_case(name: str, settings: ReproductionSettings) -> _Case:
+    """Render a case's frames (and its stationary reference) once, keeping the target's cells."""
     scenario = case_scenario(name, settings)
-    cfg, arr, traj = scenario.radar_config(), scenario.virtual_array(), scenario.trajectory()
-    ref = reference_target(scenario)
-    r_axis = cfg.range_axis()
-    gate = int(np.argmin(np.abs(r_axis - ref.range_m)))
+    frames = _frames(scenario)
+    ref = frames.reference if frames.reference is not None else reference_target(scenario)
+    cells = point_cells(frames, ref)
+    cfg = cells.gate.config
     half = int(math.ceil(settings.range_half_width / cfg.range_resolution))
-    window = np.arange(max(gate - half, 0), min(gate + half + 1, r_axis.size))
-    rc_window, rc_gate, times = _render(scenario, traj, gate, window)
-    az, el = math.radians(ref.az_deg), math.radians(ref.el_deg)
-    data = _CaseData(
-        name=name, scenario=scenario, paper=case["paper"], config=cfg, trajectory=traj,
-        lever_arm=scenario.lever_arm, positions=arr.virtual_positions,
-        grid_shape=arr.grid_shape, range_axis=r_axis, gate=gate, window=window,
-        rc_window=rc_window, rc_gate=rc_gate, chirp_times=times, target_az=az, target_el=el,
-        u_true=direction(az, el),
-        az_a=_axis(az, settings.angle_half_width_deg, settings.angle_step_deg),
-        el_a=_axis(el, settings.angle_half_width_deg, settings.angle_step_deg),
-        az_m=_axis(az, settings.map_half_width_deg, settings.map_step_deg),
-        el_m=_axis(el, settings.map_half_width_deg, settings.map_step_deg),
-        map_weights=_taper(arr.grid_shape, settings.map_taper_sll_db))
-    # stationary reference: same scenario at rest (every frame identical, rendered once)
+    i = cells.range_bin
+    window = np.arange(max(i - half, 0), min(i + half + 1, cells.range_axis.size))
+    data = _Case(name, scenario, get_case(name)["paper"], ref, cells, frames.chirp_times(),
+                 window)
+    # stationary reference: the same scenario at rest, its one frame standing for every frame
     at_rest = scenario.with_values({"motion": {}, "frames": 1})
-    _, rc_g0, _ = _render(at_rest, at_rest.trajectory(), gate, window)
-    st = _evaluate(data, parse_chain("none"),
-                   rc_gate=np.repeat(rc_g0, rc_gate.shape[0], axis=0))
+    g0 = point_cells(_frames(at_rest), ref).gate
+    still = PointGate(np.repeat(g0.snapshots, data.frames, axis=0), g0.range_m, g0.config,
+                      g0.array)
+    extra: dict = {}
+    st = gate_metrics(still, ref, chain="none", maps=extra)
     data.stationary = {k: st[k] for k in ("doppler_width_hz", "entropy_ae_nats",
                                           "pseudo_velocity_mps")}
-    data.stationary["map"] = st["_map"]
+    data.stationary["map"] = extra["ae"]
     return data
 
 
-# ----------------------------------------------------------------- metrics
-def _doppler(data: _CaseData, slow: np.ndarray) -> dict:
-    cfg = data.config
-    pv = metrics.pseudo_velocity(slow, cfg.chirp_interval, cfg.center_wavelength)
-    return {"pseudo_velocity_mps": pv, "pseudo_velocity_bins": pv / cfg.velocity_resolution,
-            "doppler_width_hz": metrics.doppler_mainlobe_width(slow, cfg.chirp_interval)}
-
-
-def _angle(data: _CaseData, power: np.ndarray) -> dict:
-    """Single-chirp metrics of an AE power map ``[azimuth, elevation]`` on the local grid."""
-    pk = Map(power, MAPS["ae"], {"azimuth": data.az_a, "elevation": data.el_a}).peak()
-    return {"az_deg": math.degrees(pk["azimuth"]), "el_deg": math.degrees(pk["elevation"]),
-            "angle_error_deg": metrics.angle_error_deg(pk["azimuth"], pk["elevation"],
-                                                       data.target_az, data.target_el),
-            "_u_hat": direction(pk["azimuth"], pk["elevation"])}
-
-
-def _accumulated(data: _CaseData, power: np.ndarray) -> dict:
-    """Metrics of the accumulated AE power map ``[azimuth, elevation]``."""
-    ae = Map(power, MAPS["ae"], {"azimuth": data.az_m, "elevation": data.el_m})
-    pk = ae.peak()
-    return {"entropy_ae_nats": ae.entropy(), "map_az_deg": math.degrees(pk["azimuth"]),
-            "map_el_deg": math.degrees(pk["elevation"]), "_map": ae}
-
-
-def _evaluate(data: _CaseData, spec: ChainSpec, motion=None, rc_gate=None) -> dict:
-    """Metrics of one chain on the gated cells (``rc_gate`` default: the case's)."""
-    rc_gate = data.rc_gate if rc_gate is None else rc_gate
-    n_frames = rc_gate.shape[0]
-    n = data.config.num_chirps
-    if spec.compensated:
-        if motion is None:
-            raise ValueError(f"chain {spec.key!r} needs motion (the platform pose at every chirp)")
-        frames = [motion.select(slice(f * n, (f + 1) * n)) for f in range(n_frames)]
-    else:
-        frames = [None] * n_frames
-    found: list[str] = []
-
-    def beams(rc, mot, az, el, toward=None, weights=None):
-        out = project(spec, rc, data.positions, wavelength=data.config.center_wavelength,
-                      range_axis=data.range_axis[[data.gate]], azimuth=az, elevation=el,
-                      motion=mot, direction=toward, grid_shape=data.grid_shape,
-                      weights=weights, range_gates=[0])
-        found.extend(w for w in out.warnings if w not in found)
-        return out
-
-    c = angle_chirp(n)
-    sel = slice(c, c + 1)
-    m0 = frames[0]
-    one = beams(rc_gate[0][sel], None if m0 is None else m0.select(sel), data.az_a, data.el_a,
-                data.u_true)
-    out = _angle(data, one.chirp_power(0)[0])
-    u_hat = out.pop("_u_hat")      # the paper chain corrects slow time towards its estimate
-    out.update(_doppler(data, beams(rc_gate[0], m0, [data.target_az], [data.target_el],
-                                    u_hat).data[:, 0, 0, 0]))
-    acc = 0.0
-    for f in range(n_frames):
-        if spec.compensated:
-            acc = acc + beams(rc_gate[f], frames[f], data.az_m, data.el_m, u_hat,
-                              data.map_weights).coherent_power()[0]
-        else:
-            mean = rc_gate[f].mean(axis=0, keepdims=True)       # coherent sum commutes
-            acc = acc + beams(mean, None, data.az_m, data.el_m,
-                              weights=data.map_weights).chirp_power(0)[0]
-    out.update(_accumulated(data, acc))
+def _evaluate(data: _Case, chain: str, motion=None) -> dict:
+    """Metrics of one chain on the case's gate (:func:`raysim.measure.point.gate_metrics`)."""
+    found: list[str] = [] if motion is None else list(motion.warnings)
+    extra: dict = {}
+    out = gate_metrics(data.cells.gate, data.reference, chain=chain, motion=motion,
+                       warnings=found, maps=extra)
+    out = {k: out[k] for k in _MEASURED}
+    out["_map"] = extra["ae"]
     out["warnings"] = found
     return out
 
 
-def platform_motion(data: _CaseData, imu: str, seed: int, settings: ReproductionSettings):
-    """IMU samples along the scenario's motion, integrated to the pose at every chirp.
+def platform_motion(data: _Case, imu: str, seed: int, settings: ReproductionSettings):
+    """The case's IMU log with preset ``imu`` and seed ``imu_seed + seed``, integrated.
 
-    The IMU record is :func:`raysim.pipeline.sensors.imu_record` over the chirps; the
-    integration is :func:`raysim.pipeline.estimate.estimate_motion`.
+    The log is :func:`raysim.pipeline.sensors.imu_log` of the case's scenario
+    (``imu.preset`` = ``imu``, ``imu.seed`` = ``scenario.imu_seed + seed``), so
+    seed 0 is the IMU ``raysim simulate --case`` sees; the integration is
+    :func:`raysim.pipeline.estimate.scenario_motion` at every TDM slot of every
+    chirp (:func:`raysim.pipeline.run.motion_times`).
     """
-    t = data.chirp_times.ravel()
-    samples = imu_record(data.trajectory, imu, rate=settings.imu_rate, times=t, seed=seed)
-    return estimate_motion(*samples.to_arrays(), t, lever_arm=data.lever_arm,
-                           trajectory=data.trajectory, velocity=settings.velocity)
+    scenario = data.scenario.with_values({"imu.preset": imu,
+                                          "imu.seed": data.scenario.imu_seed + int(seed)})
+    traj = scenario.trajectory()
+    times = motion_times(_FrameAxes(data), data.chirp_times)
+    return scenario_motion(scenario, imu_log(scenario, traj), times, traj,
+                           velocity=settings.velocity)
+
+
+class _FrameAxes:
+    """What :func:`raysim.pipeline.run.motion_times` reads of a frame: its array and config."""
+
+    def __init__(self, data: _Case) -> None:
+        self.array, self.config = data.array, data.config
 
 
 # ------------------------------------------------------------------ rows
-def _paper_values(data: _CaseData, key: str) -> dict:
+def _paper_values(data: _Case, key: str) -> dict:
     """``paper_<metric>`` of the paper's values for a chain (``none``: before, else after)."""
     vals = data.paper.get("none" if key == "none" else "paper", {})
     out = {f"paper_{m}": v for m, v in vals.items()}
@@ -325,7 +256,7 @@ def _paper_values(data: _CaseData, key: str) -> dict:
     return out
 
 
-def _summarise(data: _CaseData, key: str, runs: list[dict], unc: dict, imu: str) -> dict:
+def _summarise(data: _Case, key: str, runs: list[dict], unc: dict, imu: str) -> dict:
     st = data.stationary
     for r in runs:
         r["width_improvement_pct"] = 100.0 * (unc["doppler_width_hz"] - r["doppler_width_hz"]) \
@@ -334,7 +265,7 @@ def _summarise(data: _CaseData, key: str, runs: list[dict], unc: dict, imu: str)
         r["entropy_vs_stationary"] = r["entropy_ae_nats"] - st["entropy_ae_nats"]
     row = {"case": data.name, "chain": key, "imu": imu if key != "none" else "-",
            "seeds": len(runs), "num_chirps": data.config.num_chirps,
-           "frames": int(data.rc_gate.shape[0]),
+           "frames": data.frames,
            "velocity_bin_mps": data.config.velocity_resolution,
            "doppler_bin_hz": data.config.doppler_resolution,
            f"{REFERENCE}_doppler_width_hz": st["doppler_width_hz"],
@@ -363,7 +294,9 @@ def run_case(name: str, *, imu: str = "ideal", seeds=(0,),
     imu : str
         IMU preset name (``ideal``, ``tactical``, ``consumer_mems``).
     seeds : sequence of int
-        IMU error seeds; the radar frames are the same for every seed.
+        IMU error seeds, offsets to the scenario's ``imu_seed`` (seed 0 is the
+        IMU of ``raysim simulate --case``); the radar frames are the same for
+        every seed.
     settings : ReproductionSettings, optional
     figures_dir : str, optional
         Write the RA/RD/AE figures (first seed) there.
@@ -386,7 +319,7 @@ def run_case(name: str, *, imu: str = "ideal", seeds=(0,),
         raise ValueError("seeds must hold at least one seed")
     specs = parse_chains(chains)
     data = prepare_case(name, settings)
-    unc = _evaluate(data, parse_chain("none"))
+    unc = _evaluate(data, "none")
     runs: dict[str, list[dict]] = {s.key: [] for s in specs if s.compensated}
     first_motion = None
     for seed in seeds:
@@ -394,7 +327,7 @@ def run_case(name: str, *, imu: str = "ideal", seeds=(0,),
         first_motion = first_motion or motion
         for s in specs:
             if s.compensated:
-                runs[s.key].append(_evaluate(data, s, motion))
+                runs[s.key].append(_evaluate(data, s.key, motion))
     rows = [_summarise(data, s.key, runs[s.key] if s.compensated else [unc], unc, imu)
             for s in specs]
     if figures_dir is not None:
@@ -416,7 +349,7 @@ def reproduce(cases=None, *, imu: str = "ideal", seeds: int = 1,
     imu : str
         IMU preset.
     seeds : int
-        Number of IMU seeds (0 .. seeds-1).
+        Number of IMU seeds (0 .. seeds-1, offsets to the scenario's ``imu_seed``).
     settings : ReproductionSettings, optional
     out_dir : str, optional
         Directory for ``reproduction.json``, ``reproduction.csv`` and figures.
@@ -455,12 +388,12 @@ def reproduce(cases=None, *, imu: str = "ideal", seeds: int = 1,
         if progress is not None:
             progress(f"{name}: done after {time.perf_counter() - t0:.1f} s")
     first = case_scenario(names[0], settings)
-    result = {"meta": {"imu": imu, "seeds": int(seeds), "imu_rate_hz": settings.imu_rate,
+    result = {"meta": {"imu": imu, "seeds": int(seeds), "imu_rate_hz": first.imu.rate_hz,
                        "velocity": settings.velocity, "chains": keys,
                        "sample_rate_hz": first.radar.sample_rate_hz,
                        "lever_arm_m": first.lever_arm.tolist(),
                        "units": {m: metric_unit(m) for m in ROW_METRICS},
-                       "settings": settings.__dict__, "seconds": time.perf_counter() - t0},
+                       "settings": dict(settings.__dict__), "seconds": time.perf_counter() - t0},
               "rows": rows}
     if out_dir is not None:
         write_results(result, out_dir)

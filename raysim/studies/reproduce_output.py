@@ -17,9 +17,9 @@ import os
 import numpy as np
 
 from raysim.io.files import atomic_savefig, atomic_write_text
-from raysim.pipeline.analysis import angle_chirp
-from raysim.pipeline.chains import project
-from raysim.processing.maps import Map
+from raysim.measure.point import angle_chirp, map_grid
+from raysim.pipeline.beams import Beamformer
+from raysim.processing.maps import Map, doppler_fft
 from raysim.studies.figures import plot_map
 from raysim.vocabulary import MAPS, REFERENCE, chain_label, parse_chain
 
@@ -91,13 +91,11 @@ def format_table(rows: list[dict]) -> str:
 
 
 # ----------------------------------------------------------------- figures
-def _chain_beams(data, motion, key: str, rc, az, el):
-    """Beams of one chain on the figure window (frame 0 cells given in ``rc``)."""
-    spec = parse_chain(key)
-    return project(spec, rc, data.positions, wavelength=data.config.center_wavelength,
-                   range_axis=data.range_axis[data.window], azimuth=az, elevation=el,
-                   motion=motion if spec.compensated else None, direction=data.u_true,
-                   grid_shape=data.grid_shape)
+def _chain_beams(data, motion, key: str, rc, chirps, az, el):
+    """Beams of one chain on the figure window (frame 0 cells of chirps ``chirps`` in ``rc``)."""
+    bf = Beamformer(key, data.array, data.config.center_wavelength,
+                    motion=motion if parse_chain(key).compensated else None)
+    return bf(rc, chirps, data.range_axis[data.window], az, el, data.reference.direction)
 
 
 def write_case_figures(data, motion, folder: str, *, imu: str, maps: dict) -> list:
@@ -105,10 +103,11 @@ def write_case_figures(data, motion, folder: str, *, imu: str, maps: dict) -> li
 
     Parameters
     ----------
-    data : raysim.studies.reproduce._CaseData
-        Rendered case (frame-0 cells of the range window, grids, truth).
+    data : raysim.studies.reproduce._Case
+        Rendered case (frame-0 cells of the range window, reference).
     motion : compensation.PlatformMotion or None
-        Pose at every chirp (first seed); None when only ``none`` is drawn.
+        Pose at every TDM slot of every chirp (first seed); None when only
+        ``none`` is drawn.
     folder : str
     imu : str
         IMU preset name (file names and titles).
@@ -126,7 +125,8 @@ def write_case_figures(data, motion, folder: str, *, imu: str, maps: dict) -> li
 
     cfg = data.config
     n = cfg.num_chirps
-    m0 = None if motion is None else motion.select(slice(0, n))
+    m0 = None if motion is None else motion.select(slice(0, n * data.array.num_slots))
+    grid = map_grid()
     chains = [k for k in maps if k != REFERENCE]
     r = data.range_axis[data.window]
     c = angle_chirp(n)
@@ -148,9 +148,8 @@ def write_case_figures(data, motion, folder: str, *, imu: str, maps: dict) -> li
     # RA: the angle chirp at the target elevation
     fig, axes = panels(chains, 4)
     for ax, key in zip(axes, chains, strict=True):
-        b = _chain_beams(data, None if m0 is None else m0.select(sel), key,
-                         data.rc_window[sel], data.az_m, [data.target_el])
-        m = Map(b.chirp_power(0)[:, :, 0], MAPS["ra"], {"range": r, "azimuth": data.az_m})
+        b = _chain_beams(data, m0, key, data.rc_window[sel], [c], grid, [data.target_el])
+        m = Map(np.abs(b[0, :, :, 0]) ** 2, MAPS["ra"], {"range": r, "azimuth": grid})
         im = plot_map(ax, m, title=chain_label(key), dynamic_range_db=40.0)
         ax.axvline(az_deg, color="w", lw=0.6, ls="--")
     fig.colorbar(im, ax=axes.tolist(), label="dB")
@@ -161,8 +160,9 @@ def write_case_figures(data, motion, folder: str, *, imu: str, maps: dict) -> li
     # RD: beam towards the true direction
     fig, axes = panels(chains, 4)
     for ax, key in zip(axes, chains, strict=True):
-        b = _chain_beams(data, m0, key, data.rc_window, [data.target_az], [data.target_el])
-        spec = np.abs(b.doppler()[:, :, 0, 0]) ** 2                     # [doppler, range]
+        b = _chain_beams(data, m0, key, data.rc_window, np.arange(n), [data.target_az],
+                         [data.target_el])
+        spec = np.abs(doppler_fft(b[:, :, 0, 0], axis=0)) ** 2          # [doppler, range]
         m = Map(spec.T, MAPS["rd"], {"range": r, "doppler": cfg.velocity_axis(spec.shape[0])})
         im = plot_map(ax, m, title=chain_label(key), dynamic_range_db=50.0, xlim=(-4, 4))
     fig.colorbar(im, ax=axes.tolist(), label="dB")
@@ -177,7 +177,7 @@ def write_case_figures(data, motion, folder: str, *, imu: str, maps: dict) -> li
                       title=f"{chain_label(key)}\nH = {maps[key].entropy():.2f} nats")
         ax.plot(az_deg, el_deg, "w+", ms=8)
     fig.colorbar(im, ax=axes.tolist(), label="dB")
-    fig.suptitle(f"{data.name}: AE (azimuth-elevation), {data.rc_gate.shape[0]} frame(s) "
+    fig.suptitle(f"{data.name}: AE (azimuth-elevation), {data.frames} frame(s) "
                  f"({imu} IMU)")
     save(fig, "ae")
     return paths

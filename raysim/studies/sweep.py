@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from raysim.pipeline.analysis import ANALYSIS_METRICS
+from raysim.measure.point import POINT_METRICS
 from raysim.scenario import Scenario, parse_value, validate_scenario
 from raysim.vocabulary import metric_unit, parse_chains
 
@@ -315,7 +315,7 @@ def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint
     points = sweep_points(spec) if points is None else points
     names = list(spec.parameters)
     shape = tuple(len(spec.parameters[n]) for n in names) + (len(spec.seeds), len(spec.chains))
-    arrays = {m: np.full(shape, np.nan) for m in ANALYSIS_METRICS}
+    arrays = {m: np.full(shape, np.nan) for m in POINT_METRICS}
     warns = np.full(shape, "", dtype=object)
     done = np.zeros(shape[:-1], dtype=bool)
     for p in points:
@@ -325,7 +325,7 @@ def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint
         done[p.index] = True
         for ci, chain in enumerate(spec.chains):
             metrics = (rec.get("chains") or {}).get(chain) or {}
-            for m in ANALYSIS_METRICS:
+            for m in POINT_METRICS:
                 v = metrics.get(m)
                 if v is not None:
                     arrays[m][p.index + (ci,)] = float(v)
@@ -336,7 +336,7 @@ def gather_results(spec: SweepSpec, out_dir: str | Path, points: list[SweepPoint
               for n in names}
     coords["seed"] = ("seed", np.array(spec.seeds, dtype=np.int64))
     coords["chain"] = ("chain", np.array(spec.chains, dtype=object))
-    data = {m: (dims, arrays[m], {"units": metric_unit(m)}) for m in ANALYSIS_METRICS}
+    data = {m: (dims, arrays[m], {"units": metric_unit(m)}) for m in POINT_METRICS}
     data["point_done"] = (dims[:-1], done, {"long_name": "point finished and stored"})
     data["warnings"] = (dims, warns, {"long_name": "guard warnings of the compensation, one "
                                                    "per line ('' for none)"})

@@ -89,6 +89,6 @@ def point_metrics(frames, reference, chain, motion) -> dict:
     dict
         Metric name -> value (:data:`raysim.vocabulary.METRICS`).
     """
-    from raysim.pipeline.analysis import analyse
+    from raysim.measure.point import measure
 
-    return analyse(frames, reference, chain=chain, motion=motion)
+    return measure(frames, reference, chain=chain, motion=motion)

@@ -16,8 +16,9 @@ Modules, one job each:
 * :mod:`~raysim.studies.stability.motion` -- its simulated IMU through
   :func:`raysim.pipeline.estimate.estimate_motion`;
 * :mod:`~raysim.studies.stability.metrics` -- the range gate
-  (:func:`raysim.echoes.gated.gated_cube`) through every chain via
-  :func:`raysim.pipeline.chains.project`, and the metrics;
+  (:func:`raysim.echoes.gated.gated_cube`) through every chain, measured by
+  :func:`raysim.measure.point.gate_metrics` (the definition every command
+  uses) plus the study's ``angle_error_worst_deg``;
 * :mod:`~raysim.studies.stability.criteria` -- failure thresholds;
 * :mod:`~raysim.studies.stability.maps` -- the maps and their point builders;
 * :mod:`~raysim.studies.stability.runner` -- points as (Dask) tasks, resumable;

@@ -1,41 +1,39 @@
 """Metrics of one stability point: the gated cube through every chain, via the pipeline.
 
-Every chain is applied by :func:`raysim.pipeline.chains.project` (the one
-place a chain name becomes beams) to the target's range gate
-``[chirp, channel, 1]`` from :func:`raysim.echoes.gated.gated_cube`, with
-``range_axis = [gate range]`` and the motion of
-:func:`raysim.studies.stability.motion.point_motion`. Metric names and units
-are those of :data:`raysim.vocabulary.METRICS`:
+The target's range gate ``[chirp, channel]`` from
+:func:`raysim.echoes.gated.gated_cube` and the motion of
+:func:`raysim.studies.stability.motion.point_motion` (pose at every TDM slot of
+every chirp) are measured by :func:`raysim.measure.point.gate_metrics`, the
+definition every command uses, through
+:class:`raysim.pipeline.beams.Beamformer`. Metric names and units are those of
+:data:`raysim.vocabulary.METRICS`:
 
-``pseudo_velocity_mps``, ``pseudo_velocity_bins``, ``doppler_width_hz``
-    Slow-time signal of the gate in the beam towards the true direction.
+``pseudo_velocity_mps``, ``pseudo_velocity_bins``, ``doppler_width_hz``,
+``angle_error_deg``, ``map_angle_error_deg``, ``entropy_ae_nats``
+    As :func:`raysim.measure.point.gate_metrics` defines them (parameters in
+    docs/conventions.md); the accumulated AE map (``map_angle_error_deg``,
+    ``entropy_ae_nats``) is optional.
 ``angle_error_worst_deg``
-    Worst single-chirp angle error over :data:`ANGLE_CHIRPS` chirps spread
-    over the frame and the chirps of extreme true roll, pitch and yaw (each
-    chirp beam-scanned on its own: coarse scan, then a fine scan around its
-    peak, interpolated peak).
-``angle_error_deg``
-    The same single-chirp error at chirp :func:`raysim.pipeline.analysis.angle_chirp`
-    (``N/2 - 1``, the paper's chirp 128).
-``map_angle_error_deg``, ``entropy_ae_nats``
-    Peak error and image entropy of the accumulated AE map: the beams summed
-    coherently over at most :data:`MAP_CHIRPS` evenly strided chirps on a
-    fixed grid around the target (the paper's yaw metric).
+    The study's own metric: worst single-chirp angle error over
+    :data:`ANGLE_CHIRPS` chirps spread over the frame and the chirps of
+    extreme true roll, pitch and yaw (each chirp beam-scanned on its own:
+    coarse scan over :data:`COARSE_FOV`, then a fine scan around its peak,
+    interpolated peak).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from raysim.echoes.gated import gated_cube, nearest_range_bin
 from raysim.echoes.oracle import direction
-from raysim.pipeline.analysis import angle_chirp
-from raysim.pipeline.chains import project
+from raysim.measure.point import PointGate, gate_metrics
+from raysim.pipeline.beams import Beamformer
+from raysim.pipeline.sources import Reference
+from raysim.platform.kinematics import slot_times
 from raysim.processing.maps import Map, map_peak
-from raysim.processing.metrics import doppler_mainlobe_width, image_entropy, pseudo_velocity
 from raysim.studies.stability.motion import point_motion
 from raysim.studies.stability.point import StabilityPoint
 from raysim.vocabulary import ChainSpec, parse_chain, parse_chains
@@ -51,13 +49,7 @@ STABILITY_METRICS = ("pseudo_velocity_mps", "pseudo_velocity_bins", "doppler_wid
                      "entropy_ae_nats")
 #: Chirps (evenly spread) whose single-chirp angle error is evaluated; the worst counts.
 ANGLE_CHIRPS = 8
-#: Half-width of the accumulated azimuth-elevation map around the target [rad].
-MAP_HALF_WIDTH = np.deg2rad(24.0)
-#: Step of the accumulated azimuth-elevation map [rad].
-MAP_STEP = np.deg2rad(1.5)
-#: At most this many chirps (evenly strided) enter the accumulated azimuth-elevation map.
-MAP_CHIRPS = 64
-#: Coarse beam-scan step for single-chirp angle estimates [rad].
+#: Coarse beam-scan step for the worst single-chirp angle error [rad].
 COARSE_STEP = np.deg2rad(2.0)
 #: Field of view of the coarse beam scan (|az|, |el| below this) [rad].
 COARSE_FOV = np.deg2rad(80.0)
@@ -86,23 +78,27 @@ def point_gate(point: StabilityPoint) -> tuple[np.ndarray, int, float]:
     return gate, m, float(cfg.range_axis(cfg.num_samples)[m])
 
 
+def _reference(point: StabilityPoint) -> Reference:
+    return Reference(point.target_range_m, point.target_az_deg, point.target_el_deg)
+
+
+def _motion_times(point: StabilityPoint, chirp_times: np.ndarray) -> np.ndarray:
+    """Every TDM slot of every chirp [s], chirp major (``chirp_times`` for one slot)."""
+    return slot_times(chirp_times, point.array.num_slots, point.config.slot_interval).ravel()
+
+
 class _Beams:
     """``beams(chirps, az, el) -> [chirp, azimuth, elevation]`` of one chain on the gate."""
 
     def __init__(self, spec: ChainSpec, gate: np.ndarray, gate_range: float,
                  point: StabilityPoint, motion) -> None:
-        self.spec, self.rc, self.r = spec, gate[:, :, None], [gate_range]
-        self.point, self.motion = point, motion
+        self.rc, self.r, self.point = gate[:, :, None], [gate_range], point
+        self.bf = Beamformer(spec, point.array, point.config.center_wavelength,
+                             motion=motion)
 
     def __call__(self, chirps: np.ndarray, az, el) -> np.ndarray:
-        arr = self.point.array
-        mot = None if self.motion is None or not self.spec.compensated else \
-            self.motion.select(chirps)
-        out = project(self.spec, self.rc[chirps], arr.virtual_positions,
-                      wavelength=self.point.config.center_wavelength, range_axis=self.r,
-                      azimuth=np.atleast_1d(az), elevation=np.atleast_1d(el), motion=mot,
-                      direction=self.point.direction, grid_shape=arr.grid_shape)
-        return out.data[:, 0].astype(np.complex128)
+        out = self.bf(self.rc[chirps], chirps, self.r, az, el, self.point.direction)
+        return out[:, 0].astype(np.complex128)
 
 
 def _grid(az0: float, el0: float, half: float, step: float) -> tuple[np.ndarray, np.ndarray]:
@@ -144,11 +140,6 @@ def _angle_chirps(point: StabilityPoint, chirp_times: np.ndarray) -> np.ndarray:
     return np.unique(np.concatenate([even, extremes]))
 
 
-def _slow_time(beams: _Beams) -> np.ndarray:
-    n = beams.rc.shape[0]
-    return beams(np.arange(n), beams.point.target_az, beams.point.target_el)[:, 0, 0]
-
-
 def compensated_slow_time(point: StabilityPoint, chain: str | ChainSpec,
                           motion=None) -> np.ndarray:
     """Slow-time signal of the target's range gate after a chain, beamformed at the target.
@@ -159,51 +150,36 @@ def compensated_slow_time(point: StabilityPoint, chain: str | ChainSpec,
     chain : str or ChainSpec
         ``none``, ``paper``, ``paper:published`` or ``exact``.
     motion : compensation.PlatformMotion, optional
-        Navigation solution; :func:`~raysim.studies.stability.motion.point_motion`
-        when omitted.
+        Navigation solution at every TDM slot of every chirp;
+        :func:`~raysim.studies.stability.motion.point_motion` when omitted.
 
     Returns
     -------
     ndarray, shape ``[chirp]``, complex128
         ``y_n(u)`` [sqrt(W)]: channel-averaged beam output towards the true
-        direction through the chain (:func:`raysim.pipeline.chains.project`).
+        direction through the chain, the paper chain correcting towards the
+        true direction (:class:`raysim.pipeline.beams.Beamformer`).
     """
     spec = parse_chain(chain)
     gate, _, r = point_gate(point)
     if motion is None and spec.compensated:
-        motion = point_motion(point)
-    return _slow_time(_Beams(spec, gate, r, point, motion))
+        motion = point_motion(point, _motion_times(point, point.chirp_times()))
+    beams = _Beams(spec, gate, r, point, motion)
+    return beams(np.arange(gate.shape[0]), [point.target_az], [point.target_el])[:, 0, 0]
 
 
-def _chain_metrics(beams: _Beams, chirp_times: np.ndarray, coherent_map: bool) -> dict:
-    point = beams.point
-    cfg = point.config
-    lam = cfg.center_wavelength
-    n = chirp_times.size
-    u_true = point.direction
-    s = _slow_time(beams)
-    pv = float(pseudo_velocity(s, cfg.chirp_interval, lam))
-    width = float(doppler_mainlobe_width(s, cfg.chirp_interval))
+def _chain_metrics(spec: ChainSpec, gate: np.ndarray, gate_range: float, point: StabilityPoint,
+                   motion, chirp_times: np.ndarray, coherent_map: bool) -> dict:
+    found: list[str] = []
+    shared = gate_metrics(PointGate(gate[None], gate_range, point.config, point.array),
+                          _reference(point), chain=spec, motion=motion, warnings=found,
+                          accumulate=coherent_map)
     idx = _angle_chirps(point, chirp_times)
-    mid = angle_chirp(n)
-    scan = np.union1d(idx, [mid])
-    ae = _single_chirp_direction(beams, scan)
-    errs = _angle_between_deg(ae[:, 0], ae[:, 1], u_true)
-    out = {"pseudo_velocity_mps": pv, "pseudo_velocity_bins": pv / cfg.velocity_resolution,
-           "doppler_width_hz": width,
-           "angle_error_worst_deg": float(errs[np.isin(scan, idx)].max()),
-           "angle_error_deg": float(errs[int(np.searchsorted(scan, mid))]),
-           "map_angle_error_deg": math.nan, "entropy_ae_nats": math.nan}
-    if not coherent_map:
-        return out
-    gaz, gel = _grid(point.target_az, point.target_el, MAP_HALF_WIDTH, MAP_STEP)
-    sel = np.arange(0, n, max(1, -(-n // MAP_CHIRPS)))
-    img = np.abs(beams(sel, gaz, gel).sum(axis=0)) ** 2             # [azimuth, elevation]
-    pk = map_peak(Map(img, ("azimuth", "elevation"), {"azimuth": gaz, "elevation": gel}))
-    out["map_angle_error_deg"] = float(_angle_between_deg(pk["azimuth"], pk["elevation"],
-                                                          u_true))
-    out["entropy_ae_nats"] = float(image_entropy(img))
-    return out
+    ae = _single_chirp_direction(_Beams(spec, gate, gate_range, point, motion), idx)
+    errs = _angle_between_deg(ae[:, 0], ae[:, 1], point.direction)
+    out = {m: shared[m] for m in STABILITY_METRICS if m in shared}
+    out["angle_error_worst_deg"] = float(errs.max())
+    return {m: float(out[m]) for m in STABILITY_METRICS}
 
 
 def evaluate(point: StabilityPoint, chains: Sequence[str] = MAP_CHAINS, *,
@@ -231,11 +207,11 @@ def evaluate(point: StabilityPoint, chains: Sequence[str] = MAP_CHAINS, *,
     specs = parse_chains(chains)
     gate, _, r = point_gate(point)
     times = point.chirp_times()
-    motion = point_motion(point, times) if any(s.compensated for s in specs) else None
+    motion = point_motion(point, _motion_times(point, times)) \
+        if any(s.compensated for s in specs) else None
     out: dict = {}
     for spec in specs:
-        out[spec.key] = _chain_metrics(_Beams(spec, gate, r, point, motion), times,
-                                       coherent_map)
+        out[spec.key] = _chain_metrics(spec, gate, r, point, motion, times, coherent_map)
     out["warnings"] = list(motion.warnings) if motion is not None else []
     out["strapdown"] = STRAPDOWN if motion is not None else ""
     return out
