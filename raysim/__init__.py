@@ -22,7 +22,8 @@ Pipeline (:mod:`raysim.pipeline`)
     :func:`render` (a scenario's frames into a Zarr store),
     :func:`render_frames` (the frames in memory), :func:`evaluate` (every
     chain's metrics), :func:`estimate_motion` (IMU samples to the platform
-    pose at every chirp), :func:`measure` (point metrics and maps of given frames).
+    pose at every chirp); the point metrics and maps of given frames are
+    :func:`raysim.measure.point.measure`.
 
 Packages
 --------
@@ -55,15 +56,13 @@ _ENTRY_POINTS = {
     "evaluate": "raysim.pipeline.run",
     "render_frames": "raysim.pipeline.sources",
     "estimate_motion": "raysim.pipeline.estimate",
-    "measure": "raysim.measure.point",
 }
 
 __all__ = ["__version__", "Scenario", "load_scenario", "loads_scenario", "scenario_from_case",
            "RadarConfig", "VirtualArray", "RadarFrame", "Map", "render", "evaluate",
-           "render_frames", "estimate_motion", "measure"]
+           "render_frames", "estimate_motion"]
 
 if TYPE_CHECKING:
-    from raysim.measure.point import measure
     from raysim.pipeline.estimate import estimate_motion
     from raysim.pipeline.run import evaluate, render
     from raysim.pipeline.sources import render_frames

@@ -1,14 +1,15 @@
 """System tier: every command that reports a point metric prints the same value for one case.
 
-``simulate --json``, ``reproduce``, ``render`` + ``report`` and ``sweep`` run
+``simulate --json``, ``reproduce``, ``render`` + ``report``, ``sweep`` and
+``scene-report --scenario`` run
 one small paper case (two frames, a noisy IMU so that the IMU seeds must agree
 too) and every metric two of them share must be equal per chain, not only
 named alike: they all read the same frames and IMU log and measure through
 :mod:`raysim.measure.point`.
 
-A leg is a function ``(tmp_path) -> {chain: {metric: value}}`` in :data:`LEGS`;
-a command that learns to report point metrics (``scene-report`` on a scenario
-file) becomes one more entry.
+A leg is a function ``(tmp_path) -> {chain: {metric: value}}`` in :data:`LEGS`.
+The scene report's own maps (``scene_entropy_*_nats``, ``ridge_leakage_db``)
+have names of their own and are not compared here.
 """
 
 from __future__ import annotations
@@ -101,9 +102,26 @@ def leg_sweep(tmp_path: Path, capsys) -> dict:
             for chain in point.chain.values}
 
 
+def leg_scene_report(tmp_path: Path, capsys) -> dict:
+    """``raysim scene-report --scenario FILE``: the point metrics of its reference target."""
+    toml = tmp_path / "case.toml"
+    scenario = _scenario()
+    toml.write_text(scenario.to_toml())
+    out = tmp_path / "report"
+    assert main(["scene-report", "--scenario", str(toml), "--quick", "--chains",
+                 ",".join(CHAINS), "--out", str(out), "--no-progress"]) == 0
+    written = sorted(out.glob("*.json"))
+    reports = [json.loads(f.read_text()) for f in written]
+    reports = [r for r in reports if "point_metrics" in r]
+    assert len(reports) == 1, [f.name for f in written]
+    return {chain: _finite(m) for chain, m in reports[0]["point_metrics"]["metrics"].items()
+            if chain in CHAINS}
+
+
 #: Command name -> leg.
 LEGS: dict[str, Callable] = {"simulate": leg_simulate, "reproduce": leg_reproduce,
-                             "report": leg_report, "sweep": leg_sweep}
+                             "report": leg_report, "sweep": leg_sweep,
+                             "scene-report": leg_scene_report}
 
 
 def test_every_shared_metric_agrees_per_chain(tmp_path, capsys):

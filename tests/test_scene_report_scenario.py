@@ -98,3 +98,19 @@ def test_scenario_errors_are_named(tmp_path, capsys):
     assert main(["scene-report", "--scenario", str(path), "--jitter-axes", "z",
                  "--out", str(tmp_path / "o")]) == 2
     assert "jitter_axes" in capsys.readouterr().err
+
+
+def test_default_range_window_fits_a_short_range_radar():
+    """The default window is cut to a scenario radar's unambiguous range; a set one is kept."""
+    from raysim.scenario import scenario_from_case
+    from raysim.studies.scene_report import QUICK
+
+    sc = scenario_from_case("rotation_y").with_values({"radar.sample_rate_hz": 2.5e6})
+    cfg = sc.radar_config()
+    lo, hi = QUICK.for_scenario(sc).range_window
+    assert hi == pytest.approx(cfg.max_range - 2 * cfg.range_resolution)
+    assert 0 <= lo < hi
+    with pytest.raises(ValueError, match="max_range"):
+        QUICK.with_values(range_window=(5.0, 40.0)).for_scenario(sc)
+    assert QUICK.with_values(range_window=(5.0, 20.0)).for_scenario(sc).range_window == (5.0,
+                                                                                         20.0)

@@ -87,7 +87,8 @@ def register(subparsers) -> None:
     p.add_argument("--jitter-seed", type=int, default=None, metavar="N",
                    help="seed of the hover jitter (default: 7, or a scenario file's own)")
     p.add_argument("--range-window", default=None, metavar="LOW,HIGH",
-                   help="processed range window [m] (default: 12,45)")
+                   help="processed range window [m] (default: 12,45, cut to a scenario radar's "
+                        "unambiguous range)")
     p.add_argument("--threads", type=int, default=None, metavar="N",
                    help="Dr.Jit threads of the ray tracer (default: all cores)")
     p.add_argument("--mover-speed", type=float, default=None, metavar="MPS",
@@ -178,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
     scenarios = []
     for path in args.scenario:
         sc = load_scenario(path)
-        st = settings.with_values(scenario=sc, **overrides)      # checks knobs against it
+        st = settings.for_scenario(sc).with_values(**overrides)  # checks knobs against it
         scenarios.append(st.scenario)
     from raysim.echoes.rt import backend
 

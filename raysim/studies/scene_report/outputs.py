@@ -369,7 +369,7 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
         jobs.append((result_label(s, [j[0] for j in jobs]), settings.for_scene(s)))
     for sc in scenarios:
         jobs.append((result_label(sc.name, [j[0] for j in jobs]),
-                     settings.with_values(scenario=sc)))
+                     settings.for_scenario(sc)))
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     results, summary = {}, {}

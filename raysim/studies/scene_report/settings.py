@@ -313,6 +313,22 @@ class ReportSettings:
                                  f"{exc}") from None
         return replace(self, scenario=scenario, **knobs)
 
+    def for_scenario(self, scenario: Scenario) -> ReportSettings:
+        """These settings on a scenario file's scenario.
+
+        The default range window (:data:`RANGE_WINDOW_M`) is cut to the
+        scenario's radar where that radar sees less far: upper edge its
+        unambiguous range less two range bins [m], lower edge at most half of
+        that. A window the caller set is kept and checked as given.
+        """
+        if tuple(self.range_window) == tuple(RANGE_WINDOW_M):
+            cfg = scenario.radar_config()
+            top = cfg.max_range - 2 * cfg.range_resolution
+            if self.range_window[1] > top:
+                return self.with_values(scenario=scenario,
+                                        range_window=(min(self.range_window[0], top / 2), top))
+        return self.with_values(scenario=scenario)
+
     def for_scene(self, scene: str) -> ReportSettings:
         """These settings with the scenario's scene the bundled ``scene`` (and its name)."""
         from raysim.echoes.rt.scenes import SCENES
