@@ -45,7 +45,7 @@ for factor 2; or too few chirps saved to be worth it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -55,7 +55,9 @@ from raysim.synthesis.paths import PathDelays
 
 __all__ = ["TAPS", "TAP_CHOICES", "MAX_FACTOR", "MIN_CHIRPS", "MAX_GAIN", "DecimationPlan",
            "doppler_bound", "path_doppler", "interpolation_error", "plan_decimation", "plan_groups",
-           "interpolate", "scatter_add"]
+           "interpolate", "scatter_add", "bessel_tail", "sideband_order", "carson_bandwidth",
+           "platform_sidebands", "path_sidebands", "CHECK_SHARE", "check_channels",
+           "channel_subset", "check_errors", "halve"]
 
 #: Exact chirps each interpolated chirp draws on (its nearest ones): the fewest of these
 #: that meets the tolerance in the middle of the frame.
@@ -89,6 +91,12 @@ MAX_GROUPS = 4
 #: Share of the interpolation tolerance left to the motion's sidebands beyond the planned
 #: band (their power is cut at ``(SIDEBAND_SHARE tol)^2``, :func:`sideband_order`).
 SIDEBAND_SHARE = 0.1
+#: Share of the channels rendered at every chirp by the a-posteriori check of
+#: :func:`raysim.synthesis.select.render_checked` (at least one channel, at most
+#: :data:`MAX_CHECK_CHANNELS`).
+CHECK_SHARE = 0.01
+#: Most channels the a-posteriori check renders at every chirp.
+MAX_CHECK_CHANNELS = 8
 
 
 @dataclass(frozen=True)
@@ -599,3 +607,65 @@ def scatter_add(out: np.ndarray, exact_rows: np.ndarray, plan: DecimationPlan,
     for c0 in range(0, src.shape[1], col_block):
         c1 = min(c0 + col_block, src.shape[1])
         dst[plan.missing, c0:c1] += plan.weights @ src[:, c0:c1]
+
+
+# ------------------------------------------------------------------ a-posteriori check
+def check_channels(src: PathDelays, count: int | None = None) -> np.ndarray:
+    """Channels the a-posteriori check renders at every chirp, shape ``[k]`` (increasing).
+
+    ``count`` defaults to :data:`CHECK_SHARE` of the channels (at least 1, at most
+    :data:`MAX_CHECK_CHANNELS`): the channel whose motion has the widest sidebands
+    (largest ``dev * W`` of :func:`_modulation`, the lever arm's ends under rotation),
+    then the first and the last, then evenly spaced ones.
+    """
+    n_ch = src.num_channels
+    if count is None:
+        count = min(MAX_CHECK_CHANNELS, max(1, int(round(CHECK_SHARE * n_ch))))
+    count = min(int(count), n_ch)
+    if count < 1:
+        raise ValueError(f"count must be >= 1, got {count!r}")
+    dev, w = _modulation(np.swapaxes(src.tx_positions, 0, 1))
+    picks = [int(np.argmax(dev * np.maximum(w, 1e-12)))]
+    for c in [0, n_ch - 1] + list(np.linspace(0, n_ch - 1, count + 2).round().astype(int)):
+        if len(picks) >= count:
+            break
+        if int(c) not in picks:
+            picks.append(int(c))
+    return np.array(sorted(picks), dtype=np.int64)
+
+
+def channel_subset(src: PathDelays, channels: np.ndarray) -> PathDelays:
+    """The same paths seen by the channels ``channels`` [k] only."""
+    idx = np.asarray(channels, dtype=np.int64)
+    return PathDelays(src.first_vertex, src.last_vertex, src.interior_length, src.amplitude,
+                      src.tx_positions[:, idx],
+                      None if src.rx_positions is None else src.rx_positions[:, idx],
+                      src.velocity, None if src.element_times is None
+                      else src.element_times[:, idx], src.reference_time)
+
+
+def check_errors(got: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
+    """Relative l2 error of ``got`` against ``ref`` (both ``[chirp, ...]``) and its worst
+    chirp row ``max_n |got[n] - ref[n]| / |ref[n]|`` (a zero row: 0 if matched, else inf)."""
+    diff = (got - ref).reshape(got.shape[0], -1)
+    refn = np.linalg.norm(ref.reshape(ref.shape[0], -1), axis=1)
+    errn = np.linalg.norm(diff, axis=1)
+    total = float(np.linalg.norm(refn))
+    l2 = float(np.linalg.norm(errn)) / total if total > 0 else (0.0 if not errn.any() else math.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        row = np.where(refn > 0, errn / np.where(refn > 0, refn, 1.0),
+                       np.where(errn > 0, math.inf, 0.0))
+    return l2, float(row.max(initial=0.0))
+
+
+def halve(plan: DecimationPlan, n_local: int, eps: float, why: str) -> DecimationPlan:
+    """The plan with half the factor and twice the band (below 3/4 of the new decimated
+    Nyquist limit), or refusal (factor 1) saying ``why``."""
+    factor = plan.factor // 2
+    if factor >= 2:
+        band = min(2.0 * max(plan.doppler, 1e-6), 0.375 / factor)
+        new = _plan_band(n_local, band, eps, factor)
+        if new.factor > 1:
+            return replace(new, reason=f"{new.reason} (halved: {why})")
+    return replace(_refuse(n_local, plan.doppler, ""),
+                   reason=f"a-posteriori check failed ({why}); every chirp exact")
