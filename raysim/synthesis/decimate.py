@@ -11,7 +11,23 @@ for walking-speed clutter, far below the Nyquist limit of every 2nd chirp.
 
 :func:`path_doppler` bounds ``B_p`` from the geometry (element displacement
 between chirps, with its second difference as margin, ``2 |v_p| T_chirp`` of a
-moving path, the change of its per-chirp vertices and length).
+moving path, the change of its per-chirp vertices and length). That is the
+instantaneous frequency only. A vibrating platform (or a rotor, a swinging
+limb) phase-modulates every path, and the spectrum of a sinusoidal phase
+modulation of peak deviation ``beta`` [rad] at ``f_m`` has lines at every
+multiple of ``f_m``: ``exp(j beta sin(2 pi f_m t)) = sum_n J_n(beta)
+exp(j 2 pi n f_m t)`` (Jacobi-Anger). Carson's rule, bandwidth ``2 (beta + 1)
+f_m``, keeps about 98 % of the power; a relative error ``tol`` needs the band
+``N f_m`` with ``sum_{|n| > N} J_n(beta)^2 <= tol^2`` (:func:`bessel_tail`,
+:func:`sideband_order`), far beyond the instantaneous ``beta f_m`` when
+``beta`` is small (0.1 mm at 200 Hz: ``beta = 0.32``, ``N = 5`` at 1e-7).
+Given a tolerance, :func:`path_doppler` adds these sidebands: the motion over
+the frame is split into its best quadratic (the slow part, whose instantaneous
+frequency the steps cover: drift, acceleration) and a fast residual, whose peak
+deviation and modulating frequency ``W = max |d^2 r| / (2 pi max |d r|)`` (exact
+for a sinusoid) give ``sideband_order(beta, SIDEBAND_SHARE tol) W`` for the
+elements (:func:`platform_sidebands`, the worst channel, every line of sight)
+and for each path's own per-chirp vertices (:func:`path_sidebands`).
 :func:`plan_decimation` then picks, for a band ``B``, a factor ``D`` and the
 exact chirps (every D-th chirp, the last one, and the midpoints of the gaps
 near the edges where the design below misses the tolerance), and for every
@@ -36,10 +52,17 @@ overhead). Each group's interpolation error is below its tolerance relative to
 that group's signal; paths with independent phases add in power, so the sum is
 too.
 
+The bound is a model, so it is checked after the fact
+(:func:`raysim.synthesis.select.render_checked`): a few channels
+(:func:`check_channels`, :data:`CHECK_SHARE` of them) are rendered at every
+chirp, interpolated with the plan and compared (:func:`check_errors`: relative
+l2 and worst chirp row); the factor is halved (:func:`halve`) until both fit,
+or decimation is refused.
+
 Refusal (factor 1, every chirp exact, with the reason in ``plan.reason``):
 fewer chirps than :data:`MIN_CHIRPS`; amplitudes that vary over chirps
 (``[path, chirp]``, which the bound does not cover); a Doppler band too wide
-for factor 2; or too few chirps saved to be worth it.
+for factor 2; too few chirps saved to be worth it; or a failed check at factor 2.
 """
 
 from __future__ import annotations
