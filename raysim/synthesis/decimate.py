@@ -114,6 +114,9 @@ MAX_GROUPS = 4
 #: Share of the interpolation tolerance left to the motion's sidebands beyond the planned
 #: band (their power is cut at ``(SIDEBAND_SHARE tol)^2``, :func:`sideband_order`).
 SIDEBAND_SHARE = 0.1
+#: Degree of the polynomial over the frame taken as the motion's slow part (its
+#: instantaneous frequency is in the step bound; the rest is modelled as modulation).
+SLOW_DEGREE = 2
 #: Share of the channels rendered at every chirp by the a-posteriori check of
 #: :func:`raysim.synthesis.select.render_checked` (at least one channel, at most
 #: :data:`MAX_CHECK_CHANNELS`).
@@ -239,7 +242,7 @@ def _modulation(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z = np.zeros(v.shape[:-2])
         return z, z
     t = np.linspace(-1.0, 1.0, n)
-    basis = np.stack([np.ones(n), t, t * t], axis=1)                   # [chirp, 3]
+    basis = np.polynomial.legendre.legvander(t, min(SLOW_DEGREE, n - 2))  # [chirp, deg + 1]
     coef = np.einsum("kn,...nc->...kc", np.linalg.pinv(basis), v)
     r = v - np.einsum("nk,...kc->...nc", basis, coef)
     dev = np.linalg.norm(r, axis=-1).max(axis=-1)
