@@ -84,7 +84,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--eps", type=float, default=1e-5)
     ap.add_argument("--backend", choices=("cuda", "llvm"), default=None)
     ap.add_argument("--acc-channels", type=int, default=2)
-    ap.add_argument("--skip", default="", help="comma-separated: kernel,nufft,float32,decim")
+    ap.add_argument("--skip", default="",
+                    help="comma-separated: spread,kernel,nufft,float32,decim")
     ap.add_argument("--json", default=None, help="write the results here")
     args = ap.parse_args(argv)
     if args.paths < 1 or args.chirps < 1 or args.repeats < 1 or args.threads < 1:
@@ -134,6 +135,33 @@ def main(argv=None) -> dict:
     print(f"drjit/{backend}: {tm['median_s'] / args.chirps * 1e3:.1f} ms/chirp "
           f"(min {tm['min_s'] / args.chirps * 1e3:.1f}, max {tm['max_s'] / args.chirps * 1e3:.1f})"
           f", frame {tm['frame_s']:.2f} s, error {tm['relative_error']:.2e}", flush=True)
+
+    # Dr.Jit spreading alone (geometry copies, gathers, phase, scatter; no FFT, no copy back)
+    if "spread" not in skip:
+        import drjit as dr
+
+        from raysim.radar.config import SPEED_OF_LIGHT
+        from raysim.synthesis.kernel import kernel_error
+
+        design = kernel_error(args.paths, args.eps, k, double_grid=True)[1]
+        mu, fs = cfg.chirp_rate, cfg.sample_rate
+        consts = (pd.reference_time, 1.0 / SPEED_OF_LIGHT,
+                  cfg.carrier_frequency + (k // 2) * mu / fs, 0.5 * mu, mu / fs)
+        types = drjit_kernel._types(backend)
+        step = max(1, min(n_ch, drjit_kernel.MAX_PAIRS // args.paths))
+
+        def run_spread():
+            for n in chirps:
+                for c0 in range(0, n_ch, step):
+                    c1 = min(n_ch, c0 + step)
+                    grid = types[0](np.zeros(2 * (c1 - c0) * design.grid_size))
+                    drjit_kernel._spread_chirp(types, pd, n, design, consts, grid, c0, c1)
+            dr.sync_thread()
+
+        tm = _time(run_spread, args.repeats)
+        res["drjit_spread_only"] = tm
+        print(f"drjit/{backend} spreading only: {tm['median_s'] / args.chirps * 1e3:.1f} "
+              f"ms/chirp", flush=True)
 
     # C++ kernel
     if "kernel" not in skip and kernel.available():
