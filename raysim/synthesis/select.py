@@ -358,7 +358,7 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
 
     1. :func:`~raysim.synthesis.decimate.plan_groups` at ``eps`` (a-priori bound:
        Doppler plus sidebands).
-    2. Every group renders the :func:`~raysim.synthesis.decimate.check_channels` at
+    2. Every decimated group renders the :func:`~raysim.synthesis.decimate.check_channels` at
        every chirp; its plan is interpolated there and compared
        (:func:`~raysim.synthesis.decimate.check_errors`, relative l2 and worst chirp
        row against the group's own signal); while either exceeds ``eps`` the
@@ -422,6 +422,9 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
             mask[members] = True
             part = src.select(mask)
         full = np.zeros(shape, np.complex64)
+        if plan.factor == 1:                       # exact anyway: nothing to check
+            state.append([members, part, plan, full, full, (0.0, 0.0)])
+            continue
         render(channel_subset(part, chk), every, full)
         plan, pred, errs = _fit_group(plan, full, n_local, eps)
         state.append([members, part, plan, full, pred, errs])
