@@ -11,7 +11,23 @@ for walking-speed clutter, far below the Nyquist limit of every 2nd chirp.
 
 :func:`path_doppler` bounds ``B_p`` from the geometry (element displacement
 between chirps, with its second difference as margin, ``2 |v_p| T_chirp`` of a
-moving path, the change of its per-chirp vertices and length).
+moving path, the change of its per-chirp vertices and length). That is the
+instantaneous frequency only. A vibrating platform (or a rotor, a swinging
+limb) phase-modulates every path, and the spectrum of a sinusoidal phase
+modulation of peak deviation ``beta`` [rad] at ``f_m`` has lines at every
+multiple of ``f_m``: ``exp(j beta sin(2 pi f_m t)) = sum_n J_n(beta)
+exp(j 2 pi n f_m t)`` (Jacobi-Anger). Carson's rule, bandwidth ``2 (beta + 1)
+f_m``, keeps about 98 % of the power; a relative error ``tol`` needs the band
+``N f_m`` with ``sum_{|n| > N} J_n(beta)^2 <= tol^2`` (:func:`bessel_tail`,
+:func:`sideband_order`), far beyond the instantaneous ``beta f_m`` when
+``beta`` is small (0.1 mm at 200 Hz: ``beta = 0.32``, ``N = 5`` at 1e-7).
+Given a tolerance, :func:`path_doppler` adds these sidebands: the motion over
+the frame is split into its best quadratic (the slow part, whose instantaneous
+frequency the steps cover: drift, acceleration) and a fast residual, whose peak
+deviation and modulating frequency ``W = max |d^2 r| / (2 pi max |d r|)`` (exact
+for a sinusoid) give ``sideband_order(beta, SIDEBAND_SHARE tol) W`` for the
+elements (:func:`platform_sidebands`, the worst channel, every line of sight)
+and for each path's own per-chirp vertices (:func:`path_sidebands`).
 :func:`plan_decimation` then picks, for a band ``B``, a factor ``D`` and the
 exact chirps (every D-th chirp, the last one, and the midpoints of the gaps
 near the edges where the design below misses the tolerance), and for every
@@ -36,16 +52,23 @@ overhead). Each group's interpolation error is below its tolerance relative to
 that group's signal; paths with independent phases add in power, so the sum is
 too.
 
+The bound is a model, so it is checked after the fact
+(:func:`raysim.synthesis.select.render_checked`): a few channels
+(:func:`check_channels`, :data:`CHECK_SHARE` of them) are rendered at every
+chirp, interpolated with the plan and compared (:func:`check_errors`: relative
+l2 and worst chirp row); the factor is halved (:func:`halve`) until both fit,
+or decimation is refused.
+
 Refusal (factor 1, every chirp exact, with the reason in ``plan.reason``):
 fewer chirps than :data:`MIN_CHIRPS`; amplitudes that vary over chirps
 (``[path, chirp]``, which the bound does not cover); a Doppler band too wide
-for factor 2; or too few chirps saved to be worth it.
+for factor 2; too few chirps saved to be worth it; or a failed check at factor 2.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -55,7 +78,9 @@ from raysim.synthesis.paths import PathDelays
 
 __all__ = ["TAPS", "TAP_CHOICES", "MAX_FACTOR", "MIN_CHIRPS", "MAX_GAIN", "DecimationPlan",
            "doppler_bound", "path_doppler", "interpolation_error", "plan_decimation", "plan_groups",
-           "interpolate", "scatter_add"]
+           "interpolate", "scatter_add", "bessel_tail", "sideband_order", "carson_bandwidth",
+           "platform_sidebands", "path_sidebands", "CHECK_SHARE", "check_channels",
+           "channel_subset", "check_errors", "halve"]
 
 #: Exact chirps each interpolated chirp draws on (its nearest ones): the fewest of these
 #: that meets the tolerance in the middle of the frame.
@@ -86,6 +111,18 @@ GRID_MARGIN = 1.05
 ROW_OVERHEAD_PATHS = 1000
 #: Most path groups planned separately.
 MAX_GROUPS = 4
+#: Share of the interpolation tolerance left to the motion's sidebands beyond the planned
+#: band (their power is cut at ``(SIDEBAND_SHARE tol)^2``, :func:`sideband_order`).
+SIDEBAND_SHARE = 0.1
+#: Degree of the polynomial over the frame taken as the motion's slow part (its
+#: instantaneous frequency is in the step bound; the rest is modelled as modulation).
+SLOW_DEGREE = 2
+#: Share of the channels rendered at every chirp by the a-posteriori check of
+#: :func:`raysim.synthesis.select.render_checked` (at least one channel, at most
+#: :data:`MAX_CHECK_CHANNELS`).
+CHECK_SHARE = 0.01
+#: Most channels the a-posteriori check renders at every chirp.
+MAX_CHECK_CHANNELS = 8
 
 
 @dataclass(frozen=True)
@@ -147,12 +184,138 @@ def _platform_step(src: PathDelays) -> float:
         else step + _step_bound(np.swapaxes(src.rx_positions, 0, 1))
 
 
-def path_doppler(src: PathDelays, config: RadarConfig) -> np.ndarray:
+def bessel_tail(beta: float, order: int) -> float:
+    """Power of the sidebands beyond ``order`` of a sinusoidal phase modulation.
+
+    ``exp(j beta sin(2 pi f_m t)) = sum_n J_n(beta) exp(j 2 pi n f_m t)`` (Jacobi-Anger),
+    so the share of the power outside ``|f| <= order f_m`` is
+    ``sum_{|n| > order} J_n(beta)^2`` (summed from the band edge outwards in float64).
+
+    Parameters
+    ----------
+    beta : float
+        Peak phase deviation [rad], >= 0.
+    order : int
+        Highest sideband kept, >= 0.
+    """
+    from scipy.special import jv
+
+    beta, order = abs(float(beta)), int(order)
+    n = np.arange(order + 1, order + 64 + int(2 * beta))
+    return float(2.0 * np.sum(jv(n, beta) ** 2))
+
+
+def sideband_order(beta: float, tol: float) -> int:
+    """Fewest sidebands ``N`` of a sinusoidal phase modulation of peak deviation ``beta`` [rad]
+    whose truncation leaves a relative l2 error of at most ``tol``:
+    ``sqrt(bessel_tail(beta, N)) <= tol``.
+
+    Carson's rule (``N = beta + 1``, bandwidth ``2 (beta + 1) f_m``) keeps about 98 % of the
+    power; a tolerance of 1e-7 needs ``N`` of about ``beta + 6 beta^(1/3) + 5`` for large
+    ``beta`` and ``log(tol) / log(beta / 2)`` for small ``beta``.
+    """
+    if not (tol > 0):
+        raise ValueError(f"tol must be > 0, got {tol!r}")
+    beta = abs(float(beta))
+    n = max(0, int(beta) - 1)
+    while bessel_tail(beta, n) > tol * tol:
+        n += 1
+    while n > 0 and bessel_tail(beta, n - 1) <= tol * tol:
+        n -= 1
+    return n
+
+
+def carson_bandwidth(beta: float, f_m: float) -> float:
+    """Carson's rule: bandwidth ``2 (beta + 1) f_m`` of a phase modulation of peak deviation
+    ``beta`` [rad] at ``f_m`` (any frequency unit; same unit out)."""
+    return 2.0 * (abs(float(beta)) + 1.0) * float(f_m)
+
+
+def _modulation(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Fast part of positions ``v [..., chirp, 3]`` [m]: the residual after the best
+    quadratic fit over the chirps (the slow part, whose instantaneous frequency the
+    step bound covers). Returns its peak deviation ``max_n |r|`` [m] and its modulating
+    frequency ``W = max |d^2 r| / (2 pi max |d r|)`` [cycles per chirp] (exact for a
+    sinusoid, dominated by the fastest component otherwise), each shape ``[...]``."""
+    n = v.shape[-2]
+    if n < 4:
+        z = np.zeros(v.shape[:-2])
+        return z, z
+    t = np.linspace(-1.0, 1.0, n)
+    basis = np.polynomial.legendre.legvander(t, min(SLOW_DEGREE, n - 2))  # [chirp, deg + 1]
+    coef = np.einsum("kn,...nc->...kc", np.linalg.pinv(basis), v)
+    r = v - np.einsum("nk,...kc->...nc", basis, coef)
+    dev = np.linalg.norm(r, axis=-1).max(axis=-1)
+    d1 = np.diff(r, axis=-2)
+    s1 = np.linalg.norm(d1, axis=-1).max(axis=-1)
+    s2 = np.linalg.norm(np.diff(d1, axis=-2), axis=-1).max(axis=-1)
+    w = np.where(s1 > 0, s2 / (2.0 * np.pi * np.where(s1 > 0, s1, 1.0)), 0.0)
+    return dev, np.minimum(w, 0.5)
+
+
+def _sideband_margin(dev_m: np.ndarray, w: np.ndarray, wavelength: float,
+                     tol: float) -> np.ndarray:
+    """Band beyond the instantaneous frequency needed by the sidebands [cycles per chirp]:
+    ``sideband_order(beta, SIDEBAND_SHARE tol) W`` with ``beta = 2 pi dev / lambda``."""
+    beta = 2.0 * np.pi * np.asarray(dev_m, dtype=float) / wavelength
+    out = np.zeros(beta.shape)
+    flat_b, flat_w, flat_o = beta.reshape(-1), np.broadcast_to(w, beta.shape).reshape(-1), \
+        out.reshape(-1)
+    memo: dict = {}
+    for i, b in enumerate(flat_b):
+        key = float(f"{b:.3g}") if b > 0 else 0.0
+        key = max(key, b)
+        if key not in memo:
+            memo[key] = sideband_order(key, SIDEBAND_SHARE * tol)
+        flat_o[i] = memo[key] * flat_w[i]
+    return out
+
+
+def platform_sidebands(src: PathDelays, config: RadarConfig, tol: float) -> float:
+    """Sideband margin of the elements' motion [cycles per chirp], the worst channel.
+
+    The fast part of each channel's tx and rx motion (:func:`_modulation`) is
+    modelled as a sinusoidal phase modulation of peak deviation
+    ``beta = 2 pi (dev_tx + dev_rx) / lambda_min`` (every line of sight) at ``W``;
+    its Bessel sidebands out to :func:`sideband_order` ``(beta, SIDEBAND_SHARE tol)``
+    times ``W`` are added to the instantaneous Doppler bound.
+    """
+    dev, w = _modulation(np.swapaxes(src.tx_positions, 0, 1))          # [channel]
+    if src.rx_positions is None:
+        dev = 2.0 * dev
+    else:
+        dev_r, w_r = _modulation(np.swapaxes(src.rx_positions, 0, 1))
+        dev, w = dev + dev_r, np.maximum(w, w_r)
+    margin = _sideband_margin(dev, w, _top_wavelength(config), tol)
+    return float(margin.max(initial=0.0))
+
+
+def path_sidebands(src: PathDelays, config: RadarConfig, tol: float) -> np.ndarray:
+    """Sideband margin of each path's own per-chirp vertex motion (rotors, tracks)
+    [cycles per chirp], shape ``[path]`` (zero for fixed vertices)."""
+    dev = np.zeros(src.num_paths)
+    w = np.zeros(src.num_paths)
+    for v in (src.first_vertex, src.last_vertex):
+        if v.ndim == 3:
+            d, f = _modulation(v)
+            dev, w = dev + d, np.maximum(w, f)
+    if src.interior_length.ndim == 2:
+        d, f = _modulation(np.stack([src.interior_length, 0 * src.interior_length,
+                                     0 * src.interior_length], axis=-1))
+        dev, w = dev + d, np.maximum(w, f)
+    if not np.any(dev):
+        return dev
+    return _sideband_margin(dev, w, _top_wavelength(config), tol)
+
+
+def path_doppler(src: PathDelays, config: RadarConfig, tol: float | None = None) -> np.ndarray:
     """Bound of the slow-time frequency of each path [cycles per chirp], shape ``[path]``.
 
     ``(max step of tx + max step of rx + 2 |velocity_p| T_chirp + steps of the
     path's per-chirp vertices and length) / lambda_min``, ``lambda_min`` the
-    wavelength at the top of the sweep.
+    wavelength at the top of the sweep (the instantaneous frequency), plus with
+    ``tol`` the sideband margins of the motion's fast part
+    (:func:`platform_sidebands`, :func:`path_sidebands`) at that tolerance.
     """
     step = np.full(src.num_paths, _platform_step(src))
     if src.velocity is not None:
@@ -162,14 +325,19 @@ def path_doppler(src: PathDelays, config: RadarConfig) -> np.ndarray:
             step += _step_bound(v, axis_max=True)
     if src.interior_length.ndim == 2 and src.num_chirps > 1:
         step += np.abs(np.diff(src.interior_length, axis=1)).max(axis=1)
-    return step / _top_wavelength(config)
+    band = step / _top_wavelength(config)
+    if tol is not None:
+        band += platform_sidebands(src, config, tol) + path_sidebands(src, config, tol)
+    return band
 
 
-def doppler_bound(src: PathDelays, config: RadarConfig) -> float:
+def doppler_bound(src: PathDelays, config: RadarConfig, tol: float | None = None) -> float:
     """Bound of the slow-time frequency of every path [cycles per chirp] (max of
     :func:`path_doppler`; the platform's part alone without paths)."""
-    return float(path_doppler(src, config).max(
-        initial=_platform_step(src) / _top_wavelength(config)))
+    platform = _platform_step(src) / _top_wavelength(config)
+    if tol is not None:
+        platform += platform_sidebands(src, config, tol)
+    return float(path_doppler(src, config, tol).max(initial=platform))
 
 
 def _weights_for(off: np.ndarray, band: float, tol: float):
@@ -285,14 +453,26 @@ def _plan_band(n_local: int, doppler: float, eps: float, decimate) -> Decimation
         # the largest factors below the decimated Nyquist limit (smaller ones need more
         # exact chirps; the edges may favour one a little below the largest)
         top = min(MAX_FACTOR, max(2, int(math.ceil(0.95 / (2.0 * max(doppler, 1e-9))) - 1)))
-        factors = range(max(2, top - 2), top + 1)
+        # right at the decimated Nyquist limit no tap count may reach eps: then smaller
+        # factors, three at a time, shrinking by a quarter
+        batches = []
+        while True:
+            batches.append(range(max(2, top - 2), top + 1))
+            if top <= 4:
+                break
+            top = max(2, min(top - 3, int(0.75 * top)))
     else:
-        factors = (int(decimate),)
+        batches = [(int(decimate),)]
+    factors = batches[0]
     # quantise the band upwards (3 significant digits) so that the design cache is hit
     band = float(f"{doppler * 1.0005:.3g}") if doppler > 0 else 1e-6
     band = max(band, doppler)
-    designs = {d: _plan_factor(n_local, band, d, float(eps)) for d in factors}
-    ok = {d: p for d, p in designs.items() if p is not None}
+    ok = {}
+    for batch in batches:
+        designs = {d: _plan_factor(n_local, band, d, float(eps)) for d in batch}
+        ok = {d: p for d, p in designs.items() if p is not None}
+        if ok:
+            break
     if not ok:
         return _refuse(n_local, doppler, f"Doppler band {doppler:.3g} cycles/chirp too wide for "
                        f"factor {factors[0]} at eps={eps:g}")
@@ -342,7 +522,7 @@ def plan_decimation(src: PathDelays, config: RadarConfig, num_chirps: int, eps: 
     why = _screen(src, config, n_local, decimate)
     if why is not None:
         return _refuse(n_local, math.nan, why)
-    return _plan_band(n_local, doppler_bound(src, config), eps, decimate)
+    return _plan_band(n_local, doppler_bound(src, config, eps), eps, decimate)
 
 
 def plan_groups(src: PathDelays, config: RadarConfig, num_chirps: int, eps: float,
@@ -366,7 +546,7 @@ def plan_groups(src: PathDelays, config: RadarConfig, num_chirps: int, eps: floa
         return [(everything, _refuse(n_local, math.nan, why))]
     if src.num_paths == 0:
         return [(everything, plan_decimation(src, config, n_local, eps, decimate))]
-    bound = path_doppler(src, config)
+    bound = path_doppler(src, config, eps)
     hi = float(bound.max())
     lo = max(float(bound.min()), hi * 2.0**-10)    # a still platform: static bounds are 0
     if decimate != "auto" or hi <= 2.0 * lo:
@@ -453,3 +633,65 @@ def scatter_add(out: np.ndarray, exact_rows: np.ndarray, plan: DecimationPlan,
     for c0 in range(0, src.shape[1], col_block):
         c1 = min(c0 + col_block, src.shape[1])
         dst[plan.missing, c0:c1] += plan.weights @ src[:, c0:c1]
+
+
+# ------------------------------------------------------------------ a-posteriori check
+def check_channels(src: PathDelays, count: int | None = None) -> np.ndarray:
+    """Channels the a-posteriori check renders at every chirp, shape ``[k]`` (increasing).
+
+    ``count`` defaults to :data:`CHECK_SHARE` of the channels (at least 1, at most
+    :data:`MAX_CHECK_CHANNELS`): the channel whose motion has the widest sidebands
+    (largest ``dev * W`` of :func:`_modulation`, the lever arm's ends under rotation),
+    then the first and the last, then evenly spaced ones.
+    """
+    n_ch = src.num_channels
+    if count is None:
+        count = min(MAX_CHECK_CHANNELS, max(1, int(round(CHECK_SHARE * n_ch))))
+    count = min(int(count), n_ch)
+    if count < 1:
+        raise ValueError(f"count must be >= 1, got {count!r}")
+    dev, w = _modulation(np.swapaxes(src.tx_positions, 0, 1))
+    picks = [int(np.argmax(dev * np.maximum(w, 1e-12)))]
+    for c in [0, n_ch - 1] + list(np.linspace(0, n_ch - 1, count + 2).round().astype(int)):
+        if len(picks) >= count:
+            break
+        if int(c) not in picks:
+            picks.append(int(c))
+    return np.array(sorted(picks), dtype=np.int64)
+
+
+def channel_subset(src: PathDelays, channels: np.ndarray) -> PathDelays:
+    """The same paths seen by the channels ``channels`` [k] only."""
+    idx = np.asarray(channels, dtype=np.int64)
+    return PathDelays(src.first_vertex, src.last_vertex, src.interior_length, src.amplitude,
+                      src.tx_positions[:, idx],
+                      None if src.rx_positions is None else src.rx_positions[:, idx],
+                      src.velocity, None if src.element_times is None
+                      else src.element_times[:, idx], src.reference_time)
+
+
+def check_errors(got: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
+    """Relative l2 error of ``got`` against ``ref`` (both ``[chirp, ...]``) and its worst
+    chirp row ``max_n |got[n] - ref[n]| / |ref[n]|`` (a zero row: 0 if matched, else inf)."""
+    diff = (got - ref).reshape(got.shape[0], -1)
+    refn = np.linalg.norm(ref.reshape(ref.shape[0], -1), axis=1)
+    errn = np.linalg.norm(diff, axis=1)
+    total = float(np.linalg.norm(refn))
+    l2 = float(np.linalg.norm(errn)) / total if total > 0 else (0.0 if not errn.any() else math.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        row = np.where(refn > 0, errn / np.where(refn > 0, refn, 1.0),
+                       np.where(errn > 0, math.inf, 0.0))
+    return l2, float(row.max(initial=0.0))
+
+
+def halve(plan: DecimationPlan, n_local: int, eps: float, why: str) -> DecimationPlan:
+    """The plan with half the factor and twice the band (below 3/4 of the new decimated
+    Nyquist limit), or refusal (factor 1) saying ``why``."""
+    factor = plan.factor // 2
+    if factor >= 2:
+        band = min(2.0 * max(plan.doppler, 1e-6), 0.375 / factor)
+        new = _plan_band(n_local, band, eps, factor)
+        if new.factor > 1:
+            return replace(new, reason=f"{new.reason} (halved: {why})")
+    return replace(_refuse(n_local, plan.doppler, ""),
+                   reason=f"a-posteriori check failed ({why}); every chirp exact")

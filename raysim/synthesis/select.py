@@ -177,7 +177,8 @@ def choose_method(num_paths: int, num_chirps: int, num_channels: int, num_sample
 def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
                eps: float = 1e-6, out: np.ndarray | None = None,
                chirps: range | None = None, threads: int | None = None,
-               decimate: str | int = 1) -> np.ndarray:
+               decimate: str | int = 1,
+               decimation_report: list | None = None) -> np.ndarray:
     """IF samples of many paths on the ``[chirp, channel, sample]`` grid.
 
     Parameters
@@ -206,7 +207,14 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         (:func:`raysim.synthesis.decimate.plan_groups`, with
         ``DECIMATION_EPS_SHARE`` of ``eps``; the row method gets the rest).
         ``1`` renders every chirp exactly; refused (every chirp exact) where
-        its assumptions fail.
+        its assumptions fail. The interpolation is checked after the fact on a
+        few channels rendered at every chirp
+        (:func:`render_checked`): the factor is halved
+        until the measured error (relative l2 and worst chirp row) is within the
+        share, or decimation is refused.
+    decimation_report : list, optional
+        Receives one dict per path group of the decimation (factor, band,
+        exact chirps, measured check errors, reason).
 
     Returns
     -------
@@ -258,28 +266,19 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     # decimation needs its row share of eps to stay above the methods' floor
     if method in ("nufft", "kernel") and decimate != 1 and \
             (1.0 - DECIMATION_EPS_SHARE) * eps >= MIN_EPS:
-        from raysim.synthesis.decimate import plan_groups, scatter_add
+        rows_eps = (1.0 - DECIMATION_EPS_SHARE) * eps
+        shape = (len(chirps), src.num_channels, config.num_samples)
+        if out is not None and (out.shape != shape or out.dtype != np.complex64):
+            raise ValueError(f"out must be complex64 of shape {shape}, "
+                             f"got {out.dtype} {out.shape}")
+        target = out if out is not None and out.flags.c_contiguous \
+            else np.zeros(shape, dtype=np.complex64)
 
-        groups = plan_groups(src, config, len(chirps), DECIMATION_EPS_SHARE * eps, decimate)
-        if any(plan.factor > 1 for _, plan in groups):
-            rows_eps = (1.0 - DECIMATION_EPS_SHARE) * eps
-            shape = (len(chirps), src.num_channels, config.num_samples)
-            if out is not None and (out.shape != shape or out.dtype != np.complex64):
-                raise ValueError(f"out must be complex64 of shape {shape}, "
-                                 f"got {out.dtype} {out.shape}")
-            target = out if out is not None and out.flags.c_contiguous \
-                else np.zeros(shape, dtype=np.complex64)
-            for members, plan in groups:
-                part = src
-                if members.size < src.num_paths:
-                    mask = np.zeros(src.num_paths, bool)
-                    mask[members] = True
-                    part = src.select(mask)
-                exact = np.zeros((plan.exact.size,) + shape[1:], dtype=np.complex64)
-                _render_chirps(part, config, method, rows_eps, chirps.start + plan.exact,
-                               exact, threads)
-                scatter_add(target, exact, plan)
-                del exact
+        def render(part, chirp_list, rows):
+            _render_chirps(part, config, method, rows_eps, chirp_list, rows, threads)
+
+        if render_checked(src, config, chirps, DECIMATION_EPS_SHARE * eps, decimate, render,
+                          target, report=decimation_report):
             if out is None or target is out:
                 return target
             out += target
@@ -335,3 +334,121 @@ def _render_chirps(src, config: RadarConfig, method: str, eps: float, chirp_list
                          None if isinstance(src, PathDelays) else src.amp, config, eps=eps,
                          out=rows[i:j + 1], chirps=run, threads=threads)
         i = j + 1
+
+
+def _fit_group(plan, full: np.ndarray, n_local: int, eps: float):
+    """Halve ``plan`` until interpolating ``full`` [chirp, k, sample] from its exact rows
+    meets ``eps`` (relative l2 and worst row). Returns ``(plan, prediction, (l2, row))``."""
+    from raysim.synthesis.decimate import check_errors, halve, scatter_add
+
+    while plan.factor > 1:
+        pred = np.zeros_like(full)
+        scatter_add(pred, np.ascontiguousarray(full[plan.exact]), plan)
+        l2, row = check_errors(pred, full)
+        if l2 <= eps and row <= eps:
+            return plan, pred, (l2, row)
+        plan = halve(plan, n_local, eps, f"l2 {l2:.2g}, worst row {row:.2g} at factor "
+                      f"{plan.factor} > {eps:g}")
+    return plan, full.copy(), (0.0, 0.0)
+
+
+def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: float, decimate,
+                   render, target: np.ndarray, report: list | None = None) -> bool:
+    """Decimated render whose interpolation error is measured, not only modelled.
+
+    1. :func:`~raysim.synthesis.decimate.plan_groups` at ``eps`` (a-priori bound:
+       Doppler plus sidebands).
+    2. Every decimated group renders the :func:`~raysim.synthesis.decimate.check_channels` at
+       every chirp; its plan is interpolated there and compared
+       (:func:`~raysim.synthesis.decimate.check_errors`, relative l2 and worst chirp
+       row against the group's own signal); while either exceeds ``eps`` the
+       factor is halved (band doubled), down to refusal (every chirp exact).
+    3. The same on the sum of the groups: the group with the largest error is halved
+       until the total meets ``eps``.
+    4. The exact rows of every group on all channels, interpolated into ``target``.
+
+    The check costs the check channels' share of an undecimated frame (about
+    :data:`~raysim.synthesis.decimate.CHECK_SHARE`).
+
+    Parameters
+    ----------
+    src : PathDelays
+    config : RadarConfig
+    chirps : range
+        Chirps rendered (``target[i]`` is chirp ``chirps[i]``).
+    eps : float
+        Tolerance of the interpolation (relative l2 and worst chirp row).
+    decimate : "auto" or int >= 1
+    render : callable ``(part: PathDelays, chirp_list: ndarray[int], rows: ndarray)``
+        Adds the rows of the absolute chirps ``chirp_list`` into ``rows`` ``[len, channel,
+        sample]`` (complex64) with the undecimated method.
+    target : ndarray, shape ``[len(chirps), channel, sample]``, complex64, C-contiguous
+        Receives the result (added).
+    report : list, optional
+        Receives one dict per group: ``paths, factor, band, exact_chirps, check_l2,
+        check_row, reason``.
+
+    Returns
+    -------
+    bool
+        False where every group was refused before any rendering (nothing added:
+        render the usual way); True when ``target`` holds the result.
+    """
+    n_local = len(chirps)
+    from raysim.synthesis.decimate import (
+        channel_subset,
+        check_channels,
+        check_errors,
+        halve,
+        plan_groups,
+        scatter_add,
+    )
+
+    groups = plan_groups(src, config, n_local, eps, decimate)
+    if all(plan.factor == 1 for _, plan in groups):
+        if report is not None:
+            report.extend({"paths": int(m.size), "factor": 1, "band": p.doppler,
+                           "exact_chirps": n_local, "check_l2": 0.0, "check_row": 0.0,
+                           "reason": p.reason} for m, p in groups)
+        return False
+    chk = check_channels(src)
+    every = chirps.start + np.arange(n_local)
+    shape = (n_local, chk.size, target.shape[2])
+    state = []
+    for members, plan in groups:
+        part = src
+        if members.size < src.num_paths:
+            mask = np.zeros(src.num_paths, bool)
+            mask[members] = True
+            part = src.select(mask)
+        full = np.zeros(shape, np.complex64)
+        if plan.factor == 1:                       # exact anyway: nothing to check
+            state.append([members, part, plan, full, full, (0.0, 0.0)])
+            continue
+        render(channel_subset(part, chk), every, full)
+        plan, pred, errs = _fit_group(plan, full, n_local, eps)
+        state.append([members, part, plan, full, pred, errs])
+    while True:
+        full_sum = sum(s[3] for s in state)
+        pred_sum = sum(s[4] for s in state)
+        l2, row = check_errors(pred_sum, full_sum)
+        if (l2 <= eps and row <= eps) or all(s[2].factor == 1 for s in state):
+            break
+        worst = max((s for s in state if s[2].factor > 1),
+                    key=lambda s: float(np.linalg.norm(s[4] - s[3])))
+        plan = halve(worst[2], n_local, eps, f"sum of groups: l2 {l2:.2g}, worst row "
+                      f"{row:.2g} > {eps:g}")
+        worst[2], worst[4], worst[5] = _fit_group(plan, worst[3], n_local, eps)
+    for members, part, plan, _, _, errs in state:
+        if plan.factor == 1:
+            render(part, every, target)
+        else:
+            exact = np.zeros((plan.exact.size,) + target.shape[1:], np.complex64)
+            render(part, chirps.start + plan.exact, exact)
+            scatter_add(target, exact, plan)
+            del exact
+        if report is not None:
+            report.append({"paths": int(members.size), "factor": int(plan.factor),
+                           "band": float(plan.doppler), "exact_chirps": int(plan.exact.size),
+                           "check_l2": errs[0], "check_row": errs[1], "reason": plan.reason})
+    return True
