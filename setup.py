@@ -1,5 +1,5 @@
 """Build of the optional compiled kernels: synthesis (``raysim.synthesis._kernel._ext``) and
-real-time projection (``compensation._rt._ext``).
+real-time projection (``compensation._native._ext``).
 
 Everything else is in pyproject.toml. The extension is plain C++ on the Python
 C API (no binding library), compiled with OpenMP for the x86-64-v2 baseline
@@ -32,5 +32,5 @@ def _extension(name: str, folder: str, stem: str) -> Extension:
 
 
 ext = _extension("raysim.synthesis._kernel._ext", "raysim/synthesis/_kernel/", "kernel")
-rt_ext = _extension("compensation._rt._ext", "compensation/_rt/", "rt")
+rt_ext = _extension("compensation._native._ext", "compensation/_native/", "rt")
 setup(ext_modules=[] if os.environ.get("RAYSIM_NO_KERNEL") else [ext, rt_ext])

@@ -24,7 +24,7 @@ frames with the same geometry:
 * chirp blocks run on ``threads`` worker threads (NumPy releases the GIL in
   its array loops).
 
-Two engines compute this: the compiled kernel ``compensation._rt._ext``
+Two engines compute this: the compiled kernel ``compensation._native._ext``
 (``engine="compiled"``, the default where it is built: one fused pass per
 chirp, slot and direction chunk, OpenMP threads over those items, ``exp(j .)`` by a
 float32 polynomial after reduction to a quarter turn in float64, AVX2+FMA copy
@@ -57,7 +57,7 @@ from .projection import BeamCube
 from .strapdown import PlatformMotion
 
 try:   # optional compiled kernel (setup.py); without it the NumPy engine runs
-    from ._rt import _ext
+    from ._native import _ext
 except ImportError:  # pragma: no cover - depends on the build
     _ext = None
 
@@ -131,7 +131,7 @@ class RealtimeProjector:
         Worker threads (default: the CPUs this process may use, at most 8).
     engine : str
         One of :data:`ENGINES`; ``"compiled"`` and ``"portable"`` need the
-        extension ``compensation._rt._ext``.
+        extension ``compensation._native._ext``.
 
     Examples
     --------
@@ -195,7 +195,7 @@ class RealtimeProjector:
             raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
         if engine in ("compiled", "portable") and _ext is None:
             raise ValueError(f"engine={engine!r} needs the compiled extension "
-                             "compensation._rt._ext, which is not built here (run `python "
+                             "compensation._native._ext, which is not built here (run `python "
                              "setup.py build_ext --inplace`), or use engine='numpy'")
         if engine == "auto":
             engine = "numpy" if _ext is None else "compiled"

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from raysim.bench.workloads import hover_paths, paper_setup, subset
 from raysim.radar.arrays import ti_3tx4rx
 from raysim.radar.config import RadarConfig
-from raysim.studies.workloads import hover_paths, paper_setup, subset
 from raysim.synthesis import kernel
 from raysim.synthesis.decimate import (
     MIN_CHIRPS,

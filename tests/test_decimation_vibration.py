@@ -15,10 +15,10 @@ beyond ``N f_m`` ``sum_{|n| > N} J_n(beta)^2``.
 import numpy as np
 import pytest
 
+from raysim.bench.workloads import hover_paths
 from raysim.platform.motion import hover_jitter, sinusoid
 from raysim.radar.arrays import ti_3tx4rx, upa
 from raysim.radar.config import PAPER_RADAR, RadarConfig
-from raysim.studies.workloads import hover_paths
 from raysim.synthesis import decimate as dm
 from raysim.synthesis import kernel
 from raysim.synthesis.nufft import PathDelays
@@ -117,7 +117,7 @@ FREQUENCIES = (20.0, 60.0, 120.0, 200.0)               # [Hz]
 @pytest.mark.parametrize("frequency", FREQUENCIES)
 def test_vibration_grid(amplitude, frequency):
     """5 um - 1 mm x 20 - 200 Hz vertical vibration (with the slow paper motion under it)."""
-    from raysim.studies.workloads import paper_setup
+    from raysim.bench.workloads import paper_setup
 
     traj = paper_setup()[2] + sinusoid("z", amplitude, frequency)
     cfg, pd = scene(traj)
@@ -159,7 +159,7 @@ def test_rotors(rate):
     """A rotor's blade scatterers (per-chirp positions) 8 m below a hovering platform:
     slow fans decimate, a 50 rev/s rotor (micro-Doppler beyond the chirp rate) is
     refused, and every cube stays within its tolerance."""
-    from raysim.echoes.clutter.rotors import Rotor
+    from raysim.echoes.moving.rotors import Rotor
 
     cfg = PAPER_RADAR.with_(num_chirps=128)
     arr = upa(2, 1, wavelength=cfg.wavelength)

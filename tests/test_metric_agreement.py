@@ -75,7 +75,7 @@ def leg_reproduce(tmp_path: Path, capsys) -> dict:
 def leg_report(tmp_path: Path, capsys) -> dict:
     """``raysim render`` to a store, then what ``raysim report STORE`` measures."""
     from raysim.io import storage
-    from raysim.studies.report import collect_from_dataset
+    from raysim.report.html import collect_from_dataset
 
     toml = tmp_path / "case.toml"
     toml.write_text(_scenario().to_toml())

@@ -229,7 +229,7 @@ def test_from_pathset_matches_reprojection(rng):
 
 # ---------------------------------------------------------------- speed-accuracy chart
 def test_pareto_front_rules():
-    from raysim.studies.speed_chart import pareto_front
+    from raysim.bench.speed_chart import pareto_front
 
     # (time, error): b is dominated by a (faster, as accurate); d is within the time
     # tolerance of a and more accurate (both stay); c is slowest but most accurate; e is

@@ -15,8 +15,8 @@ from scenario_texts import small_scenario
 
 from raysim.cli import main
 from raysim.pipeline.run import render
+from raysim.report.html import collect_from_scenario, software_versions, write_report
 from raysim.scenario import scenario_from_case
-from raysim.studies.report import collect_from_scenario, software_versions, write_report
 from raysim.vocabulary import MAP_TITLES
 
 SMALL = {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4,
@@ -123,7 +123,7 @@ def _peak_report_memory(store) -> tuple[int, int]:
     import tracemalloc
 
     from raysim.io import storage
-    from raysim.studies.report import collect_from_dataset
+    from raysim.report.html import collect_from_dataset
 
     ds = storage.open_store(store, load=False)
     frame_bytes = int(ds["if_data"].isel(frame=0).nbytes)
@@ -160,7 +160,7 @@ def test_maps_zoom_on_the_target():
     """Today's maps showed the target as a one-pixel line in 0-35 m x +-16 m/s: the window
     now holds the strong cells and the truth, a few metres and m/s wide."""
     from raysim.processing.maps import Map
-    from raysim.studies.report import zoom_limits
+    from raysim.report.html import zoom_limits
 
     r = np.arange(256) * 0.137
     v = np.linspace(-16, 16, 64, endpoint=False)

@@ -119,7 +119,7 @@ def test_progress_and_peak_memory_in_subprocess():
     code = textwrap.dedent("""
         import numpy as np
         from raysim.radar.arrays import upa
-        from raysim.studies.bench import peak_rss
+        from raysim.bench.suite import peak_rss
         from raysim.radar.config import RadarConfig
         from raysim.synthesis.nufft import PathDelays
         from raysim.synthesis.streaming import render_stream
@@ -143,8 +143,8 @@ def test_progress_and_peak_memory_in_subprocess():
 
 
 def test_bench_cli_validation_and_atomic_json(tmp_path, capsys):
+    from raysim.bench.suite import atomic_write_json
     from raysim.cli import main
-    from raysim.studies.bench import atomic_write_json
 
     assert main(["bench", "--chart-only"]) == 2
     assert "--chart-only needs --chart" in capsys.readouterr().err

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scenario_texts import small_scenario
 
-import raysim.studies.sweep as sweep_mod
+import raysim.pipeline.sweep as sweep_mod
 from raysim.cli import main
+from raysim.pipeline.sweep import SweepSpec, parse_values, run_sweep, sweep_points
 from raysim.scenario import scenario_from_case
-from raysim.studies.sweep import SweepSpec, parse_values, run_sweep, sweep_points
 
 SMALL = {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4,
          "radar.chirp_duration_s": 12.8e-6}

@@ -80,7 +80,7 @@ def run(args) -> int:
     else:
         result = bench.run(quick=args.quick, memory=not args.no_memory, log=log)
     if args.chart:
-        from raysim.studies.speed_chart import draw_chart, measure_knobs
+        from raysim.bench.speed_chart import draw_chart, measure_knobs
 
         log("speed-versus-accuracy chart")
         knobs = measure_knobs(quick=args.quick, log=log)

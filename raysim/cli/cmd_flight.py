@@ -2,7 +2,7 @@
 
 Writes ``flight.ulg`` (PX4 ULog), ``adc_data.bin`` (DCA1000 capture) and
 ``radar.cfg`` (mmWave SDK configuration) of a point target seen from a
-hovering drone (:func:`raysim.studies.flight.write_flight`) and prints the one
+hovering drone (:func:`raysim.pipeline.flight.write_flight`) and prints the one
 ``raysim compensate`` command that compensates them with what a user has (IMU
 grade, lever arm, the flight controller's attitude at the first ramp or
 levelling), the initial velocity and the clock offset estimated from the radar
@@ -51,8 +51,8 @@ def register(subparsers) -> None:
 def run(args) -> int:
     """Run ``raysim flight``; returns the exit code."""
     from raysim.cli.options import check_output
+    from raysim.pipeline.flight import write_flight
     from raysim.platform.imu_spec import PRESETS
-    from raysim.studies.flight import write_flight
 
     check_output(args.folder, "dir", "folder")
     if args.imu not in PRESETS:

@@ -54,8 +54,8 @@ def run(args) -> int:
     from raysim.cli.cmd_simulate import print_warnings
     from raysim.cli.options import chains_option, check_output
     from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.report.html import collect_from_dataset, collect_from_scenario, write_report
     from raysim.scenario import load_scenario, parse_assignment, scenario_from_case
-    from raysim.studies.report import collect_from_dataset, collect_from_scenario, write_report
 
     chains = chains_option(args.chains)
     given = [x for x in (args.store, args.scenario, args.case) if x]

@@ -158,11 +158,11 @@ def run(args: argparse.Namespace) -> int:
     if args.bench_reprojection:
         import json
 
+        from raysim.bench.reprojection import bench_scene_reprojection
         from raysim.echoes.rt import backend
-        from raysim.studies.scene_report import bench_reprojection
 
         backend.configure("cpu", threads=args.threads)
-        print(json.dumps(bench_reprojection(), indent=1))
+        print(json.dumps(bench_scene_reprojection(), indent=1))
         return 0
     check_output(args.out, "dir", "--out")
     knobs = {}

@@ -75,8 +75,8 @@ def run(args) -> int:
     """Run ``raysim sweep``; returns the exit code."""
     from raysim.cli.options import chains_option, check_output
     from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.pipeline.sweep import SweepSpec, parse_values, run_sweep, warning_summary
     from raysim.scenario import load_scenario, parse_assignment, scenario_from_case
-    from raysim.studies.sweep import SweepSpec, parse_values, run_sweep, warning_summary
     from raysim.vocabulary import metric_unit
 
     if bool(args.scenario) == bool(args.case):

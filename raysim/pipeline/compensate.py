@@ -2,7 +2,7 @@
 
 :func:`compensate` is the one implementation behind ``raysim compensate`` (the
 command only parses its options and prints) and the studies that compensate
-recorded files (:mod:`raysim.studies.flight`). It reads the input
+recorded files (:mod:`raysim.pipeline.flight`). It reads the input
 (:mod:`raysim.io.compensate_io`), estimates the platform motion at every
 transmit slot of every selected frame (one integration over the record,
 :func:`raysim.pipeline.estimate.estimate_record`; or, when the clock offset or

@@ -103,14 +103,14 @@ def _rt_scene(scenario: Scenario):
 
 
 def _clutter(scenario: Scenario):
-    """The clutter of a ray-traced scenario: one GroundClutter shared by all its frames."""
+    """The clutter of a ray-traced scenario: one SceneClutter shared by all its frames."""
     c = scenario.scene.clutter
     if c.mode != "field":
         return c.mode
-    from raysim.echoes.clutter.field import FieldSettings
-    from raysim.echoes.clutter.model import GroundClutter
+    from raysim.echoes.ground.field import FieldSettings
+    from raysim.echoes.scene_clutter import SceneClutter
 
-    return GroundClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
+    return SceneClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
                                        max_scatterers=c.max_scatterers, seed=scenario.seed),
                          ghosts=c.ghosts,
                          movers=[*(_car(m, seed=scenario.seed + i)
@@ -119,11 +119,11 @@ def _clutter(scenario: Scenario):
 
 
 def _rotor(spec):
-    """The :class:`raysim.echoes.clutter.rotors.Rotor` of one ``[[scene.rotors]]`` entry."""
+    """The :class:`raysim.echoes.moving.rotors.Rotor` of one ``[[scene.rotors]]`` entry."""
     import math
 
-    from raysim.echoes.clutter.rotors import Rotor
-    from raysim.echoes.clutter.tracks import RigidTrajectory
+    from raysim.echoes.moving.rotors import Rotor
+    from raysim.echoes.moving.scatterers import RigidTrajectory
 
     hub = (RigidTrajectory(spec.hub_m, heading=math.radians(spec.heading_deg),
                            speed=spec.speed_mps)
@@ -136,11 +136,11 @@ def _rotor(spec):
 
 
 def _car(spec, seed: int = 0):
-    """The :class:`raysim.echoes.clutter.movers.CarMover` of one ``[[scene.movers]]`` entry."""
+    """The :class:`raysim.echoes.moving.cars.CarMover` of one ``[[scene.movers]]`` entry."""
     import math
 
-    from raysim.echoes.clutter.movers import CarMover
-    from raysim.echoes.clutter.tracks import RigidTrajectory
+    from raysim.echoes.moving.cars import CarMover
+    from raysim.echoes.moving.scatterers import RigidTrajectory
 
     trajectory = RigidTrajectory(spec.start_m, heading=math.radians(spec.heading_deg),
                                  speed=spec.speed_mps, yaw_rate=math.radians(spec.yaw_rate_dps))
@@ -342,8 +342,8 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
         Paths re-projected and synthesised at once.
     movers : sequence
         Extra moving objects of a traced scene, driving through it in both
-        frames: :class:`raysim.echoes.clutter.movers.CarMover`,
-        :class:`raysim.echoes.clutter.tracks.MovingObject`, or a callable
+        frames: :class:`raysim.echoes.moving.cars.CarMover`,
+        :class:`raysim.echoes.moving.scatterers.MovingObject`, or a callable
         ``mover(scene, ground, t0)`` returning one of them or None (for objects
         placed on the loaded scene's ground).
     progress : callable, optional
@@ -392,9 +392,9 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
                 progress(f"synthesised {name}")
         return dict(out, reference=reference_target(scenario), seconds=seconds)
 
-    from raysim.echoes.clutter.model import GroundClutter
-    from raysim.echoes.clutter.tracks import synthesize_tracks
+    from raysim.echoes.moving.scatterers import synthesize_tracks
     from raysim.echoes.rt.reproject import synthesize_paths
+    from raysim.echoes.scene_clutter import SceneClutter
     from raysim.synthesis.select import synthesize
 
     t = time.perf_counter()
@@ -402,7 +402,7 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     if samples_per_src is not None:
         tracer = replace(tracer, samples_per_src=int(samples_per_src))
     clutter = _clutter(scenario)
-    model = clutter if isinstance(clutter, GroundClutter) else None
+    model = clutter if isinstance(clutter, SceneClutter) else None
     if model is not None:
         tracer = model.tracer(tracer)
     elif clutter == "none":
@@ -416,7 +416,7 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     radar_w = rest.point_world([t0], lever)[0, 0]
     ground = None                      # cars are located on and traced with the ground
     if movers:
-        from raysim.echoes.clutter.ground import GroundSurface
+        from raysim.echoes.ground.surface import GroundSurface
 
         ground = model.ground if model is not None else GroundSurface.from_scene(scene)
     cars = [m(scene, ground, t0) if callable(m) and not hasattr(m, "tracks") else m

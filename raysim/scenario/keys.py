@@ -273,7 +273,7 @@ class ClutterSection(BaseModel):
 class MoverSection(BaseModel):
     """``[[scene.movers]]``: a car mesh driving through a ray-traced scene (docs/clutter.md).
 
-    Traced by PO + SBR at every trace (:class:`raysim.echoes.clutter.movers.CarMover`).
+    Traced by PO + SBR at every trace (:class:`raysim.echoes.moving.cars.CarMover`).
     ``start_m`` body origin on the ground at time 0 in W (NED) [m];
     ``heading_deg`` from north towards east; ``speed_mps`` ground speed;
     ``yaw_rate_dps`` turn rate (0 drives straight); ``length_m``, ``width_m``,
@@ -295,7 +295,7 @@ class MoverSection(BaseModel):
 class RotorSection(BaseModel):
     """``[[scene.rotors]]``: a rotor or fan giving micro-Doppler (docs/clutter.md).
 
-    :class:`raysim.echoes.clutter.rotors.Rotor`: ``hub_m`` hub at time 0 in W
+    :class:`raysim.echoes.moving.rotors.Rotor`: ``hub_m`` hub at time 0 in W
     (NED) [m], moving at ``speed_mps`` along ``heading_deg`` (default still);
     ``axis`` spin axis (W, or body FRD when moving); ``rate_rps`` [rev/s] or
     ``rate_radps`` [rad/s], one of them; ``blades``; ``blade_length_m`` hub to

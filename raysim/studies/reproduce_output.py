@@ -3,7 +3,7 @@
 The rows and maps come from :mod:`raysim.studies.reproduce`; metric names and
 units are those of :data:`raysim.vocabulary.METRICS`, chain keys those of
 :func:`raysim.vocabulary.parse_chains`, and every map is drawn by
-:func:`raysim.studies.figures.plot_map`.
+:func:`raysim.report.figures.plot_map`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from raysim.io.files import atomic_savefig, atomic_write_text
 from raysim.measure.point import angle_chirp, map_grid
 from raysim.pipeline.beams import Beamformer
 from raysim.processing.maps import Map, doppler_fft
-from raysim.studies.figures import plot_map
+from raysim.report.figures import plot_map
 from raysim.vocabulary import MAPS, REFERENCE, chain_label, parse_chain
 
 __all__ = ["write_results", "format_table", "write_case_figures"]

@@ -17,7 +17,7 @@ along the same motion, and compensates every frame with the exact chain twice:
   report's ``exact`` chain).
 
 The ground clutter is the settings' (``settings.clutter``): the persistent
-clutter field (:class:`raysim.echoes.clutter.model.GroundClutter`, the scene
+clutter field (:class:`raysim.echoes.scene_clutter.SceneClutter`, the scene
 report's default: seeded scatterers with calibrated sigma0, rough-surface
 mirror, target-ground ghosts) or Sionna's own diffuse paths (``"sionna"``), traced
 as :func:`raysim.echoes.rt.render.render_scene` and the scene report do. The
@@ -60,7 +60,7 @@ class SceneCalibration:
         Wall time of ``trace``, ``synthesis``, ``calibration``, ``chains`` [s].
     clutter : dict
         The clutter field's report
-        (:meth:`raysim.echoes.clutter.model.GroundClutter.summary`: scatterer
+        (:meth:`raysim.echoes.scene_clutter.SceneClutter.summary`: scatterer
         count, build time); empty with Sionna's clutter.
     """
 
@@ -117,12 +117,12 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     """
     import functools
 
-    from raysim.echoes.clutter.field import FieldSettings
-    from raysim.echoes.clutter.model import GroundClutter
-    from raysim.echoes.clutter.tracks import synthesize_tracks
+    from raysim.echoes.ground.field import FieldSettings
+    from raysim.echoes.moving.scatterers import synthesize_tracks
     from raysim.echoes.rt.reproject import synthesize_paths
     from raysim.echoes.rt.scenes import SCENES, load_scene
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.echoes.scene_clutter import SceneClutter
     from raysim.pipeline.estimate import estimate_motion
     from raysim.pipeline.self_calibration import calibrate_record
     from raysim.pipeline.sensors import imu_record
@@ -141,7 +141,7 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
                          f"(the self-calibration study measures a stationary scene; a car "
                          f"is a moving scatterer)")
     # the report's ground clutter: the persistent field, or Sionna's diffuse paths
-    model = None if settings.clutter == "sionna" else GroundClutter(FieldSettings(
+    model = None if settings.clutter == "sionna" else SceneClutter(FieldSettings(
         scatterers_per_cell=settings.clutter_per_cell, seed=settings.trace_seed))
     config = replace(settings.radar(), num_frames=frames, frame_period=float(frame_period))
     array = settings.array()

@@ -15,9 +15,9 @@ from clutter_grounds import grid_ground
 from scipy import stats
 from scipy.signal.windows import blackmanharris
 
-from raysim.echoes.clutter.field import ClutterField, FieldSettings, radar_scale
-from raysim.echoes.clutter.ground import GroundSurface
-from raysim.echoes.clutter.sigma0 import CLUTTER_MATERIALS, ament_factor, sigma0
+from raysim.echoes.ground.field import ClutterField, FieldSettings, radar_scale
+from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS, ament_factor, sigma0
+from raysim.echoes.ground.surface import GroundSurface
 from raysim.echoes.rt.reproject import synthesize_paths
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from clutter_grounds import grid_ground
 
-from raysim.echoes.clutter.field import FieldSettings
-from raysim.echoes.clutter.ground import GroundSurface
-from raysim.echoes.clutter.model import GroundClutter
+from raysim.echoes.ground.field import FieldSettings
+from raysim.echoes.ground.surface import GroundSurface
 from raysim.echoes.rt.reproject import synthesize_paths
+from raysim.echoes.scene_clutter import SceneClutter
 from raysim.platform.motion import hover_jitter
 from raysim.processing import maps as processing
 from raysim.radar.arrays import upa
@@ -84,7 +84,7 @@ def _coherence(a: np.ndarray, b: np.ndarray) -> float:
 
 def test_hovering_frames_share_clutter(hover):
     config, array, ground, traj = hover
-    model = GroundClutter(FieldSettings(shadowing=False), ground=ground, specular=False,
+    model = SceneClutter(FieldSettings(shadowing=False), ground=ground, specular=False,
                           ghosts=False)
     maps = [_compensated_map(_frame(model, config, array, traj, f), config, array, traj, f)
             for f in (1, 2)]
@@ -98,7 +98,7 @@ def test_hovering_frames_share_clutter(hover):
     assert 4 * np.pi * moved / config.wavelength > 0.5
     assert rho > MAP_CORRELATION_MIN
     # a fresh field for frame 2 (independent clutter) does not correlate
-    fresh = GroundClutter(FieldSettings(shadowing=False, seed=1), ground=ground,
+    fresh = SceneClutter(FieldSettings(shadowing=False, seed=1), ground=ground,
                           specular=False, ghosts=False)
     other = _compensated_map(_frame(fresh, config, array, traj, 2), config, array, traj, 2)
     rho_fresh = _coherence(maps[0], other)
@@ -108,7 +108,7 @@ def test_hovering_frames_share_clutter(hover):
 
 def test_field_rebuilt_beyond_reuse_distance(hover):
     config, array, ground, _ = hover
-    model = GroundClutter(FieldSettings(shadowing=False, reuse_distance=0.2), ground=ground)
+    model = SceneClutter(FieldSettings(shadowing=False, reuse_distance=0.2), ground=ground)
     a = model.field_for(config, array, np.zeros(3), np.eye(3))
     assert model.field_for(config, array, np.array([0.1, 0.0, 0.0]), np.eye(3)) is a
     b = model.field_for(config, array, np.array([0.5, 0.0, 0.0]), np.eye(3))

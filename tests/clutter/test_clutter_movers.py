@@ -17,7 +17,7 @@ BOX_SLACK_M = 0.15
 
 
 def test_movers_keys_reach_the_clutter_model():
-    from raysim.echoes.clutter.movers import CarMover
+    from raysim.echoes.moving.cars import CarMover
     from raysim.pipeline.sources import _clutter
 
     sc = loads_scenario(SCENE + MOVER)
@@ -42,8 +42,8 @@ def test_movers_bad_values_are_named(text, match):
 def test_car_centres_ride_on_the_body(clutter_backend):
     """PO + SBR centres of a car seen from 15 m up lie on the car, fixed in its body frame
     (x forward, y right, z down from the ground contact), and move with its trajectory."""
-    from raysim.echoes.clutter.movers import CarMover
-    from raysim.echoes.clutter.tracks import RigidTrajectory
+    from raysim.echoes.moving.cars import CarMover
+    from raysim.echoes.moving.scatterers import RigidTrajectory
     from raysim.radar.config import RadarConfig
 
     config = RadarConfig()
@@ -84,7 +84,7 @@ R_WB = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
 def _flat_ground(z, material="asphalt-77ghz"):
-    from raysim.echoes.clutter.ground import GroundSurface
+    from raysim.echoes.ground.surface import GroundSurface
     from raysim.echoes.po.mesh import TriangleMesh
 
     mesh = TriangleMesh(np.array([[-50.0, -50.0, z], [50.0, -50.0, z], [50.0, 50.0, z],
@@ -94,8 +94,8 @@ def _flat_ground(z, material="asphalt-77ghz"):
 
 def _trihedral_mover():
     """The trihedral on a trajectory through its apex, driving south (towards the radar)."""
-    from raysim.echoes.clutter.movers import CarMover
-    from raysim.echoes.clutter.tracks import RigidTrajectory
+    from raysim.echoes.moving.cars import CarMover
+    from raysim.echoes.moving.scatterers import RigidTrajectory
     from raysim.echoes.po.mesh import TriangleMesh
     from raysim.echoes.po.targets import trihedral
 
@@ -118,8 +118,8 @@ def _range_rates(tracks, dt=1e-3):
 @pytest.mark.sionna
 @pytest.mark.parametrize("material", ["asphalt-77ghz", "concrete"])
 def test_mover_ghosts_follow_the_image_method(clutter_backend, material):
-    from raysim.echoes.clutter.movers import GHOST_LABEL
-    from raysim.echoes.clutter.sigma0 import ament_factor, fresnel_coefficient
+    from raysim.echoes.ground.sigma0 import ament_factor, fresnel_coefficient
+    from raysim.echoes.moving.cars import GHOST_LABEL
     from raysim.echoes.po.paths import scattering_terms
     from raysim.radar.config import RadarConfig
 
@@ -166,12 +166,12 @@ def test_mover_ghosts_follow_the_image_method(clutter_backend, material):
 
 @pytest.mark.sionna
 def test_without_ground_the_mover_has_no_ghosts(clutter_backend):
-    """The same trace with ``ground=None`` (and a GroundClutter's ground through ``paths``)."""
+    """The same trace with ``ground=None`` (and a SceneClutter's ground through ``paths``)."""
     import dataclasses
 
-    from raysim.echoes.clutter.model import GroundClutter
-    from raysim.echoes.clutter.movers import GHOST_LABEL
+    from raysim.echoes.moving.cars import GHOST_LABEL
     from raysim.echoes.rt.trace import PathSet
+    from raysim.echoes.scene_clutter import SceneClutter
     from raysim.platform.motion import stationary
     from raysim.radar.config import RadarConfig
 
@@ -183,13 +183,13 @@ def test_without_ground_the_mover_has_no_ghosts(clutter_backend):
     assert np.all(np.linalg.norm(alone.p_tx(np.array(0.0)), axis=-1) < r1 + EDGE)
 
     @dataclasses.dataclass(frozen=True)
-    class Switches:                       # the tracer switches GroundClutter.tracer reads
+    class Switches:                       # the tracer switches SceneClutter.tracer reads
         diffuse: bool = False
         specular: bool = False
         targets: bool = False
         target_depth: int = 1
 
-    model = GroundClutter(specular=False, ghosts=False, movers=[mover],
+    model = SceneClutter(specular=False, ghosts=False, movers=[mover],
                           ground=_flat_ground(RADAR_HEIGHT))
     model.tracer(Switches())
     z3, z0 = np.zeros((0, 3)), np.zeros(0)
@@ -204,8 +204,8 @@ def test_without_ground_the_mover_has_no_ghosts(clutter_backend):
 def test_car_ghosts_lie_at_or_below_the_ground(clutter_backend):
     """A car 15 m below the radar over flat asphalt: its ground-bounced centres are labelled,
     fixed in the body at or below the ground contact (z >= 0, FRD), within a range cell."""
-    from raysim.echoes.clutter.movers import GHOST_LABEL, CarMover
-    from raysim.echoes.clutter.tracks import RigidTrajectory
+    from raysim.echoes.moving.cars import GHOST_LABEL, CarMover
+    from raysim.echoes.moving.scatterers import RigidTrajectory
     from raysim.radar.config import RadarConfig
 
     config = RadarConfig()
@@ -219,8 +219,8 @@ def test_car_ghosts_lie_at_or_below_the_ground(clutter_backend):
 
 
 def test_mover_bad_ground_and_parts_are_named():
-    from raysim.echoes.clutter.movers import CarMover
-    from raysim.echoes.clutter.tracks import RigidTrajectory
+    from raysim.echoes.moving.cars import CarMover
+    from raysim.echoes.moving.scatterers import RigidTrajectory
     from raysim.radar.config import RadarConfig
 
     traj = RigidTrajectory([6.0, 0.0, 1.0])

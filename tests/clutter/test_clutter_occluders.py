@@ -32,7 +32,7 @@ def _behind(ground, body_vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
 def test_ground_behind_a_car_is_shadowed(clutter_backend, tmp_path):
     """The parking lot's cars shadow the ground behind them, and so does a car added as a
     geometry target that the scene file does not hold (only its mesh can occlude)."""
-    from raysim.echoes.clutter.ground import GroundSurface, scene_meshes, target_meshes
+    from raysim.echoes.ground.surface import GroundSurface, scene_meshes, target_meshes
     from raysim.echoes.po.car import car_parts
     from raysim.echoes.po.mesh import TriangleMesh
     from raysim.echoes.po.rays import RayScene

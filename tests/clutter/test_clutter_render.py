@@ -63,10 +63,10 @@ def test_field_is_rayleigh_where_sionna_clutter_is_not(asphalt):
     """
     import dataclasses
 
-    from raysim.echoes.clutter.field import FieldSettings
-    from raysim.echoes.clutter.model import GroundClutter
+    from raysim.echoes.ground.field import FieldSettings
     from raysim.echoes.rt.render import render_scene
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.echoes.scene_clutter import SceneClutter
 
     config = RadarConfig(num_chirps=1)
     array = upa(4, 4, wavelength=config.wavelength)
@@ -76,7 +76,7 @@ def test_field_is_rayleigh_where_sionna_clutter_is_not(asphalt):
     for seed in range(NUM_SEEDS):
         tracer = dataclasses.replace(planned, seed=seed)
         old.append(render_scene(asphalt, config, array, tracer=tracer, clutter="sionna").data)
-        model = GroundClutter(FieldSettings(seed=seed), ghosts=False)
+        model = SceneClutter(FieldSettings(seed=seed), ghosts=False)
         new.append(render_scene(asphalt, config, array, tracer=tracer, clutter=model).data)
     p_old = _ks_rayleigh(_normalised_cells(old), NUM_SEEDS)
     p_new = _ks_rayleigh(_normalised_cells(new), NUM_SEEDS)

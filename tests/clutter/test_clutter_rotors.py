@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 from clutter_grounds import grid_ground, range_profile
 
-from raysim.echoes.clutter.rotors import Rotor
-from raysim.echoes.clutter.tracks import RigidTrajectory, synthesize_tracks
+from raysim.echoes.moving.rotors import Rotor
+from raysim.echoes.moving.scatterers import RigidTrajectory, synthesize_tracks
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
 
@@ -224,16 +224,16 @@ def test_rotor_bad_values_are_named(kwargs, match):
 
 
 def test_rotor_renders_through_ground_clutter():
-    """GroundClutter(movers=[rotor]) with a given ground returns the rotor's tracks."""
-    from raysim.echoes.clutter.field import FieldSettings
-    from raysim.echoes.clutter.ground import GroundSurface
-    from raysim.echoes.clutter.model import GroundClutter
+    """SceneClutter(movers=[rotor]) with a given ground returns the rotor's tracks."""
+    from raysim.echoes.ground.field import FieldSettings
+    from raysim.echoes.ground.surface import GroundSurface
+    from raysim.echoes.scene_clutter import SceneClutter
     from raysim.platform.motion import stationary
 
     config = RadarConfig(num_chirps=64)
     ground = GroundSurface.from_meshes([(grid_ground(30.0, 2, 12.0), "dry-soil")])
     rotor = Rotor("fan", HUB, axis=_axis_at(0.0), rate=20.0, blade_length=0.05)
-    model = GroundClutter(FieldSettings(shadowing=False), ground=ground, specular=False,
+    model = SceneClutter(FieldSettings(shadowing=False), ground=ground, specular=False,
                           ghosts=False, movers=[rotor])
     field = model.field_for(config, upa(1, 1, wavelength=config.wavelength), np.zeros(3),
                             np.eye(3))
@@ -248,7 +248,7 @@ def test_rotor_renders_through_ground_clutter():
     synthesize_tracks(tracks, config, upa(1, 1, wavelength=config.wavelength), out=cube)
     assert np.array_equal(cube[:, 0], direct)
     with pytest.raises(ValueError, match="Rotor"):
-        GroundClutter(movers=[object()])
+        SceneClutter(movers=[object()])
 
 
 SCENE = '[scene]\nname = "flat_reflectors"\n'

@@ -1,4 +1,4 @@
-"""Scenario keys of the clutter: ``[scene.clutter]`` reaches the frame source's GroundClutter."""
+"""Scenario keys of the clutter: ``[scene.clutter]`` reaches the frame source's SceneClutter."""
 
 from __future__ import annotations
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from clutter_grounds import grid_ground
 
-from raysim.echoes.clutter.field import radar_scale
-from raysim.echoes.clutter.ground import GroundSurface
-from raysim.echoes.clutter.sigma0 import CLUTTER_MATERIALS
-from raysim.echoes.clutter.specular import rough_specular_path
+from raysim.echoes.ground.field import radar_scale
+from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS
+from raysim.echoes.ground.specular import rough_specular_path
+from raysim.echoes.ground.surface import GroundSurface
 from raysim.echoes.rt.reproject import synthesize_paths
 from raysim.echoes.rt.trace import SPECULAR
 from raysim.radar.arrays import upa

@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from clutter_grounds import grid_ground, range_profile, tone_frequency
 
-from raysim.echoes.clutter.ground import GroundSurface
-from raysim.echoes.clutter.tracks import (
+from raysim.echoes.ground.surface import GroundSurface
+from raysim.echoes.moving.scatterers import (
     MovingObject,
     RigidTrajectory,
     ground_ghosts,

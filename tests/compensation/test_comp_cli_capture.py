@@ -1,6 +1,6 @@
 """`raysim compensate` on a DCA1000 capture with its SDK .cfg and a PX4 ULog.
 
-The files are written by :func:`raysim.studies.flight.write_flight` (the exact
+The files are written by :func:`raysim.pipeline.flight.write_flight` (the exact
 oracle rendering a point target from a moving platform, TI 3 Tx x 4 Rx TDM in
 the slot order TX0, TX2, TX1); the result is read back from the labelled store.
 """
@@ -15,9 +15,9 @@ import pytest
 from raysim.cli import main
 from raysim.io.mmwave_config import read_mmwave_config
 from raysim.io.zarr_store import open_store
+from raysim.pipeline.flight import write_flight
 from raysim.platform.motion import sinusoid
 from raysim.processing.metrics import parabolic_offset
-from raysim.studies.flight import write_flight
 
 #: Largest exact-chain azimuth error [deg] of the TDM case with per-slot poses.
 TDM_ANGLE_TOL_DEG = 0.1
@@ -43,13 +43,13 @@ def _run(flight, out, chain="exact", *extra, frame=None):
 def _measure(ds, flight, first=0):
     """Per frame: azimuth error [deg] of the zero-Doppler beam peak, pseudo-velocity [bin]
     and Doppler power outside +-1 bin of the peak [dB] in the beam at the peak
-    (:func:`raysim.studies.flight.measure_store`).
+    (:func:`raysim.pipeline.flight.measure_store`).
 
     Azimuth only: the 3 Tx x 4 Rx array has one lambda/2 step of elevation aperture (TX1
     raised), a beam some 100 deg wide in elevation, so the targets sit at elevation 0 and
     the beams are formed in that cut.
     """
-    from raysim.studies.flight import measure_store
+    from raysim.pipeline.flight import measure_store
 
     return [tuple(row) for row in measure_store(ds, flight, first)]
 

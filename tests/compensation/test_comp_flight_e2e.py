@@ -2,7 +2,7 @@
 
 `raysim flight` writes a PX4 ULog (consumer MEMS IMU at 1 kHz, 3 ms late), a DCA1000
 capture and its SDK .cfg of a point target seen from a drone in hover jitter with rotor
-vibration (:func:`raysim.studies.flight.write_flight`). The compensate command gets only
+vibration (:func:`raysim.pipeline.flight.write_flight`). The compensate command gets only
 what a user has: the IMU grade, the lever arm and the flight controller's attitude at the
 first ramp; the initial velocity and the clock offset are estimated from the radar
 (``--velocity radar --time-offset auto``). Every frame is measured from the store.
@@ -17,7 +17,7 @@ import pytest
 
 from raysim.cli import main
 from raysim.io.zarr_store import open_store
-from raysim.studies.flight import MEASURE_STEP_DEG, measure_store, write_flight
+from raysim.pipeline.flight import MEASURE_STEP_DEG, measure_store, write_flight
 
 #: Must-show bounds, every frame: residual pseudo-velocity [bin], Doppler power outside
 #: +-1 bin of the peak [dB], azimuth error [deg], clock-offset error [s].

@@ -41,7 +41,7 @@ def _cube(rng, n, m, r):
 #: The compiled kernel's copies where the extension is built; the NumPy engine always.
 BUILT = compiled_isa() != "missing"
 ENGINE_CASES = ["numpy"] + [pytest.param(e, marks=pytest.mark.skipif(
-    not BUILT, reason="extension compensation._rt._ext not built")) for e in ("compiled",
+    not BUILT, reason="extension compensation._native._ext not built")) for e in ("compiled",
                                                                                "portable")]
 
 
@@ -186,7 +186,7 @@ def test_without_extension_auto_is_the_numpy_engine(monkeypatch):
 
 def test_bench_doppler_power_is_the_power_of_the_beams_doppler_spectrum():
     """The benchmark's lean Doppler step gives |BeamCube.doppler()|^2 (float32 rounding)."""
-    from raysim.studies.bench_realtime import doppler_power
+    from raysim.bench.realtime import doppler_power
 
     rng = np.random.default_rng(8)
     p, slot = _ti_positions()
@@ -266,7 +266,7 @@ def test_bench_doppler_power_buffers_follow_each_frame():
     """DopplerPower reuses its buffers: each call gives that frame's power (even and odd N)."""
     from scipy.signal import get_window
 
-    from raysim.studies.bench_realtime import DopplerPower
+    from raysim.bench.realtime import DopplerPower
 
     rng = np.random.default_rng(10)
     for n in (16, 15):
@@ -286,7 +286,7 @@ def test_bench_doppler_power_buffers_follow_each_frame():
 @pytest.mark.parametrize("engine", ENGINE_CASES)
 def test_chirp_weights_carry_the_doppler_window(engine):
     """project(chirp_weights=w) = w[n] * beams; DopplerPower(weighted=True) then = its power."""
-    from raysim.studies.bench_realtime import DopplerPower
+    from raysim.bench.realtime import DopplerPower
 
     rng = np.random.default_rng(13)
     p, slot = _ti_positions()

@@ -12,7 +12,7 @@ import pytest
 from raysim.cli import main
 from raysim.io.zarr_store import open_store
 from raysim.pipeline.compensate import compensate
-from raysim.studies.flight import MEASURE_STEP_DEG, write_flight
+from raysim.pipeline.flight import MEASURE_STEP_DEG, write_flight
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +56,7 @@ def test_stage_is_the_command(flight, tmp_path):
 
 def test_flight_table_runs_the_stage_not_the_cli(tmp_path, monkeypatch):
     import raysim.cli
-    from raysim.studies.flight import calibrated_flight_table
+    from raysim.pipeline.flight import calibrated_flight_table
 
     def refuse(*_a, **_k):
         raise AssertionError("the study called the command line")

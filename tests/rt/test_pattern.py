@@ -250,8 +250,8 @@ def test_stores_keep_the_element_pattern():
 
 @pytest.mark.parametrize("floor", [3.0, math.nan, "low"])
 def test_bad_pattern_floor_is_refused(floor):
-    from raysim.echoes.rt.budget import plan_trace
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.echoes.rt.trace_plan import plan_trace
     from raysim.radar.arrays import upa
 
     with pytest.raises(ValueError, match="pattern_floor_db"):

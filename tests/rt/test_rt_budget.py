@@ -9,7 +9,7 @@ import time
 import numpy as np
 import pytest
 
-from raysim.echoes.rt.budget import MAX_SAMPLES, MIN_SAMPLES, plan_trace
+from raysim.echoes.rt.trace_plan import MAX_SAMPLES, MIN_SAMPLES, plan_trace
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
 

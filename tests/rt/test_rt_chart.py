@@ -43,7 +43,7 @@ def test_rt_knobs_measured_and_drawn(warm_kernels, monkeypatch, tmp_path):
 
 def test_tube_density_knob(rt_backend):
     """SBR tube density as a chart knob: tubes grow with density, one default, RCS in 1 dB."""
-    import raysim.studies.speed_chart as sa
+    import raysim.bench.speed_chart as sa
     from raysim.echoes.po.paths import TUBES_PER_WAVELENGTH
 
     knob = sa.measure_tube_density(quick=True)

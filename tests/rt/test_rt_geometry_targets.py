@@ -191,7 +191,7 @@ def test_parking_lot_facade_ground_dihedral_appears(warm_kernels, rt_radar):
 
 def test_tube_density_points_for_the_speed_chart(rt_backend):
     """One point per density, tubes growing with density, the trihedral within RCS_TOL_DB."""
-    from raysim.studies.tube_density import tube_density_points
+    from raysim.bench.tube_density import tube_density_points
 
     pts = tube_density_points((1.0, 2.0))
     assert [p["tubes_per_wavelength"] for p in pts] == [1.0, 2.0]

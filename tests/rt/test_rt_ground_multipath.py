@@ -36,7 +36,7 @@ RANGE_TOL_BINS = 0.1
 #: same triple bounce as the free-space trace from ``x'``, sampled by other tubes
 #: (those reflected by the ground, on a launch grid normal to the radar's line of
 #: sight): the trihedral's tube-sampling error is up to 0.4 dB at the default
-#: density (``raysim.studies.tube_density``), on each of the two traces.
+#: density (``raysim.bench.tube_density``), on each of the two traces.
 GHOST_TOL_DB = 1.0
 #: The apron lies below the target and must leave its direct return unchanged [dB].
 DIRECT_TOL_DB = 0.05
@@ -81,7 +81,7 @@ def free_space(rt_backend):
 @pytest.mark.parametrize("ground, pol", [("pec", "HH"), ("asphalt-77ghz", "HH"),
                                          ("asphalt-77ghz", "VV")])
 def test_trihedral_ghosts_follow_the_image_method(free_space, ground, pol):
-    from raysim.echoes.clutter.sigma0 import ament_factor, fresnel_coefficient
+    from raysim.echoes.ground.sigma0 import ament_factor, fresnel_coefficient
     from raysim.echoes.po.paths import cluster_terms, scattering_terms
 
     direct_free, image_free = free_space[pol]
@@ -145,7 +145,7 @@ def test_ground_apron_lies_in_the_local_ground_plane():
     """The apron of a target over a flat ground (W, NED: ground 15 m below the radar) is
     in the ground plane, centred under the target, as wide as its shadow plus two
     Fresnel lengths, of the ground's material; none off the ground or under the radar."""
-    from raysim.echoes.clutter.ground import GroundSurface
+    from raysim.echoes.ground.surface import GroundSurface
     from raysim.echoes.po.mesh import TriangleMesh
     from raysim.echoes.po.paths import APRON_MAX_HALF_SIDE, ground_apron
 

@@ -114,7 +114,7 @@ def traced(warm_kernels, rt_radar, tmp_path_factory):
 
 def test_rough_ground_bounces_carry_the_ament_factor(traced, rt_radar):
     """Each asphalt bounce divides the path by chi(theta_i); the metal plate's path is unchanged."""
-    from raysim.echoes.clutter.sigma0 import CLUTTER_MATERIALS
+    from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS
 
     on, off, _ = traced["asphalt-77ghz"]
     s = CLUTTER_MATERIALS["asphalt-77ghz"].rms_height
@@ -148,7 +148,7 @@ def test_smooth_ground_is_untouched(traced):
 
 def test_factor_is_one_for_zero_rms_height_and_checks_shapes():
     """s = 0 gives chi = 1 at any incidence; objects of s = 0 are not rough; bad shapes refused."""
-    from raysim.echoes.clutter.sigma0 import ClutterMaterial
+    from raysim.echoes.ground.sigma0 import ClutterMaterial
     from raysim.echoes.rt.rough_bounces import rough_bounce_factor
 
     smooth = ClutterMaterial("smooth", gamma_db=-20.0, rms_height=0.0, rms_slope=0.1,
@@ -171,16 +171,16 @@ def test_factor_is_one_for_zero_rms_height_and_checks_shapes():
 
 
 def test_field_mode_replaces_the_mirror_once_and_keeps_reduced_multibounce(traced, rt_radar):
-    """GroundClutter drops the (already reduced) single-bounce mirror and adds Fresnel x Ament
+    """SceneClutter drops the (already reduced) single-bounce mirror and adds Fresnel x Ament
     once; the ground-plate-ground path stays with its two Ament factors."""
-    from raysim.echoes.clutter.field import radar_scale
-    from raysim.echoes.clutter.model import GroundClutter
-    from raysim.echoes.clutter.sigma0 import ament_factor, fresnel_coefficient
+    from raysim.echoes.ground.field import radar_scale
+    from raysim.echoes.ground.sigma0 import ament_factor, fresnel_coefficient
     from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.echoes.scene_clutter import SceneClutter
     from raysim.platform.motion import stationary
 
     on, off, scene = traced["asphalt-77ghz"]
-    model = GroundClutter(ghosts=False)
+    model = SceneClutter(ghosts=False)
     # a tracer without diffuse paths asks the model for the mirror only (no field to build)
     model.tracer(MonostaticTracer(diffuse=False, targets=False))
     paths, _ = model.paths(scene, on, rt_radar, None, stationary(), np.zeros(3), time=0.0)

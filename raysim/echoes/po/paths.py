@@ -52,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raysim.echoes.clutter.sigma0 import CLUTTER_MATERIALS, ament_factor
+from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS, ament_factor
 from raysim.echoes.po.mesh import TriangleMesh, po_material
 from raysim.echoes.po.rays import RayScene
 from raysim.echoes.po.rcs import MAX_BOUNCES, facet_terms_near
@@ -71,7 +71,7 @@ PO_CENTRE = 32
 CLUSTER_ANGLE = math.radians(2.0)
 #: Default ray-tube density: tubes per wavelength along each transverse axis.
 #: A trihedral's triple bounce is within 0.2 dB of its closed form from 2 tubes
-#: per wavelength (``raysim.studies.tube_density``), at a twenty-fifth of the
+#: per wavelength (``raysim.bench.tube_density``), at a twenty-fifth of the
 #: tubes of the ``raysim rcs`` default (10).
 TUBES_PER_WAVELENGTH = 2.0
 #: Sub-facet edge of the single-bounce PO at most this share of the Fresnel length
@@ -294,7 +294,7 @@ def ground_coherence(material: str, wavelength: float):
     """Coherent share of a ground reflection, ``cos_i [ray] -> factor [ray]``.
 
     The Ament factor ``exp(-2 (k s cos theta_i)^2)`` of the material's RMS
-    height ``s`` (:func:`raysim.echoes.clutter.sigma0.ament_factor`) for a
+    height ``s`` (:func:`raysim.echoes.ground.sigma0.ament_factor`) for a
     material with a clutter model; 1 for any other (a smooth surface).
     """
     if material not in CLUTTER_MATERIALS:
@@ -440,8 +440,8 @@ _GROUNDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _ground_of(scene):
-    """The scene's :class:`~raysim.echoes.clutter.ground.GroundSurface`, cached per scene."""
-    from raysim.echoes.clutter.ground import GroundSurface
+    """The scene's :class:`~raysim.echoes.ground.surface.GroundSurface`, cached per scene."""
+    from raysim.echoes.ground.surface import GroundSurface
 
     if scene not in _GROUNDS:
         _GROUNDS[scene] = GroundSurface.from_scene(scene)

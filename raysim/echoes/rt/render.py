@@ -72,10 +72,10 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
     specular : {"image", "frozen"}
         Re-projection of single-bounce specular paths: exact image method
         (default) or frozen reflection point (see :mod:`raysim.echoes.rt.reproject`).
-    clutter : {"field", "sionna", "none"} or GroundClutter
+    clutter : {"field", "sionna", "none"} or SceneClutter
         Ground clutter and multipath: a persistent clutter field with rough-surface
         specular, target-ground ghosts and moving objects
-        (:class:`raysim.echoes.clutter.model.GroundClutter`; pass one instance to
+        (:class:`raysim.echoes.scene_clutter.SceneClutter`; pass one instance to
         every frame to keep the field across frames; ``"field"`` makes a fresh
         one), Sionna's own diffuse paths (``"sionna"``), or no diffuse paths.
 
@@ -89,8 +89,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
     """
     from dataclasses import replace
 
-    from raysim.echoes.clutter.model import resolve_clutter
-    from raysim.echoes.clutter.tracks import synthesize_tracks
+    from raysim.echoes.moving.scatterers import synthesize_tracks
+    from raysim.echoes.scene_clutter import resolve_clutter
 
     if not isinstance(config, RadarConfig):
         raise ValueError(f"config must be a RadarConfig, got {type(config)}")

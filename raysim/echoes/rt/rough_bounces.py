@@ -10,7 +10,7 @@ Spizzichino 1963, eq. 5.29)
 
     \chi(\theta_i) = \exp\bigl(-2 (k s \cos\theta_i)^2\bigr)
 
-with ``s`` the material's rms height (:data:`raysim.echoes.clutter.sigma0.CLUTTER_MATERIALS`)
+with ``s`` the material's rms height (:data:`raysim.echoes.ground.sigma0.CLUTTER_MATERIALS`)
 and ``theta_i`` the local incidence angle. The incidence angle of a specular
 bounce follows from its two legs alone: with unit directions ``a`` (incoming)
 and ``b`` (outgoing), ``b = a - 2 (a . n) n``, so ``|b - a| = 2 cos(theta_i)``;
@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from raysim.echoes.clutter.sigma0 import CLUTTER_MATERIALS, ament_factor
+from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS, ament_factor
 
 __all__ = ["object_materials", "rough_bounce_factor"]
 

@@ -257,7 +257,7 @@ class MonostaticTracer:
         are IF amplitudes [sqrt(W)] of isotropic elements; otherwise leave
         Sionna's isotropic-antenna transfer coefficients (unitless). Element
         gains are applied at re-projection.
-    plan : raysim.echoes.rt.budget.TracePlan or None
+    plan : raysim.echoes.rt.trace_plan.TracePlan or None
         When given, scene geometry is traced on the plan's pruned copy of the
         scene (triangles outside the range window / pattern cone removed, see
         :meth:`for_scene`); ``None`` traces the scene as loaded.
@@ -265,7 +265,7 @@ class MonostaticTracer:
         Multiply every path by the Ament factor ``exp(-2 (k s cos theta_i)^2)``
         of each of its specular bounces on a material with an rms height ``s``
         (the ground materials of
-        :data:`raysim.echoes.clutter.sigma0.CLUTTER_MATERIALS`), at that bounce's
+        :data:`raysim.echoes.ground.sigma0.CLUTTER_MATERIALS`), at that bounce's
         incidence angle (:mod:`raysim.echoes.rt.rough_bounces`); Sionna itself
         reflects such surfaces with the smooth Fresnel coefficient. ``False``
         keeps Sionna's amplitudes.
@@ -287,7 +287,7 @@ class MonostaticTracer:
     rough_bounces: bool = True
 
     def __post_init__(self) -> None:
-        from raysim.echoes.rt.budget import TracePlan
+        from raysim.echoes.rt.trace_plan import TracePlan
 
         if self.plan is not None and not isinstance(self.plan, TracePlan):
             raise ValueError(f"plan must be a TracePlan from plan_trace() or None, "
@@ -313,7 +313,7 @@ class MonostaticTracer:
     def for_scene(cls, scene, config: RadarConfig, array, *, radar_position_w=None,
                   rays_per_cell: float | None = None, margin: float = 0.5,
                   **overrides) -> MonostaticTracer:
-        """A tracer sized for ``scene`` by :func:`raysim.echoes.rt.budget.plan_trace`.
+        """A tracer sized for ``scene`` by :func:`raysim.echoes.rt.trace_plan.plan_trace`.
 
         The plan sets ``max_depth`` and ``samples_per_src`` and prunes the
         geometry outside the range window and the element-pattern cone (triangle
@@ -321,7 +321,7 @@ class MonostaticTracer:
         other tracer parameters and win over the plan; ``pattern_floor_db`` and
         ``max_range`` are also used by the plan (the pruning cone is where the
         one-way element gain falls below the floor). With ``max_depth > 2`` the
-        cone pruning is switched off (see :mod:`raysim.echoes.rt.budget`).
+        cone pruning is switched off (see :mod:`raysim.echoes.rt.trace_plan`).
 
         Parameters
         ----------
@@ -335,7 +335,7 @@ class MonostaticTracer:
             Radar position of the plan in W [m] (default the hover point).
         rays_per_cell : float, optional
             Average rays per resolution cell (default
-            :data:`raysim.echoes.rt.budget.DEFAULT_RAYS_PER_CELL`).
+            :data:`raysim.echoes.rt.trace_plan.DEFAULT_RAYS_PER_CELL`).
         margin : float
             Pruning margin for platform motion [m].
         **overrides
@@ -346,7 +346,7 @@ class MonostaticTracer:
         MonostaticTracer
             With ``plan`` set; ``tracer.plan.summary()`` says what was dropped.
         """
-        from raysim.echoes.rt.budget import DEFAULT_RAYS_PER_CELL, plan_trace
+        from raysim.echoes.rt.trace_plan import DEFAULT_RAYS_PER_CELL, plan_trace
 
         floor = overrides.get("pattern_floor_db", cls.pattern_floor_db)
         depth = overrides.get("max_depth")

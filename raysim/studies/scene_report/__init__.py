@@ -44,21 +44,20 @@ metrics of every chain are reported too (:func:`point_metrics`); for a point
 scenario they are those of ``raysim simulate``.
 
 Options: ``mover_speed`` drives a car mesh (PO + SBR,
-:class:`raysim.echoes.clutter.movers.CarMover`) through the scene in both frames;
+:class:`raysim.echoes.moving.cars.CarMover`) through the scene in both frames;
 it is looked for off the zero-Doppler ridge at its own range rate
 (:func:`find_mover`). The scenario's ``[scene.clutter]`` selects the persistent
-clutter field (:mod:`raysim.echoes.clutter`, default, ``per_cell`` scatterers per
+clutter field (:mod:`raysim.echoes.ground.field`, default, ``per_cell`` scatterers per
 cell), Sionna's own diffuse paths and mirror (``"sionna"``) or neither (``"none"``).
 
 Modules: :mod:`.settings` (scenario and knobs, limits), :mod:`.simulate` (trajectory,
 IMU estimate, twin frames), :mod:`.process` (scene and point measurements),
 :mod:`.evaluate` (one scene or scenario), :mod:`.outputs` (figures, tables, files),
-:mod:`.bench` (re-projection speed).
+:mod:`raysim.bench.reprojection` (re-projection speed).
 """
 
 from __future__ import annotations
 
-from .bench import bench_reprojection
 from .evaluate import (
                        MOVER_CENTRE_SPAN_DB,
                        SceneResult,
@@ -125,5 +124,4 @@ __all__ = [
     "find_mover", "MOVER_CENTRE_SPAN_DB", "report_mover",
     "POINT_TABLE_METRICS", "plot_scene", "report_markdown", "report_html",
     "write_scene_report", "result_label",
-    "bench_reprojection",
 ]

@@ -1,6 +1,6 @@
 """``python -m raysim.studies.scene_report``: print the re-projection benchmark as JSON."""
 
-from raysim.studies.scene_report.bench import main_bench
+from raysim.bench.reprojection import main_bench
 
 if __name__ == "__main__":  # pragma: no cover
     main_bench()

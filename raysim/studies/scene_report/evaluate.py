@@ -84,7 +84,7 @@ class SceneResult:
         Moving objects: :func:`mover_truth` plus ``match``: key (the reference
         and every chain) -> :func:`find_mover`.
     clutter : dict
-        The clutter field's report (:attr:`raysim.echoes.clutter.field.ClutterField.report`
+        The clutter field's report (:attr:`raysim.echoes.ground.field.ClutterField.report`
         plus ``builds``: count, expected count, density scale, resolution cell,
         build time); empty with Sionna's clutter.
     point : dict
@@ -208,7 +208,7 @@ def mover_truth(mover, settings: ReportSettings, config) -> dict:
 
     Parameters
     ----------
-    mover : raysim.echoes.clutter.tracks.MovingObject
+    mover : raysim.echoes.moving.scatterers.MovingObject
     settings : ReportSettings
     config : RadarConfig
 

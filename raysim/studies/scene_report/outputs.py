@@ -50,7 +50,7 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
     """One PNG per map (``<scene>_rd.png``, ``<scene>_ra.png``, ``<scene>_ae.png``).
 
     One panel for the stationary reference, then one per chain, each drawn by
-    :func:`raysim.studies.figures.plot_map` (azimuth on x wherever a map has
+    :func:`raysim.report.figures.plot_map` (azimuth on x wherever a map has
     it). Panels share the colour scale: dB relative to the reference map's
     peak. The RD panels zoom on the clutter ridge (+-
     :data:`RD_PLOT_HALF_WIDTH_BINS` Doppler bins); known reflectors are
@@ -68,7 +68,7 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from raysim.studies.figures import plot_map
+    from raysim.report.figures import plot_map
 
     if dynamic_range_db <= 0:
         raise ValueError(f"dynamic_range_db: got {dynamic_range_db!r}, expected > 0 dB")

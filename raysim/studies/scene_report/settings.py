@@ -156,7 +156,7 @@ class ReportSettings:
         motion from their own direction, which no beam-domain compensation
         removes, so low sidelobes matter for clutter.
     mover_speed : float or None
-        Ground speed [m/s] of a car (:class:`raysim.echoes.clutter.movers.CarMover`)
+        Ground speed [m/s] of a car (:class:`raysim.echoes.moving.cars.CarMover`)
         driving east along :data:`MOVER_START_NE` through the scene in both
         frames, or None for no mover.
     """

@@ -129,18 +129,18 @@ def report_mover(scene, settings: ReportSettings, t0: float = 0.0, ground=None):
         ``mover_speed`` [m/s] (None: no mover).
     t0 : float
         Time at which the car is at the start point [s].
-    ground : raysim.echoes.clutter.ground.GroundSurface, optional
+    ground : raysim.echoes.ground.surface.GroundSurface, optional
         The scene's ground (read from ``scene`` when omitted).
 
     Returns
     -------
-    raysim.echoes.clutter.movers.CarMover or None
+    raysim.echoes.moving.cars.CarMover or None
     """
     if settings.mover_speed is None:
         return None
-    from raysim.echoes.clutter.ground import GroundSurface
-    from raysim.echoes.clutter.movers import CarMover
-    from raysim.echoes.clutter.tracks import RigidTrajectory
+    from raysim.echoes.ground.surface import GroundSurface
+    from raysim.echoes.moving.cars import CarMover
+    from raysim.echoes.moving.scatterers import RigidTrajectory
 
     north, east = MOVER_START_NE
     ground = GroundSurface.from_scene(scene) if ground is None else ground

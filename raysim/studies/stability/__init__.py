@@ -20,14 +20,14 @@ Modules, one job each:
   :func:`raysim.measure.point.gate_metrics` (the definition every command
   uses) plus the study's ``angle_error_worst_deg``;
 * :mod:`~raysim.studies.stability.criteria` -- failure thresholds;
-* :mod:`~raysim.studies.stability.maps` -- the maps and their point builders;
+* :mod:`~raysim.studies.stability.grids` -- the maps and their point builders;
 * :mod:`~raysim.studies.stability.runner` -- points as (Dask) tasks, resumable;
 * :mod:`~raysim.studies.stability.outputs` -- NetCDF, JSON, figures, console table.
 """
 
 from raysim.io.files import atomic_write
 from raysim.studies.stability.criteria import Criteria, criteria_for, fails
-from raysim.studies.stability.maps import IMU_TERMS, MAPS, MapSpec
+from raysim.studies.stability.grids import IMU_TERMS, MAPS, MapSpec
 from raysim.studies.stability.metrics import (
     ANGLE_CHIRPS,
     MAP_CHAINS,

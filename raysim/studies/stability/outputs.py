@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from raysim.io.files import atomic_savefig, atomic_write
-from raysim.studies.stability.maps import tick_labels
+from raysim.studies.stability.grids import tick_labels
 from raysim.studies.stability.metrics import STABILITY_METRICS
 from raysim.vocabulary import metric_unit
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from raysim.io.files import atomic_write_json
 from raysim.studies.stability.criteria import criteria_for
-from raysim.studies.stability.maps import INT_AXES, MAPS, MapSpec
+from raysim.studies.stability.grids import INT_AXES, MAPS, MapSpec
 from raysim.studies.stability.metrics import MAP_CHAINS, STABILITY_METRICS, evaluate
 from raysim.studies.stability.outputs import plot_stability, read_netcdf, summarise, write_netcdf
 from raysim.vocabulary import metric_unit, parse_chains
@@ -104,7 +104,7 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
     Parameters
     ----------
     spec : MapSpec or str
-        Map or its name in :data:`~raysim.studies.stability.maps.MAPS`.
+        Map or its name in :data:`~raysim.studies.stability.grids.MAPS`.
     quick : bool
         Use the quick axis values and seeds.
     chains : sequence of str
@@ -254,7 +254,7 @@ def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
     quick : bool
         Small axes and fewer seeds (a few minutes on 2 cores).
     maps : sequence of str, optional
-        Subset of :data:`~raysim.studies.stability.maps.MAPS` (default all).
+        Subset of :data:`~raysim.studies.stability.grids.MAPS` (default all).
     progress : bool
         Progress bars on stderr.
     executor : {"auto", "dask", "serial"}

@@ -32,9 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raysim.echoes.clutter.ground import GroundSurface
-from raysim.echoes.clutter.sigma0 import ament_factor, fresnel_coefficient
-from raysim.echoes.clutter.specular import FIT_RADIUS, mirror
+from raysim.echoes.ground.sigma0 import ament_factor, fresnel_coefficient
+from raysim.echoes.ground.specular import FIT_RADIUS, mirror
+from raysim.echoes.ground.surface import GroundSurface
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
 __all__ = ["Tracks", "RigidTrajectory", "MovingObject", "ground_ghosts", "synthesize_tracks"]
@@ -156,7 +156,7 @@ def ground_ghosts(targets, ground: GroundSurface, config: RadarConfig, radar_w, 
     targets : sequence of SceneTarget
         ``position`` [m] and ``velocity`` [m/s] in W, ``rcs_dbsm``.
     ground : GroundSurface
-        The mean plane within :data:`raysim.echoes.clutter.specular.FIT_RADIUS`
+        The mean plane within :data:`raysim.echoes.ground.specular.FIT_RADIUS`
         under each target is its mirror.
     config : RadarConfig
     radar_w : array_like, shape ``[3]``
@@ -177,7 +177,7 @@ def ground_ghosts(targets, ground: GroundSurface, config: RadarConfig, radar_w, 
         Up to three ghosts per target (four with ``direct``); a ghost is left
         out when its bounce point is not on the ground.
     """
-    from raysim.echoes.clutter.field import radar_scale
+    from raysim.echoes.ground.field import radar_scale
 
     x0 = np.asarray(radar_w, dtype=float)
     bore = np.asarray(r_wb, dtype=float)[:, 2]
@@ -283,7 +283,7 @@ class MovingObject:
 
         ``r_wb`` (radar attitude) is unused: the element gain is applied at synthesis.
         """
-        from raysim.echoes.clutter.field import radar_scale
+        from raysim.echoes.ground.field import radar_scale
 
         r = np.linalg.norm(self.positions(np.array(time)) - np.asarray(radar_w, float), axis=-1)
         if self.phase is None:

@@ -2,7 +2,7 @@ r"""Rotating parts (a fan, a rotor): blades of point scatterers that spin about 
 
 Each blade is a line of point scatterers that turns rigidly about the spin axis
 ``n`` through the hub ``h(t)`` (fixed in W or riding on a
-:class:`raysim.echoes.clutter.tracks.RigidTrajectory`):
+:class:`raysim.echoes.moving.scatterers.RigidTrajectory`):
 
 .. math::
 
@@ -28,13 +28,13 @@ Sampling, as the radar has it (both physical, nothing is warned):
   :attr:`~raysim.radar.config.RadarConfig.max_velocity`) folds back into the
   spectrum, as it does in a real radar.
 * **Within a chirp.** As for every moving object
-  (:func:`raysim.echoes.clutter.tracks.synthesize_tracks`), the scatterers'
+  (:func:`raysim.echoes.moving.scatterers.synthesize_tracks`), the scatterers'
   positions are taken at each chirp's and channel's transmit instant and frozen
   during the chirp (stop-and-hop): the Doppler shift of the beat frequency is
   left out, an error of ``f_D T_c`` range bins (0.3 bin for 5 kHz and 60 us).
 
 Amplitudes follow the monostatic radar equation at the trace instant, as for
-:class:`raysim.echoes.clutter.tracks.MovingObject`; the two-way element gain is
+:class:`raysim.echoes.moving.scatterers.MovingObject`; the two-way element gain is
 applied at synthesis.
 """
 
@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raysim.echoes.clutter.tracks import RigidTrajectory, Tracks
+from raysim.echoes.moving.scatterers import RigidTrajectory, Tracks
 from raysim.radar.config import RCS_DBSM_RANGE, RadarConfig
 
 __all__ = ["Rotor", "RCS_PER", "SAMPLES_PER_WAVELENGTH"]
@@ -205,7 +205,7 @@ class Rotor:
         Tracks
             ``blades * k`` paths labelled ``"rotor"``.
         """
-        from raysim.echoes.clutter.field import radar_scale
+        from raysim.echoes.ground.field import radar_scale
 
         lam = config.wavelength
         n = self.radii(lam).size

@@ -1,6 +1,6 @@
 """Wall time of one full 1e5-path paper frame (256 x 400 x 600) by the fused kernel.
 
-    PYTHONPATH=$PWD python benchmarks/bench_kernel_frame.py [--threads N] [--decimate auto|1]
+    PYTHONPATH=$PWD python -m raysim.bench.kernel_frame [--threads N] [--decimate auto|1]
 
 Renders the whole frame with ``synthesize(..., method="kernel", eps=1e-5,
 decimate=...)`` on the usable CPUs (default) and prints wall and CPU seconds,
@@ -11,7 +11,7 @@ import argparse
 import os
 import time
 
-from raysim.studies.workloads import hover_paths, paper_setup
+from raysim.bench.workloads import hover_paths, paper_setup
 from raysim.synthesis.nufft import default_threads
 from raysim.synthesis.select import synthesize
 

@@ -2,7 +2,7 @@
 
 A report holds, for every available chain (``none``, ``paper``,
 ``paper:published``, ``exact``): the RA, RE, RD and AE maps
-(:data:`raysim.vocabulary.MAPS`, drawn by :func:`raysim.studies.figures.plot_map`
+(:data:`raysim.vocabulary.MAPS`, drawn by :func:`raysim.report.figures.plot_map`
 with the axes of :data:`raysim.vocabulary.FIGURE_AXES`), Doppler cuts of the
 reference target, the metric table of :func:`raysim.measure.point.measure`
 (names and units of :data:`raysim.vocabulary.METRICS`, with the values the
@@ -244,7 +244,7 @@ def zoom_limits(m, mark=(None, None), *, max_range: float | None = None,
     (xlim, ylim)
         Each a ``(low, high)`` pair in figure units (degrees for angles).
     """
-    from raysim.studies.figures import map_image, map_name
+    from raysim.report.figures import map_image, map_name
 
     x, y, db = map_image(m)
     xa, ya = FIGURE_AXES[map_name(m)]
@@ -271,7 +271,7 @@ def zoom_limits(m, mark=(None, None), *, max_range: float | None = None,
 
 
 def _map_figure(maps: dict, reference: Reference | None, max_range: float | None):
-    """One panel per chain of one kind of map, drawn by :func:`~raysim.studies.figures.plot_map`.
+    """One panel per chain of one kind of map, drawn by :func:`~raysim.report.figures.plot_map`.
 
     ``maps``: chain key -> :class:`~raysim.processing.maps.Map` (all of the same
     kind, see :data:`raysim.vocabulary.MAPS`); the truth is marked with a red
@@ -281,7 +281,7 @@ def _map_figure(maps: dict, reference: Reference | None, max_range: float | None
     """
     import matplotlib.pyplot as plt
 
-    from raysim.studies.figures import map_name, plot_map
+    from raysim.report.figures import map_name, plot_map
 
     chains = list(maps)
     fig, axes = plt.subplots(1, len(chains), figsize=(3.6 * len(chains) + 1.2, 3.6),

@@ -1,6 +1,6 @@
 """Clutter-field synthesis: the compact way against dense re-projection, same paths, same run.
 
-    PYTHONPATH=$PWD python benchmarks/bench_field_synthesis.py [--scene flat_reflectors]
+    PYTHONPATH=$PWD python -m raysim.bench.field_synthesis [--scene flat_reflectors]
 
 Traces a bundled scene with the scene report's QUICK settings and its persistent
 clutter field (10 scatterers per cell), then synthesises the hovering frame's
@@ -20,11 +20,11 @@ import time
 
 import numpy as np
 
-from raysim.echoes.clutter.field import FieldSettings
-from raysim.echoes.clutter.model import GroundClutter
+from raysim.echoes.ground.field import FieldSettings
 from raysim.echoes.rt.reproject import synthesize_paths
 from raysim.echoes.rt.scenes import load_scene
 from raysim.echoes.rt.trace import MonostaticTracer
+from raysim.echoes.scene_clutter import SceneClutter
 from raysim.platform.motion import stationary
 from raysim.studies.scene_report import QUICK, hover_trajectory
 from raysim.synthesis.nufft import default_threads
@@ -43,7 +43,7 @@ def main() -> None:
     s = QUICK.with_values(clutter="field")
     cfg, arr, lever = s.radar(), s.array(), np.asarray(s.lever_arm)
     t0 = float(cfg.chirp_times()[0])
-    model = GroundClutter(FieldSettings(scatterers_per_cell=s.clutter_per_cell,
+    model = SceneClutter(FieldSettings(scatterers_per_cell=s.clutter_per_cell,
                                         seed=s.trace_seed))
     scene = load_scene(a.scene, frequency=cfg.carrier_frequency)
     tracer = model.tracer(MonostaticTracer(max_depth=s.max_depth,

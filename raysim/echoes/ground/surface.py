@@ -2,7 +2,7 @@
 
 The clutter field is anchored to the ground: the up-facing triangles (normal
 within :data:`MAX_TILT` of the upward vertical ``-z_W``) of every mesh whose
-material has a backscatter model (:data:`raysim.echoes.clutter.sigma0.CLUTTER_MATERIALS`).
+material has a backscatter model (:data:`raysim.echoes.ground.sigma0.CLUTTER_MATERIALS`).
 Other meshes (cars, facades, poles) only occlude.
 """
 
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.echoes.clutter.sigma0 import CLUTTER_MATERIALS
+from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS
 from raysim.echoes.po.mesh import TriangleMesh
 
 __all__ = ["GroundSurface", "MAX_TILT", "scene_meshes", "target_meshes"]

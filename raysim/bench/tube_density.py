@@ -122,7 +122,7 @@ def scene_trace_costs(scenes=("flat_reflectors", "parking_lot", "rough_terrain")
     return out
 
 
-if __name__ == "__main__":      # python -m raysim.studies.tube_density
+if __name__ == "__main__":      # python -m raysim.bench.tube_density
     import json
     import os
 

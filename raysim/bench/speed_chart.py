@@ -166,7 +166,7 @@ def _tolerance_knob(method: str, eps_values, *, quick: bool, repeat: int, name: 
     paths (best of ``repeat`` interleaved runs), error on 1 chirp x 16 channels
     against the complex128 direct sum; times scaled to a whole paper frame.
     """
-    from raysim.studies.workloads import hover_paths, paper_setup, subset
+    from raysim.bench.workloads import hover_paths, paper_setup, subset
     from raysim.synthesis.select import synthesize
 
     cfg, arr, traj, lever = paper_setup()
@@ -211,7 +211,7 @@ def measure_kernel_eps(*, quick: bool) -> dict:
 
 def measure_decimation(*, quick: bool) -> dict:
     """Slow-time decimation off (reference) and auto, fused kernel at eps 1e-5."""
-    from raysim.studies.workloads import hover_paths, paper_setup, subset
+    from raysim.bench.workloads import hover_paths, paper_setup, subset
     from raysim.synthesis.decimate import plan_groups
     from raysim.synthesis.select import DECIMATION_EPS_SHARE, synthesize
 
@@ -245,10 +245,10 @@ def measure_decimation(*, quick: bool) -> dict:
 
 def measure_motion(*, quick: bool) -> dict:
     """Stop-and-hop against intra-chirp motion (one target, pitch 10 deg at 20 Hz)."""
+    from raysim.bench.workloads import paper_setup
     from raysim.echoes.oracle import simulate_point_targets
     from raysim.pipeline.sources import point_targets
     from raysim.scenario import scenario_from_case
-    from raysim.studies.workloads import paper_setup
 
     case = scenario_from_case("rotation_y")
     n_c = 8 if quick else 32
@@ -298,7 +298,7 @@ def plane_wave_delays(paths, chirp: int) -> np.ndarray:
 
 def measure_geometry(*, quick: bool) -> dict:
     """Plane-wave against exact spherical element delays (2,000 near ground paths)."""
-    from raysim.studies.workloads import paper_setup
+    from raysim.bench.workloads import paper_setup
     from raysim.synthesis.nufft import PathDelays, synthesize_nufft
 
     cfg, arr, traj, lever = paper_setup()
@@ -337,8 +337,8 @@ def measure_geometry(*, quick: bool) -> dict:
 
 def measure_chirp_block(*, quick: bool) -> dict:
     """Chirp block size of the streaming renderer (500 paths, 8 x 8 array, 256 chirps)."""
+    from raysim.bench.workloads import hover_paths, paper_setup
     from raysim.radar.arrays import upa
-    from raysim.studies.workloads import hover_paths, paper_setup
     from raysim.synthesis.select import synthesize
     from raysim.synthesis.streaming import render_stream
 
@@ -505,8 +505,8 @@ def measure_tube_density(*, quick: bool) -> dict:
     error: relative RCS error ``|sigma / sigma_closed - 1|`` (power). The
     engine's default is :data:`raysim.echoes.po.paths.TUBES_PER_WAVELENGTH`.
     """
+    from raysim.bench.tube_density import TUBE_DENSITIES, tube_density_points
     from raysim.echoes.po.paths import TUBES_PER_WAVELENGTH
-    from raysim.studies.tube_density import TUBE_DENSITIES, tube_density_points
 
     densities = (0.5, 1.0, 2.0, 4.0) if quick else TUBE_DENSITIES
     settings = [{"setting": f"{p['tubes_per_wavelength']:g}/lambda",

@@ -1,7 +1,7 @@
 """Real-time compensation benchmark: a TI-size TDM frame compensated and processed.
 
 :func:`bench_realtime` (key ``realtime_compensation`` of ``raysim bench`` and
-``realtime`` of ``benchmarks/bench_compensation.py``) times, in wall-clock
+``realtime`` of ``raysim/bench/compensation_speed.py``) times, in wall-clock
 seconds (``time.perf_counter``) with the CPU seconds of the process
 (``time.process_time``, all threads) next to them, the chain a radar would run
 on every frame:

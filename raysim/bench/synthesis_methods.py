@@ -1,13 +1,13 @@
 """pytest-benchmark micro-benchmarks of IF synthesis (not part of the test suite).
 
-Run: ``pytest benchmarks/bench_synthesis.py --benchmark-only`` (a few minutes).
+Run: ``pytest raysim/bench/synthesis_methods.py --benchmark-only`` (a few minutes).
 The whole-frame figures with extrapolation and memory are ``raysim bench``.
 """
 
 import numpy as np
 import pytest
 
-from raysim.studies.workloads import hover_paths, paper_setup, subset
+from raysim.bench.workloads import hover_paths, paper_setup, subset
 from raysim.synthesis.select import synthesize
 
 CFG, ARR, TRAJ, LEVER = paper_setup()

@@ -31,7 +31,7 @@
     A TI-size TDM frame (128 chirps x 12 channels x 256 samples, 61 x 61
     grid) compensated exactly and processed: frames per second against the
     frame rate, wall clock, threads, what is included
-    (:mod:`raysim.studies.bench_realtime`).
+    (:mod:`raysim.bench.realtime`).
 ``time_split``
     Where the time of one 1e5-path NUFFT frame goes (geometry, strengths,
     transforms, accumulation), and of one oracle frame.
@@ -59,12 +59,12 @@ from pathlib import Path
 
 import numpy as np
 
+from raysim.bench.workloads import hover_paths, paper_setup, subset
 from raysim.io import files
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
-from raysim.studies.workloads import hover_paths, paper_setup, subset
 from raysim.synthesis.nufft import PathDelays, default_threads
 
-SCHEMA = "raysim.studies.bench/1"
+SCHEMA = "raysim.bench.suite/1"
 #: Path counts of the synthesis table.
 PATH_COUNTS = (10, 1_000, 10_000, 100_000)
 #: NUFFT tolerances timed for every path count.
@@ -316,8 +316,8 @@ def _finufft_upsampfac(pd: PathDelays, cfg: RadarConfig, eps: float, rows: int) 
 _MEMORY_CHILD = """
 import json, time
 import numpy as np
-from raysim.studies.bench import peak_rss
-from raysim.studies.workloads import hover_paths, paper_setup
+from raysim.bench.suite import peak_rss
+from raysim.bench.workloads import hover_paths, paper_setup
 from raysim.synthesis.streaming import render_frames
 cfg, arr, traj, lever = paper_setup({chirps})
 pd = hover_paths({paths}, cfg, arr, traj, lever, seed=1)
@@ -404,7 +404,7 @@ def naive_synthesis(tau: np.ndarray, amp: np.ndarray, config: RadarConfig) -> np
 
 def _both_clocks(fn: Callable[[], object], repeat: int = 1) -> tuple[float, float]:
     """Best wall seconds and best CPU seconds (all threads of the process) of ``fn``."""
-    from raysim.studies.bench_realtime import best_clocks
+    from raysim.bench.realtime import best_clocks
 
     return best_clocks(fn, repeat)[:2]
 
@@ -506,7 +506,7 @@ def bench_processing(*, quick: bool) -> dict:
             "measures": ("CPU seconds; bare = range FFT + Doppler FFT of the cube only; "
                          "compensated = range FFT + paper_chain (static motion) on the gates; "
                          "not the same chain, grid, baseline or clock as "
-                         "benchmarks/bench_compensation.py (docs/speed.md)"),
+                         "raysim/bench/compensation_speed.py (docs/speed.md)"),
         })
     except Exception as exc:  # noqa: BLE001 - another package; record, do not fail the bench
         out["compensation"] = f"failed: {type(exc).__name__}: {exc}"
@@ -675,7 +675,7 @@ def run(*, quick: bool = False, memory: bool = True,
     result["processing"] = bench_processing(quick=quick)
     log("real-time compensation: TI-size frame, wall clock")
     try:
-        from raysim.studies.bench_realtime import bench_realtime
+        from raysim.bench.realtime import bench_realtime
 
         result["realtime_compensation"] = bench_realtime(quick=quick)
     except ImportError as exc:

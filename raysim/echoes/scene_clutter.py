@@ -1,17 +1,17 @@
 """Ground clutter and multipath of one scene, kept across the chirps and frames of a render.
 
-:class:`GroundClutter` is what :func:`raysim.echoes.rt.render.render_scene`
+:class:`SceneClutter` is what :func:`raysim.echoes.rt.render.render_scene`
 takes as ``clutter``: per trace it
 
 * switches Sionna's diffuse reflection off (the field replaces it) and keeps
   Sionna's target paths direct-only (the ghosts are added here, exactly),
 * removes Sionna's single-bounce specular paths that lie on the ground and adds
-  the rough-surface mirror (:mod:`raysim.echoes.clutter.specular`),
-* adds the persistent clutter field (:mod:`raysim.echoes.clutter.field`),
+  the rough-surface mirror (:mod:`raysim.echoes.ground.specular`),
+* adds the persistent clutter field (:mod:`raysim.echoes.ground.field`),
   building it at the first pose and again only when the radar has moved more
   than ``settings.reuse_distance`` from the pose it was built for,
 * returns the ghosts of the scene's point targets and the moving objects as
-  :class:`raysim.echoes.clutter.tracks.Tracks`.
+  :class:`raysim.echoes.moving.scatterers.Tracks`.
 """
 
 from __future__ import annotations
@@ -20,21 +20,21 @@ import dataclasses
 
 import numpy as np
 
-from raysim.echoes.clutter.field import ClutterField, FieldSettings
-from raysim.echoes.clutter.ground import GroundSurface
-from raysim.echoes.clutter.specular import rough_specular_path
-from raysim.echoes.clutter.tracks import MovingObject, Tracks, ground_ghosts
+from raysim.echoes.ground.field import ClutterField, FieldSettings
+from raysim.echoes.ground.specular import rough_specular_path
+from raysim.echoes.ground.surface import GroundSurface
+from raysim.echoes.moving.scatterers import MovingObject, Tracks, ground_ghosts
 from raysim.echoes.rt.trace import PathSet
 
-__all__ = ["GroundClutter", "CLUTTER_MODES", "ON_GROUND_TOL"]
+__all__ = ["SceneClutter", "CLUTTER_MODES", "ON_GROUND_TOL"]
 
-#: Values of ``render_scene(clutter=...)`` besides a GroundClutter.
+#: Values of ``render_scene(clutter=...)`` besides a SceneClutter.
 CLUTTER_MODES = ("field", "sionna", "none")
 #: Height tolerance for a Sionna specular vertex to count as on the ground [m].
 ON_GROUND_TOL = 0.02
 
 
-class GroundClutter:
+class SceneClutter:
     """Persistent clutter field, rough specular, ghosts and movers of a scene.
 
     Parameters
@@ -58,8 +58,8 @@ class GroundClutter:
         self.settings = FieldSettings() if settings is None else settings
         if not isinstance(self.settings, FieldSettings):
             raise ValueError(f"settings must be a FieldSettings, got {type(settings)}")
-        from raysim.echoes.clutter.movers import CarMover
-        from raysim.echoes.clutter.rotors import Rotor
+        from raysim.echoes.moving.cars import CarMover
+        from raysim.echoes.moving.rotors import Rotor
 
         for m in movers:
             if not isinstance(m, (MovingObject, CarMover, Rotor)):
@@ -128,7 +128,7 @@ class GroundClutter:
         """
         ground = self._ground_for(scene) if scene is not None else self.ground
         if ground is None:
-            raise ValueError("GroundClutter needs a scene or a ground surface")
+            raise ValueError("SceneClutter needs a scene or a ground surface")
         lever = np.asarray(lever_arm, dtype=float)
         radar_w = trajectory.point_world([time], lever)[0, 0]
         r_wb = trajectory.attitude([time]).as_matrix()[0]
@@ -152,7 +152,7 @@ class GroundClutter:
             tracks.append(ground_ghosts(targets, ground, config, radar_w, r_wb, time=time,
                                         polarisation=self.settings.polarisation,
                                         fov_half_angle=fov))
-        from raysim.echoes.clutter.movers import CarMover
+        from raysim.echoes.moving.cars import CarMover
 
         # a car is traced with the ground under it (its car-ground multipath)
         tracks.extend(m.tracks(config, radar_w, time=time, r_wb=r_wb, ground=ground)
@@ -180,14 +180,14 @@ class GroundClutter:
         return out
 
 
-def resolve_clutter(clutter) -> GroundClutter | None:
-    """A GroundClutter for ``render_scene(clutter=...)``; None keeps the tracer's own paths."""
-    if isinstance(clutter, GroundClutter):
+def resolve_clutter(clutter) -> SceneClutter | None:
+    """A SceneClutter for ``render_scene(clutter=...)``; None keeps the tracer's own paths."""
+    if isinstance(clutter, SceneClutter):
         return clutter
     if clutter == "field":
-        return GroundClutter()
+        return SceneClutter()
     if clutter in ("sionna", "none"):
         return None
-    raise ValueError(f"clutter must be one of {CLUTTER_MODES} or a GroundClutter, "
+    raise ValueError(f"clutter must be one of {CLUTTER_MODES} or a SceneClutter, "
                      f"got {clutter!r}")
 

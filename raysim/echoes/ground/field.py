@@ -21,7 +21,7 @@ Density
 Scatterers are a Poisson process of intensity
 ``rho(p) = n_cell * clip(P2(p) / P_full, min_pattern, 1) / A_cell(p)``, with
 ``P2`` the two-way element pattern relative to its peak
-(:func:`raysim.echoes.clutter.pattern.two_way_pattern`) and ``P_full`` =
+(:func:`raysim.echoes.ground.density.two_way_pattern`) and ``P_full`` =
 :data:`FULL_DENSITY_DB`: every cell seen within that many dB of the peak gets
 the full ``n_cell`` (Rayleigh cells need about ten scatterers whatever their
 gain), only weaker ones are thinned
@@ -42,9 +42,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from raysim.echoes.clutter.ground import GroundSurface
-from raysim.echoes.clutter.pattern import two_way_pattern
-from raysim.echoes.clutter.sigma0 import POLARISATIONS, sigma0
+from raysim.echoes.ground.density import two_way_pattern
+from raysim.echoes.ground.sigma0 import POLARISATIONS, sigma0
+from raysim.echoes.ground.surface import GroundSurface
 from raysim.echoes.rt.trace import DIFFUSE, PathSet
 from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig

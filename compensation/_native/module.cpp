@@ -1,4 +1,4 @@
-// Python binding of the real-time projection kernel: compensation._rt._ext.
+// Python binding of the real-time projection kernel: compensation._native._ext.
 //
 // project(ints, ptrs, dbls, isa): three addresses of contiguous NumPy arrays
 // (int64 sizes, uint64 array addresses, float64 scalars) laid out as

@@ -313,7 +313,7 @@ def calibrated_flight_table(folder: str | Path, seeds=range(4), *, frames: int =
     return rows
 
 
-if __name__ == "__main__":     # python -m raysim.studies.flight FOLDER [SEEDS] [FRAMES]
+if __name__ == "__main__":     # python -m raysim.pipeline.flight FOLDER [SEEDS] [FRAMES]
     import sys
 
     seeds_ = range(int(sys.argv[2]) if len(sys.argv) > 2 else 6)

@@ -1,7 +1,7 @@
 r"""Coherent specular return of a rough ground, independent of the triangulation.
 
 The monostatic mirror return comes from the mean ground plane below the radar
-(:meth:`raysim.echoes.clutter.ground.GroundSurface.mean_plane`, area-weighted
+(:meth:`raysim.echoes.ground.surface.GroundSurface.mean_plane`, area-weighted
 over :data:`FIT_RADIUS`: the sum of area-weighted facet normals of a surface
 patch depends only on its boundary, not on how it is cut into triangles). By
 the image method its received power is
@@ -24,8 +24,8 @@ import math
 
 import numpy as np
 
-from raysim.echoes.clutter.ground import GroundSurface
-from raysim.echoes.clutter.sigma0 import ament_factor, fresnel_coefficient
+from raysim.echoes.ground.sigma0 import ament_factor, fresnel_coefficient
+from raysim.echoes.ground.surface import GroundSurface
 from raysim.echoes.rt.trace import SPECULAR, PathSet
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
@@ -72,7 +72,7 @@ def rough_specular_path(ground: GroundSurface, config: RadarConfig, radar_w, r_w
         when there is no ground below, the foot lies off the ground, outside the
         field of view or beyond the range window.
     """
-    from raysim.echoes.clutter.field import radar_scale
+    from raysim.echoes.ground.field import radar_scale
 
     x0 = np.asarray(radar_w, dtype=float)
     empty = _paths(np.zeros((0, 3)), np.zeros(0), np.zeros(0, complex), x0, time)

@@ -12,10 +12,10 @@ import numpy as np
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
 
-__all__ = ["bench_reprojection"]
+__all__ = ["bench_scene_reprojection"]
 
 
-def bench_reprojection(scene: str = "rough_terrain", *, num_chirps: int = 16,
+def bench_scene_reprojection(scene: str = "rough_terrain", *, num_chirps: int = 16,
                        array_size: int = 8, samples_per_src: int = 100_000,
                        repeat: int = 3) -> dict:
     """Wall time of re-projection per chirp vs re-tracing per chirp (CPU).
@@ -95,4 +95,4 @@ def main_bench() -> None:  # pragma: no cover - ``python -m raysim.studies.scene
     from raysim.echoes.rt import backend
 
     backend.configure("cpu", threads=int(os.environ.get("RAYSIM_RT_THREADS", "2")))
-    print(json.dumps(bench_reprojection(), indent=1))
+    print(json.dumps(bench_scene_reprojection(), indent=1))

@@ -21,8 +21,8 @@ the planning and the slow-time interpolation as timed here (an estimate:
 
 Usage::
 
-    python benchmarks/bench_gpu_kernel.py --backend llvm --paths 2000 --chirps 1 --repeats 2
-    python benchmarks/bench_gpu_kernel.py --backend cuda --json gpu.json
+    python -m raysim.bench.gpu_kernel --backend llvm --paths 2000 --chirps 1 --repeats 2
+    python -m raysim.bench.gpu_kernel --backend cuda --json gpu.json
 """
 
 from __future__ import annotations
@@ -93,7 +93,7 @@ def main(argv=None) -> dict:
                          f"{args.chirps}, {args.repeats}, {args.threads}")
     skip = {s for s in args.skip.split(",") if s}
 
-    from raysim.studies.workloads import hover_paths, paper_setup, subset
+    from raysim.bench.workloads import hover_paths, paper_setup, subset
     from raysim.synthesis import drjit_kernel, kernel
     from raysim.synthesis.select import synthesize
 

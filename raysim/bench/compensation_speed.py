@@ -14,7 +14,7 @@ paper's 256 x 400 x 600 rotation-about-Y frame) and produce the same products:
 Prints one JSON object with the timings (wall clock, ``time.perf_counter``,
 best of ``--repeat`` interleaved runs; NumPy/SciPy/BLAS default threads, i.e.
 all CPUs of the process) and the ratio, plus (key ``realtime``, unless
-``--no-realtime``) :func:`raysim.studies.bench_realtime.bench_realtime`: a
+``--no-realtime``) :func:`raysim.bench.realtime.bench_realtime`: a
 TI-size TDM frame compensated and processed (range transform of the gated
 cells, strapdown, exact projection with the compiled real-time kernel, Doppler
 FFT and power), frames per second against its frame rate, wall and CPU seconds
@@ -27,7 +27,7 @@ gates) in CPU seconds against a bare chain of only the range and Doppler FFTs;
 here the exact chain (strapdown included, 61 x 61 beams, 3 gates) is timed in
 wall seconds against a bare chain that also forms the range-Doppler map and
 the angle-Doppler beams of the same gates. Both are in the JSON (``measures``).
-Run: ``python benchmarks/bench_compensation.py [--gates 3] [--grid-step-deg 2]``.
+Run: ``python -m raysim.bench.compensation_speed [--gates 3] [--grid-step-deg 2]``.
 """
 
 from __future__ import annotations
@@ -157,7 +157,7 @@ def main(argv=None) -> dict:
 
 
 def _realtime(args) -> dict:
-    from raysim.studies.bench_realtime import bench_realtime
+    from raysim.bench.realtime import bench_realtime
 
     return bench_realtime(quick=args.repeat < 5, repeat=args.repeat,
                           threads=args.realtime_threads)

@@ -1,15 +1,15 @@
 """Cars that drive through a scene: PO + SBR scattering centres of a car mesh on a trajectory.
 
 A :class:`CarMover` is a car mesh (:func:`raysim.echoes.po.car.car_parts`) on a
-:class:`raysim.echoes.clutter.tracks.RigidTrajectory`. At every trace it places
+:class:`raysim.echoes.moving.scatterers.RigidTrajectory`. At every trace it places
 the mesh at its pose, traces it by PO + SBR from the radar
 (:func:`raysim.echoes.po.paths.scattering_terms`), groups the terms into
 scattering centres (:func:`raysim.echoes.po.paths.cluster_terms`) and fixes them
-in the car's body frame as a :class:`raysim.echoes.clutter.tracks.MovingObject`:
+in the car's body frame as a :class:`raysim.echoes.moving.scatterers.MovingObject`:
 within a frame the centres ride on the car (Doppler and range walk of a rigid
 body); from trace to trace the aspect changes and they are traced again.
 
-Ground: given a :class:`raysim.echoes.clutter.ground.GroundSurface`, the car is
+Ground: given a :class:`raysim.echoes.ground.surface.GroundSurface`, the car is
 traced with its local ground apron (:func:`raysim.echoes.po.paths.ground_apron`,
 as the scene's static geometry targets are), so its car-ground multipath
 appears: car-ground-radar and ground-car-radar terms (between the car and its
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raysim.echoes.clutter.tracks import MovingObject, RigidTrajectory, Tracks
+from raysim.echoes.moving.scatterers import MovingObject, RigidTrajectory, Tracks
 from raysim.radar.config import RadarConfig
 
 __all__ = ["CarMover", "MESH_TO_BODY", "GHOST_LABEL", "GHOST_SHARE"]
@@ -145,7 +145,7 @@ class CarMover:
     def _trace(self, config: RadarConfig, radar_w, r_wb, time: float,
                ground) -> tuple[MovingObject, np.ndarray]:
         """:meth:`moving_object` and which centres are ghosts, ``bool [centre]``."""
-        from raysim.echoes.clutter.ground import GroundSurface
+        from raysim.echoes.ground.surface import GroundSurface
         from raysim.echoes.po.paths import cluster_terms, ground_apron, scattering_terms
 
         if ground is not None and not isinstance(ground, GroundSurface):
