@@ -404,20 +404,6 @@ def check_out_dir(spec: SweepSpec, out_dir: str | Path) -> None:
                          f"this sweep there")
 
 
-def _client(scheduler: str | None, n_workers: int, threads_per_worker: int, processes: bool):
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError as exc:
-        from raysim.pipeline.sources import FeatureUnavailable
-
-        raise FeatureUnavailable(f"sweeps need dask.distributed: {exc}") from None
-    if scheduler:
-        return Client(scheduler), None
-    cluster = LocalCluster(n_workers=n_workers, threads_per_worker=threads_per_worker,
-                           processes=processes, dashboard_address=":0")
-    return Client(cluster), cluster
-
-
 def run_sweep(spec: SweepSpec, out_dir: str | Path, *, scheduler: str | None = None,
               n_workers: int = 1, threads_per_worker: int = 2, processes: bool = False,
               limit: int | None = None, progress: bool = False,
@@ -465,11 +451,8 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, scheduler: str | None = N
         todo = todo[: max(0, int(limit))]
     if todo:
         from raysim.io.storage import atomic_write_text
+        from raysim.pipeline.tasks import dask_client, run_tasks
 
-        own = client is None
-        cluster = None
-        if own:
-            client, cluster = _client(scheduler, n_workers, threads_per_worker, processes)
         bar = None
         if progress:
             from tqdm import tqdm
@@ -477,35 +460,28 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, scheduler: str | None = N
             bar = tqdm(total=len(points), initial=len(result.skipped), unit="point",
                        desc="sweep")
         base_json = spec.base.model_dump_json()
-        try:
-            from distributed import as_completed
 
-            futures = [client.submit(_run_point, base_json, p.values, p.seed,
-                                     list(spec.chains), p.key, str(out_dir),
-                                     key=f"raysim-point-{p.key}-{time.time_ns()}", pure=False)
-                       for p in todo]
-            try:
-                for fut in as_completed(futures):
-                    rec = fut.result()
-                    if "error" in rec:
-                        result.failed[rec["key"]] = rec["error"]
-                    else:
-                        path = _point_path(out_dir, rec["key"])
-                        if not path.is_file():
-                            atomic_write_text(path, json.dumps(rec, indent=1))
-                        result.computed.append(rec["key"])
-                    if bar is not None:
-                        bar.update(1)
-            except BaseException:
-                client.cancel(futures)
-                raise
+        def done(key: str, rec: dict) -> None:
+            if "error" in rec:
+                result.failed[rec["key"]] = rec["error"]
+            else:
+                path = _point_path(out_dir, rec["key"])
+                if not path.is_file():
+                    atomic_write_text(path, json.dumps(rec, indent=1))
+                result.computed.append(rec["key"])
+            if bar is not None:
+                bar.update(1)
+
+        try:
+            with dask_client(client, scheduler=scheduler, n_workers=n_workers,
+                             threads_per_worker=threads_per_worker, processes=processes) as cl:
+                run_tasks(_run_point, [(f"point-{p.key}", (base_json, p.values, p.seed,
+                                                           list(spec.chains), p.key,
+                                                           str(out_dir)))
+                                       for p in todo], done, client=cl)
         finally:
             if bar is not None:
                 bar.close()
-            if own:
-                client.close()
-                if cluster is not None:
-                    cluster.close()
     result.dataset = gather_results(spec, out_dir, points)
     nc = out_dir / "sweep.nc"
     _export(result.dataset, nc)

@@ -10,11 +10,9 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import importlib.util
 import json
 import os
 import time
-import warnings
 from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -22,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from raysim.io.files import atomic_write_json
+from raysim.pipeline.tasks import dask_client, have_distributed, run_tasks
 from raysim.studies.stability.criteria import criteria_for
 from raysim.studies.stability.grids import INT_AXES, MAPS, MapSpec
 from raysim.studies.stability.metrics import MAP_CHAINS, STABILITY_METRICS, evaluate
@@ -71,29 +70,6 @@ def _load_record(path: Path) -> dict | None:
         return json.loads(path.read_text())
     except (OSError, ValueError):
         return None                             # missing or unreadable: compute again
-
-
-def _have_distributed() -> bool:
-    return importlib.util.find_spec("distributed") is not None
-
-
-@contextlib.contextmanager
-def _dask_client(client=None):
-    """The given ``distributed.Client``, or an in-process one (1 worker, 2 threads)."""
-    if client is not None:
-        yield client
-        return
-    from distributed import Client, LocalCluster
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)       # dashboard port already in use
-        cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                               dashboard_address=None)
-    try:
-        with Client(cluster) as cl:
-            yield cl
-    finally:
-        cluster.close()
 
 
 def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] = MAP_CHAINS,
@@ -170,23 +146,12 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
             bar.update(1)
 
     use_dask = client is not None or executor == "dask" or (
-        executor == "auto" and len(missing) > 1 and _have_distributed())
+        executor == "auto" and len(missing) > 1 and have_distributed())
+    tasks = [(key, (spec, kw, s, tuple(chains))) for _, s, kw, key in missing]
     try:
-        if missing and use_dask:
-            from distributed import as_completed
-
-            with _dask_client(client) as cl:
-                futures = {cl.submit(_evaluate_point, spec, kw, s, tuple(chains),
-                                     pure=False): key for _, s, kw, key in missing}
-                try:
-                    for fut in as_completed(futures):
-                        done(futures[fut], fut.result())
-                except BaseException:
-                    cl.cancel(list(futures))
-                    raise
-        else:
-            for _, s, kw, key in missing:
-                done(key, _evaluate_point(spec, kw, s, chains))
+        with (dask_client(client) if missing and use_dask
+              else contextlib.nullcontext(False)) as cl:
+            run_tasks(_evaluate_point, tasks, done, client=cl)
     finally:
         if bar is not None:
             bar.close()
@@ -275,8 +240,8 @@ def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
     out.mkdir(parents=True, exist_ok=True)
     with contextlib.ExitStack() as stack:
         client = None
-        if executor == "dask" or (executor == "auto" and _have_distributed()):
-            client = stack.enter_context(_dask_client())
+        if executor == "dask" or (executor == "auto" and have_distributed()):
+            client = stack.enter_context(dask_client())
         return _write_maps(out, names, quick, progress, client)
 
 
