@@ -474,8 +474,9 @@ def dpca_projection(rc, element_positions, motion: PlatformMotion, *, wavelength
     range_gates, focus, chirp_block, gate_block
         As :func:`compensation.exact.rigid_body_projection`.
     grid_shape : (int, int), optional
-        ``(nx, ny)`` of a UPA; a rectangular sub-aperture is then projected
-        with the gridded ``method`` (``"auto"``: non-uniform FFT).
+        ``(nx, ny)`` of a UPA (x major); without it the lattice is inferred
+        from the positions. A rectangular sub-aperture is projected with the
+        gridded ``method`` (``"auto"``: non-uniform FFT), others with ``"direct"``.
     method : {"auto", "nufft", "lattice", "direct"}
         Projection method of each sub-aperture; with ``channel_slot`` only
         ``"auto"`` or ``"direct"`` (a slot's channels are not a grid).
@@ -541,7 +542,7 @@ def dpca_projection(rc, element_positions, motion: PlatformMotion, *, wavelength
     common = dict(wavelength=wavelength, range_axis=range_axis, azimuth=azimuth,
                   elevation=elevation, range_gates=range_gates, focus=focus,
                   chirp_block=chirp_block, gate_block=gate_block)
-    gridded = slot is None and grid_shape is not None and plan.is_grid
+    gridded = slot is None and plan.is_grid
     out, part = None, None
     for offset, (chirps, wts) in sorted(groups.items()):
         chans = plan.channels(offset)
