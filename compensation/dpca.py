@@ -230,6 +230,18 @@ class DPCABeams(BeamCube):
 
     plan: DPCAPlan | None = None
 
+    def to_xarray(self):
+        """:meth:`BeamCube.to_xarray` with the plan's price in the attrs.
+
+        Extra attributes: ``dpca`` (:meth:`DPCAPlan.summary`),
+        ``dpca_sub_shape`` and ``dpca_gain_loss_db``.
+        """
+        out = super().to_xarray()
+        if self.plan is not None:
+            out.attrs.update(dpca=self.plan.summary(), dpca_sub_shape=list(self.plan.sub_shape),
+                             dpca_gain_loss_db=float(self.plan.gain_loss_db))
+        return out
+
 
 def _lattice(p: np.ndarray, grid_shape) -> tuple[np.ndarray, np.ndarray]:
     """Rows ``p0, a, b`` and the integer index ``[channel, 2]`` of every element."""
@@ -376,8 +388,11 @@ def dpca_plan(element_positions, motion: PlatformMotion, *, wavelength: float,
             f"spare aperture); use the exact chain, a shorter frame or a larger array")
     q = np.array(sorted(ref), dtype=int)
     if subaperture is not None:
-        want = tuple(int(v) for v in subaperture)
         have = np.ptp(q, axis=0) + 1
+        try:
+            want = tuple(int(v) for v in subaperture)
+        except (TypeError, ValueError):
+            want = ()
         if len(want) != 2 or min(want) < 1 or want[0] > have[0] or want[1] > have[1]:
             raise ValueError(f"subaperture must be (kx, ky) with 1 <= k <= {tuple(have)} (the "
                              f"largest sub-aperture this motion leaves), got {subaperture!r}")

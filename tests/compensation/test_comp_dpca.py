@@ -258,6 +258,10 @@ def test_displacement_beyond_spare_aperture_raises():
     with pytest.raises(ValueError, match="subaperture"):
         dpca_plan(p, _motion(disp[:2] / 4), wavelength=LAM, grid_shape=(8, 8),
                   subaperture=(8, 8))
+    for bad in ((8, 8), 5, (0, 3), ("a", 2)):
+        with pytest.raises(ValueError, match="subaperture"):
+            dpca_plan(p, _motion(disp[:2] / 4), wavelength=LAM, grid_shape=(8, 8),
+                      subaperture=bad)
 
 
 def test_small_subaperture_and_rotation_are_reported():
@@ -322,6 +326,8 @@ def test_zero_motion_is_beamforming_the_subaperture():
     full = dpca_projection(x, p, m, **kw)
     np.testing.assert_array_equal(full.data, rigid_body_projection(x, p, m, **kw).data)
     assert full.plan.sub_shape == (10, 10) and full.plan.gain_loss_db == 0.0
+    attrs = full.to_xarray().attrs
+    assert attrs["dpca_sub_shape"] == [10, 10] and attrs["dpca"].startswith("dpca: sub-aperture")
     taper = np.hanning(8)
     sub = dpca_projection(x, p, m, subaperture=(6, 4), **kw,
                           weights=lambda i: taper[i[:, 0]] * taper[i[:, 1]])
