@@ -14,6 +14,10 @@ Modules
 ``exact``
     :func:`rigid_body_projection`: all six degrees of freedom in one
     beamformer on a fixed global grid.
+``dpca``
+    :func:`dpca_projection`: displaced-phase-centre sub-apertures held fixed
+    in the world (horizontal motion undone for every scatterer in a beam),
+    with its price (:class:`DPCAPlan`, :func:`dpca_plan`).
 ``projection``
     :func:`beam_projection` (the engine) and its result :class:`BeamCube`.
 ``realtime``
@@ -46,6 +50,7 @@ azimuth, elevation`` for processed data (docs/conventions.md).
 
 from .calibration import CalibrationResult, Scatterer, self_calibrate
 from .clock_offset import ClockOffset, fit_time_shift
+from .dpca import DPCABeams, DPCAPlan, dpca_plan, dpca_projection
 from .ego_velocity import EgoVelocity, fit_ego_velocity
 from .exact import rigid_body_projection
 from .geometry import az_el, direction, grid_directions
@@ -67,11 +72,13 @@ from .strapdown import STANDARD_GRAVITY, PlatformMotion, integrate_imu, static_m
 __version__ = "0.1.0"
 
 __all__ = [
-    "BeamCube", "CalibrationResult", "ClockOffset", "CompensationWarning", "EgoVelocity",
+    "BeamCube", "CalibrationResult", "ClockOffset", "CompensationWarning", "DPCABeams",
+    "DPCAPlan", "EgoVelocity",
     "GyroBias", "PAPER_STEPS", "PlatformMotion", "RealtimeProjector", "STANDARD_GRAVITY",
     "Scatterer", "accumulate", "fit_ego_velocity", "fit_gyro_bias", "fit_time_shift",
     "integrate_record", "project_record", "self_calibrate",
-    "az_el", "beam_projection", "direction", "grid_directions", "integrate_imu", "paper_chain",
+    "az_el", "beam_projection", "direction", "dpca_plan", "dpca_projection", "grid_directions",
+    "integrate_imu", "paper_chain",
     "range_change", "rigid_body_projection", "slow_time_correction", "static_motion",
     "tilt_correction", "tilt_residual", "yaw_projection",
 ]
