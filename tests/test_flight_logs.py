@@ -210,7 +210,7 @@ def test_dataflash_file_is_read_with_pymavlink(tmp_path):
     back = read_imu_log(tmp_path / "i0.bin", instance=1)
     np.testing.assert_array_equal(back.time, np.rint(s.time * 1e6) * 1e-6)
     assert _within_float32(back.gyro, s.gyro)
-    with pytest.raises(ValueError, match=r"instance=0.*present: \[1\]"):
+    with pytest.raises(ValueError, match=r"instance=0.*present: \[.IMU\[1\] at 1000 Hz.\]"):
         read_imu_log(tmp_path / "i0.bin", instance=0)
 
 
