@@ -111,13 +111,11 @@ def _fifo(d: dict) -> tuple[np.ndarray, np.ndarray]:
     return time, vals
 
 
-def _candidates(log, topic, instance) -> tuple[list, dict]:
+def _candidates(log) -> tuple[list, dict]:
     """Complete IMU sources of a parsed log: ``(topic, instance, rate, (t, gyro, accel))``."""
     by = {(d.name, d.multi_id): d.data for d in log.data_list}
     out, unusable = [], {}
     for (name, k), d in sorted(by.items()):
-        if topic is not None and name != topic or instance is not None and k != instance:
-            continue
         try:
             if name == "sensor_combined":
                 time = np.asarray(d["timestamp"], dtype=np.uint64).astype(float) * 1e-6
@@ -206,7 +204,7 @@ def read_px4_ulog(path: str | os.PathLike, instance: int | None = None,
         log = ULog(str(path), list(ULOG_IMU_TOPICS) + [_FIFO_ACCEL])
     except Exception as exc:  # pyulog raises bare Exceptions on corrupt files
         raise ValueError(f"{str(path)!r}: cannot parse ULog file: {exc}") from None
-    found, unusable = _candidates(log, topic, instance)
+    found, unusable = _candidates(log)
     if not found and not unusable and topic is None and instance is None:
         topics = sorted({f.name for f in log.message_formats.values()})
         raise ValueError(f"{str(path)!r}: no IMU data in the log; expected one of the PX4 "
