@@ -73,6 +73,23 @@ def test_px4_small_log_sensor_combined_rate_units_frame():
     assert abs(p_acc - np.mean(pitch)) < LEVEL_TOL_DEG
 
 
+def test_px4_logger_gap_is_judged_over_the_capture_window():
+    """The 161 ms logger gap: 3.5 s away it does not refuse the log; across it, it needs
+    ``max_gap`` and is then filled with a warning."""
+    from compensation.ingestion import judge_imu_window
+
+    s = read_imu_log(REAL / "ulog" / "sample_log_small.ulg")
+    k = int(np.argmax(np.diff(s.time)))
+    end = s.time[k + 1]
+    keep, fill, notes = judge_imu_window(s.time, (end + 3.5, end + 3.6))
+    assert fill.size == 0 and notes[0].startswith("imu window") and "0.1613 s" in notes[0]
+    across = (s.time[k] + 0.05, s.time[k] + 0.4)
+    with pytest.raises(ValueError, match=r"gap of 0.1613 s.*--max-gap"):
+        judge_imu_window(s.time, across)
+    keep, fill, notes = judge_imu_window(s.time, across, max_gap=0.2)
+    assert fill.size == 32 and notes[-1].startswith("imu gaps filled")
+
+
 def test_px4_small_log_lists_every_instance_and_reads_the_one_asked():
     path = REAL / "ulog" / "sample_log_small.ulg"
     s = read_imu_log(path)
