@@ -375,3 +375,51 @@ def test_compensate_judges_gaps_over_the_capture_and_says_so(tmp_path, capsys):
     with pytest.raises(ValueError, match="--imu-topic / --imu-instance"):
         compensate(cube, np.column_stack([s.time, s.gyro, s.accel]), out=tmp_path / "f.npz",
                    imu_topic="x", **opts)
+
+
+def _ulog_with_fifo(path, s: ImuSamples, combined_every: int = 4) -> None:
+    """A ULog with ``sensor_gyro_fifo`` / ``sensor_accel_fifo`` (8 samples a message, int16
+    with a scale) and a decimated ``sensor_combined``, per the ULog file format."""
+    from raysim.io.flight_logs.ulog import _FORMAT, _MAGIC, _RECORD, _message
+
+    fifo = ("{}:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;"
+            "float scale;uint8_t samples;int16_t[32] x;int16_t[32] y;int16_t[32] z;")
+    rec = struct.Struct("<QQIffB32h32h32h")
+    us = np.rint(s.time * 1e6).astype(np.int64)
+    body = bytearray(_MAGIC + b"\x01" + struct.pack("<Q", int(us[0])))
+    body += _message(b"B", bytes(40))
+    body += _message(b"F", _FORMAT.encode())
+    body += _message(b"F", fifo.format("sensor_gyro_fifo").encode())
+    body += _message(b"F", fifo.format("sensor_accel_fifo").encode())
+    for mid, name in enumerate(("sensor_combined", "sensor_gyro_fifo", "sensor_accel_fifo")):
+        body += _message(b"A", struct.pack("<BH", 0, mid) + name.encode())
+    dt = float(us[1] - us[0])
+    scales = {1: 1e-4, 2: 1e-3}                       # rad/s and m/s^2 per count
+    for a in range(0, us.size - 7, 8):
+        for mid, v in ((1, s.gyro), (2, s.accel)):
+            q = np.rint(v[a:a + 8] / scales[mid]).astype(int)
+            pad = np.zeros((32, 3), int)
+            pad[:8] = q
+            body += _message(b"D", struct.pack("<H", mid) + rec.pack(
+                int(us[a + 7]), int(us[a + 7]), 1, dt, scales[mid], 8, *pad[:, 0], *pad[:, 1],
+                *pad[:, 2]))
+        for k in range(a, a + 8):
+            if k % combined_every == 0:
+                body += _message(b"D", struct.pack("<H", 0) + _RECORD.pack(
+                    int(us[k]), *map(float, s.gyro[k]), int(dt * combined_every), 0,
+                    *map(float, s.accel[k]), int(dt * combined_every), 0, 0, 0, 0))
+    path.write_bytes(bytes(body))
+
+
+def test_ulog_fifo_topics_are_preferred_over_sensor_combined(tmp_path):
+    s = _motion()
+    _ulog_with_fifo(tmp_path / "f.ulg", s)
+    back = read_imu_log(tmp_path / "f.ulg")
+    assert "sensor_gyro_fifo instance 0, 1000 Hz" in back.source
+    assert "also present: sensor_combined[0] 250 Hz" in back.source
+    n = back.time.size
+    np.testing.assert_allclose(back.time, np.rint(s.time[:n] * 1e6) * 1e-6, atol=1e-9)
+    assert np.max(np.abs(back.gyro - s.gyro[:n])) <= 0.5e-4 + 1e-12      # half a count
+    assert np.max(np.abs(back.accel - s.accel[:n])) <= 0.5e-3 + 1e-12
+    low = read_imu_log(tmp_path / "f.ulg", topic="sensor_combined")
+    assert low.rate == pytest.approx(250.0) and "sensor_combined instance 0" in low.source

@@ -7,14 +7,17 @@ configuration (``--radar-config``: an mmWave SDK ``.cfg`` or an mmWave Studio
 ``--frames``) or an ``.npz`` cube (keys in :mod:`raysim.pipeline.compensate`).
 The IMU log (``--imu FILE`` or a second positional argument) is any format of
 :func:`raysim.io.flight_logs.read_imu_log`, or left out for the IMU log of the
-frame store. Output (``--out``): a labelled Zarr store, or for one frame an
+frame store; ``--imu-topic`` / ``--imu-instance`` choose the source inside it
+and ``--max-gap`` the largest gap filled inside the window used. ``--board`` /
+``--antenna-positions`` give a capture's antennas where the configuration does
+not say the board. Output (``--out``): a labelled Zarr store, or for one frame an
 ``.npz`` (:mod:`raysim.io.compensate_io`).
 
 This module parses the options, calls the compensate stage
 (:func:`raysim.pipeline.compensate.compensate`: reading, motion estimate or
 self-calibration, the chain of every frame, writing) and prints its warnings
-on stderr as ``warning: <chain>: <text>``, the self-calibration's estimates
-and the output written.
+on stderr as ``warning: <chain>: <text>``, the IMU source read, the
+self-calibration's estimates and the output written.
 """
 
 from __future__ import annotations

@@ -45,7 +45,16 @@ IMU log (``imu``): a file of any format of
 ArduPilot DataFlash ``.bin``, ROS 2 bag; FLU turned into FRD), or a table
 ``[sample, 7]`` (time [s, IMU clock], angular rate [rad/s], specific force
 [m/s^2], body frame FRD). ``time_offset`` is IMU clock minus radar clock. It
-may be left out when the frame store holds an IMU log.
+may be left out when the frame store holds an IMU log. The source inside a log
+(``imu_topic``, ``imu_instance``; default the complete one with the highest
+rate) is reported as :attr:`CompensateResult.imu_source` and the store's
+``imu_source`` attribute. The log is judged over the window it is used for
+(the selected slots on the IMU clock plus
+:data:`compensation.ingestion.WINDOW_MARGIN`): gaps outside it are not judged,
+gaps inside it up to ``max_gap`` are filled by interpolation with a warning,
+a log that does not cover the window is refused as such
+(:func:`compensation.ingestion.judge_imu_window`). A capture's antennas come
+from ``board`` or ``antenna_positions`` (:mod:`raysim.io.ti_boards`).
 
 Output (``out``): a labelled Zarr store
 (:func:`raysim.io.compensate_io.write_compensated_store`) with ``beams
