@@ -151,9 +151,8 @@ def _candidates(log) -> tuple[list, dict]:
                 accel = np.column_stack([np.interp(time, t_acc, acc[:, i]) for i in range(3)])
             else:
                 continue
-            time, gyro, accel = _increasing(np.asarray(time, dtype=float), gyro, accel)
-            if time.size < 2:
-                raise ValueError(f"{time.size} sample(s)")
+            time = np.asarray(time, dtype=float)
+            check_increasing(time, f"{name}[{k}]")     # FIFO repeats are dropped in _fifo
             out.append((name, k, median_rate(time), (time, gyro, accel)))
         except (KeyError, ValueError) as exc:
             unusable[f"{name}[{k}]"] = str(exc)
