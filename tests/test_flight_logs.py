@@ -423,3 +423,32 @@ def test_ulog_fifo_topics_are_preferred_over_sensor_combined(tmp_path):
     assert np.max(np.abs(back.accel - s.accel[:n])) <= 0.5e-3 + 1e-12
     low = read_imu_log(tmp_path / "f.ulg", topic="sensor_combined")
     assert low.rate == pytest.approx(250.0) and "sensor_combined instance 0" in low.source
+
+
+def test_dataflash_raw_gyr_acc_preferred_over_filtered_imu(tmp_path):
+    """``GYR``/``ACC`` at the sensor rate beat ``IMU`` at the loop rate; ``SampleUS`` is the
+    sample time."""
+    pytest.importorskip("pymavlink")
+    s = _motion()
+    head, rec = b"\xa3\x95", struct.Struct("<QBQfff")
+
+    def fmt(kind, name, cols):
+        return head + bytes([0x80]) + struct.pack("<BB4s16s64s", kind, 3 + rec.size,
+                                                  name.encode(), b"QBQfff", cols.encode())
+
+    body = bytearray(fmt(0x90, "GYR", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ")
+                     + fmt(0x91, "ACC", "TimeUS,I,SampleUS,AccX,AccY,AccZ"))
+    us = np.rint(s.time * 1e6).astype(np.int64) + 1000
+    for k in range(us.size):
+        body += head + bytes([0x90]) + rec.pack(int(us[k]) + 300, 0, int(us[k]),
+                                                *map(float, s.gyro[k]))
+        body += head + bytes([0x91]) + rec.pack(int(us[k]) + 300, 0, int(us[k]),
+                                                *map(float, s.accel[k]))
+    path = tmp_path / "raw.bin"
+    path.write_bytes(bytes(body))
+    back = read_imu_log(path)
+    assert "GYR instance 0, 1000 Hz, SampleUS" in back.source
+    np.testing.assert_allclose(back.time, us * 1e-6, atol=1e-12)
+    assert _within_float32(back.gyro, s.gyro) and _within_float32(back.accel, s.accel)
+    with pytest.raises(ValueError, match=r"topic='IMU'.*GYR\[0\] at 1000 Hz"):
+        read_imu_log(path, topic="IMU")
