@@ -16,6 +16,15 @@ accepted with a warning (``warnings.warn`` with
     Interval spread (median absolute deviation scaled to a standard
     deviation, blind to single gaps) above :data:`JITTER_WARN_FRACTION` of
     the median.
+``"imu window"``
+    :func:`judge_imu_window`: gaps of the log outside the window the record
+    is used over (the chirps on the IMU clock, plus a margin) are not judged:
+    the log is cut before them.
+``"imu gaps filled"``
+    :func:`judge_imu_window`: gaps inside that window above
+    :data:`GAP_LIMIT_FACTOR` times the median interval, up to ``max_gap``
+    (default :data:`DEFAULT_MAX_GAP`), are filled by linear interpolation at
+    the median interval; what the platform did inside them is not measured.
 ``"imu rate"``
     The sample rate is below :data:`VIBRATION_RATE_FACTOR` times the upper
     edge of the vibration band (stated, or found in the gyro spectrum): the
@@ -35,6 +44,13 @@ from .guards import GAP_FACTOR, CompensationWarning
 #: Largest default IMU interval, as a multiple of the median interval: two dropped
 #: samples in a row (3 intervals) plus timestamp jitter.
 GAP_LIMIT_FACTOR = 3.5
+#: Largest gap [s] inside the window used that :func:`judge_imu_window` fills by
+#: interpolation when no ``max_gap`` is given: a 50 ms logger dropout plus one
+#: interval of a 100 Hz log. PX4 loggers drop 65-161 ms at times: give ``max_gap``.
+DEFAULT_MAX_GAP = 0.06
+#: Margin [s] of the window used on each side of the chirps (IMU clock): the
+#: integration's spline support and the clock-offset search.
+WINDOW_MARGIN = 0.5
 #: Interval spread (standard deviation over the median) above which jitter is reported.
 JITTER_WARN_FRACTION = 0.1
 #: Smallest IMU rate over the upper edge of the vibration band (Nyquist 2, plus a
@@ -209,3 +225,133 @@ def grade_hover_window(grade: str, chirp_span: tuple[float, float],
     lo = 0.5 * (chirp_span[0] + chirp_span[1]) - 0.5 * length
     lo = min(max(lo, imu_span[0]), imu_span[1] - length)
     return (lo, lo + length)
+
+
+def judge_imu_window(t: np.ndarray, window: tuple[float, float], *,
+                     max_gap: float | None = None, margin: float = WINDOW_MARGIN,
+                     what: str = "the capture") -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Judge the gaps of an IMU log over the window it is used for, and plan their filling.
+
+    A flight-controller log is judged where it is used: a logger dropout
+    seconds away from the capture does not refuse the log (the record is cut
+    before it); a gap inside the window up to ``max_gap`` is filled by linear
+    interpolation at the median interval, with a warning; a larger gap there
+    raises.
+
+    Parameters
+    ----------
+    t : ndarray, shape ``[sample]``
+        Strictly increasing IMU time stamps, IMU clock [s].
+    window : (float, float)
+        First and last time the record is needed at, IMU clock [s] (the
+        chirps plus the clock offset).
+    max_gap : float, optional
+        Largest interval [s] inside the window that is filled; default
+        :data:`DEFAULT_MAX_GAP` (or :data:`GAP_LIMIT_FACTOR` x the median
+        interval when that is larger).
+    margin : float
+        Extent [s] of the window used beyond ``window`` on each side.
+    what : str
+        What the window is, for messages.
+
+    Returns
+    -------
+    keep : ndarray, shape ``[sample_kept]``
+        Indices of ``t`` kept (one contiguous run).
+    fill_time : ndarray, shape ``[sample_new]``
+        Times [s] to insert, inside the gaps filled (empty when none).
+    warnings : tuple of str
+        ``"imu window: ..."`` (record cut at far gaps) and ``"imu gaps filled:
+        ..."`` entries.
+
+    Raises
+    ------
+    ValueError
+        The log does not cover the window (said as such, with both spans), or
+        a gap inside the window is larger than ``max_gap``.
+    """
+    t = np.asarray(t, dtype=float)
+    lo, hi = float(window[0]), float(window[1])
+    if not (np.isfinite(lo) and np.isfinite(hi)) or hi < lo:
+        raise ValueError(f"window must be an increasing pair of finite times [s], got {window!r}")
+    if max_gap is not None and not (np.isfinite(max_gap) and max_gap > 0):
+        raise ValueError(f"max_gap must be a finite positive number of seconds, got {max_gap!r}")
+    if t.size < 2:
+        raise ValueError(f"the IMU log holds {t.size} sample(s); at least 2 are needed")
+    if t[0] > lo or t[-1] < hi:
+        raise ValueError(
+            f"the IMU log does not cover {what}: the log spans {t[0]:.6f} .. {t[-1]:.6f} s on "
+            f"its clock, {what} needs {lo:.6f} .. {hi:.6f} s (radar times plus the time "
+            f"offset); check the time offset, the capture start and the log's time base "
+            f"(time since boot or Unix epoch)")
+    d = np.diff(t)
+    med = float(np.median(d))
+    big = np.flatnonzero(d > GAP_LIMIT_FACTOR * med)
+    use_lo, use_hi = lo - margin, hi + margin
+    first, last = 0, t.size - 1
+    cut = []
+    for k in big:
+        if t[k + 1] <= use_lo:
+            first = max(first, int(k) + 1)
+            cut.append(int(k))
+        elif t[k] >= use_hi:
+            last = min(last, int(k))
+            cut.append(int(k))
+    out = []
+    if cut:
+        worst = max(cut, key=lambda k: d[k])
+        out.append(f"imu window: the log is used over {t[first]:.4f} .. {t[last]:.4f} s (IMU "
+                   f"clock) around {what}; {len(cut)} gap(s) outside it are not judged (the "
+                   f"largest {d[worst]:.4g} s at {t[worst]:.6g} s)")
+    inside = [int(k) for k in big if first <= k < last]
+    limit = (max(DEFAULT_MAX_GAP, GAP_LIMIT_FACTOR * med) if max_gap is None
+             else float(max_gap))
+    fills = []
+    if inside:
+        k = max(inside, key=lambda j: d[j])
+        if d[k] > limit:
+            raise ValueError(
+                f"the IMU log has a gap of {d[k]:.4g} s at {t[k]:.6g} s (IMU clock) inside the "
+                f"window used for {what} ({use_lo:.6g} .. {use_hi:.6g} s; median interval "
+                f"{med:.4g} s); largest gap filled by interpolation: {limit:.4g} s. Raise "
+                f"max_gap (--max-gap SECONDS) to interpolate across it, or select frames away "
+                f"from it")
+        for j in inside:
+            n = int(np.ceil(d[j] / med - 1e-9))
+            fills.append(t[j] + d[j] * np.arange(1, n) / n)
+        out.append(f"imu gaps filled: {len(inside)} gap(s) inside the window used for {what} "
+                   f"filled by linear interpolation at the median interval {med:.4g} s (the "
+                   f"largest {d[k]:.4g} s at {t[k]:.6g} s, IMU clock); the motion inside them "
+                   f"is not measured (vibration and manoeuvres there are lost)")
+    keep = np.arange(first, last + 1)
+    fill = np.concatenate(fills) if fills else np.zeros(0)
+    return keep, fill, tuple(out)
+
+
+def fill_imu_gaps(t: np.ndarray, values: np.ndarray, keep: np.ndarray,
+                  fill_time: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Apply the plan of :func:`judge_imu_window` to a record.
+
+    Parameters
+    ----------
+    t : ndarray, shape ``[sample]``
+        Time stamps [s].
+    values : ndarray, shape ``[sample, n]``
+        Samples (gyro and accel side by side, any units).
+    keep, fill_time : ndarray
+        From :func:`judge_imu_window`.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        ``time [sample_out]`` and ``values [sample_out, n]``: the kept samples
+        with the interpolated ones inserted, in time order.
+    """
+    t = np.asarray(t, dtype=float)[keep]
+    v = np.asarray(values, dtype=float)[keep]
+    if fill_time.size == 0:
+        return t, v
+    new = np.column_stack([np.interp(fill_time, t, v[:, i]) for i in range(v.shape[1])])
+    tt = np.concatenate([t, fill_time])
+    order = np.argsort(tt, kind="stable")
+    return tt[order], np.concatenate([v, new])[order]

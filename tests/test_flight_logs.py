@@ -210,7 +210,7 @@ def test_dataflash_file_is_read_with_pymavlink(tmp_path):
     back = read_imu_log(tmp_path / "i0.bin", instance=1)
     np.testing.assert_array_equal(back.time, np.rint(s.time * 1e6) * 1e-6)
     assert _within_float32(back.gyro, s.gyro)
-    with pytest.raises(ValueError, match=r"instance=0.*present: \[1\]"):
+    with pytest.raises(ValueError, match=r"instance=0.*present: \[.IMU\[1\] at 1000 Hz.\]"):
         read_imu_log(tmp_path / "i0.bin", instance=0)
 
 
@@ -244,3 +244,211 @@ def test_missing_log_topic_and_stamps_are_named(tmp_path):
     too_fine = ImuSamples(np.array([1.0, 1.0 + 0.2e-6]), s.gyro[:2], s.accel[:2])
     with pytest.raises(ValueError, match=r"rounded to 1 us.*strictly increasing"):
         write_px4_ulog(tmp_path / "fine.ulg", too_fine)
+
+
+# --------------------------------------------------------------------------- real-log behaviour
+
+def test_time_base_tells_epoch_from_boot(tmp_path):
+    from raysim.io.flight_logs import time_base
+
+    assert time_base(np.array([12.5, 12.6])) == "time since boot"
+    assert time_base(np.array([1.7e9, 1.7e9 + 0.004])) == "unix epoch"
+    s = _motion()
+    epoch = ImuSamples(s.time + 1_700_000_000.0, s.gyro, s.accel)
+    back = read_imu_log(write_px4_ulog(tmp_path / "e.ulg", epoch))
+    assert "unix epoch" in back.source and back.time[0] == pytest.approx(1.7e9, abs=1e-3)
+    assert "time since boot" in read_imu_log(write_px4_ulog(tmp_path / "b.ulg", s)).source
+
+
+def test_standalone_mcap_is_read_and_lone_db3_refused(tmp_path):
+    import shutil
+
+    s = _motion()
+    bag = write_ros2_imu(tmp_path / "bag", s, storage="mcap")
+    alone = tmp_path / "alone" / "flight.mcap"
+    alone.parent.mkdir()
+    shutil.copy(next(bag.glob("*.mcap")), alone)
+    back = read_imu_log(alone)
+    assert np.allclose(back.time, s.time, atol=NANOSECOND_ROUNDING_S + TIME_FLOAT64_S)
+    assert np.allclose(back.gyro, s.gyro) and "1000 Hz" in back.source
+    db = write_ros2_imu(tmp_path / "bag_db3", s, storage="sqlite3")
+    lone = tmp_path / "lone" / "flight.db3"
+    lone.parent.mkdir()
+    shutil.copy(next(db.glob("*.db3")), lone)
+    with pytest.raises(ValueError, match="needs its bag folder's metadata.yaml"):
+        read_imu_log(lone)
+    with pytest.raises(ValueError, match="topics, not instances"):
+        read_imu_log(bag, instance=0)
+
+
+def test_ulog_source_choice_and_instances(tmp_path):
+    s = _motion()
+    path = write_px4_ulog(tmp_path / "s.ulg", s)
+    back = read_imu_log(path, topic="sensor_combined", instance=0)
+    assert "sensor_combined instance 0, 1000 Hz" in back.source and back.rate == pytest.approx(
+        1000.0)
+    with pytest.raises(ValueError, match=r"topic='vehicle_imu'.*sensor_combined\[0\] at 1000"):
+        read_imu_log(path, topic="vehicle_imu")
+    with pytest.raises(ValueError, match=r"topic='imu'.*expected one of"):
+        read_imu_log(path, topic="imu")
+    with pytest.raises(ValueError, match="no reader options"):
+        read_imu_log(write_imu_csv(tmp_path / "s.csv", s), topic="x")
+
+
+def test_window_judgement_cuts_far_gaps_fills_short_ones_and_refuses_long_ones():
+    from compensation.ingestion import fill_imu_gaps, judge_imu_window
+
+    t = np.arange(0.0, 10.0, 0.004)                   # 250 Hz
+    far = (t > 2.0) & (t < 2.5)                       # 0.5 s gap, 3.5 s before the window
+    short = (t > 6.50) & (t < 6.54)                   # 44 ms gap inside the window
+    keep_t = t[~far & ~short]
+    keep, fill, notes = judge_imu_window(keep_t, (6.0, 6.6))
+    assert keep_t[keep[0]] >= 2.5                     # cut after the far gap
+    assert [n.split(":")[0] for n in notes] == ["imu window", "imu gaps filled"]
+    assert "0.5 s at 2 s" in notes[0] and "0.04 s at 6.5 s" in notes[1]
+    tt, v = fill_imu_gaps(keep_t, np.column_stack([keep_t, 2 * keep_t]), keep, fill)
+    assert np.max(np.diff(tt)) < 0.0045 and np.allclose(v[:, 1], 2 * tt)
+    long = keep_t[(keep_t < 6.3) | (keep_t > 6.45)]    # 150 ms gap inside
+    with pytest.raises(ValueError, match=r"gap of 0.15.*inside the window.*--max-gap"):
+        judge_imu_window(long, (6.0, 6.6))
+    keep, fill, notes = judge_imu_window(long, (6.0, 6.6), max_gap=0.2)
+    assert fill.size == 38 + 9 and notes[-1].startswith("imu gaps filled: 2 gap(s)")
+    with pytest.raises(ValueError, match=r"does not cover the capture: the log spans 0\.0+ \.\. "
+                                         r"9\.99"):
+        judge_imu_window(t, (9.9, 10.5))
+    with pytest.raises(ValueError, match="max_gap must be a finite positive"):
+        judge_imu_window(t, (1.0, 2.0), max_gap=-1.0)
+
+
+def _cube_and_imu(tmp_path):
+    """A 4 x 4 array cube (.npz) on a pitch sinusoid and its ideal 250 Hz IMU over -5..1 s."""
+    from raysim.echoes.oracle import PointTarget, simulate_point_targets
+    from raysim.radar.arrays import upa
+    from raysim.radar.config import RadarConfig
+
+    cfg = RadarConfig(num_chirps=32, sample_rate=2.5e6)
+    arr = upa(4, 4, wavelength=cfg.wavelength)
+    traj = sinusoid("pitch", np.deg2rad(3), 10.0)
+    fr = simulate_point_targets(cfg, arr, [PointTarget.at(12.0, 0.2, 0.0)], traj)
+    np.savez(tmp_path / "c.npz", data=fr.data, chirp_times=fr.chirp_times,
+             element_positions=arr.virtual_positions, carrier_frequency=cfg.carrier_frequency,
+             bandwidth=cfg.bandwidth, chirp_duration=cfg.chirp_duration,
+             sample_rate=cfg.sample_rate, grid_shape=np.array(arr.grid_shape))
+    return tmp_path / "c.npz", simulate_imu(traj, "ideal", rate=250.0, start=-5.0, end=1.0)
+
+
+def _drop(s, lo, hi):
+    keep = (s.time < lo) | (s.time > hi)
+    return ImuSamples(s.time[keep], s.gyro[keep], s.accel[keep])
+
+
+def test_compensate_judges_gaps_over_the_capture_and_says_so(tmp_path, capsys):
+    from raysim.cli import main
+    from raysim.pipeline.compensate import compensate
+
+    cube, s = _cube_and_imu(tmp_path)
+    opts = dict(range_m=(11, 13), azimuth_deg=[11.0], elevation_deg=[0.0])
+    far = write_imu_csv(tmp_path / "far.csv", _drop(s, -3.9, -3.5))   # 3.5 s before
+    with pytest.warns(UserWarning, match="imu window"):
+        res = compensate(cube, far, out=tmp_path / "a.npz", **opts)
+    assert any(w.startswith("imu window") for w in res.warnings)
+    assert res.imu_source == str(far)
+    near = write_imu_csv(tmp_path / "near.csv", _drop(s, 0.001, 0.04))   # 40 ms at the chirps
+    with pytest.warns(UserWarning, match="imu gaps filled"):
+        res = compensate(cube, near, out=tmp_path / "b.npz", **opts)
+    assert any(w.startswith("imu gaps filled") for w in res.warnings)
+    wide = write_imu_csv(tmp_path / "wide.csv", _drop(s, 0.001, 0.2))
+    with pytest.raises(ValueError, match="--max-gap"):
+        compensate(cube, wide, out=tmp_path / "x.npz", **opts)
+    assert not (tmp_path / "x.npz").exists()
+    args = ["compensate", str(cube), "--imu", str(wide), "--range-m", "11:13", "--az-deg",
+            "11:11:1", "--el-deg", "0:0:1"]
+    assert main(args + ["--out", str(tmp_path / "d.npz")]) == 2
+    assert "--max-gap" in capsys.readouterr().err
+    with pytest.warns(UserWarning, match="imu gaps filled"):
+        assert main(args + ["--max-gap", "0.25", "--out", str(tmp_path / "d.npz")]) == 0
+    cap = capsys.readouterr()
+    assert f"IMU log: {wide}" in cap.out and "imu gaps filled" in cap.err
+    late = write_imu_csv(tmp_path / "late.csv", _drop(s, -9.0, 0.5))
+    with pytest.raises(ValueError, match="does not cover"):
+        compensate(cube, late, out=tmp_path / "e.npz", **opts)
+    with pytest.raises(ValueError, match="--imu-topic / --imu-instance"):
+        compensate(cube, np.column_stack([s.time, s.gyro, s.accel]), out=tmp_path / "f.npz",
+                   imu_topic="x", **opts)
+
+
+def _ulog_with_fifo(path, s: ImuSamples, combined_every: int = 4) -> None:
+    """A ULog with ``sensor_gyro_fifo`` / ``sensor_accel_fifo`` (8 samples a message, int16
+    with a scale) and a decimated ``sensor_combined``, per the ULog file format."""
+    from raysim.io.flight_logs.ulog import _FORMAT, _MAGIC, _RECORD, _message
+
+    fifo = ("{}:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float dt;"
+            "float scale;uint8_t samples;int16_t[32] x;int16_t[32] y;int16_t[32] z;")
+    rec = struct.Struct("<QQIffB32h32h32h")
+    us = np.rint(s.time * 1e6).astype(np.int64)
+    body = bytearray(_MAGIC + b"\x01" + struct.pack("<Q", int(us[0])))
+    body += _message(b"B", bytes(40))
+    body += _message(b"F", _FORMAT.encode())
+    body += _message(b"F", fifo.format("sensor_gyro_fifo").encode())
+    body += _message(b"F", fifo.format("sensor_accel_fifo").encode())
+    for mid, name in enumerate(("sensor_combined", "sensor_gyro_fifo", "sensor_accel_fifo")):
+        body += _message(b"A", struct.pack("<BH", 0, mid) + name.encode())
+    dt = float(us[1] - us[0])
+    scales = {1: 1e-4, 2: 1e-3}                       # rad/s and m/s^2 per count
+    for a in range(0, us.size - 7, 8):
+        for mid, v in ((1, s.gyro), (2, s.accel)):
+            q = np.rint(v[a:a + 8] / scales[mid]).astype(int)
+            pad = np.zeros((32, 3), int)
+            pad[:8] = q
+            body += _message(b"D", struct.pack("<H", mid) + rec.pack(
+                int(us[a + 7]), int(us[a + 7]), 1, dt, scales[mid], 8, *pad[:, 0], *pad[:, 1],
+                *pad[:, 2]))
+        for k in range(a, a + 8):
+            if k % combined_every == 0:
+                body += _message(b"D", struct.pack("<H", 0) + _RECORD.pack(
+                    int(us[k]), *map(float, s.gyro[k]), int(dt * combined_every), 0,
+                    *map(float, s.accel[k]), int(dt * combined_every), 0, 0, 0, 0))
+    path.write_bytes(bytes(body))
+
+
+def test_ulog_fifo_topics_are_preferred_over_sensor_combined(tmp_path):
+    s = _motion()
+    _ulog_with_fifo(tmp_path / "f.ulg", s)
+    back = read_imu_log(tmp_path / "f.ulg")
+    assert "sensor_gyro_fifo instance 0, 1000 Hz" in back.source
+    assert "also present: sensor_combined[0] 250 Hz" in back.source
+    n = back.time.size
+    np.testing.assert_allclose(back.time, np.rint(s.time[:n] * 1e6) * 1e-6, atol=1e-9)
+    assert np.max(np.abs(back.gyro - s.gyro[:n])) <= 0.5e-4 + 1e-12      # half a count
+    assert np.max(np.abs(back.accel - s.accel[:n])) <= 0.5e-3 + 1e-12
+    low = read_imu_log(tmp_path / "f.ulg", topic="sensor_combined")
+    assert low.rate == pytest.approx(250.0) and "sensor_combined instance 0" in low.source
+
+
+def test_dataflash_raw_gyr_acc_preferred_over_filtered_imu(tmp_path):
+    """``GYR``/``ACC`` at the sensor rate beat ``IMU`` at the loop rate; ``SampleUS`` is the
+    sample time."""
+    pytest.importorskip("pymavlink")
+    s = _motion()
+    head, rec = b"\xa3\x95", struct.Struct("<QBQfff")
+
+    def fmt(kind, name, cols):
+        return head + bytes([0x80]) + struct.pack("<BB4s16s64s", kind, 3 + rec.size,
+                                                  name.encode(), b"QBQfff", cols.encode())
+
+    body = bytearray(fmt(0x90, "GYR", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ")
+                     + fmt(0x91, "ACC", "TimeUS,I,SampleUS,AccX,AccY,AccZ"))
+    us = np.rint(s.time * 1e6).astype(np.int64) + 1000
+    for k in range(us.size):
+        body += head + bytes([0x90]) + rec.pack(int(us[k]) + 300, 0, int(us[k]),
+                                                *map(float, s.gyro[k]))
+        body += head + bytes([0x91]) + rec.pack(int(us[k]) + 300, 0, int(us[k]),
+                                                *map(float, s.accel[k]))
+    path = tmp_path / "raw.bin"
+    path.write_bytes(bytes(body))
+    back = read_imu_log(path)
+    assert "GYR instance 0, 1000 Hz, SampleUS" in back.source
+    np.testing.assert_allclose(back.time, us * 1e-6, atol=1e-12)
+    assert _within_float32(back.gyro, s.gyro) and _within_float32(back.accel, s.accel)
+    with pytest.raises(ValueError, match=r"topic='IMU'.*GYR\[0\] at 1000 Hz"):
+        read_imu_log(path, topic="IMU")

@@ -7,14 +7,17 @@ configuration (``--radar-config``: an mmWave SDK ``.cfg`` or an mmWave Studio
 ``--frames``) or an ``.npz`` cube (keys in :mod:`raysim.pipeline.compensate`).
 The IMU log (``--imu FILE`` or a second positional argument) is any format of
 :func:`raysim.io.flight_logs.read_imu_log`, or left out for the IMU log of the
-frame store. Output (``--out``): a labelled Zarr store, or for one frame an
+frame store; ``--imu-topic`` / ``--imu-instance`` choose the source inside it
+and ``--max-gap`` the largest gap filled inside the window used. ``--board`` /
+``--antenna-positions`` give a capture's antennas where the configuration does
+not say the board. Output (``--out``): a labelled Zarr store, or for one frame an
 ``.npz`` (:mod:`raysim.io.compensate_io`).
 
 This module parses the options, calls the compensate stage
 (:func:`raysim.pipeline.compensate.compensate`: reading, motion estimate or
 self-calibration, the chain of every frame, writing) and prints its warnings
-on stderr as ``warning: <chain>: <text>``, the self-calibration's estimates
-and the output written.
+on stderr as ``warning: <chain>: <text>``, the IMU source read, the
+self-calibration's estimates and the output written.
 """
 
 from __future__ import annotations
@@ -37,6 +40,8 @@ examples:
   raysim compensate cube.npz --imu imu.csv --velocity given --initial-velocity 0,0,0 \\
       --lever-arm 0,0,0.1 --out beams.npz
   raysim compensate cube.npz --imu flight.ulg --out beams.npz     # PX4 log
+  raysim compensate adc_data.bin --radar-config iwr6843.cfg --board IWR6843AOP \
+      --imu flight.ulg --imu-topic sensor_combined --max-gap 0.2 --out beams.zarr
   raysim compensate cube.npz --imu rosbag2_folder --out beams.npz # ROS 2 bag
   raysim compensate rotation_y.zarr --chain paper --direction-deg 20,0 --out paper.npz
   raysim compensate rotation_y.zarr --chain paper:published --direction-deg 20,0 \\
@@ -97,6 +102,17 @@ def register(subparsers) -> None:
     p.add_argument("--imu", default=None, metavar="FILE",
                    help="IMU log: CSV (units in the header), PX4 .ulg, ArduPilot .bin or a "
                    "ROS 2 bag (folder, .mcap, .db3); left out: the IMU log of the frame store")
+    p.add_argument("--imu-topic", default=None, metavar="NAME",
+                   help="source inside the IMU log: PX4 topic (sensor_gyro_fifo, vehicle_imu, "
+                   "sensor_combined), ArduPilot message (ISBD, GYR, IMU) or ROS 2 topic; "
+                   "left out: the complete source with the highest rate")
+    p.add_argument("--imu-instance", type=int, default=None, metavar="K",
+                   help="instance of that source (PX4 multi-id, ArduPilot I); left out: the "
+                   "best present")
+    p.add_argument("--max-gap", type=float, default=None, metavar="SECONDS",
+                   help="largest IMU-log gap inside the window used (the selected chirps plus "
+                   "0.5 s) filled by interpolation, with a warning; gaps outside it are not "
+                   "judged (default 0.06 s, or 3.5 median intervals if larger)")
     p.add_argument("--frame", type=int, default=0,
                    help="frame of a Zarr / NetCDF store to compensate (position along frame)")
     p.add_argument("--frames", default=None, metavar="LO:HI",
@@ -108,6 +124,13 @@ def register(subparsers) -> None:
     p.add_argument("--layout", choices=("2lane", "4lane"), default=None,
                    help="LVDS lanes of a DCA1000 capture (default: the Studio JSON's lane "
                    "mask, 2 lanes for an SDK .cfg)")
+    p.add_argument("--board", default=None, metavar="BOARD",
+                   help="TI board of a DCA1000 capture, for its antenna layout: xWR14xx, "
+                   "xWR16xx, xWR18xx, IWR6843ISK, IWR6843AOP or IWR6843ODS; needed when the "
+                   "configuration fits boards of different layouts")
+    p.add_argument("--antenna-positions", default=None, metavar="FILE",
+                   help="CSV or JSON file of the TX and RX positions of a capture (units "
+                   "stated: wavelength or m; see raysim.io.mmwave_config); replaces --board")
     p.add_argument("--capture-t0", type=float, default=0.0, metavar="SECONDS",
                    help="radar-clock time of the first ramp of a DCA1000 capture [s] (a raw "
                    "capture carries no time stamps)")
@@ -199,7 +222,11 @@ def run(args) -> int:
         imu_grade=args.imu_grade,
         direction_deg=None if args.direction_deg is None
         else _floats(args.direction_deg, 2, "--direction-deg"),
+        max_gap=args.max_gap, imu_topic=args.imu_topic, imu_instance=args.imu_instance,
+        board=args.board, antenna_positions=args.antenna_positions,
         progress=not args.no_progress)
+    if result.imu_source is not None:
+        print(f"IMU log: {result.imu_source}")
     for w in result.warnings:
         print(f"warning: {result.chain}: {w}", file=sys.stderr)
     if result.calibration is not None:

@@ -118,9 +118,10 @@ def frame_selection(text: str | None, total: int, option: str = "--frames") -> l
 
 
 def _load_capture(path: str, radar_config: str, frames: str | None, layout: str | None,
-                  t0: float) -> CompensateInput:
+                  t0: float, board: str | None = None,
+                  antenna_positions=None) -> CompensateInput:
     from raysim.io.mmwave_config import read_mmwave_config
-    from raysim.io.ti_dca1000 import read_dca1000
+    from raysim.io.ti_dca1000 import check_capture_fits, read_dca1000
 
     if radar_config is None:
         raise ValueError(f"{path!r} is a raw capture: give its radar configuration with "
@@ -129,26 +130,31 @@ def _load_capture(path: str, radar_config: str, frames: str | None, layout: str 
         raise ValueError(f"capture {path!r} does not exist")
     if not np.isfinite(t0):
         raise ValueError(f"--capture-t0 must be a finite time in seconds, got {t0!r}")
-    m = read_mmwave_config(radar_config, layout=layout, t0=t0)
+    if antenna_positions is not None and not os.path.isfile(os.fspath(antenna_positions)):
+        raise ValueError(f"--antenna-positions {os.fspath(antenna_positions)!r} does not exist")
+    m = read_mmwave_config(radar_config, layout=layout, t0=t0, board=board,
+                           antenna_positions=antenna_positions)
     fmt = m.fmt
-    size = os.path.getsize(path)
-    total, extra = divmod(size, fmt.bytes_per_frame)
-    if extra or total == 0:
-        raise ValueError(f"capture {path!r} holds {size} bytes, not a whole number of frames of "
-                         f"{fmt.bytes_per_frame} bytes ({fmt.describe_frame()}) as "
-                         f"--radar-config {radar_config!r} describes")
+    try:
+        total = check_capture_fits(path, fmt, m.num_frames)
+    except ValueError as exc:
+        raise ValueError(f"{exc} (--radar-config {radar_config!r})") from None
     sel = frame_selection(frames, total)
+    sign = (None if m.channel_sign is None or np.all(m.channel_sign == 1)
+            else m.channel_sign.astype(np.float32)[:, None])
 
     def read(k: int) -> np.ndarray:
         f = sel[k]
-        return read_dca1000(path, fmt, frames=slice(f, f + 1)).cube[0]
+        cube = read_dca1000(path, fmt, frames=slice(f, f + 1)).cube[0]
+        return cube if sign is None else cube * sign    # the board's RX feed signs
 
     times = np.concatenate([fmt.chirp_times(1, f) for f in sel])
     return CompensateInput(sel, read, times, m.config, m.array.virtual_positions,
                            m.array.tx_slot, m.array.grid_shape, units="ADC counts",
                            source={"capture": os.path.abspath(path),
                                    "radar_config": os.path.abspath(radar_config),
-                                   "tx_order": list(m.tx_order), "layout": fmt.layout})
+                                   "tx_order": list(m.tx_order), "layout": fmt.layout,
+                                   "board": m.board})
 
 
 def _load_store(path: str, frames: str | None, frame: int) -> CompensateInput:
@@ -216,7 +222,8 @@ def _load_npz(path: str) -> CompensateInput:
 
 def load_input(path: str, *, radar_config: str | None = None, frames: str | None = None,
                frame: int = 0, layout: str | None = None,
-               capture_t0: float = 0.0) -> CompensateInput:
+               capture_t0: float = 0.0, board: str | None = None,
+               antenna_positions=None) -> CompensateInput:
     """Open the input of the compensate stage (``raysim compensate``).
 
     Parameters
@@ -232,9 +239,16 @@ def load_input(path: str, *, radar_config: str | None = None, frames: str | None
     frame : int
         One frame of a store when ``frames`` is None.
     layout : {"2lane", "4lane"}, optional
-        LVDS layout of a capture (default from the configuration).
+        LVDS layout of a capture (default from the configuration or the
+        board). A capture whose size or zero-filled lanes do not fit it is
+        refused (:func:`raysim.io.ti_dca1000.check_capture_fits`).
     capture_t0 : float
         Radar-clock time of the first ramp of a capture [s].
+    board : str, optional
+        TI board of a capture (:mod:`raysim.io.ti_boards`): its antenna layout,
+        RX feed signs (applied to the channels) and LVDS lanes.
+    antenna_positions : str or path-like, optional
+        Antenna file of a capture (:func:`raysim.io.ti_boards.read_antenna_positions`).
 
     Raises
     ------
@@ -244,7 +258,11 @@ def load_input(path: str, *, radar_config: str | None = None, frames: str | None
     from raysim.io import storage
 
     if radar_config is not None or path.endswith(".bin"):
-        return _load_capture(path, radar_config, frames, layout, capture_t0)
+        return _load_capture(path, radar_config, frames, layout, capture_t0, board,
+                             antenna_positions)
+    if board is not None or antenna_positions is not None:
+        raise ValueError("--board / --antenna-positions describe a raw capture's antennas; "
+                         f"{path!r} carries its own element positions")
     if not path.endswith(".npz") and (storage.store_exists(path) or
                                       (path.endswith(".nc") and os.path.isfile(path))):
         return _load_store(path, frames, frame)

@@ -28,7 +28,17 @@ kHz/us> <idleTimeVar us> <adcStartTimeVar us> <txEnable>``
 <framePeriodicity ms> <triggerSelect> <frameTriggerDelay ms>``
 
 Other commands (``sensorStop``, ``lvdsStreamCfg``, ``guiMonitor``, ...) are
-ignored. The SDK file does not name the LVDS lane count; ``layout`` says it.
+ignored; ``advFrameCfg`` (sub-frames) is refused. The SDK file does not name
+the LVDS lane count; ``layout`` says it, else the board's.
+
+Antennas: the configuration does not say the board. The layout is the
+``board``'s (:mod:`raysim.io.ti_boards`: xWR14xx, xWR16xx, xWR18xx,
+IWR6843ISK, IWR6843AOP, IWR6843ODS, from TI's EVM user guides), or read from
+an antenna file (``antenna_positions``), or, when neither is given, the one
+layout every board that fits the configuration shares (a 77 GHz cfg firing TX2
+is an xWR14xx/xWR18xx, which share theirs); where they differ (TX0 + TX1 at 77
+GHz: xWR16xx places TX1 2 lambda along azimuth, xWR14xx/18xx raise it; every
+60 GHz cfg: ISK, AOP and ODS differ) a ``ValueError`` names the candidates.
 
 mmWave Studio JSON export (``*.mmwave.json``): ``mmWaveDevices[0]`` holds
 ``rfConfig`` with ``rlChanCfg_t`` (``rxChannelEn``, ``txChannelEn``),
@@ -136,6 +146,12 @@ class MmwaveConfig:
         Frames the configuration asks for (0: until stopped).
     source : str
         File read ("" for text or a dict).
+    board : str
+        Board whose antenna layout was used (:mod:`raysim.io.ti_boards`; several
+        names where they share it), or the antenna file.
+    channel_sign : ndarray, shape ``[channel]`` or None
+        Feed sign (+1 / -1) of every virtual channel (the RX phase of the
+        board): multiply a capture's channels by it before beamforming.
     """
 
     config: RadarConfig
@@ -145,6 +161,8 @@ class MmwaveConfig:
     rx_enabled: tuple[int, ...]
     num_frames: int
     source: str = ""
+    board: str = ""
+    channel_sign: np.ndarray | None = None
 
 
 def _bits(name: str, value) -> list[int]:
@@ -173,8 +191,8 @@ def _num(name: str, value, *, positive: bool = False, integer: bool = False) -> 
 
 
 def _build(*, rx_mask, tx_mask, adc_bits_code, adc_fmt_code, profiles: dict, chirps: list,
-           frame: dict, layout: str, t0: float, tx_positions, rx_positions,
-           source: str) -> MmwaveConfig:
+           frame: dict, layout: str | None, t0: float, tx_positions, rx_positions,
+           source: str, board: str | None = None, antenna_positions=None) -> MmwaveConfig:
     """Check one configuration (already in TI's units) and convert it.
 
     ``profiles``: profileId -> dict of the profile fields (GHz, us, MHz/us,
@@ -262,7 +280,7 @@ def _build(*, rx_mask, tx_mask, adc_bits_code, adc_fmt_code, profiles: dict, chi
             f"{where}frameCfg framePeriodicity {frame['framePeriodicity']} ms is shorter than "
             f"the frame's chirps, numLoops {loops} x {len(slots)} slots x (idleTime + "
             f"rampEndTime) = {loops * len(slots) * slot_interval * 1e3:.6g} ms")
-    if layout not in ("2lane", "4lane"):
+    if layout not in (None, "2lane", "4lane"):
         raise ValueError(f"{where}layout must be '2lane' or '4lane', got {layout!r}")
     cfg = RadarConfig(carrier_frequency=f_start + slope * adc_start, bandwidth=slope * sampled,
                       chirp_duration=sampled, idle_time=max(slot_interval - sampled, 0.0),
@@ -270,9 +288,16 @@ def _build(*, rx_mask, tx_mask, adc_bits_code, adc_fmt_code, profiles: dict, chi
                       num_chirps=loops, num_frames=max(n_frames, 1),
                       complex_sampling=ADC_COMPLEX[adc_fmt_code], frame_period=period,
                       num_tx_slots=len(slots))
-    tx_pos, rx_pos = ti_antenna_positions(cfg.center_wavelength)
-    tx_pos = tx_pos if tx_positions is None else np.asarray(tx_positions, dtype=float)
-    rx_pos = rx_pos if rx_positions is None else np.asarray(rx_positions, dtype=float)
+    ant = _antennas(board, antenna_positions, tx_positions, rx_positions, slots, rx,
+                    f_start, cfg.center_wavelength, where)
+    if layout is None:
+        layout = ant.layout or "2lane"
+    elif ant.layout is not None and layout != ant.layout and board is not None:
+        raise ValueError(f"{where}layout {layout!r} does not match board {ant.name}, whose "
+                         f"DCA1000 captures use {ant.layout!r}; leave the layout out or give "
+                         f"the right board")
+    tx_pos = ant.tx if tx_positions is None else np.asarray(tx_positions, dtype=float)
+    rx_pos = ant.rx if rx_positions is None else np.asarray(rx_positions, dtype=float)
     if tx_pos.ndim != 2 or tx_pos.shape[1] != 3 or tx_pos.shape[0] <= max(slots):
         raise ValueError(f"tx_positions must have shape [tx >= {max(slots) + 1}, 3], got "
                          f"{tx_pos.shape}")
@@ -285,32 +310,74 @@ def _build(*, rx_mask, tx_mask, adc_bits_code, adc_fmt_code, profiles: dict, chi
                         num_tx=len(slots), num_loops=loops, layout=layout,
                         complex=ADC_COMPLEX[adc_fmt_code], frame_period=period,
                         t0=float(t0) + adc_start, adc_bits=ADC_BITS[adc_bits_code])
-    return MmwaveConfig(cfg, array, fmt, tuple(slots), tuple(rx), n_frames, source)
+    if ant.rx_phase.shape[0] <= max(rx):
+        raise ValueError(f"{where}the antenna layout {ant.name} has {ant.rx_phase.shape[0]} "
+                         f"receivers; channelCfg enables RX{rx}")
+    sign = np.tile(ant.rx_phase[rx], len(slots))
+    return MmwaveConfig(cfg, array, fmt, tuple(slots), tuple(rx), n_frames, source, ant.name,
+                        sign)
 
 
-def parse_sdk_cfg(text: str, *, layout: str = "2lane", t0: float = 0.0, tx_positions=None,
-                  rx_positions=None, source: str = "") -> MmwaveConfig:
+def _antennas(board, antenna_positions, tx_positions, rx_positions, slots, rx, f_start,
+              wavelength, where):
+    """The antenna layout: given positions, a file, a board, or the board the cfg implies."""
+    from raysim.io.ti_boards import AntennaLayout, read_antenna_positions, resolve_board
+
+    given = sum(x is not None for x in (board, antenna_positions)) + (
+        tx_positions is not None or rx_positions is not None)
+    if given > 1:
+        raise ValueError(f"{where}give one of board, antenna_positions or tx/rx_positions, "
+                         f"not several")
+    if tx_positions is not None or rx_positions is not None:
+        tx_d, rx_d = ti_antenna_positions(wavelength)
+        n_rx = (rx_d if rx_positions is None else np.asarray(rx_positions)).shape[0]
+        return AntennaLayout(tx_d, rx_d, np.ones(max(n_rx, 4)), "tx/rx positions given")
+    if antenna_positions is not None:
+        lay = read_antenna_positions(antenna_positions, wavelength)
+        if lay.tx.shape[0] <= max(slots):
+            raise ValueError(f"{where}antenna positions {str(antenna_positions)!r} hold "
+                             f"{lay.tx.shape[0]} TX; the configuration fires TX{slots}")
+        if lay.rx.shape[0] <= max(rx):
+            raise ValueError(f"{where}antenna positions {str(antenna_positions)!r} hold "
+                             f"{lay.rx.shape[0]} RX; channelCfg enables RX{rx}")
+        return lay
+    return resolve_board(board, tx_order=slots, rx_enabled=rx, start_freq_hz=f_start,
+                         wavelength=wavelength, where=where)
+
+
+def parse_sdk_cfg(text: str, *, layout: str | None = None, t0: float = 0.0, tx_positions=None,
+                  rx_positions=None, source: str = "", board: str | None = None,
+                  antenna_positions=None) -> MmwaveConfig:
     """Parse the text of an mmWave SDK ``.cfg`` file (module docstring).
 
     Parameters
     ----------
     text : str
         The file's text.
-    layout : {"2lane", "4lane"}
-        LVDS lanes of the DCA1000 capture (the SDK file does not say).
+    layout : {"2lane", "4lane"}, optional
+        LVDS lanes of the DCA1000 capture (the SDK file does not say); default
+        the board's (:mod:`raysim.io.ti_boards`), else ``"2lane"``. A layout
+        that contradicts a given board raises.
     t0 : float
         Start of the first ramp of frame 0 on the radar clock [s].
     tx_positions, rx_positions : array_like, shape ``[tx, 3]`` / ``[rx, 3]``, optional
-        Physical antennas in frame A [m], indexed by TX / RX number; default
-        :func:`ti_antenna_positions`.
+        Physical antennas in frame A [m], indexed by TX / RX number.
     source : str
         File name for messages.
+    board : str, optional
+        TI board (:data:`raysim.io.ti_boards.BOARDS`: xWR14xx, xWR16xx,
+        xWR18xx, IWR6843ISK, IWR6843AOP, IWR6843ODS, or a part number). Left
+        out (and no positions given): the layout the boards that fit the
+        configuration share; where they differ, ``ValueError`` names them.
+    antenna_positions : str or path-like, optional
+        CSV / JSON antenna file (:func:`raysim.io.ti_boards.read_antenna_positions`).
 
     Raises
     ------
     ValueError
-        A missing command, a command with the wrong number of fields, or a
-        value out of range or inconsistent (the message names the field).
+        A missing command, a command with the wrong number of fields, a value
+        out of range or inconsistent (the message names the field), an
+        advanced frame (``advFrameCfg``), or an ambiguous board.
     """
     where = f"{source}: " if source else ""
     found: dict[str, list[dict]] = {k: [] for k in SDK_FIELDS}
@@ -326,6 +393,12 @@ def parse_sdk_cfg(text: str, *, layout: str = "2lane", t0: float = 0.0, tx_posit
             raise ValueError(f"{where}line {n}: {cmd} needs {len(names)} fields "
                              f"({' '.join(names)}), got {len(vals)}")
         found[cmd].append(dict(zip(names, vals, strict=False)))  # later SDKs append fields
+    adv = [ln for ln in text.splitlines() if ln.split("%", 1)[0].split()[:1] == ["advFrameCfg"]]
+    if adv and not found["frameCfg"]:
+        raise ValueError(f"{where}advFrameCfg (advanced frame: sub-frames with their own "
+                         f"profiles, chirps and loops) is not supported; a capture is read with "
+                         f"one frameCfg (one profile, one TDM slot order): capture each "
+                         f"sub-frame's configuration with frameCfg")
     missing = [c for c in _REQUIRED if not found[c]]
     if missing:
         raise ValueError(f"{where}missing command(s) {missing}; an SDK .cfg needs "
@@ -345,7 +418,8 @@ def parse_sdk_cfg(text: str, *, layout: str = "2lane", t0: float = 0.0, tx_posit
                   adc_bits_code=_num("numADCBits", adc["numADCBits"], integer=True),
                   adc_fmt_code=_num("adcOutputFmt", adc["adcOutputFmt"], integer=True),
                   profiles=profiles, chirps=found["chirpCfg"], frame=fr, layout=layout, t0=t0,
-                  tx_positions=tx_positions, rx_positions=rx_positions, source=source)
+                  tx_positions=tx_positions, rx_positions=rx_positions, source=source,
+                  board=board, antenna_positions=antenna_positions)
 
 
 def _get(d, key: str, where: str):
@@ -355,11 +429,12 @@ def _get(d, key: str, where: str):
 
 
 def parse_studio_json(doc: dict, *, layout: str | None = None, t0: float = 0.0,
-                      tx_positions=None, rx_positions=None, source: str = "") -> MmwaveConfig:
+                      tx_positions=None, rx_positions=None, source: str = "",
+                      board: str | None = None, antenna_positions=None) -> MmwaveConfig:
     """Convert a parsed mmWave Studio JSON export (module docstring).
 
-    ``layout`` None takes it from ``rlDevLaneEnable_t.laneEn`` (2 lanes if
-    absent); other parameters as in :func:`parse_sdk_cfg`.
+    ``layout`` None takes it from ``rlDevLaneEnable_t.laneEn`` (the board's
+    if absent, else 2 lanes); other parameters as in :func:`parse_sdk_cfg`.
 
     Raises
     ------
@@ -402,9 +477,7 @@ def parse_studio_json(doc: dict, *, layout: str | None = None, t0: float = 0.0,
     frame["framePeriodicity"] = _get(f, "framePeriodicity_msec", where)
     if layout is None:
         lanes = dev.get("rawDataCaptureConfig", {}).get("rlDevLaneEnable_t", {}).get("laneEn")
-        if lanes is None:
-            layout = "2lane"
-        else:
+        if lanes is not None:
             mask = sum(1 << b for b in _bits("laneEn", lanes))
             if mask not in LANE_LAYOUT:
                 raise ValueError(f"{where}laneEn {lanes!r} must be 0x3 (2 LVDS lanes) or 0xF "
@@ -416,16 +489,19 @@ def parse_studio_json(doc: dict, *, layout: str | None = None, t0: float = 0.0,
                   adc_fmt_code=_num("b2AdcOutFmt", _get(fmt, "b2AdcOutFmt", where),
                                     integer=True),
                   profiles=profiles, chirps=chirps, frame=frame, layout=layout, t0=t0,
-                  tx_positions=tx_positions, rx_positions=rx_positions, source=source)
+                  tx_positions=tx_positions, rx_positions=rx_positions, source=source,
+                  board=board, antenna_positions=antenna_positions)
 
 
 def read_mmwave_config(path: str | os.PathLike, *, layout: str | None = None, t0: float = 0.0,
-                       tx_positions=None, rx_positions=None) -> MmwaveConfig:
+                       tx_positions=None, rx_positions=None, board: str | None = None,
+                       antenna_positions=None) -> MmwaveConfig:
     """Read an mmWave SDK ``.cfg`` or an mmWave Studio ``.json`` export.
 
     The format follows the suffix (``.json``: Studio, anything else: SDK
-    CLI text). ``layout`` None: the Studio file's lane mask, ``"2lane"`` for
-    an SDK file. Other parameters as in :func:`parse_sdk_cfg`.
+    CLI text). ``layout`` None: the Studio file's lane mask, else the
+    board's, else ``"2lane"``. ``board`` / ``antenna_positions``: the antenna
+    layout (:func:`parse_sdk_cfg`). Other parameters as in :func:`parse_sdk_cfg`.
 
     Raises
     ------
@@ -436,14 +512,15 @@ def read_mmwave_config(path: str | os.PathLike, *, layout: str | None = None, t0
     if not path.is_file():
         raise ValueError(f"radar configuration {str(path)!r} does not exist")
     text = path.read_text(encoding="utf-8", errors="replace")
-    kw = dict(t0=t0, tx_positions=tx_positions, rx_positions=rx_positions, source=str(path))
+    kw = dict(t0=t0, tx_positions=tx_positions, rx_positions=rx_positions, source=str(path),
+              board=board, antenna_positions=antenna_positions)
     if path.suffix.lower() == ".json":
         try:
             doc = json.loads(text)
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: not valid JSON ({exc})") from None
         return parse_studio_json(doc, layout=layout, **kw)
-    return parse_sdk_cfg(text, layout=layout or "2lane", **kw)
+    return parse_sdk_cfg(text, layout=layout, **kw)
 
 
 def sdk_cfg_text(config: RadarConfig, *, tx_order=(0,), rx_enabled=(0, 1, 2, 3),

@@ -65,14 +65,14 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
 __all__ = ["Dca1000Format", "Dca1000Capture", "parse_dca1000", "read_dca1000",
-           "write_dca1000", "LAYOUTS"]
+           "write_dca1000", "check_capture_fits", "LAYOUTS"]
 
 #: Supported LVDS layouts.
 LAYOUTS = ("2lane", "4lane")
@@ -285,6 +285,76 @@ def _count_frames(n_words: int, fmt: Dca1000Format, drop_incomplete: bool, where
             f"{where}capture holds {2 * n_words} bytes, less than one frame of "
             f"{fmt.bytes_per_frame} bytes ({fmt.describe_frame()})")
     return n_frames
+
+
+def check_capture_fits(path: str | os.PathLike, fmt: Dca1000Format,
+                       num_frames: int = 0) -> int:
+    """Refuse a capture whose size or content does not fit the lanes and format; its frames.
+
+    Checks, each refusal naming the sizes:
+
+    * the size is a whole number of frames of ``fmt`` (and, where the other
+      layout fits instead, says so);
+    * with ``num_frames`` > 0 (the configuration's ``numFrames``), a size that
+      is exactly ``num_frames`` frames of the *other* layout and not of this
+      one (a 2-lane capture of fewer than 4 receivers read as 4-lane, or the
+      reverse);
+    * 4-lane with fewer than 4 receivers: the lanes of the disabled receivers
+      of the first frame must hold zeros (the DCA1000 zero-fills them).
+
+    With 4 receivers the two layouts have the same size and no zero lanes:
+    the lane count must then come from the board (:mod:`raysim.io.ti_boards`)
+    or the Studio JSON's lane mask.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The capture.
+    fmt : Dca1000Format
+    num_frames : int
+        Frames the configuration asks for (0: until stopped, not checked).
+
+    Returns
+    -------
+    int
+        Whole frames in the capture.
+
+    Raises
+    ------
+    ValueError
+        The capture does not fit (message names file size, frame size and
+        the layouts).
+    """
+    fmt = _check_format(fmt)
+    path = Path(path)
+    size = path.stat().st_size
+    other = replace(fmt, layout="4lane" if fmt.layout == "2lane" else "2lane")
+    total, extra = divmod(size, fmt.bytes_per_frame)
+    o_total, o_extra = divmod(size, other.bytes_per_frame)
+    hint = (f"; it is {o_total} whole frame(s) of the {other.layout} layout "
+            f"({other.bytes_per_frame} bytes: {other.describe_frame()})"
+            if o_total and not o_extra and other.bytes_per_frame != fmt.bytes_per_frame else "")
+    if extra or total == 0:
+        raise ValueError(f"{path}: the capture holds {size} bytes, not a whole number of "
+                         f"frames of {fmt.bytes_per_frame} bytes ({fmt.layout}: "
+                         f"{fmt.describe_frame()}){hint}")
+    if (num_frames > 0 and total != num_frames and o_total == num_frames and not o_extra
+            and other.bytes_per_frame != fmt.bytes_per_frame):
+        raise ValueError(f"{path}: the capture holds {size} bytes = {num_frames} frames of the "
+                         f"{other.layout} layout ({other.bytes_per_frame} bytes), the "
+                         f"configuration's numFrames, but {total} frames of the {fmt.layout} "
+                         f"layout asked for ({fmt.bytes_per_frame} bytes); the capture is "
+                         f"{other.layout}: give that layout (--layout {other.layout})")
+    if fmt.layout == "4lane" and fmt.num_rx < _FOUR_LANES:
+        words = np.fromfile(path, dtype=_INT16, count=fmt.words_per_frame)
+        lanes = words.reshape(-1, _FOUR_LANES)[:, fmt.num_rx:]
+        if np.any(lanes != 0):
+            raise ValueError(f"{path}: read as 4-lane with {fmt.num_rx} receiver(s), the lanes "
+                             f"of the disabled receivers ({_FOUR_LANES - fmt.num_rx} of 4) hold "
+                             f"{int(np.count_nonzero(lanes))} non-zero words in frame 0 of "
+                             f"{fmt.bytes_per_frame} bytes; a 4-lane capture zero-fills them: "
+                             f"the capture is not 4-lane (try --layout 2lane)")
+    return total
 
 
 def parse_dca1000(words, fmt: Dca1000Format, *, drop_incomplete: bool = False,

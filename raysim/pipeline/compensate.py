@@ -45,7 +45,16 @@ IMU log (``imu``): a file of any format of
 ArduPilot DataFlash ``.bin``, ROS 2 bag; FLU turned into FRD), or a table
 ``[sample, 7]`` (time [s, IMU clock], angular rate [rad/s], specific force
 [m/s^2], body frame FRD). ``time_offset`` is IMU clock minus radar clock. It
-may be left out when the frame store holds an IMU log.
+may be left out when the frame store holds an IMU log. The source inside a log
+(``imu_topic``, ``imu_instance``; default the complete one with the highest
+rate) is reported as :attr:`CompensateResult.imu_source` and the store's
+``imu_source`` attribute. The log is judged over the window it is used for
+(the selected slots on the IMU clock plus
+:data:`compensation.ingestion.WINDOW_MARGIN`): gaps outside it are not judged,
+gaps inside it up to ``max_gap`` are filled by interpolation with a warning,
+a log that does not cover the window is refused as such
+(:func:`compensation.ingestion.judge_imu_window`). A capture's antennas come
+from ``board`` or ``antenna_positions`` (:mod:`raysim.io.ti_boards`).
 
 Output (``out``): a labelled Zarr store
 (:func:`raysim.io.compensate_io.write_compensated_store`) with ``beams
@@ -112,6 +121,9 @@ class CompensateResult:
     time_offset : float or None
         IMU clock minus radar clock applied [s] (given, or estimated);
         None for the chain ``none``.
+    imu_source : str or None
+        The IMU source read: file, topic or message, instance, rate and time
+        base (:func:`raysim.io.flight_logs.read_imu_log`); None for ``none``.
     """
 
     out: Path
@@ -121,6 +133,7 @@ class CompensateResult:
     warnings: tuple
     calibration: dict | None
     time_offset: float | None
+    imu_source: str | None = None
 
     @property
     def shape(self) -> tuple:
@@ -164,28 +177,62 @@ def _frames_text(frames) -> str | None:
                      f"(LO, HI) of frame numbers")
 
 
-def _imu_table(imu, inp, source: str) -> np.ndarray:
-    """The IMU log as a table ``[sample, 7]``: time, gyro, accel (SI, FRD)."""
+def _imu_table(imu, inp, source: str, topic=None, instance=None) -> tuple[np.ndarray, str]:
+    """The IMU log as a table ``[sample, 7]`` (time, gyro, accel; SI, FRD) and its source."""
     from raysim.io.flight_logs import read_imu_log
 
     if imu is None:
         if inp.imu is None:
             raise ValueError(f"{source!r} holds no IMU log; give an IMU log with --imu FILE")
-        return inp.imu
+        if topic is not None or instance is not None:
+            raise ValueError("--imu-topic / --imu-instance select a source of an IMU log file; "
+                             f"{source!r} carries its own IMU record (give --imu FILE)")
+        return inp.imu, f"{source} (IMU log of the store)"
     if isinstance(imu, (str, os.PathLike)):
         path = os.fspath(imu)
         if not os.path.exists(path):
             raise ValueError(f"IMU file {path!r} does not exist")
         try:
-            s = read_imu_log(path)
+            s = read_imu_log(path, topic=topic, instance=instance)
         except ImportError as exc:   # an optional reader (pymavlink for .bin) is missing
             raise ValueError(f"IMU file {path!r}: {exc}") from None
-        return np.column_stack([s.time, s.gyro, s.accel])
+        return np.column_stack([s.time, s.gyro, s.accel]), s.source
+    if topic is not None or instance is not None:
+        raise ValueError("--imu-topic / --imu-instance select a source of an IMU log file, not "
+                         "of a table")
     table = np.asarray(imu, dtype=float)
     if table.ndim != 2 or table.shape[1] != 7:
         raise ValueError(f"imu: got an array of shape {table.shape}, expected a file path or "
                          f"a table [sample, 7] (time, gyro xyz, accel xyz)")
-    return table
+    return table, "table"
+
+
+def _imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarray, tuple]:
+    """The IMU table judged over the window used (:func:`compensation.ingestion.judge_imu_window`).
+
+    The window is every selected chirp and slot on the IMU clock (radar time plus
+    the given offset; the first guess 0 of ``"auto"``, whose search stays within
+    the margin), plus :data:`compensation.ingestion.WINDOW_MARGIN` on each side.
+    """
+    from compensation.ingestion import fill_imu_gaps, judge_imu_window
+
+    if max_gap is not None:
+        max_gap = float(_vector(max_gap, 1, "--max-gap")[0])
+        if max_gap <= 0:
+            raise ValueError(f"--max-gap: got {max_gap!r}, expected a positive number of "
+                             f"seconds")
+    t = table[:, 0]
+    if t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        return table, ()         # the integration names the bad stamps
+    slots = np.asarray(inp.slot_times, dtype=float)
+    shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
+    window = (float(slots.min()) + shift, float(slots.max()) + shift)
+    keep, fill, notes = judge_imu_window(t, window, max_gap=max_gap,
+                                         what=f"the {len(inp.frames)} frame(s) selected")
+    if keep.size == t.size and fill.size == 0:
+        return table, notes
+    tt, vals = fill_imu_gaps(t, table[:, 1:], keep, fill)
+    return np.column_stack([tt, vals]), notes
 
 
 def _attitude(value):
@@ -246,7 +293,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                elevation_deg=None, lever_arm=None, time_offset: float | str = 0.0,
                velocity: str = "hover", initial_velocity=None,
                initial_attitude_deg=(0.0, 0.0, 0.0), imu_grade: str | None = None,
-               direction_deg=None, progress: bool = False) -> CompensateResult:
+               direction_deg=None, max_gap: float | None = None, imu_topic: str | None = None,
+               imu_instance: int | None = None, board: str | None = None,
+               antenna_positions=None, progress: bool = False) -> CompensateResult:
     """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
 
     Parameters
@@ -301,6 +350,26 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     direction_deg : (float, float), optional
         Target direction (azimuth, elevation) [deg] of the paper chain's
         slow-time correction (required by ``paper``).
+    max_gap : float, optional
+        Largest gap of the IMU log [s] inside the window used (the selected
+        chirps on the IMU clock plus a margin) that is filled by linear
+        interpolation, with a warning; default
+        :data:`compensation.ingestion.DEFAULT_MAX_GAP`. Gaps outside the window
+        are not judged (:func:`compensation.ingestion.judge_imu_window`).
+    imu_topic : str, optional
+        Source inside the IMU log: a PX4 topic (``sensor_gyro_fifo``,
+        ``vehicle_imu``, ``sensor_combined``), an ArduPilot message (``IMU``,
+        ``GYR``, ``ISBD``) or a ROS 2 topic; default the best present.
+    imu_instance : int, optional
+        Instance of that source (PX4 multi-id, ArduPilot ``I``); default the
+        best present.
+    board : str, optional
+        TI board of a capture (:data:`raysim.io.mmwave_config.BOARDS`); needed
+        when the configuration fits boards with different antenna layouts.
+    antenna_positions : str or path-like, optional
+        CSV / JSON file of the TX and RX positions of a capture
+        (:func:`raysim.io.mmwave_config.read_antenna_positions`); replaces
+        ``board``.
     progress : bool
         A progress bar on stderr for records of several frames.
 
@@ -329,7 +398,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     source = os.fspath(source)
     inp = load_input(source, radar_config=None if radar_config is None
                      else os.fspath(radar_config), frames=_frames_text(frames), frame=frame,
-                     layout=layout, capture_t0=capture_t0)
+                     layout=layout, capture_t0=capture_t0, board=board,
+                     antenna_positions=antenna_positions)
     if as_npz and len(inp.frames) != 1:
         raise ValueError(f"--out {str(out)!r}: an .npz holds one frame, the selection has "
                          f"{len(inp.frames)}; give a store path (no .npz) or --frames K")
@@ -351,17 +421,26 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                          f"0 .. {r_axis[-1]:.2f} m")
     az = _angles(DEFAULT_ANGLES_DEG if azimuth_deg is None else azimuth_deg, "--az-deg")
     el = _angles(DEFAULT_ANGLES_DEG if elevation_deg is None else elevation_deg, "--el-deg")
-    motions = calibration = offset = None
+    motions = calibration = offset = imu_source = None
     rcs: list = []                     # range-compressed frames, kept when calibrating
+    window_notes: tuple = ()
     if spec.compensated:
-        table = _imu_table(imu, inp, source)
+        table, imu_source = _imu_table(imu, inp, source, imu_topic, imu_instance)
+        table, window_notes = _imu_window(table, inp, time_offset, max_gap)
+        if window_notes:
+            import warnings
+
+            from compensation.guards import CompensationWarning
+
+            for text in window_notes:
+                warnings.warn(text, CompensationWarning, stacklevel=2)
         lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
                  else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
         motions, calibration, offset = _motions(
             inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
             time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
             initial_attitude_deg=initial_attitude_deg, imu_grade=imu_grade)
-    results, found = [], []
+    results, found = [], list(window_notes)
     ks = range(len(inp.frames))
     if len(inp.frames) > 1 and progress:
         import sys
@@ -388,6 +467,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         import json
 
         attrs = {"velocity": velocity}
+        if imu_source is not None:
+            attrs["imu_source"] = imu_source
         if calibration is not None:
             attrs["self_calibration"] = json.dumps(calibration)
         if offset is not None:     # the offset applied: given, or estimated ('auto')
@@ -396,4 +477,4 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                                 azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
                                 extra_attrs=attrs)
     return CompensateResult(out, spec.key, list(inp.frames), results, tuple(found),
-                            calibration, offset)
+                            calibration, offset, imu_source)

@@ -10,13 +10,28 @@ frame B = FRD (forward, right, down; ``docs/conventions.md``).
 source                 module                      time base
 =====================  ==========================  ================================
 ``.csv``               :mod:`raysim.io.imu_log`    the file's ``time_<unit>`` column
-``.ulg`` (PX4)         :mod:`.ulog`                ``sensor_combined.timestamp``:
-                                                   microseconds since boot
-``.bin`` (ArduPilot)   :mod:`.dataflash`           ``IMU.TimeUS``: microseconds since
-                                                   boot
+``.ulg`` (PX4)         :mod:`.ulog`                ``timestamp`` / ``timestamp_sample``:
+                                                   microseconds since boot (some
+                                                   logs: since the Unix epoch)
+``.bin`` (ArduPilot)   :mod:`.dataflash`           ``TimeUS`` (``TimeMS`` in 2014-15
+                                                   firmware): since boot
 ROS 2 bag (folder,     :mod:`.rosbag`              ``header.stamp`` (sec + nanosec),
 ``.mcap``, ``.db3``)                               the publisher's clock (ROS time)
 =====================  ==========================  ================================
+
+Sources inside a log: each reader lists the IMU sources the file holds (PX4
+topics ``sensor_gyro_fifo`` + ``sensor_accel_fifo``, ``vehicle_imu``,
+``sensor_combined`` and their instances; ArduPilot ``ISBH``/``ISBD`` batches,
+``GYR`` + ``ACC``, ``IMU``), reads the complete ones (gyro and accelerometer
+over the same time) and returns the one with the highest sample rate unless
+``topic`` / ``instance`` choose. The choice (topic, instance, rate, time base)
+is written into :attr:`ImuSamples.source <raysim.platform.imu.ImuSamples>`.
+
+Time base: :func:`time_base` tells time since boot from Unix-epoch stamps
+(a first stamp between 2000-01-01 and 2100-01-01 in seconds is taken for
+epoch time: no flight controller runs for 30 years). Either way the times are
+returned as they are stored; the clock offset to the radar
+(``--time-offset``) is then of the size of the stamps (docs/recordings.md).
 
 Frames: PX4 and ArduPilot log in FRD already; ROS uses FLU (REP 103), turned
 into FRD by :func:`flu_to_frd`.
@@ -31,7 +46,10 @@ import numpy as np
 
 from raysim.platform.imu import ImuSamples
 
-__all__ = ["FLIGHT_LOG_SUFFIXES", "flu_to_frd", "read_imu_log"]
+__all__ = ["FLIGHT_LOG_SUFFIXES", "flu_to_frd", "read_imu_log", "time_base", "choose_source"]
+
+#: Unix time [s] of 2000-01-01 and 2100-01-01: a first stamp between them is epoch time.
+EPOCH_RANGE_S = (946_684_800.0, 4_102_444_800.0)
 
 #: File suffixes recognised by :func:`read_imu_log` (a ROS 2 bag may also be a folder).
 FLIGHT_LOG_SUFFIXES = (".csv", ".ulg", ".bin", ".mcap", ".db3")
@@ -60,6 +78,55 @@ def flu_to_frd(vectors: np.ndarray) -> np.ndarray:
     return v @ _FLU_TO_FRD
 
 
+def time_base(time: np.ndarray) -> str:
+    """``"unix epoch"`` or ``"time since boot"`` for stamps ``[sample]`` [s] (module docstring)."""
+    t0 = float(np.asarray(time, dtype=float).ravel()[0]) if np.size(time) else 0.0
+    return "unix epoch" if EPOCH_RANGE_S[0] <= t0 <= EPOCH_RANGE_S[1] else "time since boot"
+
+
+def median_rate(time: np.ndarray) -> float:
+    """Sample rate [Hz] from the median interval of stamps ``[sample]`` [s] (0 if < 2)."""
+    t = np.asarray(time, dtype=float)
+    if t.size < 2:
+        return 0.0
+    d = float(np.median(np.diff(t)))
+    return 1.0 / d if d > 0 else 0.0
+
+
+def choose_source(where: str, candidates: list, topic: str | None, instance: int | None,
+                  unusable: dict) -> tuple:
+    """The candidate with the highest rate among those ``topic`` / ``instance`` allow.
+
+    Parameters
+    ----------
+    where : str
+        The file, for messages.
+    candidates : list of (str, int, float, object)
+        ``(topic, instance, rate [Hz], payload)`` of each complete source.
+    topic, instance : optional
+        The user's choice (None: any).
+    unusable : dict
+        ``"topic[instance]" -> reason`` of the sources present but incomplete.
+
+    Raises
+    ------
+    ValueError
+        Nothing matches; the message lists the sources present with their
+        rates and the unusable ones with their reasons.
+    """
+    ok = [c for c in candidates if (topic is None or c[0] == topic)
+          and (instance is None or c[1] == instance)]
+    if not ok:
+        present = [f"{c[0]}[{c[1]}] at {c[2]:.4g} Hz" for c in candidates]
+        asked = ", ".join(x for x in (f"topic={topic!r}" if topic is not None else "",
+                                      f"instance={instance!r}" if instance is not None
+                                      else "") if x) or "any source"
+        raise ValueError(f"{where}: no IMU source matches {asked}; complete sources present: "
+                         f"{present or 'none'}"
+                         + (f"; present but unusable: {unusable}" if unusable else ""))
+    return max(ok, key=lambda c: c[2])
+
+
 def read_imu_log(path: str | os.PathLike, **kwargs) -> ImuSamples:
     """Read an IMU log of any supported source, dispatched on the file suffix.
 
@@ -72,8 +139,9 @@ def read_imu_log(path: str | os.PathLike, **kwargs) -> ImuSamples:
         ROS 2 bag: its folder, or a ``.mcap`` / ``.db3`` file inside one
         (:func:`.rosbag.read_ros2_imu`).
     **kwargs
-        Passed to the source's reader (e.g. ``topic=`` for a bag, ``instance=``
-        for ULog / DataFlash).
+        Passed to the source's reader: ``topic=`` (PX4 topic, ArduPilot
+        message, ROS topic) and ``instance=`` (PX4 / ArduPilot); None values
+        are dropped (the reader's choice: the best source present).
 
     Returns
     -------
@@ -86,6 +154,7 @@ def read_imu_log(path: str | os.PathLike, **kwargs) -> ImuSamples:
     ValueError
         The path does not exist or its suffix is none of the above.
     """
+    kwargs = {k: v for k, v in kwargs.items() if v is not None}
     p = Path(path)
     if not p.exists():
         raise ValueError(f"IMU log {str(p)!r} does not exist")
@@ -93,6 +162,9 @@ def read_imu_log(path: str | os.PathLike, **kwargs) -> ImuSamples:
     if p.is_dir() or suffix in (".mcap", ".db3"):
         from raysim.io.flight_logs.rosbag import read_ros2_imu
 
+        if "instance" in kwargs:
+            raise ValueError(f"IMU log {str(p)!r}: a ROS 2 bag has topics, not instances; got "
+                             f"instance={kwargs['instance']!r} (choose with topic=)")
         return read_ros2_imu(p, **kwargs)
     if suffix == ".csv":
         from raysim.io.imu_log import read_imu_csv

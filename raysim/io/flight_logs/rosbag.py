@@ -17,7 +17,11 @@ turned into FRD by :func:`raysim.io.flight_logs.flu_to_frd`, ``(x, -y, -z)``.
 A ``frame_id`` other than the body frame is not rotated (no TF lookup).
 
 Bags: a rosbag2 folder (``metadata.yaml`` with a ``.db3`` SQLite3 or ``.mcap``
-file) or one of its storage files.
+file), one of its storage files, or a standalone ``.mcap`` file (an MCAP file
+carries its own schemas and channels, so no ``metadata.yaml`` is needed; a
+``.db3`` file without its folder's ``metadata.yaml`` is refused with a message
+saying so). The result's ``source`` names the topic, the rate and the time base
+(:func:`raysim.io.flight_logs.time_base`: ROS time is usually Unix time).
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.flight_logs import check_increasing, flu_to_frd
+from raysim.io.flight_logs import check_increasing, flu_to_frd, median_rate, time_base
 from raysim.platform.imu import ImuSamples
 
 __all__ = ["IMU_MSGTYPE", "read_ros2_imu", "write_ros2_imu"]
@@ -71,6 +75,12 @@ def read_ros2_imu(path: str | os.PathLike, topic: str | None = None,
 
     path = Path(path)
     bag = path if path.is_dir() else path.parent
+    if not path.is_dir() and not (path.parent / "metadata.yaml").is_file():
+        if path.suffix.lower() != ".mcap":
+            raise ValueError(f"{str(path)!r}: a rosbag2 {path.suffix} storage file needs its "
+                             f"bag folder's metadata.yaml beside it (none in "
+                             f"{str(path.parent)!r}); give the bag folder, or record to MCAP")
+        bag = path                  # a standalone MCAP file holds its own schemas
     try:
         reader = AnyReader([bag], default_typestore=_typestore())
         reader.open()
@@ -101,9 +111,10 @@ def read_ros2_imu(path: str | os.PathLike, topic: str | None = None,
     check_increasing(time, f"{str(path)!r} topic {topic!r} (header.stamp)")
     gyro_frd = flu_to_frd(np.asarray(gyro, dtype=float).reshape(-1, 3))
     accel_frd = flu_to_frd(np.asarray(accel, dtype=float).reshape(-1, 3))
-    rate = 1.0 / float(np.median(np.diff(time)))
+    rate = median_rate(time)
     return ImuSamples(time, gyro_frd, accel_frd, spec=None, truth=None,
-                      source=f"{path} (ROS 2 {topic})", rate=rate)
+                      source=f"{path} (ROS 2 {topic}, {rate:.4g} Hz, "
+                      f"{time_base(time + epoch_ns * 1e-9)})", rate=rate)
 
 
 def write_ros2_imu(path: str | os.PathLike, samples: ImuSamples, topic: str = "/imu",

@@ -1,24 +1,47 @@
-"""PX4 ULog (``.ulg``): the ``sensor_combined`` topic, read with ``pyulog``.
+"""PX4 ULog (``.ulg``): the IMU topics, read with ``pyulog``; the best present chosen.
 
-Topic and fields (PX4 ``msg/SensorCombined.msg``):
+Topics read (PX4 ``msg/*.msg``), from the highest rate a log usually holds:
 
-=================================  ==========================================
-``timestamp``                      uint64, microseconds since boot (PX4
-                                   ``hrt_absolute_time``): the gyro sample time
-``gyro_rad[3]``                    float32, angular rate [rad/s], FRD
-``accelerometer_timestamp_relative``  int32 [us], accel time minus ``timestamp``
-``accelerometer_m_s2[3]``          float32, specific force [m/s^2], FRD
-=================================  ==========================================
+``sensor_gyro_fifo`` + ``sensor_accel_fifo``
+    ``timestamp_sample`` [us], ``dt`` [us], ``scale``, ``samples``,
+    ``x/y/z[32]`` (int16; value = x * scale, rad/s and m/s^2): the raw sensor
+    samples (1-8 kHz), band up to the sensor's own anti-alias filter.
+``vehicle_imu``
+    ``timestamp_sample`` [us], ``delta_angle[3]`` [rad], ``delta_velocity[3]``
+    [m/s], ``delta_angle_dt`` / ``delta_velocity_dt`` [us]: integrals over the
+    logged interval (a boxcar of that length).
+``sensor_combined``
+    ``timestamp`` [us], ``gyro_rad[3]`` [rad/s], ``accelerometer_m_s2[3]``
+    [m/s^2], ``accelerometer_timestamp_relative`` [us]: 200-250 Hz in real
+    logs, each sample a 4-5 ms boxcar average.
 
-Time base: the returned ``time`` is ``timestamp * 1e-6`` [s since boot]. PX4
-publishes the gyro and accelerometer values averaged over their
-``*_integral_dt`` interval ending at the stamp; they are returned as samples at
-the stamp (a constant delay of half the interval, absorbed by the IMU-radar
-clock offset). When ``accelerometer_timestamp_relative`` is not zero the
-accelerometer is interpolated linearly onto the gyro stamps (held constant
-before its first and after its last sample). PX4's body frame
-is FRD, so no axis conversion is made. Values are float32 in the file: about 7
-significant digits (relative resolution 2^-24).
+Every instance (PX4 multi-id: one per IMU) of every topic present is read;
+the complete source (gyro and accelerometer) with the highest median sample
+rate is returned unless ``topic`` / ``instance`` choose. A FIFO sample ``i``
+of a message of ``n`` samples is placed at ``timestamp_sample - (n - 1 - i)
+dt`` (the last sample at ``timestamp_sample``); the FIFO accelerometer is
+interpolated onto the FIFO gyro times. ``vehicle_imu`` rates are the deltas
+over their intervals, placed at ``timestamp_sample`` (the interval's end).
+
+What each source can see: an average over ``T`` seconds is a boxcar filter
+(first null at ``1/T``) and a log at ``f_s`` folds everything above ``f_s/2``:
+a 200-250 Hz ``sensor_combined`` (``T`` = 4-5 ms) cannot resolve a 100-200 Hz
+rotor band; only the FIFO topics can (docs/recordings.md).
+
+Time base: the returned ``time`` is the stamp times 1e-6 [s], as stored:
+microseconds since boot (PX4 ``hrt_absolute_time``) in most logs, since the
+Unix epoch in some (:func:`raysim.io.flight_logs.time_base` tells them apart
+and the result's ``source`` says which). ``sensor_combined`` publishes the gyro
+and accelerometer averaged over their ``*_integral_dt`` intervals ending at the
+stamp; they are returned as samples at the stamp (a constant delay of half the
+interval, absorbed by the IMU-radar clock offset). When
+``accelerometer_timestamp_relative`` is not zero the accelerometer is
+interpolated linearly onto the gyro stamps (held constant before its first and
+after its last sample). Frames: ``sensor_combined`` and ``vehicle_imu`` are in
+the body frame FRD (board rotation and calibration applied); the FIFO topics
+are in the sensor board's frame (FRD for the usual mounting, before
+``SENS_BOARD_ROT`` and the calibration). No axis conversion is made. Values are
+float32 in the file.
 
 :func:`write_px4_ulog` writes a minimal ULog file (header, flag bits, one
 format, one subscription, data messages) per the published ULog specification
@@ -34,13 +57,22 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.flight_logs import check_increasing, microsecond_stamps
+from raysim.io.flight_logs import (
+    check_increasing,
+    choose_source,
+    median_rate,
+    microsecond_stamps,
+    time_base,
+)
 from raysim.platform.imu import ImuSamples
 
-__all__ = ["ULOG_TOPIC", "read_px4_ulog", "write_px4_ulog"]
+__all__ = ["ULOG_TOPIC", "ULOG_IMU_TOPICS", "read_px4_ulog", "write_px4_ulog"]
 
-#: The PX4 topic holding the IMU samples.
+#: The PX4 topic the writer uses (and the usual IMU topic of a log).
 ULOG_TOPIC = "sensor_combined"
+#: IMU topics read (``sensor_gyro_fifo`` stands for the FIFO pair).
+ULOG_IMU_TOPICS = ("sensor_gyro_fifo", "vehicle_imu", "sensor_combined")
+_FIFO_ACCEL = "sensor_accel_fifo"
 
 _MAGIC = b"ULog\x01\x12\x35"
 _FORMAT = ("sensor_combined:uint64_t timestamp;float[3] gyro_rad;uint32_t gyro_integral_dt;"
@@ -51,64 +83,138 @@ _FORMAT = ("sensor_combined:uint64_t timestamp;float[3] gyro_rad;uint32_t gyro_i
 _RECORD = struct.Struct("<Q3fIi3fIBBBB")
 
 
-def read_px4_ulog(path: str | os.PathLike, instance: int = 0) -> ImuSamples:
-    """Read the ``sensor_combined`` IMU samples of a PX4 ULog file.
+def _increasing(time: np.ndarray, *arrays) -> tuple:
+    """Drop samples whose stamp does not increase (repeated FIFO reads), keep the rest."""
+    keep = np.concatenate([[True], np.diff(time) > 0]) if time.size else np.zeros(0, bool)
+    while time.size and not np.all(np.diff(time[keep]) > 0):
+        t = time[keep]
+        bad = np.flatnonzero(np.diff(t) <= 0) + 1
+        idx = np.flatnonzero(keep)[bad]
+        keep[idx] = False
+    return (time[keep],) + tuple(a[keep] for a in arrays)
+
+
+def _fifo(d: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Samples of a ``sensor_*_fifo`` topic: time ``[sample]`` [s], values ``[sample, 3]``."""
+    n = np.asarray(d["samples"], dtype=int)
+    dt = np.asarray(d["dt"], dtype=float)
+    scale = np.asarray(d["scale"], dtype=float)
+    ts = np.asarray(d.get("timestamp_sample", d["timestamp"]), dtype=float)
+    width = max(int(n.max()) if n.size else 0, 1)
+    i = np.arange(width)
+    valid = i[None, :] < n[:, None]
+    t = (ts[:, None] - (n[:, None] - 1 - i[None, :]) * dt[:, None]) * 1e-6
+    xyz = [np.column_stack([np.asarray(d[f"{a}[{j}]"], dtype=float) for j in range(width)])
+           * scale[:, None] for a in "xyz"]
+    vals = np.stack([x[valid] for x in xyz], axis=-1)
+    time, vals = _increasing(t[valid], vals)
+    return time, vals
+
+
+def _candidates(log) -> tuple[list, dict]:
+    """Complete IMU sources of a parsed log: ``(topic, instance, rate, (t, gyro, accel))``."""
+    by = {(d.name, d.multi_id): d.data for d in log.data_list}
+    out, unusable = [], {}
+    for (name, k), d in sorted(by.items()):
+        try:
+            if name == "sensor_combined":
+                time = np.asarray(d["timestamp"], dtype=np.uint64).astype(float) * 1e-6
+                gyro = np.column_stack([d[f"gyro_rad[{i}]"] for i in range(3)]).astype(float)
+                accel = np.column_stack([d[f"accelerometer_m_s2[{i}]"]
+                                         for i in range(3)]).astype(float)
+                rel = np.asarray(d.get("accelerometer_timestamp_relative",
+                                       np.zeros(time.size)), dtype=float)
+                if np.any(rel != 0):
+                    t_acc = time + rel * 1e-6
+                    check_increasing(t_acc, f"{name}[{k}] accelerometer")
+                    accel = np.column_stack([np.interp(time, t_acc, accel[:, i])
+                                             for i in range(3)])
+            elif name == "vehicle_imu":
+                time = np.asarray(d.get("timestamp_sample", d["timestamp"]),
+                                  dtype=np.uint64).astype(float) * 1e-6
+                da = np.asarray(d["delta_angle_dt"], dtype=float) * 1e-6
+                dv = np.asarray(d["delta_velocity_dt"], dtype=float) * 1e-6
+                if np.any(da <= 0) or np.any(dv <= 0):
+                    raise ValueError("delta_angle_dt / delta_velocity_dt not positive")
+                gyro = np.column_stack([d[f"delta_angle[{i}]"] for i in range(3)]) / da[:, None]
+                accel = np.column_stack([d[f"delta_velocity[{i}]"]
+                                         for i in range(3)]) / dv[:, None]
+            elif name == "sensor_gyro_fifo":
+                time, gyro = _fifo(d)
+                if (_FIFO_ACCEL, k) not in by:
+                    raise ValueError(f"no {_FIFO_ACCEL}[{k}] in the log")
+                t_acc, acc = _fifo(by[_FIFO_ACCEL, k])
+                inside = (time >= t_acc[0]) & (time <= t_acc[-1])
+                if inside.sum() < 2:
+                    raise ValueError(f"{_FIFO_ACCEL}[{k}] does not overlap the gyro samples")
+                time, gyro = time[inside], gyro[inside]
+                accel = np.column_stack([np.interp(time, t_acc, acc[:, i]) for i in range(3)])
+            else:
+                continue
+            time = np.asarray(time, dtype=float)
+            check_increasing(time, f"{name}[{k}]")     # FIFO repeats are dropped in _fifo
+            out.append((name, k, median_rate(time), (time, gyro, accel)))
+        except (KeyError, ValueError) as exc:
+            unusable[f"{name}[{k}]"] = str(exc)
+    return out, unusable
+
+
+def read_px4_ulog(path: str | os.PathLike, instance: int | None = None,
+                  topic: str | None = None) -> ImuSamples:
+    """Read the best IMU source of a PX4 ULog file (module docstring).
 
     Parameters
     ----------
     path : str or path-like
         ``.ulg`` file.
-    instance : int
-        Multi-instance id of the topic (0 for the usual single instance).
+    instance : int, optional
+        Multi-instance id of the topic (one per IMU); default the best.
+    topic : {"sensor_gyro_fifo", "vehicle_imu", "sensor_combined"}, optional
+        Topic to read; default the complete one with the highest rate.
 
     Returns
     -------
     ImuSamples
-        ``time [sample]`` [s since boot], ``gyro [sample, 3]`` [rad/s],
-        ``accel [sample, 3]`` [m/s^2], FRD (module docstring).
+        ``time [sample]`` [s, the log's clock], ``gyro [sample, 3]`` [rad/s],
+        ``accel [sample, 3]`` [m/s^2], FRD; ``rate`` the median sample rate
+        [Hz]; ``source`` names the file, topic, instance, rate and time base.
 
     Raises
     ------
     ValueError
-        Not a ULog file, no ``sensor_combined`` topic (the message lists the
-        topics present), or time stamps that do not increase.
+        Not a ULog file, an unknown topic, no complete IMU source matching
+        ``topic`` / ``instance`` (the message lists the sources present with
+        their rates), or time stamps that do not increase.
     """
     from pyulog import ULog
 
     path = Path(path)
+    if topic is not None and topic not in ULOG_IMU_TOPICS:
+        raise ValueError(f"{str(path)!r}: topic={topic!r} is not an IMU topic read here; "
+                         f"expected one of {list(ULOG_IMU_TOPICS)}")
+    if instance is not None and (isinstance(instance, bool) or int(instance) != instance
+                                 or instance < 0):
+        raise ValueError(f"{str(path)!r}: instance must be a non-negative integer, got "
+                         f"{instance!r}")
     with path.open("rb") as fh:
         if fh.read(7) != _MAGIC:
             raise ValueError(f"{str(path)!r} is not a ULog file (no 'ULog' header magic)")
     try:
-        log = ULog(str(path), [ULOG_TOPIC])
+        log = ULog(str(path), list(ULOG_IMU_TOPICS) + [_FIFO_ACCEL])
     except Exception as exc:  # pyulog raises bare Exceptions on corrupt files
         raise ValueError(f"{str(path)!r}: cannot parse ULog file: {exc}") from None
-    found = [d for d in log.data_list if d.name == ULOG_TOPIC]
-    if not found:
+    found, unusable = _candidates(log)
+    if not found and not unusable and topic is None and instance is None:
         topics = sorted({f.name for f in log.message_formats.values()})
-        raise ValueError(f"{str(path)!r}: no {ULOG_TOPIC!r} data in the log; expected the "
-                         f"PX4 topic {ULOG_TOPIC!r} (formats present: {topics})")
-    ids = sorted(d.multi_id for d in found)
-    match = [d for d in found if d.multi_id == instance]
-    if not match:
-        raise ValueError(f"{str(path)!r}: instance={instance} of {ULOG_TOPIC!r} not present; "
-                         f"instances are {ids}")
-    d = match[0].data
-    stamp_us = np.asarray(d["timestamp"], dtype=np.uint64)
-    time = stamp_us.astype(np.float64) * 1e-6
-    gyro = np.column_stack([d[f"gyro_rad[{i}]"] for i in range(3)]).astype(float)
-    accel = np.column_stack([d[f"accelerometer_m_s2[{i}]"] for i in range(3)]).astype(float)
-    where = f"{str(path)!r} ({ULOG_TOPIC})"
-    check_increasing(time, where)
-    rel = np.asarray(d.get("accelerometer_timestamp_relative", np.zeros(time.size)),
-                     dtype=float)
-    if np.any(rel != 0):
-        t_acc = time + rel * 1e-6
-        check_increasing(t_acc, where + " accelerometer")
-        accel = np.column_stack([np.interp(time, t_acc, accel[:, i]) for i in range(3)])
-    rate = 1.0 / float(np.median(np.diff(time)))
-    return ImuSamples(time, gyro, accel, spec=None, truth=None,
-                      source=f"{path} (PX4 ULog {ULOG_TOPIC})", rate=rate)
+        raise ValueError(f"{str(path)!r}: no IMU data in the log; expected one of the PX4 "
+                         f"topics {list(ULOG_IMU_TOPICS)} (formats present: {topics})")
+    name, k, rate, (time, gyro, accel) = choose_source(str(path), found, topic, instance,
+                                                       unusable)
+    check_increasing(time, f"{str(path)!r} ({name}[{k}])")
+    others = ", ".join(f"{c[0]}[{c[1]}] {c[2]:.4g} Hz" for c in found if c[:2] != (name, k))
+    source = (f"{path} (PX4 ULog {name} instance {k}, {rate:.4g} Hz, {time_base(time)}"
+              + (f"; also present: {others}" if others else "") + ")")
+    return ImuSamples(time, gyro, accel, spec=None, truth=None, source=source, rate=rate)
 
 
 def _message(kind: bytes, payload: bytes) -> bytes:
