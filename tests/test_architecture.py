@@ -266,3 +266,16 @@ def test_cli_holds_no_strapdown_or_projection():
         if found:
             bad[str(path.relative_to(ROOT))] = found
     assert bad == {}
+
+
+#: Packages below the echo models: they may not import ``raysim.echoes``.
+BELOW_ECHOES = ("raysim.radar", "raysim.platform", "raysim.synthesis", "raysim.processing",
+                "raysim.measure", "raysim.scenario")
+
+
+def test_lower_stages_import_no_echo_model():
+    """Timing, synthesis, processing and measurement never import an echo model."""
+    graph = _graph()
+    bad = {m: sorted(i for i in imps if i.startswith("raysim.echoes"))
+           for m, imps in graph.items() if m.startswith(BELOW_ECHOES)}
+    assert {m: i for m, i in bad.items() if i} == {}

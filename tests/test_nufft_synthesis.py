@@ -242,8 +242,8 @@ def test_pareto_front_rules():
 
 def test_chart_default_on_pareto_front(monkeypatch, tmp_path):
     """Every knob measured on a reduced frame; the default must be on its Pareto front."""
-    from raysim.studies import speed_chart as sa
-    from raysim.studies import workloads
+    from raysim.bench import speed_chart as sa
+    from raysim.bench import workloads
 
     full = workloads.paper_setup
 

@@ -7,7 +7,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from raysim.echoes.oracle import PointTarget, simulate_point_targets
+from raysim.echoes.oracle import PointTarget, point_target_source, simulate_point_targets
 from raysim.platform.motion import sinusoid
 from raysim.radar.arrays import upa
 from raysim.radar.config import RadarConfig
@@ -16,7 +16,6 @@ from raysim.synthesis.streaming import (
     FrameWriter,
     NpyWriter,
     peak_bytes,
-    point_target_source,
     render_frames,
     render_stream,
 )

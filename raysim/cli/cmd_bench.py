@@ -59,7 +59,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``raysim bench``; returns the exit code."""
-    from raysim.studies import bench
+    from raysim.bench import suite as bench
 
     if args.chart_only and not args.chart:
         raise ValueError("--chart-only needs --chart OUT.png")

@@ -260,3 +260,23 @@ def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
     return RadarFrame(adc_samples(data, config), config, array, config.chirp_times(frame, t0),
                       np.asarray(lever_arm, dtype=float), frame,
                       {"targets": list(targets), "trajectory": trajectory.name})
+
+
+def point_target_source(config: RadarConfig, array, targets, trajectory=None, *,
+                        lever_arm=(0.0, 0.0, 0.0), t0: float = 0.0):
+    """Source for :func:`raysim.synthesis.streaming.render_stream` with the oracle's exact point-target delays.
+
+    Returns
+    -------
+    callable
+        ``source(frame) -> (tau, amplitude)``, both ``[target, chirp, channel]``
+        from :func:`point_target_delays`.
+    """
+    trajectory = stationary() if trajectory is None else trajectory
+    targets = list(targets)
+
+    def source(frame: int):
+        return point_target_delays(config, array, trajectory, targets, lever_arm=lever_arm,
+                                   frame=frame, t0=t0)
+
+    return source

@@ -316,7 +316,7 @@ def _coherent_power(bf: Beamformer, snaps: np.ndarray, gate_r, grid, direction) 
 
 
 def _direction(az: float, el: float) -> np.ndarray:
-    from raysim.echoes.oracle import direction
+    from compensation.geometry import direction
 
     return direction(az, el)
 

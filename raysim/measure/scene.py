@@ -367,7 +367,7 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
     leak = ridge_leakage_db(rd)
     detections = []
     lever = np.asarray(lever_arm, dtype=float)
-    from raysim.echoes.oracle import direction
+    from compensation.geometry import direction
 
     for gi, ai, ei in cfar_detect(cube)[:MAX_DETECTIONS]:
         u = direction(az[ai], el[ei])

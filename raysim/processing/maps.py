@@ -199,7 +199,7 @@ def beamform(x: np.ndarray, array: VirtualArray, wavelength: float, u: np.ndarra
 
 def az_el_grid(az: np.ndarray, el: np.ndarray) -> np.ndarray:
     """Directions of an (azimuth, elevation) grid, shape ``[azimuth * elevation, 3]`` (az major)."""
-    from raysim.echoes.oracle import direction
+    from compensation.geometry import direction
 
     aa, ee = np.meshgrid(az, el, indexing="ij")
     return direction(aa, ee).reshape(-1, 3)

@@ -96,7 +96,7 @@ def doppler_mainlobe_width(slow_time: np.ndarray, chirp_interval: float) -> floa
 
 def angle_error_deg(az, el, az_true, el_true) -> float:
     """Great-circle angle [deg] between (az, el) and the true direction (all in rad)."""
-    from raysim.echoes.oracle import direction
+    from compensation.geometry import direction
 
     u, v = direction(az, el), direction(az_true, el_true)
     return float(np.rad2deg(np.arccos(np.clip(np.dot(u, v), -1.0, 1.0))))

@@ -46,13 +46,13 @@ def available() -> bool:
 
 
 def backend() -> str:
-    """``"cuda"`` where a GPU is present (``raysim.echoes.rt.backend.cuda_available``),
-    else ``"llvm"``; ``"missing"`` without Dr.Jit."""
-    from raysim.echoes.rt.backend import cuda_available
-
+    """``"cuda"`` where a GPU and driver are present, else ``"llvm"``; ``"missing"``
+    without Dr.Jit."""
     if not available():
         return "missing"
-    return "cuda" if cuda_available() else "llvm"
+    import drjit as dr
+
+    return "cuda" if dr.has_backend(dr.JitBackend.CUDA) else "llvm"
 
 
 def _types(name: str):

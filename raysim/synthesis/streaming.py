@@ -269,26 +269,3 @@ class NpyWriter:
         self.array[i, first_chirp:n1] = block
         if n1 == self.array.shape[1]:
             self.array.flush()
-
-
-def point_target_source(config: RadarConfig, array, targets, trajectory=None, *,
-                        lever_arm=(0.0, 0.0, 0.0), t0: float = 0.0):
-    """Source for :func:`render_stream` with the oracle's exact point-target delays.
-
-    Returns
-    -------
-    callable
-        ``source(frame) -> (tau, amplitude)``, both ``[target, chirp, channel]``
-        from :func:`raysim.echoes.oracle.point_target_delays`.
-    """
-    from raysim.echoes.oracle import point_target_delays
-    from raysim.platform.motion import stationary
-
-    trajectory = stationary() if trajectory is None else trajectory
-    targets = list(targets)
-
-    def source(frame: int):
-        return point_target_delays(config, array, trajectory, targets, lever_arm=lever_arm,
-                                   frame=frame, t0=t0)
-
-    return source

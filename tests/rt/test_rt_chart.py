@@ -8,7 +8,7 @@ pytestmark = pytest.mark.sionna
 
 
 def test_rt_knobs_measured_and_drawn(warm_kernels, monkeypatch, tmp_path):
-    from raysim.studies import speed_chart as sa
+    from raysim.bench import speed_chart as sa
 
     d = sa.rt_defaults()
     assert d == {"samples_per_src": 100_000, "max_depth": 3, "retrace_every": None}
