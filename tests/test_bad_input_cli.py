@@ -321,8 +321,8 @@ def test_every_command_help_has_examples(capsys):
 # ----------------------------------------------------------------- bench output
 def test_bench_prints_a_table_with_out(tmp_path, capsys, monkeypatch):
     """``raysim bench --out`` writes the JSON and still shows the results on stdout."""
-    from raysim.cli import main
     from raysim.bench import suite as bench
+    from raysim.cli import main
 
     fake = {"schema": bench.SCHEMA, "quick": True, "machine": {"cpus": 2},
             "memory": {"peak_rss_gb": 1.25}, "oracle": {"oracle_s": 0.5, "floor_s": 0.1},

@@ -264,7 +264,9 @@ def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
 
 def point_target_source(config: RadarConfig, array, targets, trajectory=None, *,
                         lever_arm=(0.0, 0.0, 0.0), t0: float = 0.0):
-    """Source for :func:`raysim.synthesis.streaming.render_stream` with the oracle's exact point-target delays.
+    """Source of the oracle's exact point-target delays for a frame stream.
+
+    For :func:`raysim.synthesis.streaming.render_stream`.
 
     Returns
     -------
