@@ -180,6 +180,12 @@ METRICS = {
     "peak_power_db": ("dB(W)", "received power at the target's range peak"),
     "ridge_leakage_db": ("dB", "power of a scene's RD map outside the zero-Doppler ridge "
                                "(Doppler bins -1..+1) relative to the map's total"),
+    "beam_angle_error_deg": ("deg", "azimuth error of the zero-Doppler peak of a compensated "
+                                    "beam cube (raysim.measure.beams)"),
+    "beam_pseudo_velocity_bins": ("bins", "pseudo-velocity of the slow-time signal at that "
+                                          "peak, in Doppler velocity bins"),
+    "doppler_leakage_db": ("dB", "power of that signal's Hann Doppler spectrum outside the "
+                                 "peak bin and its neighbours, over the total"),
     "width_improvement_pct": ("%", "Doppler width reduction against chain none: "
                                    "100 (w_none - w) / w_none"),
     "width_vs_stationary": ("1", "Doppler width over that of the stationary reference"),

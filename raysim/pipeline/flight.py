@@ -232,8 +232,8 @@ MEASURE_STEP_DEG = 0.25
 
 
 def measure_store(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
-    """Per frame of a compensated store: azimuth error [deg], pseudo-velocity [bin] and
-    Doppler power outside +-1 bin of the peak [dB], at the zero-Doppler beam peak.
+    """The beam metrics (:data:`raysim.measure.beams.BEAM_METRICS`) of every frame of a
+    compensated store of a simulated flight.
 
     The store holds one elevation (the 3 Tx x 4 Rx array resolves azimuth only) and an
     azimuth grid around the target; ``first`` is the flight frame of its first frame
@@ -242,31 +242,22 @@ def measure_store(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
     Returns
     -------
     ndarray, shape ``[frame, 3]``
+        ``beam_angle_error_deg`` [deg], ``beam_pseudo_velocity_bins`` [bins],
+        ``doppler_leakage_db`` [dB] per frame.
     """
     from raysim.io.mmwave_config import read_mmwave_config
     from raysim.io.zarr_store import open_store
-    from raysim.processing.metrics import parabolic_offset, pseudo_velocity
+    from raysim.measure.beams import BEAM_METRICS, beam_metrics
 
     ds = store if hasattr(store, "data_vars") else open_store(store)   # a path or a Dataset
     cfg = read_mmwave_config(flight.radar_config).config
     az_true = flight.apparent_direction(first)[0]
-    step = float(np.diff(ds.azimuth.values[:2])[0])
     out = []
     for b in ds["beams"].values[..., 0]:                         # [chirp, range, azimuth]
-        zero = np.abs(b.astype(np.complex128).sum(axis=0)) ** 2   # [range, azimuth]
-        g, a = np.unravel_index(np.argmax(zero), zero.shape)
-        if not 0 < a < zero.shape[1] - 1:
-            raise ValueError(f"the beam peak lies on the edge of the azimuth grid "
-                             f"({ds.azimuth.values[a]:.2f} deg); expected it inside")
-        db = 10 * np.log10(zero[g])
-        az = ds.azimuth.values[a] + step * parabolic_offset(*db[a - 1:a + 2])
-        slow = b[:, g, a]
-        pv = pseudo_velocity(slow, cfg.chirp_interval, cfg.center_wavelength)
-        spec = np.abs(np.fft.fft(slow * np.hanning(slow.size))) ** 2
-        k = int(np.argmax(spec))
-        near = spec[[(k - 1) % spec.size, k, (k + 1) % spec.size]].sum()
-        leak = 10 * np.log10(max(spec.sum() - near, 1e-30 * spec.sum()) / spec.sum())
-        out.append((abs(az - az_true), pv / cfg.velocity_resolution, leak))
+        m = beam_metrics(b, ds.azimuth.values, az_true, chirp_interval=cfg.chirp_interval,
+                         wavelength=cfg.center_wavelength,
+                         velocity_resolution=cfg.velocity_resolution)
+        out.append([m[k] for k in BEAM_METRICS])
     return np.array(out)
 
 
@@ -285,8 +276,9 @@ def calibrated_flight_table(folder: str | Path, seeds=range(4), *, frames: int =
     Returns
     -------
     list of dict
-        Per seed: ``seed``, worst ``angle_deg``, ``pseudo_velocity_bin`` (absolute),
-        ``leakage_db`` over the frames, ``offset_error_ms`` (estimated minus true),
+        Per seed: ``seed``, the worst over the frames of ``beam_angle_error_deg``,
+        ``|beam_pseudo_velocity_bins|`` and ``doppler_leakage_db``
+        (:mod:`raysim.measure.beams`), ``offset_error_ms`` (estimated minus true),
         ``cpu_s`` of the compensate stage (``time.process_time``).
     """
     import time
@@ -305,9 +297,9 @@ def calibrated_flight_table(folder: str | Path, seeds=range(4), *, frames: int =
         cpu = time.process_time() - cpu
         m = measure_store(out, f)
         cal = res.calibration
-        rows.append(dict(seed=int(seed), angle_deg=float(m[:, 0].max()),
-                         pseudo_velocity_bin=float(np.abs(m[:, 1]).max()),
-                         leakage_db=float(m[:, 2].max()),
+        rows.append(dict(seed=int(seed), beam_angle_error_deg=float(m[:, 0].max()),
+                         beam_pseudo_velocity_bins=float(np.abs(m[:, 1]).max()),
+                         doppler_leakage_db=float(m[:, 2].max()),
                          offset_error_ms=1e3 * (cal["time_offset_s"] - f.time_offset),
                          cpu_s=cpu))
     return rows
@@ -322,5 +314,6 @@ if __name__ == "__main__":     # python -m raysim.pipeline.flight FOLDER [SEEDS]
     print("| seed | angle [deg] | pseudo-velocity [bin] | leakage [dB] | offset error [ms] "
           "| CPU [s] |\n|---|---|---|---|---|---|")
     for row in table:
-        print(f"| {row['seed']} | {row['angle_deg']:.3f} | {row['pseudo_velocity_bin']:.4f} | "
-              f"{row['leakage_db']:.1f} | {row['offset_error_ms']:+.3f} | {row['cpu_s']:.1f} |")
+        print(f"| {row['seed']} | {row['beam_angle_error_deg']:.3f} | "
+              f"{row['beam_pseudo_velocity_bins']:.4f} | {row['doppler_leakage_db']:.1f} | "
+              f"{row['offset_error_ms']:+.3f} | {row['cpu_s']:.1f} |")
