@@ -18,7 +18,7 @@ from raysim.synthesis.frame import RadarFrame
 
 __all__ = ["FeatureUnavailable", "Reference", "frame_source", "point_targets",
            "reference_target", "LazyFrames", "render_frames", "nominal_at", "path_kinds",
-           "hover_twin"]
+           "hover_twin", "gated_source"]
 
 
 class FeatureUnavailable(RuntimeError):
@@ -448,3 +448,41 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
             progress(f"synthesised {name}")
     out["seconds"] = seconds
     return out
+
+
+def gated_source(config, array, trajectory, targets, *, range_m: float,
+                 lever_arm=(0.0, 0.0, 0.0), t0: float = 0.0):
+    """The gated oracle as a source: one frame's range gate nearest ``range_m``, in closed form.
+
+    The fast source of studies that need one range gate only
+    (:func:`raysim.echoes.gated.gated_cube`: equal to the point oracle's
+    Hann range compression at that bin).
+
+    Parameters
+    ----------
+    config : raysim.radar.config.RadarConfig
+        Waveform (complex sampling); one frame starting at ``t0`` [s].
+    array : raysim.radar.arrays.VirtualArray
+    trajectory : raysim.platform.motion.Trajectory
+        Truth body motion.
+    targets : sequence of raysim.echoes.oracle.PointTarget
+    range_m : float
+        Range of the gate [m]; the nearest unpadded range bin is used.
+    lever_arm : array_like, shape ``[3]``
+        Radar origin in B [m].
+
+    Returns
+    -------
+    gate : ndarray, shape ``[chirp, channel]``, complex128
+        Range-compressed samples at the gate [sqrt(W)].
+    bin : int
+        Range bin of the gate (unpadded FFT).
+    gate_range_m : float
+        Range of that bin [m].
+    """
+    from raysim.echoes.gated import gated_cube, nearest_range_bin
+
+    m = nearest_range_bin(config, range_m)
+    gate = gated_cube(config, array, trajectory, list(targets), range_bin=m,
+                      lever_arm=lever_arm, t0=t0)
+    return gate, m, float(config.range_axis(config.num_samples)[m])

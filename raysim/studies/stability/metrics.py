@@ -1,7 +1,7 @@
 """Metrics of one stability point: the gated cube through every chain, via the pipeline.
 
 The target's range gate ``[chirp, channel]`` from
-:func:`raysim.echoes.gated.gated_cube` and the motion of
+:func:`raysim.pipeline.sources.gated_source` (the gated oracle) and the motion of
 :func:`raysim.studies.stability.motion.point_motion` (pose at every TDM slot of
 every chirp) are measured by :func:`raysim.measure.point.gate_metrics`, the
 definition every command uses, through
@@ -27,11 +27,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from raysim.echoes.gated import gated_cube, nearest_range_bin
 from raysim.echoes.oracle import direction
 from raysim.measure.point import PointGate, gate_metrics
 from raysim.pipeline.beams import Beamformer
-from raysim.pipeline.sources import Reference
+from raysim.pipeline.sources import Reference, gated_source
 from raysim.platform.kinematics import slot_times
 from raysim.processing.maps import Map, map_peak
 from raysim.studies.stability.motion import point_motion
@@ -71,11 +70,9 @@ def point_gate(point: StabilityPoint) -> tuple[np.ndarray, int, float]:
     range_m : float
         Range of that bin [m].
     """
-    cfg = point.config
-    m = nearest_range_bin(cfg, point.target_range_m)
-    gate = gated_cube(cfg, point.array, point.trajectory, [point.target], range_bin=m,
-                      lever_arm=point.lever_arm_m, t0=point.t0_s)
-    return gate, m, float(cfg.range_axis(cfg.num_samples)[m])
+    return gated_source(point.config, point.array, point.trajectory, [point.target],
+                        range_m=point.target_range_m, lever_arm=point.lever_arm_m,
+                        t0=point.t0_s)
 
 
 def _reference(point: StabilityPoint) -> Reference:
