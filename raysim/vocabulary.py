@@ -32,7 +32,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = [
-    "CHAINS", "ROTATION_PHASES", "ChainSpec", "parse_chain", "parse_chains", "chain_label",
+    "CHAINS", "CHAIN_KEYS", "ROTATION_PHASES", "ChainSpec", "parse_chain", "parse_chains",
+    "chain_label",
     "MAPS", "FIGURE_AXES", "MAP_TITLES", "AXIS_LABELS", "AXIS_UNITS", "METRICS", "metric_unit",
     "REFERENCE",
 ]
@@ -42,6 +43,10 @@ CHAINS = ("none", "paper", "exact")
 
 #: Rotation-phase forms of the ``paper`` chain (first is the default).
 ROTATION_PHASES = ("integrated", "published")
+
+#: Every chain key, options included, in table order (``paper`` then ``paper:published``).
+CHAIN_KEYS = tuple(k for n in CHAINS
+                   for k in ((n, f"{n}:{ROTATION_PHASES[1]}") if n == "paper" else (n,)))
 
 #: Key of the stationary-platform reference in results (not a chain).
 REFERENCE = "stationary"

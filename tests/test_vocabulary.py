@@ -238,3 +238,14 @@ def test_stability_names_are_the_vocabulary():
 
     assert set(stability.STABILITY_METRICS) <= set(METRICS)
     assert all(_valid_chain_key(c) for c in stability.MAP_CHAINS)
+
+
+def test_chain_keys_are_the_one_vocabulary():
+    """Every chain key (options included) parses to itself; the studies' chain lists are it."""
+    from raysim.studies.reproduce import DEFAULT_CHAINS
+    from raysim.studies.stability.metrics import MAP_CHAINS
+    from raysim.vocabulary import CHAIN_KEYS, CHAINS, parse_chains
+
+    assert [s.key for s in parse_chains(CHAIN_KEYS)] == list(CHAIN_KEYS)
+    assert set(CHAINS) <= set(CHAIN_KEYS)
+    assert DEFAULT_CHAINS == MAP_CHAINS == CHAIN_KEYS

@@ -59,9 +59,9 @@ def chains_option(text: str, option: str = "--chains") -> list[str]:
     ValueError
         Naming ``option``, the value and the closest chain name.
     """
-    from raysim.vocabulary import CHAINS, parse_chains
+    from raysim.vocabulary import CHAIN_KEYS, parse_chains
 
-    names = [*CHAINS, "paper:published"]
+    names = list(CHAIN_KEYS)
     try:
         return [s.key for s in parse_chains(text)]
     except ValueError as exc:

@@ -58,14 +58,14 @@ from raysim.processing import metrics
 from raysim.scenario import Scenario, scenario_from_case
 from raysim.scenario.paper_cases import PAPER_CASES, get_case
 from raysim.studies.reproduce_output import format_table, write_case_figures, write_results
-from raysim.vocabulary import REFERENCE, metric_unit, parse_chains
+from raysim.vocabulary import CHAIN_KEYS, REFERENCE, metric_unit, parse_chains
 
 __all__ = ["DEFAULT_CHAINS", "ROW_METRICS", "ReproductionSettings", "case_scenario",
            "prepare_case", "platform_motion", "run_case", "reproduce", "format_table",
            "write_results", "write_case_figures"]
 
 #: Chains evaluated for every case, in table order (:func:`raysim.vocabulary.parse_chains`).
-DEFAULT_CHAINS = ("none", "paper", "paper:published", "exact")
+DEFAULT_CHAINS = CHAIN_KEYS
 #: Metrics of every row (mean and ``_std`` over seeds), names of :data:`raysim.vocabulary.METRICS`.
 ROW_METRICS = ("pseudo_velocity_mps", "pseudo_velocity_bins", "doppler_width_hz",
                "width_improvement_pct", "width_vs_stationary", "angle_error_deg", "az_deg",

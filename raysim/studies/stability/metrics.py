@@ -35,13 +35,13 @@ from raysim.platform.kinematics import slot_times
 from raysim.processing.maps import Map, map_peak
 from raysim.studies.stability.motion import point_motion
 from raysim.studies.stability.point import StabilityPoint
-from raysim.vocabulary import ChainSpec, parse_chain, parse_chains
+from raysim.vocabulary import CHAIN_KEYS, ChainSpec, parse_chain, parse_chains
 
 __all__ = ["MAP_CHAINS", "STABILITY_METRICS", "ANGLE_CHIRPS", "STRAPDOWN", "point_gate",
            "compensated_slow_time", "evaluate"]
 
 #: Chains compared in every map (keys of :class:`raysim.vocabulary.ChainSpec`).
-MAP_CHAINS = tuple(s.key for s in parse_chains(("none", "paper", "paper:published", "exact")))
+MAP_CHAINS = CHAIN_KEYS
 #: Metrics of every chain at every point (names of :data:`raysim.vocabulary.METRICS`).
 STABILITY_METRICS = ("pseudo_velocity_mps", "pseudo_velocity_bins", "doppler_width_hz",
                      "angle_error_worst_deg", "angle_error_deg", "map_angle_error_deg",
