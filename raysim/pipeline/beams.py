@@ -4,7 +4,10 @@
 place a chain name becomes beams) for the cells of one frame: it picks the
 poses of the chirps it is given from the frame's motion, at every transmit
 slot for a compensated chain on a TDM array, and collects the chain's guard
-warnings. :mod:`raysim.measure.point` measures every point metric through it.
+warnings. For ``dpca`` it plans the sub-aperture once from the whole frame's
+motion (:func:`compensation.dpca_plan`, :attr:`Beamformer.plan`) and holds its
+size for every call, so beams of any chirps of the frame come from
+sub-apertures of one size. :mod:`raysim.measure.point` measures every point metric through it.
 """
 
 from __future__ import annotations
@@ -15,7 +18,11 @@ from raysim.pipeline.chains import project
 from raysim.radar.arrays import VirtualArray
 from raysim.vocabulary import ChainSpec, parse_chain
 
-__all__ = ["Beamformer"]
+__all__ = ["Beamformer", "PRICE_PREFIX"]
+
+#: Start of the line a ``dpca`` beamformer adds to its warnings to state its price
+#: (elements kept, beamwidth growth, gain lost: :meth:`compensation.DPCAPlan.summary`).
+PRICE_PREFIX = "dpca price: "
 
 
 class Beamformer:
@@ -24,7 +31,7 @@ class Beamformer:
     Parameters
     ----------
     chain : str or ChainSpec
-        ``none``, ``paper``, ``paper:published`` or ``exact``.
+        ``none``, ``paper``, ``paper:published``, ``exact`` or ``dpca``.
     array : VirtualArray
         Virtual array of the frame (positions ``[channel, 3]`` in A [m], TDM
         slot of every channel, UPA grid shape).
@@ -37,16 +44,30 @@ class Beamformer:
         each slot's channels with the pose of its own transmit instant;
         ``none`` ignores the motion.
     warnings : list, optional
-        Receives the chain's guard warnings (str), each once.
+        Receives the chain's guard warnings (str), each once. ``dpca`` adds, from
+        the start, its price (:data:`PRICE_PREFIX` then the plan's summary:
+        sub-aperture kept, beamwidth growth, gain lost) and its plan's
+        ``dpca aperture`` / ``dpca rotation`` warnings, so both reach every
+        command that reports the warnings.
+    subaperture : (int, int), optional
+        ``dpca``: elements per axis of its sub-aperture (default the largest
+        the frame's motion leaves, :attr:`plan`).
+
+    Attributes
+    ----------
+    plan : compensation.DPCAPlan or None
+        ``dpca``: the sub-aperture of the whole frame and its price
+        (``summary()``, ``gain_loss_db``, ``resolution_loss``); None otherwise.
 
     Raises
     ------
     ValueError
-        A compensated chain without ``motion``.
+        A compensated chain without ``motion``; ``dpca`` with a displacement
+        over the frame larger than the spare aperture.
     """
 
     def __init__(self, chain: str | ChainSpec, array: VirtualArray, wavelength: float, *,
-                 motion=None, warnings: list | None = None) -> None:
+                 motion=None, warnings: list | None = None, subaperture=None) -> None:
         self.spec = parse_chain(chain)
         if self.spec.compensated and motion is None:
             raise ValueError(f"chain {self.spec.key!r} needs motion (the platform pose at "
@@ -55,6 +76,17 @@ class Beamformer:
         self.wavelength = float(wavelength)
         self.motion = motion if self.spec.compensated else None
         self.warnings = [] if warnings is None else warnings
+        self.plan = None
+        if self.spec.name == "dpca":
+            from compensation import dpca_plan
+
+            self.plan = dpca_plan(array.virtual_positions, self.motion,
+                                  wavelength=self.wavelength, grid_shape=array.grid_shape,
+                                  channel_slot=array.tx_slot if array.num_slots > 1 else None,
+                                  subaperture=subaperture)
+            price = PRICE_PREFIX + self.plan.summary().removeprefix("dpca: ")
+            self.warnings.extend(w for w in (price, *self.plan.warnings)
+                                 if w not in self.warnings)
 
     @property
     def compensated(self) -> bool:
@@ -98,6 +130,10 @@ class Beamformer:
         out = project(self.spec, rc, arr.virtual_positions, wavelength=self.wavelength,
                       range_axis=np.atleast_1d(ranges), azimuth=np.atleast_1d(azimuth),
                       elevation=np.atleast_1d(elevation), motion=mot, direction=direction,
-                      grid_shape=arr.grid_shape, channel_slot=channel_slot)
-        self.warnings.extend(w for w in out.warnings if w not in self.warnings)
+                      grid_shape=arr.grid_shape, channel_slot=channel_slot,
+                      subaperture=None if self.plan is None else self.plan.sub_shape)
+        # dpca: the frame's plan stated its aperture and rotation warnings; a call on
+        # some of the frame's chirps would restate them for those chirps only
+        fresh = [w for w in out.warnings if self.plan is None or not w.startswith("dpca ")]
+        self.warnings.extend(w for w in fresh if w not in self.warnings)
         return out.data

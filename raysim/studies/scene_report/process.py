@@ -50,13 +50,14 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
     Parameters
     ----------
     chain : str or ChainSpec
-        A chain (``none``, ``paper``, ``paper:published``, ``exact``), or
+        A chain (``none``, ``paper``, ``paper:published``, ``exact``, ``dpca``), or
         :data:`raysim.vocabulary.REFERENCE` for the stationary platform's frame
         (beamformed like ``none``).
     rc : ndarray, shape ``[chirp, channel, range]``
-        Range-compressed cube (Hann), channel taper applied (:func:`report_cube`).
+        Range-compressed cube (Hann), channel taper applied (:func:`report_cube`;
+        ``dpca`` moves the taper onto its sub-aperture).
     motion : compensation.PlatformMotion or None
-        Pose estimate at the chirps (needed by ``paper`` and ``exact``).
+        Pose estimate at the chirps (needed by the compensated chains).
     settings, config, array
         Report settings, waveform and virtual array.
 
@@ -67,7 +68,8 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
     az, el = settings.grid()
     return measure_scene(chain, rc, motion, config=config, array=array, azimuth=az,
                          elevation=el, range_window=settings.range_window,
-                         lever_arm=settings.lever_arm, gate_block=settings.gate_block)
+                         lever_arm=settings.lever_arm, gate_block=settings.gate_block,
+                         spatial_window=settings.spatial_window)
 
 
 def point_metrics(frames, reference, chain, motion) -> dict:
