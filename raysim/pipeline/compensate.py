@@ -367,7 +367,6 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     sub = None
     if spec.name == "dpca":            # one sub-aperture size for every frame: comparable maps
         sub, price = _dpca_subaperture(inp, motions, cfg.center_wavelength)
-        found.append(price)
     ks = range(len(inp.frames))
     if len(inp.frames) > 1 and progress:
         import sys
@@ -386,6 +385,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                         subaperture=sub)
         if mot is None:   # the conventional beamformer carries chirp indices, not times
             beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
+        if sub is not None:   # dpca: its price travels with the beams (first warning)
+            beams = replace(beams, warnings=(price, *beams.warnings))
         found.extend(w for w in beams.warnings if w not in found)
         results.append(beams)
     if as_npz:

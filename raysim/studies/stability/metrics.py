@@ -232,7 +232,7 @@ def evaluate(point: StabilityPoint, chains: Sequence[str] = MAP_CHAINS, *,
         out[spec.key] = _chain_metrics(spec, gate, r, point, motion, times, coherent_map,
                                        found)
         if spec.name == "dpca":               # its price, aperture and failure reach the map
-            chain_warnings += [f"dpca: {w}" for w in found]
+            chain_warnings += found                # each starts with "dpca"
     out["warnings"] = (list(motion.warnings) if motion is not None else []) + chain_warnings
     out["strapdown"] = STRAPDOWN if motion is not None else ""
     return out
