@@ -115,14 +115,19 @@ def test_beamformer_plans_the_frame_once_and_states_the_price():
     plan = dpca_plan(arr.virtual_positions, mot, wavelength=LAM, grid_shape=arr.grid_shape)
     assert bf.plan.sub_shape == plan.sub_shape
     assert found[0] == PRICE_PREFIX + plan.summary().removeprefix("dpca: ")
-    # a single chirp gets the frame's sub-aperture size, not the larger one it alone allows
-    one = bf(rc[5:6], [5], [15.0], [0.0], [0.0])
-    ref = dpca_projection(rc[5:6], arr.virtual_positions, mot.select([5]), wavelength=LAM,
-                          range_axis=[15.0], azimuth=[0.0], elevation=[0.0],
-                          grid_shape=arr.grid_shape, subaperture=plan.sub_shape)
-    np.testing.assert_allclose(one, ref.data, rtol=0, atol=SAME_TOL * np.abs(ref.data).max())
-    whole = bf(rc, np.arange(32), [15.0], [0.0], [0.0])
+    # the whole frame through the Beamformer is dpca_projection of the frame
+    ref = dpca_projection(rc, arr.virtual_positions, mot, wavelength=LAM,
+                          range_axis=[15.0], azimuth=[0.5], elevation=[0.2],
+                          grid_shape=arr.grid_shape)
+    whole = bf(rc, np.arange(32), [15.0], [0.5], [0.2])
     assert whole.shape == (32, 1, 1, 1)
+    np.testing.assert_allclose(whole, ref.data, rtol=0, atol=SAME_TOL * np.abs(ref.data).max())
+    # the frame's reference sub-aperture in every call: a chirp's beam (off the
+    # beam's own direction too) is the same alone, in a block and in the whole frame
+    for pick in ([5], [0, 1, 2], [30, 31], [7, 19, 23]):
+        part = bf(rc[pick], pick, [15.0], [0.5], [0.2])
+        np.testing.assert_allclose(part, whole[pick], rtol=0,
+                                   atol=SAME_TOL * np.abs(whole).max())
     assert all(not w.startswith("dpca ") or w in plan.warnings for w in found[1:])
 
 

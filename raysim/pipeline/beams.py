@@ -5,9 +5,13 @@ place a chain name becomes beams) for the cells of one frame: it picks the
 poses of the chirps it is given from the frame's motion, at every transmit
 slot for a compensated chain on a TDM array, and collects the chain's guard
 warnings. For ``dpca`` it plans the sub-aperture once from the whole frame's
-motion (:func:`compensation.dpca_plan`, :attr:`Beamformer.plan`) and holds its
-size for every call, so beams of any chirps of the frame come from
-sub-apertures of one size. :mod:`raysim.measure.point` measures every point metric through it.
+motion (:func:`compensation.dpca_plan`, :attr:`Beamformer.plan`) and holds it
+for every call: the size is fixed, and every call also projects the (zero)
+cells of the frame's :attr:`Beamformer.anchors`, the chirps whose sub-aperture
+offsets are the frame's extremes, so the reference sub-aperture (its phase
+centre) is the whole frame's whichever chirps a call asks for. Beams of a
+chirp are then the same in every call. :mod:`raysim.measure.point` measures
+every point metric through it.
 """
 
 from __future__ import annotations
@@ -58,6 +62,9 @@ class Beamformer:
     plan : compensation.DPCAPlan or None
         ``dpca``: the sub-aperture of the whole frame and its price
         (``summary()``, ``gain_loss_db``, ``resolution_loss``); None otherwise.
+    anchors : ndarray of int, shape ``[k]``
+        ``dpca``: chirps (``k <= 4``) whose sub-aperture offsets are the
+        frame's smallest and largest along each lattice axis; empty otherwise.
 
     Raises
     ------
@@ -76,7 +83,7 @@ class Beamformer:
         self.wavelength = float(wavelength)
         self.motion = motion if self.spec.compensated else None
         self.warnings = [] if warnings is None else warnings
-        self.plan = None
+        self.plan, self.anchors = None, np.zeros(0, dtype=int)
         if self.spec.name == "dpca":
             from compensation import dpca_plan
 
@@ -87,6 +94,7 @@ class Beamformer:
             price = PRICE_PREFIX + self.plan.summary().removeprefix("dpca: ")
             self.warnings.extend(w for w in (price, *self.plan.warnings)
                                  if w not in self.warnings)
+            self.anchors = _anchors(self.plan)
 
     @property
     def compensated(self) -> bool:
@@ -120,6 +128,12 @@ class Beamformer:
         if c.size != np.shape(rc)[0]:
             raise ValueError(f"chirps holds {c.size} indices, rc has {np.shape(rc)[0]} chirps; "
                              f"expected one index per chirp")
+        n_asked = c.size
+        extra = np.setdiff1d(self.anchors, c)
+        if extra.size:          # dpca: the frame's extreme offsets fix its reference
+            rc = np.concatenate([np.asarray(rc), np.zeros((extra.size,) + np.shape(rc)[1:],
+                                                          dtype=np.asarray(rc).dtype)])
+            c = np.concatenate([c, extra])
         slots = arr.num_slots
         mot, channel_slot = None, None
         if self.motion is not None and slots > 1:   # every TDM slot at its own pose
@@ -136,4 +150,24 @@ class Beamformer:
         # some of the frame's chirps would restate them for those chirps only
         fresh = [w for w in out.warnings if self.plan is None or not w.startswith("dpca ")]
         self.warnings.extend(w for w in fresh if w not in self.warnings)
-        return out.data
+        return out.data[:n_asked]
+
+
+def _anchors(plan) -> np.ndarray:
+    """Chirps whose sub-aperture offsets reach the frame's extremes along each axis.
+
+    Chirp ``n`` uses the offsets ``floor(shift) + l`` over the stencil
+    (:data:`compensation.dpca.STENCILS`) along each axis, only ``l = 0`` for an
+    integer shift; the reference sub-aperture of a projection is what every
+    offset keeps inside the array, so projecting these chirps with any others
+    reproduces the whole frame's reference (a rectangular lattice).
+    """
+    from compensation.dpca import STENCILS
+
+    nodes = STENCILS[plan.order]
+    floor = np.floor(plan.shift).astype(int)
+    whole = (plan.shift - floor) == 0
+    lo = floor + np.where(whole, 0, min(nodes))
+    hi = floor + np.where(whole, 0, max(nodes))
+    pick = [np.argmin(lo[:, a]) for a in (0, 1)] + [np.argmax(hi[:, a]) for a in (0, 1)]
+    return np.unique(np.asarray(pick, dtype=int))
