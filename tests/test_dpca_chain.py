@@ -263,3 +263,23 @@ def test_stability_map_of_dpca_beside_exact(tmp_path):
     assert np.isfinite(ds.sel(chain="exact").pseudo_velocity_mps.values).all()
     assert np.nanmax(np.abs(d.pseudo_velocity_mps.values)) < float(ds.velocity_bin.max())
     assert "dpca price" in ds.attrs["warnings"]
+
+
+def test_report_and_sweep_take_dpca(tmp_path):
+    """The HTML report states dpca's price apart from the warnings; sweep keeps its key."""
+    import xarray as xr
+
+    scen = tmp_path / "s.toml"
+    scen.write_text(small_scenario("dpca", frames=1, pitch_deg=10.0))
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["report", "--scenario", str(scen), "--chains", "exact,dpca",
+                     "--out", str(tmp_path / "r.html")]) == 0
+        assert main(["sweep", str(scen), "--param", "scene.targets.0.range_m=15.0",
+                     "--chains", "exact,dpca", "--no-progress",
+                     "--out", str(tmp_path / "sweep")]) == 0
+    page = (tmp_path / "r.html").read_text()
+    assert "Price of the chains" in page and "sub-aperture 1 x 4 of 4 x 4" in page
+    warnings = page.split("<h2 id='warnings'>")[1].split("</ul>")[0]
+    assert "dpca aperture:" in warnings and PRICE_PREFIX not in warnings
+    with xr.open_dataset(tmp_path / "sweep" / "sweep.nc") as ds:
+        assert [str(c) for c in ds["chain"].values] == ["exact", "dpca"]
