@@ -205,10 +205,15 @@ def test_scene_report_takes_dpca_with_its_price(tmp_path, capsys):
     assert dpca["price"]["full_shape"] == [8, 8]
     assert 1 <= dpca["price"]["sub_shape"][0] <= 8 and dpca["price"]["gain_loss_db"] >= 0
     assert isinstance(dpca["within_margin"], bool)
+    same = dpca["same_aperture_reference"]                # stationary, dpca's sub-aperture
+    assert set(same["metrics"]) == set(dpca["metrics"])
+    assert same["minus_same_aperture"]["scene_entropy_ae_nats"] == pytest.approx(
+        dpca["metrics"]["scene_entropy_ae_nats"] - same["metrics"]["scene_entropy_ae_nats"])
     for w in dpca["warnings"]:
         assert f"warning: small_rotation_y: dpca: {w}" in err
     md = (out / "report.md").read_text()
     assert "Price of `dpca`" in md and "dpca - stationary" in md
+    assert "through the same sub-aperture" in md
     assert "dpca" in data["point_metrics"]["metrics"]
 
 

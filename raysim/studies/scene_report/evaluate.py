@@ -87,6 +87,12 @@ class SceneResult:
         The clutter field's report (:attr:`raysim.echoes.ground.field.ClutterField.report`
         plus ``builds``: count, expected count, density scale, resolution cell,
         build time); empty with Sionna's clutter.
+    same_aperture : dict
+        Chain key -> :class:`ChainResult` of the stationary platform's frame
+        through that chain's own smaller aperture (``dpca``: its sub-aperture,
+        no motion): the reference at the chain's resolution, so the report can
+        tell the aperture's price from what the motion leaves. Empty without
+        ``dpca``.
     point : dict
         Point metrics of the scenario's reference target
         (:func:`raysim.pipeline.sources.reference_target`): ``reference``
@@ -108,6 +114,7 @@ class SceneResult:
     movers: list = field(default_factory=list)
     clutter: dict = field(default_factory=dict)
     point: dict = field(default_factory=dict)
+    same_aperture: dict = field(default_factory=dict)
 
     def within_margin(self, key: str) -> bool | None:
         """True when every map entropy of chain ``key`` is within the margin of the reference.
@@ -135,7 +142,9 @@ class SceneResult:
         ``chains``: chain key -> ``{"metrics", "minus_reference", "detections",
         "within_margin", "warnings"}`` (``dpca`` also ``"price"``:
         :meth:`raysim.measure.scene.SceneMeasurement.price`, the aperture,
-        gain and resolution it gives up) where ``minus_reference`` holds the
+        gain and resolution it gives up, and ``"same_aperture_reference"``:
+        ``{"metrics", "minus_same_aperture"}`` of the stationary frame through
+        its sub-aperture, :attr:`same_aperture`) where ``minus_reference`` holds the
         differences of every metric to the reference's; ``point_metrics``:
         ``{"reference": target, "metrics": {key: {name: value}}}`` for a
         scenario with a target (NaN written as null).
@@ -149,6 +158,10 @@ class SceneResult:
                          "warnings": list(r.warnings)}
             if r.plan is not None:
                 chains[c]["price"] = r.price()
+            if c in self.same_aperture:
+                sm = self.same_aperture[c].metrics()
+                chains[c]["same_aperture_reference"] = {
+                    "metrics": sm, "minus_same_aperture": {k: m[k] - sm[k] for k in m}}
         return {
             "scene": self.scene,
             "settings": settings_dict(self.settings),
@@ -427,6 +440,15 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
         for w in results[s.key].warnings:           # guard warnings reach the user
             bar.write(f"warning: {label}: {s.key}: {w}", file=sys.stderr)
         bar.update()
+    same = {}
+    if "dpca" in results and results["dpca"].plan is not None:   # the reference at its aperture
+        from compensation import static_motion
+
+        bar.set_postfix_str(f"{REFERENCE}, dpca sub-aperture")
+        same["dpca"] = chain_result("dpca", rc["stationary"], static_motion(motion.time),
+                                    settings, config, array,
+                                    subaperture=results["dpca"].plan.sub_shape)
+        seconds["dpca_same_aperture"] = same["dpca"].seconds
     point = {}
     target = sim.get("reference")
     if target is not None:
@@ -458,4 +480,4 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
     paths = sim.get("paths")
     return SceneResult(label, settings, reference, results, targets,
                        0 if paths is None else paths.num_paths, sim.get("path_kinds", {}),
-                       motion_rms, seconds, movers, sim.get("clutter", {}), point)
+                       motion_rms, seconds, movers, sim.get("clutter", {}), point, same)

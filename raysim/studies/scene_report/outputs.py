@@ -264,6 +264,18 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
                             for s, r in results.items() if c in r.chains)
         lines += ["", f"`{c}` within {ENTROPY_MARGIN_NATS} nats of `{REFERENCE}` on every "
                   f"map: {verdict}."]
+    same = {s: r for s, r in results.items() if "dpca" in r.same_aperture}
+    if same:
+        lines += ["", f"`dpca` against the `{REFERENCE}` frame through the same sub-aperture "
+                  "(no motion: the reference at `dpca`'s resolution, not a margin), "
+                  "entropy difference [nats] and that reference's ridge leakage:", "",
+                  "| scene | " + " | ".join(f"{SCENE_METRICS[m]}" for m in REPORT_MAPS)
+                  + " | ridge_leakage_db |", "|---|" + "---|" * (len(REPORT_MAPS) + 1)]
+        for s, r in same.items():
+            ref = r.same_aperture["dpca"]
+            lines.append(f"| {s} | " + " | ".join(
+                f"{r.chains['dpca'].entropy[m] - ref.entropy[m]:+.4f}" for m in REPORT_MAPS)
+                + f" | {ref.ridge_leakage_db:.1f} |")
     lines += ["", "ridge_leakage_db: RD power outside Doppler bins -1..+1 relative to the "
               "total [dB]", "",
               "| scene | " + " | ".join(cols) + " |", "|---|" + "---|" * len(cols)]

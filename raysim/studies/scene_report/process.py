@@ -41,7 +41,8 @@ def report_cube(data: np.ndarray, settings: ReportSettings) -> np.ndarray:
 
 
 def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
-                 config: RadarConfig, array: VirtualArray) -> SceneMeasurement:
+                 config: RadarConfig, array: VirtualArray, *,
+                 subaperture=None) -> SceneMeasurement:
     """Beams, maps, entropies and detections of one chain (or of the reference).
 
     :func:`raysim.measure.scene.measure_scene` on the report's grid, range
@@ -60,6 +61,9 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
         Pose estimate at the chirps (needed by the compensated chains).
     settings, config, array
         Report settings, waveform and virtual array.
+    subaperture : (int, int), optional
+        ``dpca``: elements per axis of its sub-aperture (default the largest
+        the motion leaves).
 
     Returns
     -------
@@ -69,7 +73,7 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
     return measure_scene(chain, rc, motion, config=config, array=array, azimuth=az,
                          elevation=el, range_window=settings.range_window,
                          lever_arm=settings.lever_arm, gate_block=settings.gate_block,
-                         spatial_window=settings.spatial_window)
+                         spatial_window=settings.spatial_window, subaperture=subaperture)
 
 
 def point_metrics(frames, reference, chain, motion) -> dict:
