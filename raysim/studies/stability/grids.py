@@ -161,7 +161,7 @@ def companion_offset_deg(array_size: int) -> float:
 
     Half the boresight 3 dB beamwidth ``0.886 lambda / (n d)`` of an ``n``-element
     half-wavelength axis (``d = lambda / 2`` in the one-way virtual
-    coordinates): ``0.443 / n * 2`` rad, inside the target's beam for every array.
+    coordinates), i.e. ``0.886 / n`` rad: inside the target's beam for every array.
     """
     return float(np.rad2deg(0.886 / int(array_size)))
 
@@ -218,7 +218,7 @@ MAPS: dict[str, MapSpec] = {m.name: m for m in (
              ("array_size", "", (8, 12, 16, 20), (8, 16))),
             _b_dpca, log_axes=("displacement_mm",), chains=DPCA_CHAINS,
             note="target 15 m, az 20 deg plus a -6 dB scatterer half a beamwidth off in "
-                 "azimuth; dpca vs exact: doppler_width_hz (stationary about 1.44 bins) "
-                 "shows the clutter decorrelation exact leaves; dpca fails (NaN) where the "
-                 "displacement exceeds the spare aperture"),
+                 "azimuth; exact leaves the pair's relative phase (small pseudo-velocity, "
+                 "Doppler width below the stationary 1.44 bins), dpca restores it; dpca "
+                 "fails (NaN) where the displacement exceeds the spare aperture"),
 )}
