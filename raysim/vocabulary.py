@@ -15,6 +15,14 @@ Chains
     published phase is written ``paper:published``.
 ``exact``
     Rigid-body projection with all six degrees of freedom per chirp.
+``dpca``
+    Displaced phase centre (:func:`compensation.dpca_projection`): per chirp
+    the sub-aperture whose phase centre stays fixed in the world (Lagrange
+    interpolation between neighbouring sub-apertures), each projected as
+    ``exact`` does. It undoes what a horizontal displacement does to the
+    clutter inside a beam, at the price of aperture (resolution and gain,
+    :class:`compensation.DPCAPlan`). Not in the default chain lists
+    (:data:`CHAINS`): ask for it by name (``--chains none,exact,dpca``).
 
 A *stationary* result (the same scene with the platform at rest) is a
 reference, not a chain: it is reported under ``reference``.
@@ -32,19 +40,26 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = [
-    "CHAINS", "CHAIN_KEYS", "ROTATION_PHASES", "ChainSpec", "parse_chain", "parse_chains",
-    "chain_label",
+    "CHAINS", "CHAIN_NAMES", "CHAIN_KEYS", "ROTATION_PHASES", "ChainSpec", "parse_chain",
+    "parse_chains", "chain_order", "chain_label",
     "MAPS", "FIGURE_AXES", "MAP_TITLES", "AXIS_LABELS", "AXIS_UNITS", "METRICS", "metric_unit",
     "REFERENCE",
 ]
 
-#: The compensation chains, in the order every table and figure shows them.
+#: The chains every command evaluates by default, in table order.
 CHAINS = ("none", "paper", "exact")
+
+#: Every chain name, in the order every table and figure shows them: the
+#: defaults (:data:`CHAINS`), then the chains evaluated only when named
+#: (``dpca``: it costs a stencil of sub-aperture projections per chirp and fails
+#: for a displacement larger than the spare aperture).
+CHAIN_NAMES = CHAINS + ("dpca",)
 
 #: Rotation-phase forms of the ``paper`` chain (first is the default).
 ROTATION_PHASES = ("integrated", "published")
 
-#: Every chain key, options included, in table order (``paper`` then ``paper:published``).
+#: The keys of the default chains, options included, in table order (``paper`` then
+#: ``paper:published``): the chain lists of the studies.
 CHAIN_KEYS = tuple(k for n in CHAINS
                    for k in ((n, f"{n}:{ROTATION_PHASES[1]}") if n == "paper" else (n,)))
 
@@ -58,7 +73,7 @@ class ChainSpec:
 
     Attributes
     ----------
-    name : {"none", "paper", "exact"}
+    name : {"none", "paper", "exact", "dpca"}
     rotation_phase : {"integrated", "published"}
         Rotation phase of the ``paper`` chain (ignored by the others).
     """
@@ -67,8 +82,8 @@ class ChainSpec:
     rotation_phase: str = "integrated"
 
     def __post_init__(self) -> None:
-        if self.name not in CHAINS:
-            raise ValueError(f"chain: got {self.name!r}, expected one of {list(CHAINS)} "
+        if self.name not in CHAIN_NAMES:
+            raise ValueError(f"chain: got {self.name!r}, expected one of {list(CHAIN_NAMES)} "
                              f"(the paper chain with the published rotation phase is "
                              f"'paper:published')")
         if self.rotation_phase not in ROTATION_PHASES:
@@ -77,7 +92,7 @@ class ChainSpec:
 
     @property
     def key(self) -> str:
-        """The name used in results: ``none``, ``paper``, ``paper:published`` or ``exact``."""
+        """The name used in results (``paper:published`` for that variant, else the name)."""
         if self.name == "paper" and self.rotation_phase != ROTATION_PHASES[0]:
             return f"paper:{self.rotation_phase}"
         return self.name
@@ -96,12 +111,18 @@ def parse_chain(text: str | ChainSpec) -> ChainSpec:
     if isinstance(text, ChainSpec):
         return text
     if not isinstance(text, str):
-        raise ValueError(f"chain: got {text!r}, expected a name from {list(CHAINS)}")
+        raise ValueError(f"chain: got {text!r}, expected a name from {list(CHAIN_NAMES)}")
     name, _, option = text.strip().partition(":")
     if option and name != "paper":
         raise ValueError(f"chain: got {text!r}; only the paper chain takes an option "
                          f"(paper:published)")
     return ChainSpec(name, option or ROTATION_PHASES[0])
+
+
+def chain_order(spec: ChainSpec | str) -> tuple[int, str]:
+    """Sort key of a chain: its place in :data:`CHAIN_NAMES`, then its key."""
+    spec = parse_chain(spec)
+    return CHAIN_NAMES.index(spec.name), spec.key
 
 
 def parse_chains(items) -> tuple[ChainSpec, ...]:
@@ -110,7 +131,8 @@ def parse_chains(items) -> tuple[ChainSpec, ...]:
         items = [s for s in items.split(",") if s.strip()]
     specs = tuple(parse_chain(s) for s in items)
     if not specs:
-        raise ValueError(f"chains: got {items!r}, expected at least one of {list(CHAINS)}")
+        raise ValueError(f"chains: got {items!r}, expected at least one of "
+                         f"{list(CHAIN_NAMES)}")
     keys = [s.key for s in specs]
     if len(set(keys)) != len(keys):
         raise ValueError(f"chains: got {keys}, each chain may appear once")
@@ -121,7 +143,7 @@ def chain_label(key: str) -> str:
     """Human label of a chain key for tables and legends."""
     return {"none": "none (uncompensated)", "paper": "paper",
             "paper:published": "paper, published rotation phase", "exact": "exact",
-            REFERENCE: "stationary platform"}.get(key, key)
+            "dpca": "dpca (displaced phase centre)", REFERENCE: "stationary platform"}.get(key, key)
 
 
 #: Map name -> dimensions of its :class:`~raysim.processing.maps.Map` in array order.

@@ -244,8 +244,10 @@ def test_chain_keys_are_the_one_vocabulary():
     """Every chain key (options included) parses to itself; the studies' chain lists are it."""
     from raysim.studies.reproduce import DEFAULT_CHAINS
     from raysim.studies.stability.metrics import MAP_CHAINS
-    from raysim.vocabulary import CHAIN_KEYS, CHAINS, parse_chains
+    from raysim.vocabulary import CHAIN_KEYS, CHAIN_NAMES, CHAINS, parse_chains
 
     assert [s.key for s in parse_chains(CHAIN_KEYS)] == list(CHAIN_KEYS)
     assert set(CHAINS) <= set(CHAIN_KEYS)
+    assert set(CHAINS) <= set(CHAIN_NAMES) and [s.name for s in parse_chains(CHAIN_NAMES)] == \
+        list(CHAIN_NAMES)
     assert DEFAULT_CHAINS == MAP_CHAINS == CHAIN_KEYS

@@ -28,7 +28,7 @@ import sys
 import numpy as np
 
 from raysim.cli.options import chains_option, span_grid, span_option
-from raysim.vocabulary import CHAINS, ChainSpec, parse_chain
+from raysim.vocabulary import CHAIN_NAMES, ChainSpec, parse_chain
 
 EPILOG = """\
 examples:
@@ -50,7 +50,9 @@ examples:
 
 chains: exact (rigid-body projection), paper (the published chain, needs
 --direction-deg; paper:published with the paper's rotation phase), none
-(conventional beamformer; the IMU log is not used). Guard warnings go to
+(conventional beamformer; the IMU log is not used), dpca (displaced phase
+centre: a sub-aperture held fixed in the world, one size for every frame; its
+price, "dpca price: ...", is printed with the warnings). Guard warnings go to
 stderr as "warning: CHAIN: TEXT" and into the "warnings" array of the output.
 
 exit status: 0 written, 2 invalid input (the message names the flag or file
@@ -83,7 +85,7 @@ def _chain(text: str) -> ChainSpec:
     keys = chains_option(text, "--chain")
     if len(keys) != 1:
         raise ValueError(f"--chain: got {text!r}, expected one chain of "
-                         f"{[*CHAINS, 'paper:published']}")
+                         f"{[*CHAIN_NAMES, 'paper:published']}")
     return parse_chain(keys[0])
 
 
@@ -161,7 +163,7 @@ def register(subparsers) -> None:
                    "'level' (1 s centred on the chirps for consumer_mems, 8 s for tactical, "
                    "the whole record for ideal); left out: the whole record")
     p.add_argument("--chain", default="exact", metavar="CHAIN",
-                   help=f"one of {', '.join(CHAINS)} or paper:published")
+                   help=f"one of {', '.join(CHAIN_NAMES)} or paper:published")
     p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
                    help="target direction for the paper chain's slow-time correction [deg]")
     p.set_defaults(func=run)

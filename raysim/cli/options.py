@@ -59,9 +59,9 @@ def chains_option(text: str, option: str = "--chains") -> list[str]:
     ValueError
         Naming ``option``, the value and the closest chain name.
     """
-    from raysim.vocabulary import CHAIN_KEYS, parse_chains
+    from raysim.vocabulary import CHAIN_KEYS, CHAIN_NAMES, parse_chains
 
-    names = list(CHAIN_KEYS)
+    names = list(dict.fromkeys([*CHAIN_KEYS, *CHAIN_NAMES]))
     try:
         return [s.key for s in parse_chains(text)]
     except ValueError as exc:

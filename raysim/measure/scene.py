@@ -29,6 +29,12 @@ found by a cell-averaging CFAR along range on the coherent cube
 (:func:`cfar_detect`, parameters :data:`CFAR_TRAIN`, :data:`CFAR_GUARD`,
 :data:`CFAR_THRESHOLD_DB`; the :data:`MAX_DETECTIONS` strongest kept).
 
+The ``dpca`` chain tapers its sub-aperture, not the array: the channel taper
+the cube carries is divided out again and the same window, built for the
+sub-aperture's length (:func:`sub_aperture_taper`), is handed to the chain as
+its weights; its plan (elements kept, gain and resolution lost) and its
+warnings are kept in the measurement.
+
 The ``paper`` chain's slow-time phase is corrected towards one direction; a
 scene has no per-target angle estimate, so the correction is re-pointed per
 beam: every beam ``(az, el)`` is multiplied by
@@ -52,7 +58,7 @@ from raysim.vocabulary import MAPS, REFERENCE, ChainSpec, parse_chain
 __all__ = ["SCENE_MAPS", "SCENE_METRICS", "scene_metric", "CFAR_TRAIN", "CFAR_GUARD",
            "CFAR_THRESHOLD_DB", "MAX_DETECTIONS", "BORESIGHT", "GRID_HALF_WIDTH_DEG",
            "GRID_STEP_DEG", "RANGE_WINDOW_M", "SPATIAL_WINDOWS", "TAYLOR_SLL_DB",
-           "TAYLOR_NBAR", "SceneMeasurement", "angle_grid", "channel_taper",
+           "TAYLOR_NBAR", "SceneMeasurement", "angle_grid", "channel_taper", "sub_aperture_taper",
            "range_compressed", "beam_blocks", "cfar_detect", "measure_scene"]
 
 #: The maps of a scene (names and dimensions from :data:`raysim.vocabulary.MAPS`).
@@ -115,6 +121,10 @@ class SceneMeasurement:
         RD power outside the zero-Doppler ridge relative to the total [dB].
     seconds : float
         Processing time [s].
+    warnings : tuple of str
+        The chain's guard warnings (``dpca``: ``dpca aperture``, ``dpca rotation``).
+    plan : compensation.DPCAPlan or None
+        ``dpca``: its sub-aperture and price; None for the other chains.
     """
 
     key: str
@@ -124,6 +134,29 @@ class SceneMeasurement:
     detections: list
     ridge_leakage_db: float
     seconds: float
+    warnings: tuple = ()
+    plan: object = None
+
+    def price(self) -> dict:
+        """The ``dpca`` chain's price, JSON-ready; empty for the other chains.
+
+        ``summary`` (:meth:`compensation.DPCAPlan.summary`), ``full_shape`` and
+        ``sub_shape`` (elements per axis), ``gain_loss_db`` [dB],
+        ``resolution_loss`` (beamwidth growth per axis [1]),
+        ``beamwidth_sub_deg`` (boresight 3 dB beamwidth per axis [deg]),
+        ``residual_displacement_m`` [m], ``rotation_misplacement``
+        [element spacings] and ``overlap`` [1].
+        """
+        p = self.plan
+        if p is None:
+            return {}
+        return {"summary": p.summary(), "full_shape": list(p.full_shape),
+                "sub_shape": list(p.sub_shape), "gain_loss_db": float(p.gain_loss_db),
+                "resolution_loss": [float(v) for v in p.resolution_loss],
+                "beamwidth_sub_deg": [float(np.rad2deg(v)) for v in p.beamwidth_sub],
+                "residual_displacement_m": float(p.residual_displacement),
+                "rotation_misplacement": float(p.rotation_misplacement),
+                "overlap": float(p.overlap)}
 
     def metrics(self) -> dict:
         """``{metric name: value}``, names from :data:`raysim.vocabulary.METRICS`.
@@ -171,6 +204,34 @@ def channel_taper(array, window: str | None = "taylor") -> np.ndarray:
     return ww / ww.mean()
 
 
+def sub_aperture_taper(window: str | None = "taylor"):
+    """The channel taper of :func:`channel_taper`, built for a ``dpca`` sub-aperture.
+
+    Returns None for ``window=None`` (uniform), else ``weights(index) -> [sub]``
+    with ``index [sub, 2]`` the lattice indices of the sub-aperture's elements
+    counted from its corner: the outer product of Taylor tapers
+    (:data:`TAYLOR_SLL_DB`, :data:`TAYLOR_NBAR`) of the sub-aperture's length
+    along each axis, mean 1 (the form :func:`compensation.dpca_projection`
+    takes as ``weights``).
+    """
+    if window not in SPATIAL_WINDOWS:
+        raise ValueError(f"spatial_window must be one of {list(SPATIAL_WINDOWS)}, "
+                         f"got {window!r}")
+    if window is None:
+        return None
+    from scipy.signal.windows import taylor
+
+    def weights(index):
+        i = np.asarray(index, dtype=int)
+        n = i.max(axis=0) + 1
+        wx, wy = (taylor(int(k), nbar=TAYLOR_NBAR, sll=TAYLOR_SLL_DB, norm=False)
+                  if k > 1 else np.ones(1) for k in n)
+        w = wx[i[:, 0]] * wy[i[:, 1]]
+        return w / w.mean()
+
+    return weights
+
+
 def range_compressed(data: np.ndarray, taper: np.ndarray) -> np.ndarray:
     """Range-compressed cube with the channel taper applied.
 
@@ -214,15 +275,17 @@ def _repointing(spec: ChainSpec, motion, azimuth, elevation, wavelength: float) 
 
 def beam_blocks(chain, rc: np.ndarray, positions: np.ndarray, motion, config,
                 range_axis: np.ndarray, gates: np.ndarray, azimuth: np.ndarray,
-                elevation: np.ndarray, grid_shape, gate_block: int):
+                elevation: np.ndarray, grid_shape, gate_block: int, weights=None,
+                subaperture=None):
     """Beams of one chain, block by block of range gates.
 
     Parameters
     ----------
     chain : str or ChainSpec
-        ``none``, ``paper``, ``paper:published`` or ``exact``.
+        ``none``, ``paper``, ``paper:published``, ``exact`` or ``dpca``.
     rc : ndarray, shape ``[chirp, channel, range]``
-        Range-compressed cube (complex64, channel taper applied).
+        Range-compressed cube (complex64, channel taper applied; for ``dpca``
+        without it, the taper given as ``weights``).
     positions : ndarray, shape ``[channel, 3]``
         Virtual element positions [m].
     motion : compensation.PlatformMotion or None
@@ -238,6 +301,11 @@ def beam_blocks(chain, rc: np.ndarray, positions: np.ndarray, motion, config,
         ``(nx, ny)`` of a virtual UPA.
     gate_block : int
         Gates per block.
+    weights : None, array_like or callable, optional
+        Channel weights handed to the chain (``dpca``: its sub-aperture taper,
+        :func:`sub_aperture_taper`).
+    subaperture : (int, int), optional
+        ``dpca``: elements per axis of its sub-aperture (default the largest).
 
     Yields
     ------
@@ -258,7 +326,8 @@ def beam_blocks(chain, rc: np.ndarray, positions: np.ndarray, motion, config,
                      azimuth=azimuth, elevation=elevation,
                      motion=motion if spec.compensated else None,
                      direction=BORESIGHT if spec.name == "paper" else None,
-                     grid_shape=grid_shape, range_gates=sel)
+                     grid_shape=grid_shape, range_gates=sel, weights=weights,
+                     **({"subaperture": subaperture} if spec.name == "dpca" else {}))
         if repoint is not None:
             bc = replace(bc, data=bc.data * repoint)
         yield sel, bc
@@ -303,19 +372,21 @@ def cfar_detect(cube: np.ndarray, *, train: int = CFAR_TRAIN, guard: int = CFAR_
 
 def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.ndarray,
                   elevation: np.ndarray, range_window: tuple[float, float], lever_arm,
-                  gate_block: int = 16) -> SceneMeasurement:
+                  gate_block: int = 16, spatial_window: str | None = None,
+                  subaperture=None) -> SceneMeasurement:
     """Beams, maps, entropies, ridge leakage and detections of one chain (or the reference).
 
     Parameters
     ----------
     chain : str or ChainSpec
-        A chain (``none``, ``paper``, ``paper:published``, ``exact``), or
-        :data:`raysim.vocabulary.REFERENCE` for the stationary platform's frame
-        (beamformed like ``none``).
+        A chain (``none``, ``paper``, ``paper:published``, ``exact``,
+        ``dpca``), or :data:`raysim.vocabulary.REFERENCE` for the stationary
+        platform's frame (beamformed like ``none``).
     rc : ndarray, shape ``[chirp, channel, range]``
-        Range-compressed cube (:func:`range_compressed`).
+        Range-compressed cube (:func:`range_compressed`) carrying the channel
+        taper ``channel_taper(array, spatial_window)``.
     motion : compensation.PlatformMotion or None
-        Pose estimate at the chirps (needed by ``paper`` and ``exact``).
+        Pose estimate at the chirps (needed by the compensated chains).
     config : raysim.radar.config.RadarConfig
     array : raysim.radar.arrays.VirtualArray
     azimuth, elevation : ndarray, shape ``[azimuth]``, ``[elevation]``
@@ -326,10 +397,24 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
         Radar phase centre in B [m] (detections are placed from it).
     gate_block : int
         Range gates beamformed at once (bounds memory).
+    spatial_window : {"taylor", None}
+        The channel taper ``rc`` carries (:func:`channel_taper`); ``dpca``
+        divides it out and tapers its sub-aperture with the same window
+        (:func:`sub_aperture_taper`). The other chains use ``rc`` as it is.
+    subaperture : (int, int), optional
+        ``dpca``: elements per axis of its sub-aperture (default the largest
+        the motion leaves; fix it to compare frames).
 
     Returns
     -------
     SceneMeasurement
+
+    Raises
+    ------
+    ValueError
+        A compensated chain without motion, a range window without a bin, or
+        what the chain refuses (``dpca``: a displacement larger than the
+        spare aperture).
     """
     if chain == REFERENCE:
         spec, key = parse_chain("none"), REFERENCE
@@ -350,9 +435,19 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
     rd = np.zeros((gates.size, rc.shape[0]))
     cube = np.zeros((gates.size, az.size, el.size))
     rc_win = np.ascontiguousarray(rc[:, :, gates])               # the window only
+    weights = None
+    if spec.name == "dpca":                        # the taper goes on the sub-aperture
+        taper = np.asarray(channel_taper(array, spatial_window), dtype=np.float32)
+        rc_win /= taper[None, :, None]
+        weights = sub_aperture_taper(spatial_window)
     local = np.arange(gates.size)
+    warnings: list[str] = []
+    plan = None
     for k, bc in beam_blocks(spec, rc_win, array.virtual_positions, motion, config,
-                             r_axis[gates], local, az, el, array.grid_shape, gate_block):
+                             r_axis[gates], local, az, el, array.grid_shape, gate_block,
+                             weights=weights, subaperture=subaperture):
+        warnings.extend(w for w in bc.warnings if w not in warnings)
+        plan = getattr(bc, "plan", None) if plan is None else plan
         spec_d = bc.doppler()                                # [doppler, g, az, el]
         rd[k] = np.einsum("dgae->gd", np.abs(spec_d.astype(np.complex128)) ** 2)
         cube[k] = bc.coherent_power(window="hann")
@@ -378,4 +473,4 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
             "power_db": float(10 * np.log10(cube[gi, ai, ei] / cube.max())),
             "position_m": (lever + rng[gi] * u).tolist()})
     return SceneMeasurement(key, maps, cube, entropy, detections, leak,
-                            time.perf_counter() - t)
+                            time.perf_counter() - t, tuple(warnings), plan)

@@ -4,7 +4,14 @@
 place a chain name becomes beams) for the cells of one frame: it picks the
 poses of the chirps it is given from the frame's motion, at every transmit
 slot for a compensated chain on a TDM array, and collects the chain's guard
-warnings. :mod:`raysim.measure.point` measures every point metric through it.
+warnings. For ``dpca`` it plans the sub-aperture once from the whole frame's
+motion (:func:`compensation.dpca_plan`, :attr:`Beamformer.plan`) and holds it
+for every call: the size is fixed, and every call also projects the (zero)
+cells of the frame's :attr:`Beamformer.anchors`, the chirps whose sub-aperture
+offsets are the frame's extremes, so the reference sub-aperture (its phase
+centre) is the whole frame's whichever chirps a call asks for. Beams of a
+chirp are then the same in every call. :mod:`raysim.measure.point` measures
+every point metric through it.
 """
 
 from __future__ import annotations
@@ -15,7 +22,11 @@ from raysim.pipeline.chains import project
 from raysim.radar.arrays import VirtualArray
 from raysim.vocabulary import ChainSpec, parse_chain
 
-__all__ = ["Beamformer"]
+__all__ = ["Beamformer", "PRICE_PREFIX"]
+
+#: Start of the line a ``dpca`` beamformer adds to its warnings to state its price
+#: (elements kept, beamwidth growth, gain lost: :meth:`compensation.DPCAPlan.summary`).
+PRICE_PREFIX = "dpca price: "
 
 
 class Beamformer:
@@ -24,7 +35,7 @@ class Beamformer:
     Parameters
     ----------
     chain : str or ChainSpec
-        ``none``, ``paper``, ``paper:published`` or ``exact``.
+        ``none``, ``paper``, ``paper:published``, ``exact`` or ``dpca``.
     array : VirtualArray
         Virtual array of the frame (positions ``[channel, 3]`` in A [m], TDM
         slot of every channel, UPA grid shape).
@@ -37,16 +48,33 @@ class Beamformer:
         each slot's channels with the pose of its own transmit instant;
         ``none`` ignores the motion.
     warnings : list, optional
-        Receives the chain's guard warnings (str), each once.
+        Receives the chain's guard warnings (str), each once. ``dpca`` adds, from
+        the start, its price (:data:`PRICE_PREFIX` then the plan's summary:
+        sub-aperture kept, beamwidth growth, gain lost) and its plan's
+        ``dpca aperture`` / ``dpca rotation`` warnings, so both reach every
+        command that reports the warnings.
+    subaperture : (int, int), optional
+        ``dpca``: elements per axis of its sub-aperture (default the largest
+        the frame's motion leaves, :attr:`plan`).
+
+    Attributes
+    ----------
+    plan : compensation.DPCAPlan or None
+        ``dpca``: the sub-aperture of the whole frame and its price
+        (``summary()``, ``gain_loss_db``, ``resolution_loss``); None otherwise.
+    anchors : ndarray of int, shape ``[k]``
+        ``dpca``: chirps (``k <= 4``) whose sub-aperture offsets are the
+        frame's smallest and largest along each lattice axis; empty otherwise.
 
     Raises
     ------
     ValueError
-        A compensated chain without ``motion``.
+        A compensated chain without ``motion``; ``dpca`` with a displacement
+        over the frame larger than the spare aperture.
     """
 
     def __init__(self, chain: str | ChainSpec, array: VirtualArray, wavelength: float, *,
-                 motion=None, warnings: list | None = None) -> None:
+                 motion=None, warnings: list | None = None, subaperture=None) -> None:
         self.spec = parse_chain(chain)
         if self.spec.compensated and motion is None:
             raise ValueError(f"chain {self.spec.key!r} needs motion (the platform pose at "
@@ -55,6 +83,18 @@ class Beamformer:
         self.wavelength = float(wavelength)
         self.motion = motion if self.spec.compensated else None
         self.warnings = [] if warnings is None else warnings
+        self.plan, self.anchors = None, np.zeros(0, dtype=int)
+        if self.spec.name == "dpca":
+            from compensation import dpca_plan
+
+            self.plan = dpca_plan(array.virtual_positions, self.motion,
+                                  wavelength=self.wavelength, grid_shape=array.grid_shape,
+                                  channel_slot=array.tx_slot if array.num_slots > 1 else None,
+                                  subaperture=subaperture)
+            price = PRICE_PREFIX + self.plan.summary().removeprefix("dpca: ")
+            self.warnings.extend(w for w in (price, *self.plan.warnings)
+                                 if w not in self.warnings)
+            self.anchors = _anchors(self.plan)
 
     @property
     def compensated(self) -> bool:
@@ -88,6 +128,12 @@ class Beamformer:
         if c.size != np.shape(rc)[0]:
             raise ValueError(f"chirps holds {c.size} indices, rc has {np.shape(rc)[0]} chirps; "
                              f"expected one index per chirp")
+        n_asked = c.size
+        extra = np.setdiff1d(self.anchors, c)
+        if extra.size:          # dpca: the frame's extreme offsets fix its reference
+            rc = np.concatenate([np.asarray(rc), np.zeros((extra.size,) + np.shape(rc)[1:],
+                                                          dtype=np.asarray(rc).dtype)])
+            c = np.concatenate([c, extra])
         slots = arr.num_slots
         mot, channel_slot = None, None
         if self.motion is not None and slots > 1:   # every TDM slot at its own pose
@@ -98,6 +144,30 @@ class Beamformer:
         out = project(self.spec, rc, arr.virtual_positions, wavelength=self.wavelength,
                       range_axis=np.atleast_1d(ranges), azimuth=np.atleast_1d(azimuth),
                       elevation=np.atleast_1d(elevation), motion=mot, direction=direction,
-                      grid_shape=arr.grid_shape, channel_slot=channel_slot)
-        self.warnings.extend(w for w in out.warnings if w not in self.warnings)
-        return out.data
+                      grid_shape=arr.grid_shape, channel_slot=channel_slot,
+                      subaperture=None if self.plan is None else self.plan.sub_shape)
+        # dpca: the frame's plan stated its aperture and rotation warnings; a call on
+        # some of the frame's chirps would restate them for those chirps only
+        fresh = [w for w in out.warnings if self.plan is None or not w.startswith("dpca ")]
+        self.warnings.extend(w for w in fresh if w not in self.warnings)
+        return out.data[:n_asked]
+
+
+def _anchors(plan) -> np.ndarray:
+    """Chirps whose sub-aperture offsets reach the frame's extremes along each axis.
+
+    Chirp ``n`` uses the offsets ``floor(shift) + l`` over the stencil
+    (:data:`compensation.dpca.STENCILS`) along each axis, only ``l = 0`` for an
+    integer shift; the reference sub-aperture of a projection is what every
+    offset keeps inside the array, so projecting these chirps with any others
+    reproduces the whole frame's reference (a rectangular lattice).
+    """
+    from compensation.dpca import STENCILS
+
+    nodes = STENCILS[plan.order]
+    floor = np.floor(plan.shift).astype(int)
+    whole = (plan.shift - floor) == 0
+    lo = floor + np.where(whole, 0, min(nodes))
+    hi = floor + np.where(whole, 0, max(nodes))
+    pick = [np.argmin(lo[:, a]) for a in (0, 1)] + [np.argmax(hi[:, a]) for a in (0, 1)]
+    return np.unique(np.asarray(pick, dtype=int))

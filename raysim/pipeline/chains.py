@@ -5,7 +5,9 @@ into a computation: ``none`` is the conventional beamformer
 (:func:`compensation.beam_projection` without motion), ``paper`` the
 published chain (:func:`compensation.paper_chain`, rotation phase as an
 option), ``exact`` the rigid-body projection
-(:func:`compensation.rigid_body_projection`). Every study and command calls
+(:func:`compensation.rigid_body_projection`), ``dpca`` the displaced-phase-centre
+projection (:func:`compensation.dpca_projection`: a sub-aperture held fixed in
+the world, its price in the result's ``plan``). Every study and command calls
 :func:`project`.
 """
 
@@ -20,13 +22,13 @@ __all__ = ["project"]
 
 def project(chain: str | ChainSpec, rc, element_positions, *, wavelength: float, range_axis,
             azimuth, elevation, motion=None, direction=None, grid_shape=None, weights=None,
-            range_gates=None, channel_slot=None):
+            range_gates=None, channel_slot=None, subaperture=None, order: int = 3):
     """Beams of a range-compressed cube through one chain.
 
     Parameters
     ----------
     chain : str or ChainSpec
-        ``none``, ``paper``, ``paper:published`` or ``exact``.
+        ``none``, ``paper``, ``paper:published``, ``exact`` or ``dpca``.
     rc : ndarray, shape ``[chirp, channel, range]``
         Range-compressed data.
     element_positions : ndarray, shape ``[channel, 3]``
@@ -38,25 +40,49 @@ def project(chain: str | ChainSpec, rc, element_positions, *, wavelength: float,
     azimuth, elevation : array_like
         Grid axes [rad].
     motion : compensation.PlatformMotion, optional
-        Pose at every chirp of ``rc`` (needed by ``paper`` and ``exact``).
+        Pose at every chirp of ``rc`` (needed by ``paper``, ``exact`` and ``dpca``).
     direction : array_like, shape ``[3]``, optional
         Slow-time correction direction of the ``paper`` chain (unit vector in A).
     grid_shape, weights, range_gates
-        As in :func:`compensation.beam_projection`.
+        As in :func:`compensation.beam_projection`. ``dpca`` tapers its
+        sub-aperture, not the array: its ``weights`` are None (uniform), an
+        array ``[sub]`` in the order of ``DPCAPlan.reference_index`` or a
+        callable ``weights(index [sub, 2]) -> [sub]`` of the lattice indices
+        counted from the sub-aperture's corner (a full-array ``[channel]``
+        taper is refused with a ValueError).
     channel_slot : array_like of int, shape ``[channel]``, optional
-        TDM transmit slot of each channel (``paper`` and ``exact``): ``motion``
-        then holds the pose at every transmit slot, chirp major, slot minor, and
-        each channel is compensated with the pose of its own slot.
+        TDM transmit slot of each channel (``paper``, ``exact``, ``dpca``):
+        ``motion`` then holds the pose at every transmit slot, chirp major,
+        slot minor, and each channel is compensated with the pose of its own slot.
+    subaperture : (int, int), optional
+        ``dpca`` only: elements per axis of the sub-aperture (default the
+        largest the motion of ``rc`` leaves; fix it to compare frames).
+    order : {1, 3}
+        ``dpca`` only: Lagrange interpolation order between sub-apertures.
 
     Returns
     -------
     compensation.BeamCube
         ``data`` ``[chirp, range, azimuth, elevation]``; its ``warnings`` are
-        the chain's guard warnings.
+        the chain's guard warnings. ``dpca`` returns a
+        :class:`compensation.DPCABeams` whose ``plan`` states the sub-aperture
+        and its price (``plan.summary()``, ``gain_loss_db``,
+        ``resolution_loss``); its ``dpca aperture`` / ``dpca rotation``
+        warnings are among ``warnings``.
+
+    Raises
+    ------
+    ValueError
+        A compensated chain without ``motion``, ``paper`` without
+        ``direction``, options of ``dpca`` given to another chain, or what the
+        chain itself refuses (``dpca``: a displacement larger than the spare aperture).
     """
-    from compensation import beam_projection, paper_chain, rigid_body_projection
+    from compensation import beam_projection, dpca_projection, paper_chain, rigid_body_projection
 
     spec = parse_chain(chain)
+    if spec.name != "dpca" and (subaperture is not None or order != 3):
+        raise ValueError(f"subaperture={subaperture!r}, order={order!r}: options of the dpca "
+                         f"chain, got chain {spec.key!r}")
     kw = dict(wavelength=wavelength, range_axis=range_axis, azimuth=azimuth,
               elevation=elevation, grid_shape=grid_shape, weights=weights,
               range_gates=range_gates)
@@ -67,6 +93,9 @@ def project(chain: str | ChainSpec, rc, element_positions, *, wavelength: float,
     if spec.name == "exact":
         return rigid_body_projection(rc, element_positions, motion, channel_slot=channel_slot,
                                      **kw)
+    if spec.name == "dpca":
+        return dpca_projection(rc, element_positions, motion, channel_slot=channel_slot,
+                               order=order, subaperture=subaperture, **kw)
     if direction is None:
         raise ValueError("chain 'paper' needs direction (its slow-time correction direction)")
     return paper_chain(rc, element_positions, motion, direction=np.asarray(direction),

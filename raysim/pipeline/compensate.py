@@ -38,7 +38,7 @@ key                    shape                      meaning
 
 TDM MIMO: the IMU log is integrated once to the start of every transmit slot
 of every selected frame, and each slot's channels are compensated with the
-pose of their own ramp (exact and paper chains).
+pose of their own ramp (exact, dpca and paper chains).
 
 IMU log (``imu``): a file of any format of
 :func:`raysim.io.flight_logs.read_imu_log` (the project's IMU CSV, PX4 ULog,
@@ -312,8 +312,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         replace), or for one frame a path ending in ``.npz``. Checked before
         any computation.
     chain : str or raysim.vocabulary.ChainSpec
-        ``exact`` (rigid-body projection), ``paper``, ``paper:published`` or
-        ``none`` (conventional beamformer).
+        ``exact`` (rigid-body projection), ``paper``, ``paper:published``,
+        ``dpca`` (displaced phase centre: one sub-aperture size for every frame,
+        the smallest any frame's motion leaves, its price the first entry of
+        the warnings) or ``none`` (conventional beamformer).
     frames : str, int or (int, int), optional
         ``"LO:HI"`` or ``(LO, HI)`` (HI excluded), or ``"K"`` / ``K``: frames of
         a capture or store (default every frame of a capture, ``frame`` of a
@@ -441,6 +443,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
             initial_attitude_deg=initial_attitude_deg, imu_grade=imu_grade)
     results, found = [], list(window_notes)
+    sub = None
+    if spec.name == "dpca":            # one sub-aperture size for every frame: comparable maps
+        sub, price = _dpca_subaperture(inp, motions, cfg.center_wavelength)
     ks = range(len(inp.frames))
     if len(inp.frames) > 1 and progress:
         import sys
@@ -455,9 +460,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         rc = rcs[k] if rcs else range_compress(inp.read(k))[..., : r_axis.size]
         beams = project(spec, rc, inp.element_positions, wavelength=cfg.center_wavelength,
                         range_axis=r_axis, azimuth=az, elevation=el, motion=mot, direction=u,
-                        grid_shape=inp.grid_shape, range_gates=gates, channel_slot=channel_slot)
+                        grid_shape=inp.grid_shape, range_gates=gates, channel_slot=channel_slot,
+                        subaperture=sub)
         if mot is None:   # the conventional beamformer carries chirp indices, not times
             beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
+        if sub is not None:   # dpca: its price travels with the beams (first warning)
+            beams = replace(beams, warnings=(price, *beams.warnings))
         found.extend(w for w in beams.warnings if w not in found)
         results.append(beams)
     if as_npz:
@@ -478,3 +486,22 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                                 extra_attrs=attrs)
     return CompensateResult(out, spec.key, list(inp.frames), results, tuple(found),
                             calibration, offset, imu_source)
+
+
+def _dpca_subaperture(inp, motions, wavelength: float) -> tuple[tuple[int, int], str]:
+    """The ``dpca`` sub-aperture every frame can hold (smallest over frames) and its price.
+
+    Returns ``(kx, ky)`` elements per axis and the price line
+    (:data:`raysim.pipeline.beams.PRICE_PREFIX` then the plan's summary).
+    Raises the plan's ValueError for a frame whose displacement exceeds the spare aperture.
+    """
+    from compensation import dpca_plan
+    from raysim.pipeline.beams import PRICE_PREFIX
+
+    slot = inp.tx_slot if inp.num_slots > 1 else None
+    plans = [dpca_plan(inp.element_positions, m, wavelength=wavelength,
+                       grid_shape=inp.grid_shape, channel_slot=slot) for m in motions]
+    sub = tuple(int(min(p.sub_shape[a] for p in plans)) for a in (0, 1))
+    plan = dpca_plan(inp.element_positions, motions[0], wavelength=wavelength,
+                     grid_shape=inp.grid_shape, channel_slot=slot, subaperture=sub)
+    return sub, PRICE_PREFIX + plan.summary().removeprefix("dpca: ")

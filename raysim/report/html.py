@@ -1,12 +1,13 @@
 """Self-contained HTML reports comparing the chains of :mod:`raysim.vocabulary`.
 
 A report holds, for every available chain (``none``, ``paper``,
-``paper:published``, ``exact``): the RA, RE, RD and AE maps
+``paper:published``, ``exact``, ``dpca``): the RA, RE, RD and AE maps
 (:data:`raysim.vocabulary.MAPS`, drawn by :func:`raysim.report.figures.plot_map`
 with the axes of :data:`raysim.vocabulary.FIGURE_AXES`), Doppler cuts of the
 reference target, the metric table of :func:`raysim.measure.point.measure`
 (names and units of :data:`raysim.vocabulary.METRICS`, with the values the
 paper reports for a paper case), the compensation's guard warnings per chain,
+the price of the ``dpca`` chain (sub-aperture kept, beamwidth growth, gain lost),
 the run parameters (motion label, scenario TOML, derived radar quantities)
 and the software versions (numpy, sionna-rt, mitsuba, drjit, ...). Figures
 are PNGs embedded as base64 ``data:`` URIs, so the single HTML file can be
@@ -32,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from raysim.measure.point import POINT_METRICS
+from raysim.pipeline.beams import PRICE_PREFIX
 from raysim.pipeline.sources import LazyFrames, Reference
 from raysim.synthesis.frame import RadarFrame
 from raysim.vocabulary import (
@@ -377,10 +379,26 @@ def _fmt(v) -> str:
     return html.escape(str(v))
 
 
+def _price_section(chains: Sequence[str], warnings: dict) -> str:
+    """HTML section stating what a chain gives up (``dpca``: aperture, gain), '' if none."""
+    found = [(c, w.removeprefix(PRICE_PREFIX)) for c in chains for w in warnings.get(c, [])
+             if w.startswith(PRICE_PREFIX)]
+    if not found:
+        return ""
+    out = ["<h2 id='price'>Price of the chains</h2>",
+           "<p>The dpca chain forms its beams from a sub-aperture held fixed in the world: "
+           "it gives up aperture (beamwidth grows, coherent gain falls) for every frame "
+           "below.</p><ul class='price'>"]
+    out.extend(f"<li><b>{html.escape(c)}</b>: {html.escape(w)}</li>" for c, w in found)
+    out.append("</ul>")
+    return "\n".join(out)
+
+
 def _warnings_section(chains: Sequence[str], warnings: dict) -> str:
     """HTML section listing the guard warnings of every chain (or saying there are none)."""
     out = ["<h2 id='warnings'>Warnings</h2>"]
-    found = [(c, w) for c in chains for w in warnings.get(c, [])]
+    found = [(c, w) for c in chains for w in warnings.get(c, [])
+             if not w.startswith(PRICE_PREFIX)]
     if not found:
         out.append("<p class='muted'>The compensation raised no warning for any chain.</p>")
         return "\n".join(out)
@@ -436,6 +454,9 @@ def build_report(data: ReportData) -> str:
     for note in res["notes"]:
         parts.append(f"<p class='note'>Note: {html.escape(note)}</p>")
     parts.append(_warnings_section(chains, warnings))
+    price = _price_section(chains, warnings)
+    if price:
+        parts.append(price)
 
     parts.append("<h2>Metrics</h2><table class='metrics'><tr><th>metric</th><th>unit</th>"
                  + "".join(f"<th>{html.escape(c)}</th>" for c in chains)

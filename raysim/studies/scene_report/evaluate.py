@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from raysim.vocabulary import CHAINS, REFERENCE, parse_chains
+from raysim.vocabulary import CHAINS, REFERENCE, chain_order, parse_chains
 
 from .process import ChainResult, chain_result, point_metrics, report_cube
 from .settings import (
@@ -63,7 +63,7 @@ class SceneResult:
         The stationary platform (:data:`raysim.vocabulary.REFERENCE`), not a chain.
     chains : dict
         Chain key (``none``, ``paper``, ``exact`` ...) -> :class:`ChainResult`
-        of the hovering platform, in :data:`raysim.vocabulary.CHAINS` order.
+        of the hovering platform, in :data:`raysim.vocabulary.CHAIN_NAMES` order.
     targets : list of dict
         Known reflectors: ``name``, ``position_m`` (W), ``range_m``, ``az_deg``,
         ``el_deg`` from the nominal radar phase centre, ``rcs_dbsm``; the
@@ -87,6 +87,12 @@ class SceneResult:
         The clutter field's report (:attr:`raysim.echoes.ground.field.ClutterField.report`
         plus ``builds``: count, expected count, density scale, resolution cell,
         build time); empty with Sionna's clutter.
+    same_aperture : dict
+        Chain key -> :class:`ChainResult` of the stationary platform's frame
+        through that chain's own smaller aperture (``dpca``: its sub-aperture,
+        no motion): the reference at the chain's resolution, so the report can
+        tell the aperture's price from what the motion leaves. Empty without
+        ``dpca``.
     point : dict
         Point metrics of the scenario's reference target
         (:func:`raysim.pipeline.sources.reference_target`): ``reference``
@@ -108,32 +114,54 @@ class SceneResult:
     movers: list = field(default_factory=list)
     clutter: dict = field(default_factory=dict)
     point: dict = field(default_factory=dict)
+    same_aperture: dict = field(default_factory=dict)
+
+    def within_margin(self, key: str) -> bool | None:
+        """True when every map entropy of chain ``key`` is within the margin of the reference.
+
+        The margin is :data:`ENTROPY_MARGIN_NATS` on every map of
+        :data:`REPORT_MAPS`; None when the chain was not evaluated.
+        """
+        if key not in self.chains:
+            return None
+        ex, st = self.chains[key].entropy, self.reference.entropy
+        return bool(all(abs(ex[m] - st[m]) <= ENTROPY_MARGIN_NATS for m in REPORT_MAPS))
 
     def exact_within_margin(self) -> bool | None:
-        """True when every map entropy of ``exact`` is within the margin of the reference.
+        """:meth:`within_margin` of ``exact`` (None when it was not evaluated)."""
+        return self.within_margin("exact")
 
-        None when the ``exact`` chain was not evaluated.
-        """
-        if "exact" not in self.chains:
-            return None
-        ex, st = self.chains["exact"].entropy, self.reference.entropy
-        return bool(all(abs(ex[m] - st[m]) <= ENTROPY_MARGIN_NATS for m in REPORT_MAPS))
+    def warnings(self) -> dict:
+        """Chain key -> its guard warnings (list of str; chains without any left out)."""
+        return {c: list(r.warnings) for c, r in self.chains.items() if r.warnings}
 
     def to_dict(self) -> dict:
         """JSON-ready summary (no arrays); metric names from :data:`raysim.vocabulary.METRICS`.
 
         ``reference``: ``{"key": "stationary", "metrics", "detections"}``;
-        ``chains``: chain key -> ``{"metrics", "minus_reference", "detections"}``
-        where ``minus_reference`` holds the differences of every metric to the
-        reference's; ``point_metrics``: ``{"reference": target, "metrics": {key:
-        {name: value}}}`` for a scenario with a target (NaN written as null).
+        ``chains``: chain key -> ``{"metrics", "minus_reference", "detections",
+        "within_margin", "warnings"}`` (``dpca`` also ``"price"``:
+        :meth:`raysim.measure.scene.SceneMeasurement.price`, the aperture,
+        gain and resolution it gives up, and ``"same_aperture_reference"``:
+        ``{"metrics", "minus_same_aperture"}`` of the stationary frame through
+        its sub-aperture, :attr:`same_aperture`) where ``minus_reference`` holds the
+        differences of every metric to the reference's; ``point_metrics``:
+        ``{"reference": target, "metrics": {key: {name: value}}}`` for a
+        scenario with a target (NaN written as null).
         """
         ref = self.reference.metrics()
         chains = {}
         for c, r in self.chains.items():
             m = r.metrics()
             chains[c] = {"metrics": m, "minus_reference": {k: m[k] - ref[k] for k in m},
-                         "detections": r.detections}
+                         "detections": r.detections, "within_margin": self.within_margin(c),
+                         "warnings": list(r.warnings)}
+            if r.plan is not None:
+                chains[c]["price"] = r.price()
+            if c in self.same_aperture:
+                sm = self.same_aperture[c].metrics()
+                chains[c]["same_aperture_reference"] = {
+                    "metrics": sm, "minus_same_aperture": {k: m[k] - sm[k] for k in m}}
         return {
             "scene": self.scene,
             "settings": settings_dict(self.settings),
@@ -374,7 +402,7 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
     -------
     SceneResult
     """
-    specs = sorted(parse_chains(chains), key=lambda s: (CHAINS.index(s.name), s.key))
+    specs = sorted(parse_chains(chains), key=chain_order)
     from tqdm.auto import tqdm
 
     scenario = settings.scenario
@@ -409,7 +437,18 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
         bar.set_postfix_str(s.key)
         results[s.key] = chain_result(s, rc["hover"], motion, settings, config, array)
         seconds[s.key] = results[s.key].seconds
+        for w in results[s.key].warnings:           # guard warnings reach the user
+            bar.write(f"warning: {label}: {s.key}: {w}", file=sys.stderr)
         bar.update()
+    same = {}
+    if "dpca" in results and results["dpca"].plan is not None:   # the reference at its aperture
+        from compensation import static_motion
+
+        bar.set_postfix_str(f"{REFERENCE}, dpca sub-aperture")
+        same["dpca"] = chain_result("dpca", rc["stationary"], static_motion(motion.time),
+                                    settings, config, array,
+                                    subaperture=results["dpca"].plan.sub_shape)
+        seconds["dpca_same_aperture"] = same["dpca"].seconds
     point = {}
     target = sim.get("reference")
     if target is not None:
@@ -441,4 +480,4 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
     paths = sim.get("paths")
     return SceneResult(label, settings, reference, results, targets,
                        0 if paths is None else paths.num_paths, sim.get("path_kinds", {}),
-                       motion_rms, seconds, movers, sim.get("clutter", {}), point)
+                       motion_rms, seconds, movers, sim.get("clutter", {}), point, same)

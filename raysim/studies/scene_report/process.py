@@ -41,7 +41,8 @@ def report_cube(data: np.ndarray, settings: ReportSettings) -> np.ndarray:
 
 
 def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
-                 config: RadarConfig, array: VirtualArray) -> SceneMeasurement:
+                 config: RadarConfig, array: VirtualArray, *,
+                 subaperture=None) -> SceneMeasurement:
     """Beams, maps, entropies and detections of one chain (or of the reference).
 
     :func:`raysim.measure.scene.measure_scene` on the report's grid, range
@@ -50,15 +51,19 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
     Parameters
     ----------
     chain : str or ChainSpec
-        A chain (``none``, ``paper``, ``paper:published``, ``exact``), or
+        A chain (``none``, ``paper``, ``paper:published``, ``exact``, ``dpca``), or
         :data:`raysim.vocabulary.REFERENCE` for the stationary platform's frame
         (beamformed like ``none``).
     rc : ndarray, shape ``[chirp, channel, range]``
-        Range-compressed cube (Hann), channel taper applied (:func:`report_cube`).
+        Range-compressed cube (Hann), channel taper applied (:func:`report_cube`;
+        ``dpca`` moves the taper onto its sub-aperture).
     motion : compensation.PlatformMotion or None
-        Pose estimate at the chirps (needed by ``paper`` and ``exact``).
+        Pose estimate at the chirps (needed by the compensated chains).
     settings, config, array
         Report settings, waveform and virtual array.
+    subaperture : (int, int), optional
+        ``dpca``: elements per axis of its sub-aperture (default the largest
+        the motion leaves).
 
     Returns
     -------
@@ -67,7 +72,8 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
     az, el = settings.grid()
     return measure_scene(chain, rc, motion, config=config, array=array, azimuth=az,
                          elevation=el, range_window=settings.range_window,
-                         lever_arm=settings.lever_arm, gate_block=settings.gate_block)
+                         lever_arm=settings.lever_arm, gate_block=settings.gate_block,
+                         spatial_window=settings.spatial_window, subaperture=subaperture)
 
 
 def point_metrics(frames, reference, chain, motion) -> dict:

@@ -2,7 +2,9 @@
 
 Every point is one static target seen by the paper's radar (256 chirps unless
 the map varies it) and 20 x 20 half-wavelength virtual UPA, lever arm
-``(0, 0, 0.10)`` m, target at 15 m (:class:`StabilityPoint` defaults).
+``(0, 0, 0.10)`` m, target at 15 m (:class:`StabilityPoint` defaults). The
+``dpca_displacement`` map varies the array and adds a second scatterer inside
+the target's beam (clutter in a beam), comparing ``dpca`` with ``exact``.
 """
 
 from __future__ import annotations
@@ -17,12 +19,15 @@ from raysim.radar.arrays import VirtualArray, upa
 from raysim.radar.config import RadarConfig
 from raysim.studies.stability.point import INITS, StabilityPoint
 
-__all__ = ["MapSpec", "MAPS", "IMU_TERMS", "INT_AXES", "tick_labels"]
+__all__ = ["MapSpec", "MAPS", "IMU_TERMS", "INT_AXES", "DPCA_CHAINS", "tick_labels",
+           "companion_offset_deg"]
 
 #: Consumer-MEMS error terms of the ``imu_grade`` map (``term_index`` axis).
 IMU_TERMS = ("noise", "bias", "bias_instability", "scale_factor", "misalignment")
 #: Axes whose values are integers (passed to the builders as int).
-INT_AXES = ("num_chirps", "term_index", "error_axis_index", "init_index")
+INT_AXES = ("num_chirps", "term_index", "error_axis_index", "init_index", "array_size")
+#: Chains of the ``dpca_displacement`` map.
+DPCA_CHAINS = ("none", "exact", "dpca")
 
 
 @dataclass(frozen=True)
@@ -42,6 +47,8 @@ class MapSpec:
     log_axes : tuple of str
         Axes drawn on a log scale.
     note : str
+    chains : tuple of str or None
+        Chains of the map (None: :data:`~raysim.studies.stability.metrics.MAP_CHAINS`).
     """
 
     name: str
@@ -52,6 +59,7 @@ class MapSpec:
     quick_seeds: int = 1
     log_axes: tuple = ()
     note: str = ""
+    chains: tuple | None = None
 
 
 def tick_labels(axis: str, values) -> list[str]:
@@ -148,6 +156,24 @@ def _b_jitter(*, jitter_scale, init_index, seed):
                           init=INITS[int(init_index)], t0_s=1.0 + 0.37 * seed, seed=seed)
 
 
+def companion_offset_deg(array_size: int) -> float:
+    """Azimuth offset of the ``dpca_displacement`` map's second scatterer [deg].
+
+    Half the boresight 3 dB beamwidth ``0.886 lambda / (n d)`` of an ``n``-element
+    half-wavelength axis (``d = lambda / 2`` in the one-way virtual
+    coordinates), i.e. ``0.886 / n`` rad: inside the target's beam for every array.
+    """
+    return float(np.rad2deg(0.886 / int(array_size)))
+
+
+def _b_dpca(*, displacement_mm, array_size, seed):
+    # horizontal (x) sinusoid at 20 Hz: over the 15 ms frame the radar moves by about
+    # the amplitude; a -6 dB scatterer half a beamwidth off the target shares its beam
+    arr = upa(int(array_size), int(array_size), wavelength=_R.wavelength)
+    return StabilityPoint(_R, arr, sinusoid("x", displacement_mm * 1e-3, 20.0), 15.0, 20.0,
+                          companion_az_deg=companion_offset_deg(array_size), seed=seed)
+
+
 MAPS: dict[str, MapSpec] = {m.name: m for m in (
     MapSpec("rotation_azimuth", "pitch amplitude (20 Hz) x target azimuth",
             (("rotation_deg", "deg", (1, 2, 5, 10, 15, 20, 30), (2, 10, 30)),
@@ -186,4 +212,13 @@ MAPS: dict[str, MapSpec] = {m.name: m for m in (
             _b_jitter, seeds=6, quick_seeds=2, log_axes=("jitter_scale",),
             note="init 0=truth (aligned), 1=hover (nominal attitude, zero-mean velocity); "
                  "default jitter: 1 deg RMS roll/pitch, 3 cm RMS horizontal"),
+    MapSpec("dpca_displacement", "horizontal displacement (x, 20 Hz) x array size, two "
+            "scatterers in one beam",
+            (("displacement_mm", "mm", (0.25, 0.5, 1, 2, 4, 8), (0.5, 4)),
+             ("array_size", "", (8, 12, 16, 20), (8, 16))),
+            _b_dpca, log_axes=("displacement_mm",), chains=DPCA_CHAINS,
+            note="target 15 m, az 20 deg plus a -6 dB scatterer half a beamwidth off in "
+                 "azimuth; exact leaves the pair's relative phase (small pseudo-velocity, "
+                 "Doppler width below the stationary 1.44 bins), dpca restores it; dpca "
+                 "fails (NaN) where the displacement exceeds the spare aperture"),
 )}

@@ -59,7 +59,7 @@ STRAPDOWN = "raysim.pipeline.estimate.estimate_motion"
 
 
 def point_gate(point: StabilityPoint) -> tuple[np.ndarray, int, float]:
-    """The target's range gate of a point.
+    """The target's range gate of a point (its companion scatterer included).
 
     Returns
     -------
@@ -70,7 +70,7 @@ def point_gate(point: StabilityPoint) -> tuple[np.ndarray, int, float]:
     range_m : float
         Range of that bin [m].
     """
-    return gated_source(point.config, point.array, point.trajectory, [point.target],
+    return gated_source(point.config, point.array, point.trajectory, point.targets,
                         range_m=point.target_range_m, lever_arm=point.lever_arm_m,
                         t0=point.t0_s)
 
@@ -166,8 +166,24 @@ def compensated_slow_time(point: StabilityPoint, chain: str | ChainSpec,
 
 
 def _chain_metrics(spec: ChainSpec, gate: np.ndarray, gate_range: float, point: StabilityPoint,
-                   motion, chirp_times: np.ndarray, coherent_map: bool) -> dict:
-    found: list[str] = []
+                   motion, chirp_times: np.ndarray, coherent_map: bool,
+                   found: list[str]) -> dict:
+    if spec.name == "dpca":
+        try:
+            return _measure_chain(spec, gate, gate_range, point, motion, chirp_times,
+                                  coherent_map, found)
+        except ValueError as exc:            # displacement beyond the spare aperture
+            if not str(exc).startswith("dpca:"):
+                raise
+            found.append(str(exc))
+            return {m: float("nan") for m in STABILITY_METRICS}
+    return _measure_chain(spec, gate, gate_range, point, motion, chirp_times, coherent_map,
+                          found)
+
+
+def _measure_chain(spec: ChainSpec, gate: np.ndarray, gate_range: float,
+                   point: StabilityPoint, motion, chirp_times: np.ndarray, coherent_map: bool,
+                   found: list[str]) -> dict:
     shared = gate_metrics(PointGate(gate[None], gate_range, point.config, point.array),
                           _reference(point), chain=spec, motion=motion, warnings=found,
                           accumulate=coherent_map)
@@ -187,7 +203,7 @@ def evaluate(point: StabilityPoint, chains: Sequence[str] = MAP_CHAINS, *,
     ----------
     point : StabilityPoint
     chains : sequence of str
-        Chain keys (``none``, ``paper``, ``paper:published``, ``exact``).
+        Chain keys (``none``, ``paper``, ``paper:published``, ``exact``, ``dpca``).
     coherent_map : bool
         Also form the accumulated AE map (``map_angle_error_deg``,
         ``entropy_ae_nats``; NaN when False). The failure criteria need only
@@ -197,8 +213,10 @@ def evaluate(point: StabilityPoint, chains: Sequence[str] = MAP_CHAINS, *,
     -------
     dict
         ``chain key -> {metric: value}`` with the metrics of
-        :data:`STABILITY_METRICS` (units in :data:`raysim.vocabulary.METRICS`),
-        plus ``"warnings"`` (list of str, from the navigation solution) and
+        :data:`STABILITY_METRICS` (units in :data:`raysim.vocabulary.METRICS`;
+        all NaN for ``dpca`` where the displacement over the frame exceeds the
+        spare aperture), plus ``"warnings"`` (list of str, from the navigation
+        solution, then ``dpca``'s price, aperture warnings and failure) and
         ``"strapdown"`` (:data:`STRAPDOWN`, or ``""`` without a compensated chain).
     """
     specs = parse_chains(chains)
@@ -207,8 +225,13 @@ def evaluate(point: StabilityPoint, chains: Sequence[str] = MAP_CHAINS, *,
     motion = point_motion(point, _motion_times(point, times)) \
         if any(s.compensated for s in specs) else None
     out: dict = {}
+    chain_warnings: list[str] = []
     for spec in specs:
-        out[spec.key] = _chain_metrics(spec, gate, r, point, motion, times, coherent_map)
-    out["warnings"] = list(motion.warnings) if motion is not None else []
+        found: list[str] = []
+        out[spec.key] = _chain_metrics(spec, gate, r, point, motion, times, coherent_map,
+                                       found)
+        if spec.name == "dpca":               # its price, aperture and failure reach the map
+            chain_warnings += found                # each starts with "dpca"
+    out["warnings"] = (list(motion.warnings) if motion is not None else []) + chain_warnings
     out["strapdown"] = STRAPDOWN if motion is not None else ""
     return out

@@ -72,6 +72,13 @@ class StabilityPoint:
     seed : int
         Seed of the IMU error draws (``imu.seed``; :meth:`from_scenario` takes
         ``Scenario.imu_seed``).
+    companion_az_deg : float or None
+        Study knob: a second static scatterer at the target's range and
+        elevation, this many degrees off the target in azimuth (inside its
+        beam), so the target's beam holds two scatterers whose relative phase a
+        horizontal displacement changes (clutter inside a beam). None: one target.
+    companion_db : float
+        RCS of the companion relative to the target's [dB].
     """
 
     config: RadarConfig
@@ -89,6 +96,8 @@ class StabilityPoint:
     init: str = "truth"
     t0_s: float = 0.0
     seed: int = 0
+    companion_az_deg: float | None = None
+    companion_db: float = -6.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.config, RadarConfig):
@@ -118,6 +127,13 @@ class StabilityPoint:
             raise ValueError(f"init must be one of {INITS}, got {self.init!r}")
         if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        if self.companion_az_deg is not None:
+            az = self.target_az_deg + self.companion_az_deg
+            if not (math.isfinite(az) and abs(az) < 90.0 and math.isfinite(self.companion_db)):
+                raise ValueError(f"companion_az_deg must put the companion at a finite "
+                                 f"azimuth in (-90, 90) deg and companion_db be finite, got "
+                                 f"companion_az_deg={self.companion_az_deg!r}, "
+                                 f"companion_db={self.companion_db!r}")
         if isinstance(self.imu_spec, str):
             from raysim.platform.imu import get_preset
 
@@ -139,6 +155,17 @@ class StabilityPoint:
         """The static target, placed from the nominal radar phase centre."""
         return PointTarget.at(self.target_range_m, self.target_az, self.target_el,
                               radar_origin=self.lever_arm_m)
+
+    @property
+    def targets(self) -> list[PointTarget]:
+        """The target, then the companion (if any), both static, 10 dBsm and ``companion_db``."""
+        out = [self.target]
+        if self.companion_az_deg is not None:
+            out.append(PointTarget.at(self.target_range_m,
+                                      math.radians(self.target_az_deg + self.companion_az_deg),
+                                      self.target_el, rcs_dbsm=10.0 + self.companion_db,
+                                      radar_origin=self.lever_arm_m))
+        return out
 
     @property
     def direction(self) -> np.ndarray:

@@ -72,7 +72,7 @@ def _load_record(path: Path) -> dict | None:
         return None                             # missing or unreadable: compute again
 
 
-def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] = MAP_CHAINS,
+def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] | None = None,
             progress: bool = True, points_dir: str | os.PathLike | None = None,
             executor: str = "auto", client=None):
     """Evaluate a stability map, point by point, resumably.
@@ -83,8 +83,10 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
         Map or its name in :data:`~raysim.studies.stability.grids.MAPS`.
     quick : bool
         Use the quick axis values and seeds.
-    chains : sequence of str
-        Chain keys (``none``, ``paper``, ``paper:published``, ``exact``).
+    chains : sequence of str, optional
+        Chain keys (``none``, ``paper``, ``paper:published``, ``exact``,
+        ``dpca``); default the map's own (``MapSpec.chains``), else
+        :data:`~raysim.studies.stability.metrics.MAP_CHAINS`.
     progress : bool
         Show a progress bar (tqdm, on stderr).
     points_dir : path-like, optional
@@ -104,13 +106,16 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] =
         Variables of :data:`~raysim.studies.stability.metrics.STABILITY_METRICS`
         (units in their ``units`` attribute) with dims
         ``(chain, <axis 0>, <axis 1>, seed)``, ``fail`` (bool,
-        :func:`~raysim.studies.stability.criteria.fails`), ``worse_than_none``
+        :func:`~raysim.studies.stability.criteria.fails`, or a chain that could not
+        run: NaN metrics), ``worse_than_none``
         (bool: ``|pseudo_velocity_mps|`` or ``angle_error_worst_deg`` above the
         baseline's), and the thresholds ``velocity_bin`` [m/s],
         ``half_beamwidth_deg``, ``doppler_bin_hz`` per grid point.
     """
     spec = _map_spec(spec)
     _check_executor(executor)
+    if chains is None:
+        chains = spec.chains or MAP_CHAINS
     chains = [s.key for s in parse_chains(chains)]
     names = [a[0] for a in spec.axes]
     values = [np.asarray(a[3] if quick else a[2], dtype=float) for a in spec.axes]
@@ -186,8 +191,10 @@ def _dataset(spec, quick, chains, names, values, shape, todo, records):
     ds["velocity_bin"].attrs["units"] = "m/s"
     ds["half_beamwidth_deg"].attrs["units"] = "deg"
     ds["doppler_bin_hz"].attrs["units"] = "Hz"
+    # a chain that could not run (NaN: dpca beyond its spare aperture) fails too
     ds["fail"] = ((np.abs(ds.pseudo_velocity_mps) > ds.velocity_bin)
-                  | (ds.angle_error_worst_deg > ds.half_beamwidth_deg))
+                  | (ds.angle_error_worst_deg > ds.half_beamwidth_deg)
+                  | np.isnan(ds.pseudo_velocity_mps) | np.isnan(ds.angle_error_worst_deg))
     if "none" in chains:
         base = ds.sel(chain="none")
         ds["worse_than_none"] = (
