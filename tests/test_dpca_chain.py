@@ -309,3 +309,18 @@ def test_compensate_dpca_on_a_tdm_capture(tmp_path, capsys):
     assert ds.attrs["chain"] == "dpca"
     (angle_err, pv_bins, _), = [tuple(r) for r in measure_store(ds, flight, 0)]
     assert angle_err < 0.1 and abs(pv_bins) < 0.01      # measured 0.019 deg, 9e-5 bin
+
+
+def test_point_metrics_of_several_frames_use_one_subaperture():
+    """Frames of one record are measured through one dpca sub-aperture (one price line)."""
+    from raysim.pipeline.beams import PRICE_PREFIX
+    from raysim.pipeline.run import evaluate
+    from raysim.scenario import scenario_from_case
+
+    s = scenario_from_case("rotation_y").with_values(
+        {"radar.sample_rate_hz": 2.5e6, "radar.num_chirps": 32, "array.nx": 20, "array.ny": 20,
+         "frames": 3})
+    res = evaluate(s, chains=["dpca"])
+    prices = [w for w in res["warnings"]["dpca"] if w.startswith(PRICE_PREFIX)]
+    assert len(prices) == 1, prices
+    assert res["chains"]["dpca"]["entropy_ae_nats"] > 0

@@ -29,6 +29,8 @@ exit status: 0 written, 1 could not run here, 2 invalid input.
 
 def register(subparsers) -> None:
     """Add the ``report`` subcommand."""
+    from raysim.cli.options import chains_help
+
     p = subparsers.add_parser(
         "report", help="write a self-contained HTML report",
         description="Write a self-contained HTML report comparing the chains none, paper "
@@ -44,8 +46,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", metavar="REPORT.html",
                    help="output file (default: output.report of the scenario or report.html)")
     p.add_argument("--chains", default=",".join(CHAINS),
-                   help="comma-separated chains: none, paper, paper:published, exact "
-                   "(default: %(default)s)")
+                   help=chains_help(",".join(CHAINS)))
     p.set_defaults(func=run)
 
 

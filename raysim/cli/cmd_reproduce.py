@@ -26,6 +26,8 @@ exit status: 0 success, 2 invalid input (the message names the offending value).
 
 def register(subparsers) -> None:
     """Add the ``reproduce`` subcommand."""
+    from raysim.cli.options import chains_help
+
     p = subparsers.add_parser(
         "reproduce",
         help="run the paper's experiments with and without motion compensation",
@@ -55,8 +57,7 @@ def register(subparsers) -> None:
                    help="reduced size: 2.5 MHz sampling (radar.sample_rate_hz), a narrower "
                    "figure window")
     p.add_argument("--chains", default="none,paper,paper:published,exact", metavar="NAMES",
-                   help="comma-separated chains: none, paper, paper:published, exact "
-                   "(default: all four)")
+                   help=chains_help("none,paper,paper:published,exact"))
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
     p.set_defaults(func=run)
 

@@ -45,6 +45,8 @@ component), 2 invalid input (the message names the offending key or flag).
 
 def register(subparsers) -> None:
     """Add the ``simulate`` subcommand."""
+    from raysim.cli.options import chains_help
+
     p = subparsers.add_parser(
         "simulate", help="simulate point targets under a motion and print metrics",
         description="Simulate point targets seen from a moving drone and print range, "
@@ -68,8 +70,7 @@ def register(subparsers) -> None:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="change a scenario key, e.g. radar.num_chirps=64 (repeatable)")
     p.add_argument("--chains", default=",".join(CHAINS),
-                   help="comma-separated chains to evaluate: none, paper, paper:published, "
-                   "exact (default: %(default)s)")
+                   help=chains_help(",".join(CHAINS)))
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=run)
 

@@ -42,6 +42,8 @@ SUMMARY_METRICS = ("pseudo_velocity_mps", "doppler_width_hz", "angle_error_deg")
 
 def register(subparsers) -> None:
     """Add the ``sweep`` subcommand."""
+    from raysim.cli.options import chains_help
+
     p = subparsers.add_parser(
         "sweep", help="sweep scenario keys on Dask (resumable)",
         description="Run a parameter sweep over scenario keys and seeds as Dask tasks and "
@@ -56,8 +58,7 @@ def register(subparsers) -> None:
     p.add_argument("--seeds", default="0", metavar="VALUES",
                    help="seeds, e.g. 0,1,2 or range(8) (default: 0)")
     p.add_argument("--chains", default=",".join(CHAINS),
-                   help="comma-separated chains: none, paper, paper:published, exact "
-                   "(default: %(default)s)")
+                   help=chains_help(",".join(CHAINS)))
     p.add_argument("--out", required=True, metavar="DIR", help="result folder")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="Dask scheduler address (default: a local in-process cluster)")

@@ -51,6 +51,15 @@ def known_name(value: str, choices: Iterable[str], option: str, what: str) -> st
     return value
 
 
+def chains_help(default: str) -> str:
+    """Help text of a ``--chains`` option: every chain key of the vocabulary and the default."""
+    from raysim.vocabulary import CHAIN_KEYS, CHAIN_NAMES
+
+    names = list(dict.fromkeys([*CHAIN_KEYS, *CHAIN_NAMES]))
+    return (f"comma-separated chains from {', '.join(names)} (dpca only when named; "
+            f"default: {default})")
+
+
 def chains_option(text: str, option: str = "--chains") -> list[str]:
     """Comma list of chain names -> chain keys (:func:`raysim.vocabulary.parse_chains`).
 

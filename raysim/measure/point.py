@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raysim.pipeline.beams import Beamformer
+from raysim.pipeline.beams import Beamformer, common_subaperture
 from raysim.pipeline.sources import Reference
 from raysim.processing.maps import Map, doppler_fft, range_compress, window
 from raysim.processing.metrics import (
@@ -282,6 +282,21 @@ def point_cells(frames: Sequence[RadarFrame], reference: Reference | None = None
     return PointCells(gate, i, rc0, r_axis, profile)
 
 
+def _beamformers(spec: ChainSpec, gate: PointGate, motion, found: list) -> list[Beamformer]:
+    """One :class:`Beamformer` per frame of the gate; ``dpca`` keeps one sub-aperture size
+    for every frame (:func:`raysim.pipeline.beams.common_subaperture`), so the frames'
+    beams add up on one resolution."""
+    arr, wl = gate.array, gate.config.center_wavelength
+    motions = _split_motion(motion if spec.compensated else None, gate)
+    sub = None
+    if spec.name == "dpca" and len(motions) > 1:
+        sub, _ = common_subaperture(arr.virtual_positions, motions, wl,
+                                    grid_shape=arr.grid_shape,
+                                    channel_slot=arr.tx_slot if arr.num_slots > 1 else None)
+    return [Beamformer(spec, arr, wl, motion=m, warnings=found, subaperture=sub)
+            for m in motions]
+
+
 def _split_motion(motion, gate: PointGate) -> list:
     """Per-frame motion (poses at every TDM slot of every chirp), or Nones."""
     if motion is None:
@@ -388,8 +403,7 @@ def gate_metrics(gate: PointGate, reference: Reference | None = None, *,
                          "single-chirp estimate is the accumulated peak without one)")
     cfg, arr = gate.config, gate.array
     found = [] if warnings is None else warnings
-    bfs = [Beamformer(spec, arr, cfg.center_wavelength, motion=m, warnings=found)
-           for m in _split_motion(motion if spec.compensated else None, gate)]
+    bfs = _beamformers(spec, gate, motion, found)
     gate_r = [gate.range_m]
     snaps = gate.snapshots[:, :, :, None]                       # [frame, chirp, channel, 1]
     toward = reference.direction if reference is not None else None
@@ -502,9 +516,7 @@ def measure(frames: Sequence[RadarFrame] | PointCells, reference: Reference | No
     metrics = gate_metrics(gate, reference, chain=spec, motion=motion, warnings=found,
                            maps=extra)
     profile, r_axis, i = cells.profile, cells.range_axis, cells.range_bin
-    bf = Beamformer(spec, gate.array, cfg.center_wavelength,
-                    motion=_split_motion(motion if spec.compensated else None, gate)[0],
-                    warnings=found)
+    bf = _beamformers(spec, gate, motion, found)[0]
     look_az, look_el = extra["look"]
     n = gate.num_chirps
     all_chirps = np.arange(n)

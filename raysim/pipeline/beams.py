@@ -22,7 +22,7 @@ from raysim.pipeline.chains import project
 from raysim.radar.arrays import VirtualArray
 from raysim.vocabulary import ChainSpec, parse_chain
 
-__all__ = ["Beamformer", "PRICE_PREFIX"]
+__all__ = ["Beamformer", "PRICE_PREFIX", "common_subaperture"]
 
 #: Start of the line a ``dpca`` beamformer adds to its warnings to state its price
 #: (elements kept, beamwidth growth, gain lost: :meth:`compensation.DPCAPlan.summary`).
@@ -151,6 +151,47 @@ class Beamformer:
         fresh = [w for w in out.warnings if self.plan is None or not w.startswith("dpca ")]
         self.warnings.extend(w for w in fresh if w not in self.warnings)
         return out.data[:n_asked]
+
+
+def common_subaperture(positions: np.ndarray, motions, wavelength: float, *, grid_shape=None,
+                       channel_slot=None) -> tuple[tuple[int, int], str]:
+    """The ``dpca`` sub-aperture every frame of a record can hold, and its price.
+
+    One size for all frames, so their maps are comparable: per axis the
+    smallest the frames' plans (:func:`compensation.dpca_plan`) allow.
+
+    Parameters
+    ----------
+    positions : ndarray, shape ``[channel, 3]``
+        Virtual element positions in A [m].
+    motions : sequence of compensation.PlatformMotion
+        Pose at every transmit slot of every chirp, one per frame.
+    wavelength : float
+        [m].
+    grid_shape, channel_slot
+        As :func:`compensation.dpca_plan` takes them.
+
+    Returns
+    -------
+    sub : (int, int)
+        Elements per lattice axis.
+    price : str
+        :data:`PRICE_PREFIX` then the plan's summary at that size.
+
+    Raises
+    ------
+    ValueError
+        The plan's error for a frame whose displacement exceeds the spare aperture.
+    """
+    from compensation import dpca_plan
+
+    motions = list(motions)
+    plans = [dpca_plan(positions, m, wavelength=wavelength, grid_shape=grid_shape,
+                       channel_slot=channel_slot) for m in motions]
+    sub = tuple(int(min(p.sub_shape[a] for p in plans)) for a in (0, 1))
+    plan = dpca_plan(positions, motions[0], wavelength=wavelength, grid_shape=grid_shape,
+                     channel_slot=channel_slot, subaperture=sub)
+    return sub, PRICE_PREFIX + plan.summary().removeprefix("dpca: ")
 
 
 def _anchors(plan) -> np.ndarray:

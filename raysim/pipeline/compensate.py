@@ -445,7 +445,11 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     results, found = [], list(window_notes)
     sub = None
     if spec.name == "dpca":            # one sub-aperture size for every frame: comparable maps
-        sub, price = _dpca_subaperture(inp, motions, cfg.center_wavelength)
+        from raysim.pipeline.beams import common_subaperture
+
+        sub, price = common_subaperture(inp.element_positions, motions, cfg.center_wavelength,
+                                        grid_shape=inp.grid_shape,
+                                        channel_slot=inp.tx_slot if inp.num_slots > 1 else None)
     ks = range(len(inp.frames))
     if len(inp.frames) > 1 and progress:
         import sys
@@ -486,22 +490,3 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                                 extra_attrs=attrs)
     return CompensateResult(out, spec.key, list(inp.frames), results, tuple(found),
                             calibration, offset, imu_source)
-
-
-def _dpca_subaperture(inp, motions, wavelength: float) -> tuple[tuple[int, int], str]:
-    """The ``dpca`` sub-aperture every frame can hold (smallest over frames) and its price.
-
-    Returns ``(kx, ky)`` elements per axis and the price line
-    (:data:`raysim.pipeline.beams.PRICE_PREFIX` then the plan's summary).
-    Raises the plan's ValueError for a frame whose displacement exceeds the spare aperture.
-    """
-    from compensation import dpca_plan
-    from raysim.pipeline.beams import PRICE_PREFIX
-
-    slot = inp.tx_slot if inp.num_slots > 1 else None
-    plans = [dpca_plan(inp.element_positions, m, wavelength=wavelength,
-                       grid_shape=inp.grid_shape, channel_slot=slot) for m in motions]
-    sub = tuple(int(min(p.sub_shape[a] for p in plans)) for a in (0, 1))
-    plan = dpca_plan(inp.element_positions, motions[0], wavelength=wavelength,
-                     grid_shape=inp.grid_shape, channel_slot=slot, subaperture=sub)
-    return sub, PRICE_PREFIX + plan.summary().removeprefix("dpca: ")
