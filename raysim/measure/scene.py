@@ -11,7 +11,8 @@ cover every beam of a global grid and every gate of a range window.
 Procedure (:func:`measure_scene`): the range-compressed cube
 ``[chirp, channel, range]`` (Hann in fast time, channel taper
 :func:`channel_taper` applied) is beamformed through one chain
-(:func:`raysim.pipeline.chains.project`) on the gates of the range window and
+(:class:`raysim.pipeline.beams.Beamformer` over :func:`raysim.pipeline.chains.project`,
+each TDM slot at its own pose) on the gates of the range window and
 the global azimuth / elevation grid, block by block of gates
 (:func:`beam_blocks`). From the beams ``[chirp, range, azimuth, elevation]``:
 
@@ -51,6 +52,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from raysim.measure.ridge import ridge_leakage_db
+from raysim.pipeline.beams import Beamformer
 from raysim.processing.maps import Map, range_compress
 from raysim.processing.metrics import image_entropy
 from raysim.vocabulary import MAPS, REFERENCE, ChainSpec, parse_chain
@@ -273,23 +275,18 @@ def _repointing(spec: ChainSpec, motion, azimuth, elevation, wavelength: float) 
     return np.exp(-4j * np.pi * ddr / wavelength).astype(np.complex64)[:, None]
 
 
-def beam_blocks(chain, rc: np.ndarray, positions: np.ndarray, motion, config,
-                range_axis: np.ndarray, gates: np.ndarray, azimuth: np.ndarray,
-                elevation: np.ndarray, grid_shape, gate_block: int, weights=None,
-                subaperture=None):
-    """Beams of one chain, block by block of range gates.
+def beam_blocks(beamformer, rc: np.ndarray, config, range_axis: np.ndarray,
+                gates: np.ndarray, azimuth: np.ndarray, elevation: np.ndarray,
+                gate_block: int, weights=None):
+    """Beams of one chain over a whole frame, block by block of range gates.
 
     Parameters
     ----------
-    chain : str or ChainSpec
-        ``none``, ``paper``, ``paper:published``, ``exact`` or ``dpca``.
+    beamformer : raysim.pipeline.beams.Beamformer
+        The chain on the frame's array and motion (every TDM slot at its own pose).
     rc : ndarray, shape ``[chirp, channel, range]``
-        Range-compressed cube (complex64, channel taper applied; for ``dpca``
-        without it, the taper given as ``weights``).
-    positions : ndarray, shape ``[channel, 3]``
-        Virtual element positions [m].
-    motion : compensation.PlatformMotion or None
-        Pose estimate at the chirps (unused by ``none``).
+        Range-compressed cube of every chirp of the frame (complex64, channel
+        taper applied; for ``dpca`` without it, the taper given as ``weights``).
     config : raysim.radar.config.RadarConfig
     range_axis : ndarray, shape ``[range]``
         Range of every bin of ``rc`` [m].
@@ -297,37 +294,32 @@ def beam_blocks(chain, rc: np.ndarray, positions: np.ndarray, motion, config,
         Bins of ``rc`` to beamform.
     azimuth, elevation : ndarray
         Global grid [rad].
-    grid_shape : (int, int) or None
-        ``(nx, ny)`` of a virtual UPA.
     gate_block : int
         Gates per block.
     weights : None, array_like or callable, optional
         Channel weights handed to the chain (``dpca``: its sub-aperture taper,
         :func:`sub_aperture_taper`).
-    subaperture : (int, int), optional
-        ``dpca``: elements per axis of its sub-aperture (default the largest).
 
     Yields
     ------
     (ndarray of int, compensation.BeamCube)
         The block's gates and its beams ``[chirp, gate, azimuth, elevation]``.
     """
-    from raysim.pipeline.chains import project
-
-    spec = parse_chain(chain)
+    spec = beamformer.spec
     if not (isinstance(gate_block, (int, np.integer)) and gate_block >= 1):
         raise ValueError(f"gate_block must be a positive integer, got {gate_block!r}")
-    lam = config.center_wavelength
-    repoint = (_repointing(spec, motion, azimuth, elevation, lam) if spec.name == "paper"
-               else None)
+    n = rc.shape[0]
+    chirps = np.arange(n)
+    repoint = None
+    if spec.name == "paper":                    # the loop's first slot re-points each beam
+        slots = beamformer.array.num_slots
+        per_chirp = beamformer.motion.select(chirps * slots)
+        repoint = _repointing(spec, per_chirp, azimuth, elevation, config.center_wavelength)
     for g0 in range(0, gates.size, gate_block):
         sel = gates[g0:g0 + gate_block]
-        bc = project(spec, rc, positions, wavelength=lam, range_axis=range_axis,
-                     azimuth=azimuth, elevation=elevation,
-                     motion=motion if spec.compensated else None,
-                     direction=BORESIGHT if spec.name == "paper" else None,
-                     grid_shape=grid_shape, range_gates=sel, weights=weights,
-                     **({"subaperture": subaperture} if spec.name == "dpca" else {}))
+        bc = beamformer.cube(rc, chirps, range_axis, azimuth, elevation,
+                             direction=BORESIGHT if spec.name == "paper" else None,
+                             range_gates=sel, weights=weights)
         if repoint is not None:
             bc = replace(bc, data=bc.data * repoint)
         yield sel, bc
@@ -386,7 +378,11 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
         Range-compressed cube (:func:`range_compressed`) carrying the channel
         taper ``channel_taper(array, spatial_window)``.
     motion : compensation.PlatformMotion or None
-        Pose estimate at the chirps (needed by the compensated chains).
+        Pose estimate at every transmit slot of every chirp of the frame, chirp
+        major, slot minor (one pose per chirp for a single-slot array); needed by
+        the compensated chains, which project each TDM slot's channels with the
+        pose of its own transmit instant
+        (:class:`raysim.pipeline.beams.Beamformer`).
     config : raysim.radar.config.RadarConfig
     array : raysim.radar.arrays.VirtualArray
     azimuth, elevation : ndarray, shape ``[azimuth]``, ``[elevation]``
@@ -443,9 +439,10 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
     local = np.arange(gates.size)
     warnings: list[str] = []
     plan = None
-    for k, bc in beam_blocks(spec, rc_win, array.virtual_positions, motion, config,
-                             r_axis[gates], local, az, el, array.grid_shape, gate_block,
-                             weights=weights, subaperture=subaperture):
+    bf = Beamformer(spec, array, config.center_wavelength,
+                    motion=motion if spec.compensated else None, subaperture=subaperture)
+    for k, bc in beam_blocks(bf, rc_win, config, r_axis[gates], local, az, el, gate_block,
+                             weights=weights):
         warnings.extend(w for w in bc.warnings if w not in warnings)
         plan = getattr(bc, "plan", None) if plan is None else plan
         spec_d = bc.doppler()                                # [doppler, g, az, el]

@@ -103,7 +103,18 @@ class Beamformer:
 
     def __call__(self, rc: np.ndarray, chirps, ranges, azimuth, elevation,
                  direction=None) -> np.ndarray:
-        """Beams of the chirps ``chirps`` of the frame.
+        """Beam outputs of the chirps ``chirps`` of the frame (:meth:`cube`'s data).
+
+        Returns
+        -------
+        ndarray, shape ``[chirp, range, azimuth, elevation]``, complex
+            Beam outputs [sqrt(W)].
+        """
+        return self.cube(rc, chirps, ranges, azimuth, elevation, direction=direction).data
+
+    def cube(self, rc: np.ndarray, chirps, ranges, azimuth, elevation, *, direction=None,
+             range_gates=None, weights=None):
+        """Beams of the chirps ``chirps`` of the frame, with their axes.
 
         Parameters
         ----------
@@ -117,12 +128,19 @@ class Beamformer:
             Grid axes [rad].
         direction : array_like, shape ``[3]``, optional
             Slow-time correction direction of the ``paper`` chain (unit vector in A).
+        range_gates : array_like of int, optional
+            Bins of ``rc`` to beamform (default all).
+        weights : None, array_like or callable, optional
+            Channel weights handed to the chain (``dpca``: its sub-aperture taper).
 
         Returns
         -------
-        ndarray, shape ``[chirp, range, azimuth, elevation]``, complex
-            Beam outputs [sqrt(W)].
+        compensation.BeamCube
+            ``data`` ``[chirp, range, azimuth, elevation]`` [sqrt(W)] of the asked
+            chirps, the chain's guard warnings (also added to :attr:`warnings`).
         """
+        from dataclasses import replace
+
         arr = self.array
         c = np.asarray(chirps, dtype=int).reshape(-1)
         if c.size != np.shape(rc)[0]:
@@ -145,12 +163,15 @@ class Beamformer:
                       range_axis=np.atleast_1d(ranges), azimuth=np.atleast_1d(azimuth),
                       elevation=np.atleast_1d(elevation), motion=mot, direction=direction,
                       grid_shape=arr.grid_shape, channel_slot=channel_slot,
+                      range_gates=range_gates, weights=weights,
                       subaperture=None if self.plan is None else self.plan.sub_shape)
         # dpca: the frame's plan stated its aperture and rotation warnings; a call on
         # some of the frame's chirps would restate them for those chirps only
         fresh = [w for w in out.warnings if self.plan is None or not w.startswith("dpca ")]
         self.warnings.extend(w for w in fresh if w not in self.warnings)
-        return out.data[:n_asked]
+        if n_asked == out.data.shape[0]:
+            return out
+        return replace(out, data=out.data[:n_asked], chirp_time=out.chirp_time[:n_asked])
 
 
 def common_subaperture(positions: np.ndarray, motions, wavelength: float, *, grid_shape=None,

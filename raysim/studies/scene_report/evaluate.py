@@ -425,7 +425,7 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
         point_motion = scene_motion(trajectory, slot_times(t_chirp, slots,
                                                            config.slot_interval).ravel(),
                                     settings)
-    motion = point_motion.select(np.arange(config.num_chirps) * slots)   # frame 0, slot 0
+    motion = point_motion.select(np.arange(config.num_chirps * slots))   # frame 0, every slot
     seconds = dict(sim["seconds"], imu=time.perf_counter() - t)
     rc = {k: report_cube(sim[k].data, settings) for k in ("stationary", "hover")}
     bar.set_postfix_str(REFERENCE)
