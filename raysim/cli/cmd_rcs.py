@@ -130,7 +130,7 @@ def run(args) -> int:
     from raysim.echoes.po import monostatic_rcs, po_material
 
     if args.plot:
-        check_output(args.plot, "file", "--plot")
+        check_output(args.plot, "file", "--plot", inputs=[("MESH", args.mesh)])
     az = parse_spec(args.az_deg, "--az-deg")
     el = parse_spec(args.el_deg, "--el-deg")
     if not (math.isfinite(args.freq_hz) and args.freq_hz > 0):

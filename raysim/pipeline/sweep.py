@@ -387,7 +387,7 @@ def check_out_dir(spec: SweepSpec, out_dir: str | Path) -> None:
     from raysim.io.files import check_output
 
     out = Path(out_dir)
-    check_output(out, "dir", "--out")
+    check_output(out, "dir", "--out", names=("sweep.json", "sweep.nc"))
     manifest = out / "sweep.json"
     if not manifest.exists():
         return
