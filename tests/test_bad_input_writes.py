@@ -40,9 +40,8 @@ def test_atomic_write_interrupted_leaves_nothing(tmp_path):
 
 
 def test_atomic_write_interrupted_keeps_old_file(tmp_path):
-    from raysim.studies.stability import atomic_write
-
     from raysim.io.files import atomic_write_text
+    from raysim.studies.stability import atomic_write
 
     target = tmp_path / "map.json"
     atomic_write_text(target, "old")
