@@ -6,7 +6,7 @@ the destination folder, flushed to disk, then renamed over the destination
 with :func:`os.replace` (atomic on POSIX). If writing fails or is interrupted
 the temporary file is removed and an existing destination is left untouched.
 
-What raysim wrote is listed in a small manifest, ``.raysim-outputs.json``, in
+What raysim wrote is listed in a small manifest, ``.raysim-outputs`` (JSON), in
 the folder of each file (name, size and modification time). A writer only
 replaces a file that is absent or listed there unchanged
 (:func:`check_replaceable_file`): a user's file given by mistake as an output
@@ -26,7 +26,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 #: Name of the manifest of raysim's outputs kept in each folder it writes files to.
-MANIFEST = ".raysim-outputs.json"
+MANIFEST = ".raysim-outputs"
 
 
 def _default_mode(path: str | Path) -> None:

@@ -387,10 +387,15 @@ def check_out_dir(spec: SweepSpec, out_dir: str | Path) -> None:
     from raysim.io.files import check_output
 
     out = Path(out_dir)
-    check_output(out, "dir", "--out", names=("sweep.json", "sweep.nc"))
+    check_output(out, "dir", "--out")
     manifest = out / "sweep.json"
-    if not manifest.exists():
-        return
+    if manifest.exists():
+        _check_same_sweep(spec, out, manifest)
+    check_output(out, "dir", "--out", names=("sweep.json", "sweep.nc"))
+
+
+def _check_same_sweep(spec: SweepSpec, out: Path, manifest: Path) -> None:
+    """Raise ValueError unless ``manifest`` (a ``sweep.json``) describes ``spec``."""
     try:
         old = json.loads(manifest.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
