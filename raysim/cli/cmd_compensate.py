@@ -138,7 +138,9 @@ def register(subparsers) -> None:
     p.add_argument("--out", required=True,
                    help="output: a Zarr store (labelled beams and Doppler maps of every frame) "
                    "or, for one frame, an .npz")
-    p.add_argument("--range-m", default="0:1e9", metavar="LO:HI", help="range cells [m]")
+    p.add_argument("--range-m", default=None, metavar="LO:HI",
+                   help="range cells [m]; left out: every cell when the job fits 1.2 GB, else "
+                   "the cells around the strongest return that fit (a note says which)")
     p.add_argument("--az-deg", default="-60:60:1", metavar="LO:HI:STEP")
     p.add_argument("--el-deg", default="-60:60:1", metavar="LO:HI:STEP")
     p.add_argument("--lever-arm", default=None, metavar="X,Y,Z",
@@ -210,7 +212,7 @@ def run(args) -> int:
         args.cube, args.imu if args.imu is not None else args.imu_positional, out=args.out,
         chain=spec, frames=args.frames, frame=args.frame, radar_config=args.radar_config,
         layout=args.layout, capture_t0=args.capture_t0,
-        range_m=span_option(args.range_m, "--range-m", False),
+        range_m=None if args.range_m is None else span_option(args.range_m, "--range-m", False),
         azimuth_deg=span_grid(args.az_deg, "--az-deg"),
         elevation_deg=span_grid(args.el_deg, "--el-deg"),
         lever_arm=None if args.lever_arm is None else _floats(args.lever_arm, 3, "--lever-arm"),
@@ -225,6 +227,8 @@ def run(args) -> int:
         max_gap=args.max_gap, imu_topic=args.imu_topic, imu_instance=args.imu_instance,
         board=args.board, antenna_positions=args.antenna_positions,
         progress=not args.no_progress)
+    for note in result.notes:
+        print(f"note: {note}", file=sys.stderr)
     if result.imu_source is not None:
         print(f"IMU log: {result.imu_source}")
     for w in result.warnings:

@@ -174,8 +174,8 @@ def check_not_input(path: str | os.PathLike, inputs: Iterable, option: str = "--
     p = Path(path)
     for item in inputs:
         label, src = item if isinstance(item, tuple) else ("input", item)
-        if src is None:
-            continue
+        if not isinstance(src, (str, os.PathLike)):
+            continue                                   # None, or data given in memory
         q = Path(src)
         inside = False
         with contextlib.suppress(OSError, ValueError):

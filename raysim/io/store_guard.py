@@ -11,9 +11,13 @@
 * Readers never write and take no lock (see
   :func:`raysim.io.storage.open_store`).
 * Debris of a killed writer: the hidden ``.<store name>.<hex>.tmp`` folders
-  of an unfinished :func:`~raysim.io.storage.write_store` and Zarr's
-  ``*.partial`` files inside the store are removed by the next writer of the
-  same store, under its lock (:func:`remove_debris`), and nothing else.
+  of an unfinished :func:`~raysim.io.storage.write_store`, the hidden
+  ``.<file name>.<random>.tmp`` files of an unfinished
+  :func:`~raysim.io.files.atomic_write` and Zarr's ``*.partial`` files inside
+  the store are removed by the next writer of the same output, under its lock
+  (:func:`remove_debris`), and nothing else. The same lock and debris rules
+  hold for every output that is written for a long time: ``render``,
+  ``compensate`` and ``sweep``.
 """
 
 from __future__ import annotations
@@ -125,11 +129,16 @@ def writer_lock(store: str | os.PathLike) -> Iterator[Path]:
 
 
 def tmp_siblings(store: str | os.PathLike) -> list[Path]:
-    """The hidden temporary folders of :func:`~raysim.io.storage.write_store` for a store."""
+    """The hidden temporaries of a writer of this output, beside it.
+
+    Folders of :func:`~raysim.io.storage.write_store` and files of
+    :func:`~raysim.io.files.atomic_write`: ``.<name>.<random>.tmp``.
+    """
     p = Path(store)
     if not p.parent.is_dir():
         return []
-    return sorted(q for q in p.parent.glob(f".{p.name}.*.tmp") if q.is_dir())
+    return sorted(q for q in p.parent.glob(f".{p.name}.*.tmp")
+                  if q.is_dir() or (q.is_file() and not q.is_symlink()))
 
 
 def remove_debris(store: str | os.PathLike) -> list[Path]:
@@ -144,7 +153,10 @@ def remove_debris(store: str | os.PathLike) -> list[Path]:
     p = Path(store)
     removed = []
     for tmp in tmp_siblings(p):
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp.is_dir():
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            tmp.unlink(missing_ok=True)
         removed.append(tmp)
     if p.is_dir() and is_raysim_store(p):
         for part in p.rglob("*.partial"):
