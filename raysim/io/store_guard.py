@@ -25,12 +25,13 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import os
+import re
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
 __all__ = ["STORE_MARKER", "is_raysim_store", "check_replaceable", "remove_store",
-           "lock_path", "writer_lock", "remove_debris", "tmp_siblings"]
+           "lock_path", "writer_lock", "remove_debris", "tmp_siblings", "remove_tmp_files"]
 
 #: Group attribute that marks a store written by raysim.
 STORE_MARKER = "raysim_format"
@@ -163,4 +164,28 @@ def remove_debris(store: str | os.PathLike) -> list[Path]:
             if part.is_file():
                 part.unlink()
                 removed.append(part)
+    return removed
+
+
+#: Name of a temporary file of :func:`raysim.io.files.atomic_write`: ``.<name>.<8 chars>.tmp``.
+_ATOMIC_TMP = re.compile(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$")
+
+
+def remove_tmp_files(folder: str | os.PathLike) -> list[Path]:
+    """Remove the temporary files a killed :func:`~raysim.io.files.atomic_write` left in
+    ``folder`` (not below it); call it holding the folder's :func:`writer_lock`.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    p = Path(folder)
+    if not p.is_dir():
+        return []
+    removed = []
+    for q in sorted(p.iterdir()):
+        if _ATOMIC_TMP.match(q.name) and q.is_file() and not q.is_symlink():
+            q.unlink(missing_ok=True)
+            removed.append(q)
     return removed
