@@ -113,7 +113,7 @@ def choose_range_window(r_axis: np.ndarray, frame0, *, size, budget: int = AUTO_
     size : callable
         ``size(cells) -> bytes``, the job's peak for that many cells.
     budget : int
-        Largest estimated peak [bytes].
+        Largest estimated peak [bytes] (at most 80 % of the memory available).
 
     Returns
     -------
@@ -123,6 +123,7 @@ def choose_range_window(r_axis: np.ndarray, frame0, *, size, budget: int = AUTO_
         What was chosen and why, when it is not the whole window.
     """
     n = r_axis.size
+    budget = min(int(budget), int(0.8 * available_memory()))
     if size(n) <= budget:
         return np.arange(n), None
     power = range_profile(frame0(), n)
