@@ -206,10 +206,11 @@ def test_bad_cli_input(case: Bad, tmp_path, capsys):
 def test_catalogue_holds_at_least_100_cases():
     """tests/test_bad_input*.py together list at least 100 ``Bad(`` cases, all ids unique."""
     from test_bad_input import CASES
+    from test_bad_input_writes import GUARD_CASES
 
     files = sorted(Path(__file__).parent.glob("test_bad_input*.py"))
     written = sum(len(re.findall(r"^\s*Bad\(", p.read_text(), re.M)) for p in files)
-    ids = [c.id for c in CASES + CLI_CASES]
+    ids = [c.id for c in CASES + CLI_CASES + GUARD_CASES]
     assert len(ids) == len(set(ids))
     assert written == len(ids)
     assert written >= 100, f"only {written} bad-input cases"

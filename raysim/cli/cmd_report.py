@@ -69,6 +69,7 @@ def run(args) -> int:
             from raysim.io import storage
 
             path = Path(args.store)
+            check_output(args.out or default_out, "file", "--out", inputs=[("STORE", path)])
             if storage.store_exists(path):
                 ds = storage.open_store(path, load=False)     # frames are read one at a time
             elif path.is_file() and path.suffix in (".nc", ".nc4", ".netcdf"):
@@ -78,7 +79,6 @@ def run(args) -> int:
                                  f"raysim render or a NetCDF export (.nc)")
             if ds.sizes.get("frame", 0) == 0:
                 raise ValueError(f"STORE {args.store!r} holds no complete frame yet")
-            check_output(args.out or default_out, "file", "--out", inputs=[("STORE", path)])
             data = collect_from_dataset(ds, chains=chains, source=str(path))
         else:
             scenario = (load_scenario(args.scenario) if args.scenario
