@@ -99,7 +99,7 @@ def gated_range_compress(frame: np.ndarray, lo: int, hi: int) -> np.ndarray:
     return out
 
 
-def choose_range_window(r_axis: np.ndarray, frame0, *, size, budget: int = AUTO_BUDGET_BYTES
+def choose_range_window(r_axis: np.ndarray, frame0, *, size, budget: int | None = None
                         ) -> tuple[np.ndarray, str | None]:
     """Range cells compensated when ``--range-m`` is not given.
 
@@ -112,8 +112,9 @@ def choose_range_window(r_axis: np.ndarray, frame0, *, size, budget: int = AUTO_
         whole window does not fit).
     size : callable
         ``size(cells) -> bytes``, the job's peak for that many cells.
-    budget : int
-        Largest estimated peak [bytes] (at most 80 % of the memory available).
+    budget : int, optional
+        Largest estimated peak [bytes]; default :data:`AUTO_BUDGET_BYTES`;
+        never over 80 % of the memory available.
 
     Returns
     -------
@@ -123,7 +124,8 @@ def choose_range_window(r_axis: np.ndarray, frame0, *, size, budget: int = AUTO_
         What was chosen and why, when it is not the whole window.
     """
     n = r_axis.size
-    budget = min(int(budget), int(0.8 * available_memory()))
+    budget = min(AUTO_BUDGET_BYTES if budget is None else int(budget),
+                 int(0.8 * available_memory()))
     if size(n) <= budget:
         return np.arange(n), None
     power = range_profile(frame0(), n)
