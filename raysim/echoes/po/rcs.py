@@ -106,7 +106,7 @@ def rcs_job_size(mesh: TriangleMesh, directions: int, spacing: float, max_bounce
     tubes = int(side * side) if max_bounces > 1 else 0
     work = float(directions) * (facets + tubes)
     if work > MAX_RCS_WORK:
-        raise ValueError(f"rcs: {directions} directions x ({facets} facets + about {tubes} "
+        raise ValueError(f"rcs: {directions} directions x ({facets} facets + about {tubes} SBR "
                          f"ray tubes) = {work:.3g} evaluations, expected at most "
                          f"{MAX_RCS_WORK:.3g}: reduce --az-deg / --el-deg (fewer directions), "
                          f"--rays-per-wavelength, the mesh, or give --max-bounces 1")
