@@ -339,9 +339,8 @@ def convert_user_meshes(placements, *, frequency: float = 77e9,
     What was fixed is warned about (``UserWarning``, one message with every note);
     what cannot be used raises ``ValueError``.
     """
-    import warnings
-
     import shutil
+    import warnings
 
     from raysim.io.files import MANIFEST
 
