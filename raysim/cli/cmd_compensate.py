@@ -11,7 +11,12 @@ frame store; ``--imu-topic`` / ``--imu-instance`` choose the source inside it
 and ``--max-gap`` the largest gap filled inside the window used. ``--board`` /
 ``--antenna-positions`` give a capture's antennas where the configuration does
 not say the board. Output (``--out``): a labelled Zarr store, or for one frame an
-``.npz`` (:mod:`raysim.io.compensate_io`).
+``.npz`` (:mod:`raysim.io.compensate_io`); never one of the inputs, a file raysim did
+not write or an output another process is writing. The job is sized before anything
+large is allocated (:mod:`raysim.pipeline.compensate_size`): without ``--range-m``
+every range cell when it fits, else the cells around the strongest return (a note
+on stderr says which); a job that does not fit the memory or disk is refused with
+its size and the options that reduce it.
 
 This module parses the options, calls the compensate stage
 (:func:`raysim.pipeline.compensate.compensate`: reading, motion estimate or
@@ -54,7 +59,8 @@ chains: exact (rigid-body projection), paper (the published chain, needs
 stderr as "warning: CHAIN: TEXT" and into the "warnings" array of the output.
 
 exit status: 0 written, 2 invalid input (the message names the flag or file
-and the value).
+and the value; a job too large names its size), 130 interrupted (Ctrl-C or
+SIGTERM: temporary files removed).
 """
 
 def _floats(text: str, n: int, name: str) -> np.ndarray:
