@@ -498,3 +498,29 @@ def test_resume_after_a_full_disk_sizes_only_the_missing_frames(tmp_path, monkey
     with pytest.raises(ValueError, match="3 missing frame"):
         render(s, tmp_path / "new.zarr")                 # a new store needs all three
     assert render(s, store).frames_rendered == 1          # the resumed one only the last
+
+
+def test_flight_rerun_replaces_its_own_files(tmp_path, capsys):
+    """``raysim flight DIR`` twice: the second run replaces what the first wrote."""
+    from raysim.cli import main
+
+    assert main(["flight", str(tmp_path / "d"), "--frames", "1"]) == 0
+    first = {n: (tmp_path / "d" / n).stat().st_ino for n in ("adc_data.bin", "radar.cfg")}
+    assert main(["flight", str(tmp_path / "d"), "--frames", "1", "--seed", "1"]) == 0
+    assert all((tmp_path / "d" / n).stat().st_ino != i for n, i in first.items())
+    capsys.readouterr()
+
+
+def test_compensate_npz_leftover_is_removed(tmp_path, capsys):
+    """The hidden temporary of a killed ``.npz`` write is removed by the next writer."""
+    from raysim.cli import main
+
+    left = tmp_path / ".b.npz.ab12cd34.tmp"
+    left.write_bytes(b"half an npz")
+    other = tmp_path / ".other.npz.ab12cd34.tmp"          # another output's: kept
+    other.write_bytes(b"x")
+    assert main(["compensate", str(_tiny_cube(tmp_path / "c.npz")), "--chain", "none",
+                 "--az-deg", "0:0:1", "--el-deg", "0:0:1", "--out",
+                 str(tmp_path / "b.npz")]) == 0
+    assert not left.exists() and other.exists()
+    assert "removed 1 leftover" in capsys.readouterr().err

@@ -76,7 +76,8 @@ def _folder_lock(folder: Path):
     """Exclusive lock on a folder (its directory descriptor) while its manifest changes."""
     fd = os.open(folder, os.O_RDONLY)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
+        with contextlib.suppress(OSError):     # file systems without directory locks
+            fcntl.flock(fd, fcntl.LOCK_EX)
         yield
     finally:
         os.close(fd)
