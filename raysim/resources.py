@@ -17,19 +17,71 @@ __all__ = ["LARGE_OUTPUT_BYTES", "available_memory", "format_bytes", "check_memo
 LARGE_OUTPUT_BYTES = 1 << 30
 
 
+def _read_int(path: str) -> int | None:
+    try:
+        with open(path, encoding="ascii") as fh:
+            text = fh.read().strip()
+    except OSError:
+        return None
+    return int(text) if text.isdigit() else None
+
+
+def _cgroup_room() -> int | None:
+    """Memory left under this process's cgroup limit [bytes] (v2, else v1); None if none."""
+    for limit, usage in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                         ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                          "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        lim = _read_int(limit)
+        if lim is not None and lim < (1 << 60):
+            return max(0, lim - (_read_int(usage) or 0))
+    return None
+
+
+def _address_space_room() -> int | None:
+    """Address space left under ``ulimit -v`` (RLIMIT_AS) [bytes]; None if unlimited."""
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, ValueError, OSError):
+        return None
+    if soft == resource.RLIM_INFINITY or soft <= 0:
+        return None
+    used = 0
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmSize:"):
+                    used = int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return max(0, soft - used)
+
+
 def available_memory() -> int:
-    """Memory the system can give this process now [bytes] (``MemAvailable``)."""
+    """Memory this process can still get now [bytes].
+
+    The least of the system's ``MemAvailable``, the room under the process's
+    cgroup memory limit (containers) and the room under ``ulimit -v``.
+    """
+    avail = None
     try:
         with open("/proc/meminfo", encoding="ascii") as fh:
             for line in fh:
                 if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
+                    avail = int(line.split()[1]) * 1024
+                    break
     except OSError:
         pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError):
-        return 1 << 62                               # unknown: do not refuse
+    if avail is None:
+        try:
+            avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (ValueError, OSError):
+            avail = 1 << 62                              # unknown: do not refuse
+    for room in (_cgroup_room(), _address_space_room()):
+        if room is not None:
+            avail = min(avail, room)
+    return int(avail)
 
 
 def format_bytes(n: float) -> str:

@@ -49,6 +49,40 @@ def _with(**changes):
     return scenario_from_case("rotation_y").with_values(changes)
 
 
+def _cube(tmp: Path) -> Path:
+    """A one-frame ``.npz`` cube of the small radar (8 chirps, 2 x 2 array)."""
+    fr = simulate_point_targets(SMALL, ARR, [PointTarget.at(10.0, -0.2, -0.1)])
+    path = tmp / "c.npz"
+    np.savez(path, data=fr.data, chirp_times=fr.chirp_times,
+             element_positions=ARR.virtual_positions, carrier_frequency=SMALL.carrier_frequency,
+             bandwidth=SMALL.bandwidth, chirp_duration=SMALL.chirp_duration,
+             sample_rate=SMALL.sample_rate)
+    return path
+
+
+def _plate_mm(tmp: Path, side: float) -> Path:
+    """A square plate of ``side`` file units (STL), as a CAD tool in millimetres writes it."""
+    import trimesh
+
+    h = side / 2
+    v = np.array([[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]])
+    path = tmp / "plate.stl"
+    trimesh.Trimesh(v, [[0, 1, 2], [0, 2, 3]]).export(path)
+    return path
+
+
+def _with_memory(available: int, fn):
+    """Run ``fn()`` as if ``available`` bytes of memory were left."""
+    from raysim import resources
+
+    real = resources.available_memory
+    resources.available_memory = lambda: available
+    try:
+        return fn()
+    finally:
+        resources.available_memory = real
+
+
 #: A path whose nearest existing folder cannot be written, even by root.
 UNWRITABLE = "/proc/raysim-no-such-dir/out"
 
@@ -183,6 +217,42 @@ CLI_CASES = [
     Bad("cli-compensate-chain-suggests",
         lambda t: cli(["compensate", t / "c.npz", "--chain", "exakt", "--out", t / "o.npz"]),
         CliError, ("exit 2", "--chain", "did you mean 'exact'")),
+    # ------------------------------------------ every job sized before allocating
+    Bad("size-compensate-beams",
+        lambda t: cli(["compensate", _cube(t), "--chain", "none", "--range-m", "0:100",
+                       "--az-deg", "-90:90:0.002", "--el-deg", "-60:60:0.002",
+                       "--out", t / "b.zarr"]),
+        CliError, ("exit 2", "compensate beams", "of memory", "--range-m", "--az-deg")),
+    Bad("size-rcs-directions",
+        lambda _: cli(["rcs", "plate:0.1", "--az-deg", "0:360:0.01", "--el-deg", "-90:90:0.01"]),
+        CliError, ("exit 2", "648054001 directions", "evaluations", "--az-deg / --el-deg")),
+    Bad("size-rcs-facets",
+        lambda _: __import__("raysim.echoes.po.rcs", fromlist=["x"]).rcs_job_size(
+            __import__("types").SimpleNamespace(faces=range(10_000_000), radius=1.0), 1,
+            3.9e-4, 1), ValueError, ("10000000 facets", "at most 2000000", "decimate")),
+    Bad("size-rcs-millimetres",
+        lambda t: cli(["rcs", _plate_mm(t, 1000.0), "--az-deg", "0", "--el-deg", "0"]),
+        CliError, ("exit 2", "plate.stl", "looks like millimetres", "--scale 0.001")),
+    Bad("size-rcs-scale-on-canonical",
+        lambda _: cli(["rcs", "plate:0.1", "--scale", "0.001", "--az-deg", "0", "--el-deg",
+                       "0"]), CliError, ("exit 2", "--scale", "plate:0.1")),
+    Bad("size-rcs-scale-negative",
+        lambda t: cli(["rcs", _plate_mm(t, 100.0), "--scale", "-1", "--az-deg", "0",
+                       "--el-deg", "0"]), CliError, ("exit 2", "--scale", "-1.0")),
+    Bad("size-flight-frames",
+        lambda t: cli(["flight", t / "f", "--frames", "1000000000"]), CliError,
+        ("exit 2", "1000000000 frame(s)", "--frames")),
+    Bad("size-flight-target-behind",
+        lambda t: cli(["flight", t / "f", "--target", "15,100,0"]), CliError,
+        ("exit 2", "--target", "azimuth 100", "[-90, 90] deg")),
+    Bad("size-flight-target-beyond-range",
+        lambda t: cli(["flight", t / "f", "--target", "500,0,0"]), CliError,
+        ("exit 2", "--target", "range 500 m", "maximum range")),
+    Bad("size-intra-chirp-paper-case",
+        lambda t: _with_memory(2 << 30, lambda: cli(
+            ["render", CASE_TOML, "--set", "intra_chirp=true", "--out", t / "s.zarr"])),
+        CliError, ("exit 2", "[256, 400, 600] with intra-chirp motion", "GiB",
+                   "radar.num_chirps")),
     Bad("cli-render-scenario-not-utf8",
         lambda t: (t / "l.toml").write_bytes(b'name = "\xe9t\xe9"\n')
         and cli(["render", t / "l.toml", "--out", t / "x.zarr"]), CliError,
@@ -206,10 +276,11 @@ def test_bad_cli_input(case: Bad, tmp_path, capsys):
 def test_catalogue_holds_at_least_100_cases():
     """tests/test_bad_input*.py together list at least 100 ``Bad(`` cases, all ids unique."""
     from test_bad_input import CASES
+    from test_bad_input_writes import GUARD_CASES
 
     files = sorted(Path(__file__).parent.glob("test_bad_input*.py"))
     written = sum(len(re.findall(r"^\s*Bad\(", p.read_text(), re.M)) for p in files)
-    ids = [c.id for c in CASES + CLI_CASES]
+    ids = [c.id for c in CASES + CLI_CASES + GUARD_CASES]
     assert len(ids) == len(set(ids))
     assert written == len(ids)
     assert written >= 100, f"only {written} bad-input cases"
@@ -350,3 +421,75 @@ def test_read_only_folder_is_refused_before_computing(tmp_path, capsys):
         ro.chmod(0o755)
     err = capsys.readouterr().err
     assert "--out" in err and "not writable" in err and str(ro) in err
+
+
+def test_millimetre_plate_is_reported_and_scaled(tmp_path, capsys):
+    """A 100 mm plate written in millimetres: a note without --scale, its true RCS with it."""
+    from raysim.cli import main
+
+    path = _plate_mm(tmp_path, 100.0)
+    assert main(["rcs", str(path), "--az-deg", "0", "--el-deg", "0", "--max-bounces", "1",
+                 "--json"]) == 0
+    out = capsys.readouterr()
+    assert "100 m across" in out.err and "--scale 0.001" in out.err
+    assert main(["rcs", str(path), "--scale", "0.001", "--az-deg", "0", "--el-deg", "0",
+                 "--json"]) == 0
+    scaled = json.loads(capsys.readouterr().out)["rcs_dbsm"][0][0]
+    assert main(["rcs", "plate:0.1", "--az-deg", "0", "--el-deg", "0", "--json"]) == 0
+    assert scaled == pytest.approx(json.loads(capsys.readouterr().out)["rcs_dbsm"][0][0],
+                                   abs=0.05)
+
+
+def test_compensate_default_window_is_sized(tmp_path, capsys):
+    """Without --range-m: every cell when the job fits, else the cells around the strongest
+    return that fit the budget, with a note saying which."""
+    from raysim.cli import main
+    from raysim.pipeline import compensate_size
+
+    cube = _cube(tmp_path)
+    assert main(["compensate", str(cube), "--chain", "none", "--out",
+                 str(tmp_path / "all.npz")]) == 0
+    with np.load(tmp_path / "all.npz") as z:
+        assert z["range_m"].size == SMALL.num_samples            # all cells fit
+    assert "note" not in capsys.readouterr().err
+    budget = compensate_size.job_bytes(1, 8, 4, SMALL.num_samples, 5, 121 * 121)
+    real = compensate_size.AUTO_BUDGET_BYTES
+    compensate_size.AUTO_BUDGET_BYTES = budget
+    try:
+        from raysim.pipeline.compensate import compensate
+
+        res = compensate(cube, chain="none", out=tmp_path / "win.npz")
+    finally:
+        compensate_size.AUTO_BUDGET_BYTES = real
+    cells = res.beams[0].range
+    assert cells.size == 5 and cells[0] < 10.0 < cells[-1]       # around the 10 m target
+    assert "strongest return" in res.notes[0] and "--range-m" in res.notes[0]
+
+
+def test_user_guide_compensate_example_runs_within_2_gb(tmp_path):
+    """``raysim compensate rotation_y.zarr --out beams.npz`` (docs/user_guide.md) on the
+    paper case: the default window keeps the process under 2 GB of memory (peak RSS)."""
+    import os
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(root)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
+    run = ("import resource, sys\nfrom raysim.cli import main\ncode = main(sys.argv[1:])\n"
+           "print('maxrss_kib', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, "
+           "file=sys.stderr)\nsys.exit(code)\n")
+
+    def raysim(*argv):
+        return subprocess.run([sys.executable, "-c", run, *map(str, argv)], cwd=tmp_path,
+                              env=env, capture_output=True, text=True, timeout=600)
+
+    r = raysim("render", CASE_TOML, "--out", "rotation_y.zarr", "--no-progress")
+    assert r.returncode == 0, r.stderr
+    c = raysim("compensate", "rotation_y.zarr", "--out", "beams.npz", "--no-progress")
+    assert c.returncode == 0, c.stderr
+    peak = int(c.stderr.split("maxrss_kib")[1].split()[0]) * 1024
+    assert peak < 2e9, f"compensate peaked at {peak / 1e9:.2f} GB"
+    assert "strongest return" in c.stderr
+    with np.load(tmp_path / "beams.npz") as z:
+        assert z["beams"].shape[1] >= 3 and 14.0 < float(np.mean(z["range_m"])) < 16.0

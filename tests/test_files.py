@@ -4,13 +4,24 @@ import json
 
 import pytest
 
-from raysim.io.files import atomic_savefig, atomic_write, atomic_write_json, atomic_write_text
+from raysim.io.files import (
+    MANIFEST,
+    atomic_savefig,
+    atomic_write,
+    atomic_write_json,
+    atomic_write_text,
+)
+
+
+def _names(folder):
+    """Names in ``folder`` without raysim's manifest of its outputs."""
+    return sorted(p.name for p in folder.iterdir() if p.name != MANIFEST)
 
 
 def test_written_file_is_complete_and_no_temporary_is_left(tmp_path):
     path = atomic_write_json(tmp_path / "sub" / "a.json", {"x": 1})
     assert json.loads(path.read_text()) == {"x": 1}
-    assert [p.name for p in path.parent.iterdir()] == ["a.json"]
+    assert _names(path.parent) == ["a.json"]
 
 
 def test_failure_midway_keeps_the_old_file(tmp_path):
@@ -23,7 +34,7 @@ def test_failure_midway_keeps_the_old_file(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         atomic_write(path, half)
     assert path.read_text() == "old"
-    assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]
+    assert _names(tmp_path) == ["a.txt"]
 
 
 def test_figure_is_saved_in_the_suffix_format(tmp_path):
@@ -36,3 +47,33 @@ def test_figure_is_saved_in_the_suffix_format(tmp_path):
     path = atomic_savefig(fig, tmp_path / "f.png", dpi=20)
     plt.close(fig)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_users_file_is_never_replaced(tmp_path):
+    """A file raysim did not write (or one changed since) is refused by every writer."""
+    mine = tmp_path / "notes.json"
+    mine.write_text("mine")
+    with pytest.raises(ValueError, match="raysim did not write") as info:
+        atomic_write_json(mine, {"x": 1})
+    assert str(mine) in str(info.value)
+    assert mine.read_text() == "mine"
+    ours = atomic_write_text(tmp_path / "ours.txt", "1")
+    atomic_write_text(ours, "2")                               # raysim's own output: replaced
+    assert ours.read_text() == "2"
+    ours.write_text("edited by hand, longer")
+    with pytest.raises(ValueError, match="raysim did not write"):
+        atomic_write_text(ours, "3")
+    assert ours.read_text() == "edited by hand, longer"
+
+
+def test_output_that_is_an_input_is_refused(tmp_path):
+    from raysim.io.files import check_output
+
+    src = atomic_write_text(tmp_path / "run.nc", "x")          # even raysim's own file
+    with pytest.raises(ValueError, match="one of the command's inputs") as info:
+        check_output(src, "file", "--out", inputs=[("STORE", src)])
+    assert "--out" in str(info.value) and str(src) in str(info.value)
+    store = tmp_path / "s.zarr"
+    store.mkdir()
+    with pytest.raises(ValueError, match="inputs"):
+        check_output(store / "r.html", "file", "--out", inputs=[store])

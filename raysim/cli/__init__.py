@@ -2,7 +2,9 @@
 
 Subcommands live in modules ``raysim/cli/cmd_<name>.py``; each defines
 ``register(subparsers)`` which adds a parser and sets ``func(args) -> int``.
-Exit codes: 0 success, 1 the work failed, 2 bad input (usage, files, values).
+Exit codes: 0 success, 1 the work failed, 2 bad input (usage, files, values),
+130 interrupted (Ctrl-C, or SIGTERM, which is handled the same way: the
+writers remove their temporary files and keep what they finished).
 Every parser is a :class:`raysim.cli.options.Parser` (option values such as
 ``-30:30:1`` are read as values); every command's ``--help`` ends with examples.
 """
@@ -10,9 +12,12 @@ Every parser is a :class:`raysim.cli.options.Parser` (option values such as
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import pkgutil
+import signal
 import sys
+import threading
 
 from raysim import __version__
 from raysim.cli.options import Parser
@@ -45,7 +50,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        return int(args.func(args) or 0)
+        with _sigterm_as_interrupt():
+            return int(args.func(args) or 0)
     except ValueError as exc:
         print(f"raysim {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -56,6 +62,23 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"raysim {args.command}: interrupted; finished outputs were kept", file=sys.stderr)
         return 130
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """While the block runs, SIGTERM raises KeyboardInterrupt (as Ctrl-C does)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, _frame):
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 if __name__ == "__main__":  # pragma: no cover

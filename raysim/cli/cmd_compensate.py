@@ -11,7 +11,12 @@ frame store; ``--imu-topic`` / ``--imu-instance`` choose the source inside it
 and ``--max-gap`` the largest gap filled inside the window used. ``--board`` /
 ``--antenna-positions`` give a capture's antennas where the configuration does
 not say the board. Output (``--out``): a labelled Zarr store, or for one frame an
-``.npz`` (:mod:`raysim.io.compensate_io`).
+``.npz`` (:mod:`raysim.io.compensate_io`); never one of the inputs, a file raysim did
+not write or an output another process is writing. The job is sized before anything
+large is allocated (:mod:`raysim.pipeline.compensate_size`): without ``--range-m``
+every range cell when it fits, else the cells around the strongest return (a note
+on stderr says which); a job that does not fit the memory or disk is refused with
+its size and the options that reduce it.
 
 This module parses the options, calls the compensate stage
 (:func:`raysim.pipeline.compensate.compensate`: reading, motion estimate or
@@ -56,7 +61,8 @@ price, "dpca price: ...", is printed with the warnings). Guard warnings go to
 stderr as "warning: CHAIN: TEXT" and into the "warnings" array of the output.
 
 exit status: 0 written, 2 invalid input (the message names the flag or file
-and the value).
+and the value; a job too large names its size), 130 interrupted (Ctrl-C or
+SIGTERM: temporary files removed).
 """
 
 def _floats(text: str, n: int, name: str) -> np.ndarray:
@@ -140,7 +146,9 @@ def register(subparsers) -> None:
     p.add_argument("--out", required=True,
                    help="output: a Zarr store (labelled beams and Doppler maps of every frame) "
                    "or, for one frame, an .npz")
-    p.add_argument("--range-m", default="0:1e9", metavar="LO:HI", help="range cells [m]")
+    p.add_argument("--range-m", default=None, metavar="LO:HI",
+                   help="range cells [m]; left out: every cell when the job fits 1.2 GB, else "
+                   "the cells around the strongest return that fit (a note says which)")
     p.add_argument("--az-deg", default="-60:60:1", metavar="LO:HI:STEP")
     p.add_argument("--el-deg", default="-60:60:1", metavar="LO:HI:STEP")
     p.add_argument("--lever-arm", default=None, metavar="X,Y,Z",
@@ -212,7 +220,7 @@ def run(args) -> int:
         args.cube, args.imu if args.imu is not None else args.imu_positional, out=args.out,
         chain=spec, frames=args.frames, frame=args.frame, radar_config=args.radar_config,
         layout=args.layout, capture_t0=args.capture_t0,
-        range_m=span_option(args.range_m, "--range-m", False),
+        range_m=None if args.range_m is None else span_option(args.range_m, "--range-m", False),
         azimuth_deg=span_grid(args.az_deg, "--az-deg"),
         elevation_deg=span_grid(args.el_deg, "--el-deg"),
         lever_arm=None if args.lever_arm is None else _floats(args.lever_arm, 3, "--lever-arm"),
@@ -227,6 +235,8 @@ def run(args) -> int:
         max_gap=args.max_gap, imu_topic=args.imu_topic, imu_instance=args.imu_instance,
         board=args.board, antenna_positions=args.antenna_positions,
         progress=not args.no_progress)
+    for note in result.notes:
+        print(f"note: {note}", file=sys.stderr)
     if result.imu_source is not None:
         print(f"IMU log: {result.imu_source}")
     for w in result.warnings:

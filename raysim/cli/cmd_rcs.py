@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +13,7 @@ import numpy as np
 from raysim.cli.options import MAX_SPAN_VALUES, span_grid
 
 _EPILOG = """\
-MESH is a mesh file trimesh reads (PLY, OBJ, STL, GLB/glTF; metres) or a canonical
+MESH is a mesh file trimesh reads (PLY, OBJ, STL, GLB/glTF; metres, or --scale) or a canonical
 target: plate:A (square plate of side A), dihedral:AxB (right dihedral, faces A wide,
 fold B long), trihedral:A (triangular trihedral, edge A), sphere:R (radius R).
 The radar sits at range * u(az, el), u = (cos el sin az, sin el, cos el cos az),
@@ -24,6 +25,7 @@ examples:
   raysim rcs trihedral:0.1 --material metal --az-deg 0 --el-deg 0 --json
   raysim rcs plate:0.1 --material metal --az-deg 0,1,2 --el-deg 0 --range-m 15
   raysim rcs car.glb --material metal --az-deg 0:360:5 --el-deg -10 --pol HH
+  raysim rcs plate_mm.stl --scale 0.001 --az-deg 0 --el-deg 0   # file in millimetres
 
 exit status: 0 ok, 2 bad input (values, files).
 """
@@ -52,6 +54,9 @@ def register(subparsers) -> None:
                    help="deepest bounce (1 = single-bounce PO only; default 3)")
     p.add_argument("--rays-per-wavelength", type=float, default=10.0,
                    help="SBR tube density per transverse axis (default 10)")
+    p.add_argument("--scale", type=float, default=None, metavar="M_PER_UNIT",
+                   help="metres per unit of a mesh file (0.001 for millimetres); left out: "
+                   "metres, and a file over 500 units across is refused as millimetres")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None, help="write a PNG pattern plot")
     p.set_defaults(func=run)
@@ -81,19 +86,25 @@ def parse_spec(text: str, option: str) -> np.ndarray:
     return values
 
 
-def load_target(text: str):
-    """A canonical target spelling or a mesh file -> :class:`TriangleMesh`."""
+def load_target(text: str, scale: float | None = None, notes: list | None = None):
+    """A canonical target spelling or a mesh file -> :class:`TriangleMesh` [m].
+
+    ``scale`` (metres per file unit) and ``notes`` as in :meth:`TriangleMesh.load`.
+    """
     from raysim.echoes.po.mesh import TriangleMesh
     from raysim.echoes.po.targets import canonical_target
 
     head = str(text).partition(":")[0]
     if head in ("plate", "dihedral", "trihedral", "sphere") and not Path(text).exists():
+        if scale is not None:
+            raise ValueError(f"--scale applies to a mesh file, not to the canonical target "
+                             f"{text!r} (its size is in metres)")
         return canonical_target(text)
     path = Path(text)
     if not path.is_file():
         raise ValueError(f"MESH: got {text!r}, neither a mesh file nor a canonical target "
                          "(plate:A, dihedral:AxB, trihedral:A, sphere:R)")
-    return TriangleMesh.load(path)
+    return TriangleMesh.load(path, scale=scale, notes=notes)
 
 
 def _plot(result, path) -> None:
@@ -130,14 +141,17 @@ def run(args) -> int:
     from raysim.echoes.po import monostatic_rcs, po_material
 
     if args.plot:
-        check_output(args.plot, "file", "--plot")
+        check_output(args.plot, "file", "--plot", inputs=[("MESH", args.mesh)])
     az = parse_spec(args.az_deg, "--az-deg")
     el = parse_spec(args.el_deg, "--el-deg")
     if not (math.isfinite(args.freq_hz) and args.freq_hz > 0):
         raise ValueError(f"--freq-hz: got {args.freq_hz!r}, expected a positive frequency")
     if args.range_m is not None and not (math.isfinite(args.range_m) and args.range_m > 0):
         raise ValueError(f"--range-m: got {args.range_m!r}, expected a positive range")
-    mesh = load_target(args.mesh)
+    notes: list[str] = []
+    mesh = load_target(args.mesh, args.scale, notes)
+    for note in notes:
+        print(f"note: {note}", file=sys.stderr)
     material = po_material(args.material, args.freq_hz)
     result = monostatic_rcs(mesh, material, az, el, frequency=args.freq_hz,
                             range_m=args.range_m, polarisation=args.pol,

@@ -54,10 +54,12 @@ def run(args) -> int:
     if not out:
         raise ValueError("no output store: pass --out STORE.zarr or set output.store in the "
                          "scenario file")
-    check_output(out, "dir", "--out" if args.out else "output.store")
+    inputs = [("SCENARIO", args.scenario)]
+    check_output(out, "dir", "--out" if args.out else "output.store", inputs=inputs)
     nc = args.netcdf or scenario.output.netcdf
     if nc:
-        check_output(nc, "file", "--netcdf" if args.netcdf else "output.netcdf")
+        check_output(nc, "file", "--netcdf" if args.netcdf else "output.netcdf",
+                     inputs=inputs + [("the store", out)])
     try:
         summary = render(scenario, out, overwrite=args.overwrite,
                          progress=not args.no_progress, export_netcdf=nc)

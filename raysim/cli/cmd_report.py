@@ -70,6 +70,7 @@ def run(args) -> int:
             from raysim.io import storage
 
             path = Path(args.store)
+            check_output(args.out or default_out, "file", "--out", inputs=[("STORE", path)])
             if storage.store_exists(path):
                 ds = storage.open_store(path, load=False)     # frames are read one at a time
             elif path.is_file() and path.suffix in (".nc", ".nc4", ".netcdf"):
@@ -79,7 +80,6 @@ def run(args) -> int:
                                  f"raysim render or a NetCDF export (.nc)")
             if ds.sizes.get("frame", 0) == 0:
                 raise ValueError(f"STORE {args.store!r} holds no complete frame yet")
-            check_output(args.out or default_out, "file", "--out")
             data = collect_from_dataset(ds, chains=chains, source=str(path))
         else:
             scenario = (load_scenario(args.scenario) if args.scenario
@@ -88,7 +88,8 @@ def run(args) -> int:
                 scenario = scenario.with_values(dict(parse_assignment(s) for s in args.set))
             default_out = scenario.output.report or default_out
             check_output(args.out or default_out, "file",
-                         "--out" if args.out or not scenario.output.report else "output.report")
+                         "--out" if args.out or not scenario.output.report else "output.report",
+                         inputs=[("--scenario", args.scenario)])
             data = collect_from_scenario(scenario, chains=chains,
                                          source=args.scenario or f"paper case {args.case}")
     except FeatureUnavailable as exc:

@@ -79,7 +79,7 @@ def run(args) -> int:
     cases = None if not args.cases else [c.strip() for c in args.cases.split(",") if c.strip()]
     for case in cases or ():
         known_name(case, PAPER_CASES, "--cases", "case")
-    check_output(args.out, "dir", "--out")
+    check_output(args.out, "dir", "--out", names=("reproduction.json", "reproduction.csv"))
     make = ReproductionSettings.quick if args.quick else ReproductionSettings
     overrides = {} if args.imu_rate is None else {"imu.rate_hz": float(args.imu_rate)}
     settings = make(overrides=overrides, velocity=args.velocity)

@@ -54,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
 
     for name in args.maps or ():
         known_name(name, MAPS, "--maps", "stability map")
-    check_output(args.out, "dir", "--out")
+    maps = args.maps or list(MAPS)
+    check_output(args.out, "dir", "--out", names=["summary.json"] + [
+        f"{m}.{ext}" for m in maps for ext in ("json", "nc", "png")])
     summary = write_stability(args.out, quick=args.quick, maps=args.maps,
                               progress=not args.no_progress, executor=args.executor)
     print(summary_table(summary))

@@ -121,6 +121,9 @@ def run(args) -> int:
                  else "the local Dask cluster failed")
         print(f"raysim sweep: {where}: {exc}", file=sys.stderr)
         return 1
+    if res.removed:
+        print(f"note: removed {len(res.removed)} leftover file(s) of an interrupted writer of "
+              f"{args.out!r}", file=sys.stderr)
     ds = res.dataset
     total = int(ds.attrs["points_total"])
     print(f"{args.out}: {int(ds.attrs['points_done'])}/{total} points done "

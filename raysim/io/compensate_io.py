@@ -378,7 +378,7 @@ def write_compensated_npz(path: str, beams, chain: str, azimuth_deg, elevation_d
     atomic_write(path, write)
 
 
-def check_compensated_output(path, option: str = "--out") -> bool:
+def check_compensated_output(path, option: str = "--out", inputs=()) -> bool:
     """Check, before any computation, that the compensated output may be written at ``path``.
 
     A path ending in ``.npz`` is a file; any other a Zarr store, which may
@@ -391,6 +391,8 @@ def check_compensated_output(path, option: str = "--out") -> bool:
         The output.
     option : str
         The option or parameter named in the messages.
+    inputs : iterable of path or (label, path)
+        The command's inputs; the output may be none of them.
 
     Returns
     -------
@@ -408,7 +410,7 @@ def check_compensated_output(path, option: str = "--out") -> bool:
 
     path = os.fspath(path)
     as_npz = path.endswith(".npz")
-    check_output(path, "file" if as_npz else "dir", option)
+    check_output(path, "file" if as_npz else "dir", option, inputs=inputs)
     if not as_npz and os.path.isdir(path):
         if not store_exists(path):
             raise ValueError(f"{option}: cannot write {path!r}: it is an existing directory "

@@ -11,9 +11,13 @@
 * Readers never write and take no lock (see
   :func:`raysim.io.storage.open_store`).
 * Debris of a killed writer: the hidden ``.<store name>.<hex>.tmp`` folders
-  of an unfinished :func:`~raysim.io.storage.write_store` and Zarr's
-  ``*.partial`` files inside the store are removed by the next writer of the
-  same store, under its lock (:func:`remove_debris`), and nothing else.
+  of an unfinished :func:`~raysim.io.storage.write_store`, the hidden
+  ``.<file name>.<random>.tmp`` files of an unfinished
+  :func:`~raysim.io.files.atomic_write` and Zarr's ``*.partial`` files inside
+  the store are removed by the next writer of the same output, under its lock
+  (:func:`remove_debris`), and nothing else. The same lock and debris rules
+  hold for every output that is written for a long time: ``render``,
+  ``compensate`` and ``sweep``.
 """
 
 from __future__ import annotations
@@ -21,12 +25,13 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import os
+import re
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
 __all__ = ["STORE_MARKER", "is_raysim_store", "check_replaceable", "remove_store",
-           "lock_path", "writer_lock", "remove_debris", "tmp_siblings"]
+           "lock_path", "writer_lock", "remove_debris", "tmp_siblings", "remove_tmp_files"]
 
 #: Group attribute that marks a store written by raysim.
 STORE_MARKER = "raysim_format"
@@ -125,11 +130,16 @@ def writer_lock(store: str | os.PathLike) -> Iterator[Path]:
 
 
 def tmp_siblings(store: str | os.PathLike) -> list[Path]:
-    """The hidden temporary folders of :func:`~raysim.io.storage.write_store` for a store."""
+    """The hidden temporaries of a writer of this output, beside it.
+
+    Folders of :func:`~raysim.io.storage.write_store` and files of
+    :func:`~raysim.io.files.atomic_write`: ``.<name>.<random>.tmp``.
+    """
     p = Path(store)
     if not p.parent.is_dir():
         return []
-    return sorted(q for q in p.parent.glob(f".{p.name}.*.tmp") if q.is_dir())
+    return sorted(q for q in p.parent.glob(f".{p.name}.*.tmp")
+                  if q.is_dir() or (q.is_file() and not q.is_symlink()))
 
 
 def remove_debris(store: str | os.PathLike) -> list[Path]:
@@ -144,11 +154,38 @@ def remove_debris(store: str | os.PathLike) -> list[Path]:
     p = Path(store)
     removed = []
     for tmp in tmp_siblings(p):
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp.is_dir():
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            tmp.unlink(missing_ok=True)
         removed.append(tmp)
     if p.is_dir() and is_raysim_store(p):
         for part in p.rglob("*.partial"):
             if part.is_file():
                 part.unlink()
                 removed.append(part)
+    return removed
+
+
+#: Name of a temporary file of :func:`raysim.io.files.atomic_write`: ``.<name>.<8 chars>.tmp``.
+_ATOMIC_TMP = re.compile(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$")
+
+
+def remove_tmp_files(folder: str | os.PathLike) -> list[Path]:
+    """Remove the temporary files a killed :func:`~raysim.io.files.atomic_write` left in
+    ``folder`` (not below it); call it holding the folder's :func:`writer_lock`.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    p = Path(folder)
+    if not p.is_dir():
+        return []
+    removed = []
+    for q in sorted(p.iterdir()):
+        if _ATOMIC_TMP.match(q.name) and q.is_file() and not q.is_symlink():
+            q.unlink(missing_ok=True)
+            removed.append(q)
     return removed

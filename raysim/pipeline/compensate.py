@@ -84,7 +84,9 @@ from raysim.io.compensate_io import (
     write_compensated_npz,
     write_compensated_store,
 )
+from raysim.io.store_guard import remove_debris, writer_lock
 from raysim.pipeline.chains import project
+from raysim.pipeline.compensate_size import gated_range_compress, output_bytes
 from raysim.pipeline.estimate import estimate_record
 from raysim.pipeline.self_calibration import calibrate_record
 from raysim.processing.maps import range_compress
@@ -124,6 +126,9 @@ class CompensateResult:
     imu_source : str or None
         The IMU source read: file, topic or message, instance, rate and time
         base (:func:`raysim.io.flight_logs.read_imu_log`); None for ``none``.
+    notes : tuple of str
+        What the run chose or cleaned for the user (the default range window,
+        debris of an interrupted writer removed).
     """
 
     out: Path
@@ -134,6 +139,7 @@ class CompensateResult:
     calibration: dict | None
     time_offset: float | None
     imu_source: str | None = None
+    notes: tuple = ()
 
     @property
     def shape(self) -> tuple:
@@ -287,9 +293,45 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                                                    else time_offset)
 
 
+def _size_job(inp, out: Path, range_m, beams: int, calibrating: bool, notes: list
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """The range axis ``[cell]`` [m] and the cells compensated, the job sized as a whole.
+
+    ``range_m`` None chooses the window
+    (:func:`raysim.pipeline.compensate_size.choose_range_window`, its note
+    appended to ``notes``); the job is then refused when it does not fit the
+    memory or the disk available, before anything large is allocated.
+    """
+    from raysim.pipeline.compensate_size import check_job, choose_range_window, job_bytes
+
+    cfg = inp.config
+    chirps, channels, n_samples = (int(n) for n in inp.read(0).shape)
+    r_axis = cfg.bin_ranges(n_samples if cfg.complex_sampling else n_samples // 2)
+    n_frames = len(inp.frames)
+
+    def size(cells: int) -> int:
+        return job_bytes(n_frames, chirps, channels, n_samples, cells, beams,
+                         calibrating=calibrating)
+
+    if range_m is None:
+        gates, note = choose_range_window(r_axis, lambda: inp.read(0), size=size)
+        if note:
+            notes.append(note)
+    else:
+        r_lo, r_hi = _vector(range_m, 2, "--range-m")
+        gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
+        if gates.size == 0:
+            raise ValueError(f"--range-m {r_lo:g}:{r_hi:g} selects no range cell; cells span "
+                             f"0 .. {r_axis[-1]:.2f} m")
+    shape = [n_frames, chirps, int(gates.size), beams]
+    check_job(size(gates.size), out, output_bytes(n_frames, chirps, gates.size, beams),
+              f"beams {shape} [frame, chirp, range, beam]")
+    return r_axis, gates
+
+
 def compensate(source, imu=None, *, out, chain="exact", frames=None,
                frame: int = 0, radar_config=None, layout: str | None = None,
-               capture_t0: float = 0.0, range_m=(0.0, 1e9), azimuth_deg=None,
+               capture_t0: float = 0.0, range_m=None, azimuth_deg=None,
                elevation_deg=None, lever_arm=None, time_offset: float | str = 0.0,
                velocity: str = "hover", initial_velocity=None,
                initial_attitude_deg=(0.0, 0.0, 0.0), imu_grade: str | None = None,
@@ -328,8 +370,11 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         LVDS lanes of a capture (default from the configuration).
     capture_t0 : float
         Radar-clock time of the first ramp of a capture [s].
-    range_m : (float, float)
-        Range cells ``lo <= r <= hi`` to compensate [m].
+    range_m : (float, float), optional
+        Range cells ``lo <= r <= hi`` to compensate [m]; default every cell
+        when the job fits :data:`raysim.pipeline.compensate_size.AUTO_BUDGET_BYTES`,
+        else the cells around the strongest return that fit (said in the
+        result's ``notes``).
     azimuth_deg, elevation_deg : array_like, optional
         Beam grid axes [deg]; default -60..60 in 1 deg steps.
     lever_arm : array_like, shape ``[3]``, optional
@@ -382,9 +427,11 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     Raises
     ------
     ValueError
-        Bad input, named: the output path, missing files, frame selections,
-        radar configurations, option values, an IMU log that does not cover
-        the chirps.
+        Bad input, named: the output path (one of the inputs, a file or folder
+        raysim did not write, or written by another process now), missing
+        files, frame selections, radar configurations, option values, an IMU
+        log that does not cover the chirps, a job larger than the memory or
+        disk available (the size and the settings to reduce).
     """
     spec = parse_chain(chain)
     if velocity not in VELOCITY_CHOICES:
@@ -396,97 +443,101 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     else:
         time_offset = float(_vector(time_offset, 1, "--time-offset")[0])
     out = Path(out)
-    as_npz = check_compensated_output(out, "--out")
-    source = os.fspath(source)
-    inp = load_input(source, radar_config=None if radar_config is None
-                     else os.fspath(radar_config), frames=_frames_text(frames), frame=frame,
-                     layout=layout, capture_t0=capture_t0, board=board,
-                     antenna_positions=antenna_positions)
-    if as_npz and len(inp.frames) != 1:
-        raise ValueError(f"--out {str(out)!r}: an .npz holds one frame, the selection has "
-                         f"{len(inp.frames)}; give a store path (no .npz) or --frames K")
-    cfg = inp.config
-    u = None
-    if spec.name == "paper":
-        from compensation.geometry import direction
+    as_npz = check_compensated_output(out, "--out", inputs=[("CUBE", source), ("--imu", imu),
+                                                            ("--radar-config", radar_config)])
+    with writer_lock(out):
+        removed = remove_debris(out)
+        notes = [f"removed {len(removed)} leftover file(s) of an interrupted writer of "
+                 f"{str(out)!r}"] if removed else []
+        source = os.fspath(source)
+        inp = load_input(source, radar_config=None if radar_config is None
+                         else os.fspath(radar_config), frames=_frames_text(frames), frame=frame,
+                         layout=layout, capture_t0=capture_t0, board=board,
+                         antenna_positions=antenna_positions)
+        if as_npz and len(inp.frames) != 1:
+            raise ValueError(f"--out {str(out)!r}: an .npz holds one frame, the selection has "
+                             f"{len(inp.frames)}; give a store path (no .npz) or --frames K")
+        cfg = inp.config
+        u = None
+        if spec.name == "paper":
+            from compensation.geometry import direction
 
-        if direction_deg is None:
-            raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target "
-                             f"direction)")
-        u = direction(*np.deg2rad(_vector(direction_deg, 2, "--direction-deg")))
-    n_samples = inp.read(0).shape[-1]
-    r_axis = cfg.bin_ranges(n_samples if cfg.complex_sampling else n_samples // 2)
-    r_lo, r_hi = _vector(range_m, 2, "--range-m")
-    gates = np.flatnonzero((r_axis >= r_lo) & (r_axis <= r_hi))
-    if gates.size == 0:
-        raise ValueError(f"--range-m {r_lo:g}:{r_hi:g} selects no range cell; cells span "
-                         f"0 .. {r_axis[-1]:.2f} m")
-    az = _angles(DEFAULT_ANGLES_DEG if azimuth_deg is None else azimuth_deg, "--az-deg")
-    el = _angles(DEFAULT_ANGLES_DEG if elevation_deg is None else elevation_deg, "--el-deg")
-    motions = calibration = offset = imu_source = None
-    rcs: list = []                     # range-compressed frames, kept when calibrating
-    window_notes: tuple = ()
-    if spec.compensated:
-        table, imu_source = _imu_table(imu, inp, source, imu_topic, imu_instance)
-        table, window_notes = _imu_window(table, inp, time_offset, max_gap)
-        if window_notes:
-            import warnings
+            if direction_deg is None:
+                raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target "
+                                 f"direction)")
+            u = direction(*np.deg2rad(_vector(direction_deg, 2, "--direction-deg")))
+        az = _angles(DEFAULT_ANGLES_DEG if azimuth_deg is None else azimuth_deg, "--az-deg")
+        el = _angles(DEFAULT_ANGLES_DEG if elevation_deg is None else elevation_deg, "--el-deg")
+        calibrating = spec.compensated and (velocity == "radar" or time_offset == "auto")
+        r_axis, gates = _size_job(inp, out, range_m, az.size * el.size, calibrating, notes)
+        motions = calibration = offset = imu_source = None
+        rcs: list = []                     # range-compressed frames, kept when calibrating
+        window_notes: tuple = ()
+        if spec.compensated:
+            table, imu_source = _imu_table(imu, inp, source, imu_topic, imu_instance)
+            table, window_notes = _imu_window(table, inp, time_offset, max_gap)
+            if window_notes:
+                import warnings
 
-            from compensation.guards import CompensationWarning
+                from compensation.guards import CompensationWarning
 
-            for text in window_notes:
-                warnings.warn(text, CompensationWarning, stacklevel=2)
-        lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
-                 else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
-        motions, calibration, offset = _motions(
-            inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
-            time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
-            initial_attitude_deg=initial_attitude_deg, imu_grade=imu_grade)
-    results, found = [], list(window_notes)
-    sub = None
-    if spec.name == "dpca":            # one sub-aperture size for every frame: comparable maps
-        from raysim.pipeline.beams import common_subaperture
+                for text in window_notes:
+                    warnings.warn(text, CompensationWarning, stacklevel=2)
+            lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
+                     else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
+            motions, calibration, offset = _motions(
+                inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
+                time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
+                initial_attitude_deg=initial_attitude_deg, imu_grade=imu_grade)
+        results, found = [], list(window_notes)
+        sub = None
+        if spec.name == "dpca":        # one sub-aperture size for every frame: comparable maps
+            from raysim.pipeline.beams import common_subaperture
 
-        sub, price = common_subaperture(inp.element_positions, motions, cfg.center_wavelength,
-                                        grid_shape=inp.grid_shape,
-                                        channel_slot=inp.tx_slot if inp.num_slots > 1 else None)
-    ks = range(len(inp.frames))
-    if len(inp.frames) > 1 and progress:
-        import sys
+            sub, price = common_subaperture(
+                inp.element_positions, motions, cfg.center_wavelength, grid_shape=inp.grid_shape,
+                channel_slot=inp.tx_slot if inp.num_slots > 1 else None)
+        ks = range(len(inp.frames))
+        if len(inp.frames) > 1 and progress:
+            import sys
 
-        from tqdm import tqdm
+            from tqdm import tqdm
 
-        ks = tqdm(ks, unit="frame", desc="compensate", file=sys.stderr)
-    for k in ks:
-        mot = None if motions is None else motions[k]
-        # TDM: every slot's channels with the pose of their own ramp
-        channel_slot = inp.tx_slot if mot is not None and inp.num_slots > 1 else None
-        rc = rcs[k] if rcs else range_compress(inp.read(k))[..., : r_axis.size]
-        beams = project(spec, rc, inp.element_positions, wavelength=cfg.center_wavelength,
-                        range_axis=r_axis, azimuth=az, elevation=el, motion=mot, direction=u,
-                        grid_shape=inp.grid_shape, range_gates=gates, channel_slot=channel_slot,
-                        subaperture=sub)
-        if mot is None:   # the conventional beamformer carries chirp indices, not times
-            beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
-        if sub is not None:   # dpca: its price travels with the beams (first warning)
-            beams = replace(beams, warnings=(price, *beams.warnings))
-        found.extend(w for w in beams.warnings if w not in found)
-        results.append(beams)
-    if as_npz:
-        write_compensated_npz(os.fspath(out), results[0], spec.key, np.rad2deg(az),
-                              np.rad2deg(el), calibration)
-    else:
-        import json
+            ks = tqdm(ks, unit="frame", desc="compensate", file=sys.stderr)
+        for k in ks:
+            mot = None if motions is None else motions[k]
+            # TDM: every slot's channels with the pose of their own ramp
+            channel_slot = inp.tx_slot if mot is not None and inp.num_slots > 1 else None
+            if rcs:
+                rc, cells, g0 = rcs[k], r_axis, 0
+            else:      # only the cells compensated, range-compressed block by block
+                g0, g1 = int(gates[0]), int(gates[-1]) + 1
+                rc, cells = gated_range_compress(inp.read(k), g0, g1), r_axis[g0:g1]
+            beams = project(spec, rc, inp.element_positions, wavelength=cfg.center_wavelength,
+                            range_axis=cells, azimuth=az, elevation=el, motion=mot,
+                            direction=u, grid_shape=inp.grid_shape, range_gates=gates - g0,
+                            channel_slot=channel_slot, subaperture=sub)
+            if mot is None:   # the conventional beamformer carries chirp indices, not times
+                beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
+            if sub is not None:   # dpca: its price travels with the beams (first warning)
+                beams = replace(beams, warnings=(price, *beams.warnings))
+            found.extend(w for w in beams.warnings if w not in found)
+            results.append(beams)
+        if as_npz:
+            write_compensated_npz(os.fspath(out), results[0], spec.key, np.rad2deg(az),
+                                  np.rad2deg(el), calibration)
+        else:
+            import json
 
-        attrs = {"velocity": velocity}
-        if imu_source is not None:
-            attrs["imu_source"] = imu_source
-        if calibration is not None:
-            attrs["self_calibration"] = json.dumps(calibration)
-        if offset is not None:     # the offset applied: given, or estimated ('auto')
-            attrs["time_offset_s"] = offset
-        write_compensated_store(os.fspath(out), inp, results, chain=spec.key, warnings=found,
-                                azimuth_deg=np.rad2deg(az), elevation_deg=np.rad2deg(el),
-                                extra_attrs=attrs)
-    return CompensateResult(out, spec.key, list(inp.frames), results, tuple(found),
-                            calibration, offset, imu_source)
+            attrs = {"velocity": velocity}
+            if imu_source is not None:
+                attrs["imu_source"] = imu_source
+            if calibration is not None:
+                attrs["self_calibration"] = json.dumps(calibration)
+            if offset is not None:     # the offset applied: given, or estimated ('auto')
+                attrs["time_offset_s"] = offset
+            write_compensated_store(os.fspath(out), inp, results, chain=spec.key,
+                                    warnings=found, azimuth_deg=np.rad2deg(az),
+                                    elevation_deg=np.rad2deg(el), extra_attrs=attrs)
+        return CompensateResult(out, spec.key, list(inp.frames), results, tuple(found),
+                                calibration, offset, imu_source, tuple(notes))

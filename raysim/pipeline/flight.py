@@ -31,6 +31,8 @@ __all__ = ["FlightFiles", "write_flight", "FLIGHT_RADAR", "measure_store",
 
 #: Waveform of the flight: TI 3 Tx x 4 Rx TDM (TX0, TX2, TX1), 64 loops, 150 samples.
 FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_period=0.05)
+#: The files :func:`write_flight` writes in its folder.
+FLIGHT_FILES = ("adc_data.bin", "radar.cfg", "flight.ulg")
 #: Largest ADC value of the written capture (the IF cube is scaled to it) [counts].
 FULL_SCALE_COUNTS = 8000.0
 
@@ -183,7 +185,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     FlightFiles
     """
     from raysim.echoes.oracle import PointTarget, simulate_point_targets
-    from raysim.io.files import atomic_write_text
+    from raysim.io.files import atomic_write_text, check_output
     from raysim.io.flight_logs.ulog import write_px4_ulog
     from raysim.io.mmwave_config import sdk_cfg_text, ti_antenna_positions
     from raysim.io.ti_dca1000 import Dca1000Format, write_dca1000
@@ -197,15 +199,16 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     if not (np.isfinite(start) and start > 0):
         raise ValueError(f"start must be a positive time [s] (the IMU starts at 0), got "
                          f"{start!r}")
-    folder = Path(folder)
+    folder = check_output(folder, "dir", "folder", names=FLIGHT_FILES)
+    cfg = RadarConfig(num_tx_slots=3, num_frames=frames, **FLIGHT_RADAR)
+    r, az, el = check_flight_target(target, cfg)
+    tx_order, rx_on = (0, 2, 1), (0, 1, 2, 3)
+    size_flight(cfg, frames, len(tx_order) * len(rx_on), folder)
     folder.mkdir(parents=True, exist_ok=True)
     traj = hover_jitter(seed) if trajectory is None else trajectory
-    cfg = RadarConfig(num_tx_slots=3, num_frames=frames, **FLIGHT_RADAR)
-    tx_order, rx_on = (0, 2, 1), (0, 1, 2, 3)
     tx, rx = ti_antenna_positions(cfg.center_wavelength)
     array = tdm_mimo(tx[list(tx_order)], rx[list(rx_on)], name="TI 3Tx x 4Rx (TX0, TX2, TX1)")
     lever = np.asarray(lever_arm, dtype=float)
-    r, az, el = (float(v) for v in target)
     tgt = PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=lever)
     cube = np.stack([simulate_point_targets(cfg, array, [tgt], traj, lever_arm=lever, frame=f,
                                             t0=start).data for f in range(frames)])
@@ -224,6 +227,63 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
                        np.rad2deg(np.asarray(traj.euler(starts), dtype=float)),
                        np.asarray(traj.position(starts), dtype=float), lever, (r, az, el),
                        imu)
+
+
+def check_flight_target(target, cfg) -> tuple[float, float, float]:
+    """``(range [m], azimuth [deg], elevation [deg])`` of a flight's point target, checked.
+
+    The target must lie in front of the radar (azimuth and elevation within
+    [-90, 90] deg, the bounds a scenario's ``scene.targets`` have) and within
+    the radar's unambiguous range ``(0, cfg.max_range)``.
+    """
+    try:
+        r, az, el = (float(v) for v in target)
+    except (TypeError, ValueError):
+        raise ValueError(f"--target: got {target!r}, expected R,AZ,EL (three numbers)") from None
+    rmax = float(cfg.max_range)
+    if not (np.isfinite(r) and 0 < r < rmax):
+        raise ValueError(f"--target: range {r:g} m, expected within (0, {rmax:.4g}) m (the "
+                         f"radar's maximum range)")
+    for name, v in (("azimuth", az), ("elevation", el)):
+        if not (np.isfinite(v) and -90.0 <= v <= 90.0):
+            raise ValueError(f"--target: {name} {v:g} deg, expected within [-90, 90] deg (in "
+                             f"front of the radar)")
+    return r, az, el
+
+
+def size_flight(cfg, frames: int, channels: int, folder: Path) -> int:
+    """Size a flight before allocating: refuse it (memory, disk) or announce a large capture.
+
+    The peak is the complex128 cube ``[frame, chirp, channel, sample]`` of the
+    echoes plus its scaled copy and the int16 capture; the capture on disk is
+    ``frames x chirps x channels x samples x 2 x 2`` bytes.
+
+    Returns
+    -------
+    int
+        Estimated capture size [bytes].
+    """
+    import shutil
+    import sys
+
+    from raysim.resources import LARGE_OUTPUT_BYTES, check_memory, format_bytes
+
+    cells = int(frames) * int(cfg.num_chirps) * int(channels) * int(cfg.num_samples)
+    check_memory(cells * (16 * 3 + 4), f"a flight of {frames} frame(s) [{cfg.num_chirps} "
+                 f"chirps, {channels} channels, {cfg.num_samples} samples]", "--frames")
+    disk = cells * 4
+    parent = folder.resolve()
+    while not parent.exists():
+        parent = parent.parent
+    free = shutil.disk_usage(parent).free
+    if disk > free:
+        raise ValueError(f"the capture of {frames} frame(s) would take about "
+                         f"{format_bytes(disk)}, {format_bytes(free)} are free in "
+                         f"{str(folder)!r}; expected a flight that fits: reduce --frames")
+    if disk > LARGE_OUTPUT_BYTES:
+        print(f"flight: writing about {format_bytes(disk)} of capture in {str(folder)!r}",
+              file=sys.stderr, flush=True)
+    return disk
 
 
 #: Azimuth step [deg] of the beams measured by :func:`measure_store` (peaks interpolated

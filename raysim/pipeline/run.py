@@ -114,7 +114,9 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
     traj = scenario.trajectory()
     if store.exists():
         check_replaceable(store, "--out")      # never touch what raysim did not write
-    announce_store_size(scenario, store, progress=progress)
+    kept = (storage.frames_complete(store)
+            if store.exists() and not overwrite and storage.store_exists(store) else 0)
+    announce_store_size(scenario, store, progress=progress, frames_done=kept)
     summary = RenderSummary(str(store), scenario.frames, 0, 0)
     with writer_lock(store):
         removed = remove_debris(store)
@@ -142,17 +144,21 @@ def render(scenario: Scenario, store: str | Path, *, overwrite: bool = False,
     return summary
 
 
-def announce_store_size(scenario: Scenario, store: Path, *, progress: bool = False) -> int:
-    """Estimate a render's store size; refuse it if the disk lacks room, announce it if large.
+def announce_store_size(scenario: Scenario, store: Path, *, progress: bool = False,
+                        frames_done: int = 0) -> int:
+    """Estimate what a render adds to its store; refuse it if the disk lacks room, announce
+    it if large.
 
-    The size is the IF cubes (complex64) plus the per-chirp pose; compression
-    does not shrink noisy IF data. Printed on stderr when ``progress`` is set
-    or the size exceeds :data:`raysim.resources.LARGE_OUTPUT_BYTES`.
+    The size is the IF cubes (complex64) plus the per-chirp pose of the
+    frames still missing (``scenario.frames - frames_done``: a resumed render,
+    e.g. after a full disk, needs room only for those); compression does not
+    shrink noisy IF data. Printed on stderr when ``progress`` is set or the
+    size exceeds :data:`raysim.resources.LARGE_OUTPUT_BYTES`.
 
     Returns
     -------
     int
-        Estimated store size [bytes].
+        Estimated bytes still to write.
     """
     import shutil
     import sys
@@ -162,18 +168,19 @@ def announce_store_size(scenario: Scenario, store: Path, *, progress: bool = Fal
     cfg = scenario.radar_config()
     shape = (cfg.num_chirps, scenario.virtual_array().num_channels, cfg.num_samples)
     per_frame = cube_bytes(*shape) + cfg.num_chirps * 7 * 8
-    total = per_frame * scenario.frames
+    missing = max(0, scenario.frames - int(frames_done))
+    total = per_frame * missing
     parent = store.resolve().parent
     while not parent.exists():
         parent = parent.parent
     free = shutil.disk_usage(parent).free
     if total > free:
         raise ValueError(f"store {str(store)!r} would take about {format_bytes(total)} "
-                         f"({scenario.frames} frames of {list(shape)} complex64), "
+                         f"({missing} missing frame(s) of {list(shape)} complex64), "
                          f"{format_bytes(free)} are free on its disk; expected a render that "
                          f"fits: reduce frames, radar.num_chirps or the array")
     if progress or total > LARGE_OUTPUT_BYTES:
-        print(f"render: {scenario.frames} frame(s) of {list(shape)} complex64, "
+        print(f"render: {missing} frame(s) to write of {list(shape)} complex64, "
               f"{format_bytes(per_frame)} each, about {format_bytes(total)} in {str(store)!r}",
               file=sys.stderr, flush=True)
     return total

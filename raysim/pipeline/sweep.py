@@ -262,6 +262,8 @@ class SweepResult:
         Key -> error message of points that raised.
     path : str
         ``sweep.nc`` written (empty if nothing was written).
+    removed : list of str
+        Temporary files of an interrupted writer removed by this call.
     """
 
     dataset: Any
@@ -269,6 +271,7 @@ class SweepResult:
     skipped: list = field(default_factory=list)
     failed: dict = field(default_factory=dict)
     path: str = ""
+    removed: list = field(default_factory=list)
 
 
 def _coord(values: list):
@@ -389,8 +392,13 @@ def check_out_dir(spec: SweepSpec, out_dir: str | Path) -> None:
     out = Path(out_dir)
     check_output(out, "dir", "--out")
     manifest = out / "sweep.json"
-    if not manifest.exists():
-        return
+    if manifest.exists():
+        _check_same_sweep(spec, out, manifest)
+    check_output(out, "dir", "--out", names=("sweep.json", "sweep.nc"))
+
+
+def _check_same_sweep(spec: SweepSpec, out: Path, manifest: Path) -> None:
+    """Raise ValueError unless ``manifest`` (a ``sweep.json``) describes ``spec``."""
     try:
         old = json.loads(manifest.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -436,56 +444,62 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, scheduler: str | None = N
         A bad point, or an ``out_dir`` that is a file, cannot be created or
         holds another sweep (:func:`check_out_dir`); nothing is computed then.
     """
+    from raysim.io.store_guard import remove_debris, remove_tmp_files, writer_lock
+
     out_dir = Path(out_dir)
     points = sweep_points(spec)
     check_out_dir(spec, out_dir)
-    try:
-        (out_dir / "points").mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ValueError(f"--out {str(out_dir)!r}: cannot create the results folder "
-                         f"({exc.strerror or exc}); expected a writable folder") from None
-    _write_manifest(spec, out_dir)
-    todo = [p for p in points if load_point(out_dir, p.key) is None]
-    result = SweepResult(None, skipped=[p.key for p in points if p not in todo])
-    if limit is not None:
-        todo = todo[: max(0, int(limit))]
-    if todo:
-        from raysim.io.storage import atomic_write_text
-        from raysim.pipeline.tasks import dask_client, run_tasks
-
-        bar = None
-        if progress:
-            from tqdm import tqdm
-
-            bar = tqdm(total=len(points), initial=len(result.skipped), unit="point",
-                       desc="sweep")
-        base_json = spec.base.model_dump_json()
-
-        def done(key: str, rec: dict) -> None:
-            if "error" in rec:
-                result.failed[rec["key"]] = rec["error"]
-            else:
-                path = _point_path(out_dir, rec["key"])
-                if not path.is_file():
-                    atomic_write_text(path, json.dumps(rec, indent=1))
-                result.computed.append(rec["key"])
-            if bar is not None:
-                bar.update(1)
-
+    with writer_lock(out_dir):      # one writer per sweep folder; debris of a killed one
+        removed = remove_debris(out_dir) + remove_tmp_files(out_dir) \
+            + remove_tmp_files(out_dir / "points")
         try:
-            with dask_client(client, scheduler=scheduler, n_workers=n_workers,
-                             threads_per_worker=threads_per_worker, processes=processes) as cl:
-                run_tasks(_run_point, [(f"point-{p.key}", (base_json, p.values, p.seed,
-                                                           list(spec.chains), p.key,
-                                                           str(out_dir)))
-                                       for p in todo], done, client=cl)
-        finally:
-            if bar is not None:
-                bar.close()
-    result.dataset = gather_results(spec, out_dir, points)
-    nc = out_dir / "sweep.nc"
-    _export(result.dataset, nc)
-    result.path = str(nc)
+            (out_dir / "points").mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ValueError(f"--out {str(out_dir)!r}: cannot create the results folder "
+                             f"({exc.strerror or exc}); expected a writable folder") from None
+        _write_manifest(spec, out_dir)
+        todo = [p for p in points if load_point(out_dir, p.key) is None]
+        result = SweepResult(None, skipped=[p.key for p in points if p not in todo])
+        if limit is not None:
+            todo = todo[: max(0, int(limit))]
+        if todo:
+            from raysim.io.storage import atomic_write_text
+            from raysim.pipeline.tasks import dask_client, run_tasks
+
+            bar = None
+            if progress:
+                from tqdm import tqdm
+
+                bar = tqdm(total=len(points), initial=len(result.skipped), unit="point",
+                           desc="sweep")
+            base_json = spec.base.model_dump_json()
+
+            def done(key: str, rec: dict) -> None:
+                if "error" in rec:
+                    result.failed[rec["key"]] = rec["error"]
+                else:
+                    path = _point_path(out_dir, rec["key"])
+                    if not path.is_file():
+                        atomic_write_text(path, json.dumps(rec, indent=1))
+                    result.computed.append(rec["key"])
+                if bar is not None:
+                    bar.update(1)
+
+            try:
+                with dask_client(client, scheduler=scheduler, n_workers=n_workers,
+                                 threads_per_worker=threads_per_worker, processes=processes) as cl:
+                    run_tasks(_run_point, [(f"point-{p.key}", (base_json, p.values, p.seed,
+                                                               list(spec.chains), p.key,
+                                                               str(out_dir)))
+                                           for p in todo], done, client=cl)
+            finally:
+                if bar is not None:
+                    bar.close()
+        result.dataset = gather_results(spec, out_dir, points)
+        nc = out_dir / "sweep.nc"
+        _export(result.dataset, nc)
+        result.path = str(nc)
+        result.removed = [str(p) for p in removed]
     return result
 
 

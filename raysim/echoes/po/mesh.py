@@ -16,8 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from raysim.echoes.rt.scenes import MATERIALS
+from raysim.echoes.rt.user_meshes import MM_EXTENT_M
 
-__all__ = ["TriangleMesh", "PoMaterial", "po_material", "PO_MATERIAL_NAMES", "fresnel"]
+__all__ = ["TriangleMesh", "PoMaterial", "po_material", "PO_MATERIAL_NAMES", "fresnel",
+           "LARGE_TARGET_M"]
+
+#: A mesh read as metres and larger than this is reported (a file in millimetres?) [m].
+LARGE_TARGET_M = 20.0
 
 #: Vacuum permittivity [F/m].
 EPSILON_0 = 8.8541878128e-12
@@ -57,14 +62,46 @@ class TriangleMesh:
         object.__setattr__(self, "faces", f[keep])
 
     @classmethod
-    def load(cls, path) -> TriangleMesh:
-        """Read a mesh file trimesh understands (PLY, OBJ, STL, GLB/glTF) [m]."""
+    def load(cls, path, scale: float | None = None, notes: list | None = None
+             ) -> TriangleMesh:
+        """Read a mesh file trimesh understands (PLY, OBJ, STL, GLB/glTF).
+
+        Parameters
+        ----------
+        path : path
+            The file.
+        scale : float, optional
+            Metres per file unit (0.001 for millimetres); default metres,
+            checked as ``[[scene.meshes]]`` does: a bounding box over
+            ``MM_EXTENT_M`` (500) units is refused as millimetres, one over
+            :data:`LARGE_TARGET_M` is reported in ``notes``.
+        notes : list, optional
+            Receives the report of a large target.
+
+        Returns
+        -------
+        TriangleMesh
+            Vertices in metres.
+        """
         import trimesh
 
+        if scale is not None and not (math.isfinite(scale) and scale > 0):
+            raise ValueError(f"--scale: got {scale!r}, expected a positive number of metres "
+                             f"per file unit (0.001 for millimetres)")
         loaded = trimesh.load(str(path), force="mesh")
         if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
             raise ValueError(f"mesh file {str(path)!r}: no triangles found")
-        return cls(np.asarray(loaded.vertices), np.asarray(loaded.faces))
+        v = np.asarray(loaded.vertices, dtype=float)
+        extent = float(np.max(np.ptp(v, axis=0)))
+        if scale is None and extent > MM_EXTENT_M:
+            raise ValueError(f"mesh file {str(path)!r}: bounding box {extent:g} units across "
+                             f"looks like millimetres (over {MM_EXTENT_M:g} m); expected "
+                             f"metres: give --scale 0.001 (metres per file unit) or the "
+                             f"file's true unit")
+        if scale is None and extent > LARGE_TARGET_M and notes is not None:
+            notes.append(f"mesh file {str(path)!r} is {extent:g} m across, read as metres; "
+                         f"if it is in millimetres give --scale 0.001")
+        return cls(v * (1.0 if scale is None else float(scale)), np.asarray(loaded.faces))
 
     @property
     def triangles(self) -> np.ndarray:

@@ -36,7 +36,7 @@ from raysim.radar.config import SPEED_OF_LIGHT
 
 __all__ = ["RcsResult", "monostatic_rcs", "facet_terms_near", "radar_direction",
            "polarisation_basis", "DEFAULT_FREQUENCY", "RAYS_PER_WAVELENGTH", "FRESNEL_FRACTION",
-           "MAX_BOUNCES"]
+           "MAX_BOUNCES", "MAX_RCS_FACETS", "MAX_RCS_WORK", "rcs_job_size"]
 
 #: Default carrier [Hz].
 DEFAULT_FREQUENCY = 77e9
@@ -50,6 +50,67 @@ RAYS_PER_WAVELENGTH = 10.0
 FRESNEL_FRACTION = 0.1
 #: Default deepest bounce traced.
 MAX_BOUNCES = 3
+#: Most facets (after the near-field subdivision) of one RCS job.
+MAX_RCS_FACETS = 2_000_000
+#: Most facet and ray-tube evaluations of one RCS job (directions x (facets + tubes));
+#: 10 x 10 directions of a 0.1 m plate at the default density are about 1.3e7 (10 s).
+MAX_RCS_WORK = 2e9
+#: Memory per facet while a mesh is traced (vertices, normals, scene, terms) [bytes].
+FACET_BYTES = 400
+
+
+def rcs_job_size(mesh: TriangleMesh, directions: int, spacing: float, max_bounces: int,
+                 near_edge: float | None = None) -> dict:
+    """Size of an RCS job before anything is traced, refused when too large.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        The target [m].
+    directions : int
+        Azimuths x elevations.
+    spacing : float
+        SBR tube side [m].
+    max_bounces : int
+        Deepest bounce (1: no ray tubes).
+    near_edge : float, optional
+        Near field: largest sub-facet edge [m] (facets are split to it).
+
+    Returns
+    -------
+    dict
+        ``facets`` (traced), ``tubes`` (per direction, at most), ``work``.
+
+    Raises
+    ------
+    ValueError
+        More than :data:`MAX_RCS_FACETS` facets, more than :data:`MAX_RCS_WORK`
+        evaluations, or more memory than is available; the message gives the
+        size and the settings to change.
+    """
+    from raysim.resources import check_memory
+
+    facets = len(mesh.faces)
+    if near_edge is not None and facets:
+        t = mesh.triangles
+        edge = np.max(np.linalg.norm(t - np.roll(t, 1, axis=1), axis=2), axis=1)
+        facets = int(np.sum(np.ceil(edge / near_edge) ** 2))
+    if facets > MAX_RCS_FACETS:
+        raise ValueError(f"MESH: {facets} facets to trace"
+                         + (f" ({len(mesh.faces)} in the file, split for the near field)"
+                            if facets != len(mesh.faces) else "")
+                         + f", expected at most {MAX_RCS_FACETS}: decimate the mesh"
+                         + (", or use the far field (no --range-m)" if near_edge else ""))
+    check_memory(facets * FACET_BYTES, f"a mesh of {facets} facets", "the mesh (decimate it)")
+    side = 2.0 * mesh.radius / spacing + 2.0
+    tubes = int(side * side) if max_bounces > 1 else 0
+    work = float(directions) * (facets + tubes)
+    if work > MAX_RCS_WORK:
+        raise ValueError(f"rcs: {directions} directions x ({facets} facets + about {tubes} SBR "
+                         f"ray tubes) = {work:.3g} evaluations, expected at most "
+                         f"{MAX_RCS_WORK:.3g}: reduce --az-deg / --el-deg (fewer directions), "
+                         f"--rays-per-wavelength, the mesh, or give --max-bounces 1")
+    return {"facets": facets, "tubes": tubes, "work": work}
 
 
 def polarisation_basis(az: float, el: float) -> tuple[np.ndarray, np.ndarray]:
@@ -250,7 +311,7 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
     ------
     ValueError
         Non-positive frequency, range or density, unknown polarisation,
-        ``max_bounces`` outside 1..10.
+        ``max_bounces`` outside 1..10, a job too large (:func:`rcs_job_size`).
     """
     if not (math.isfinite(frequency) and frequency > 0):
         raise ValueError(f"frequency must be a positive number of Hz, got {frequency!r}")
@@ -268,13 +329,15 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
     wavelength = SPEED_OF_LIGHT / frequency
     k = 2 * math.pi / wavelength
     spacing = wavelength / rays_per_wavelength
-    scene = RayScene(mesh, variant)
-    fine = None
+    near_edge = None
     if range_m is not None:
         if range_m <= mesh.radius:
             raise ValueError(f"range_m={range_m!r} puts the radar inside the target "
                              f"(radius {mesh.radius:.3g} m)")
-        fine = mesh.subdivided(FRESNEL_FRACTION * math.sqrt(wavelength * range_m))
+        near_edge = FRESNEL_FRACTION * math.sqrt(wavelength * range_m)
+    rcs_job_size(mesh, len(az) * len(el), spacing, int(max_bounces), near_edge)
+    scene = RayScene(mesh, variant)
+    fine = None if near_edge is None else mesh.subdivided(near_edge)
     out = np.zeros((len(az), len(el)))
     for i, a in enumerate(np.radians(az)):
         for j, e in enumerate(np.radians(el)):

@@ -339,11 +339,16 @@ def convert_user_meshes(placements, *, frequency: float = 77e9,
     What was fixed is warned about (``UserWarning``, one message with every note);
     what cannot be used raises ``ValueError``.
     """
+    import shutil
     import warnings
 
+    from raysim.io.files import MANIFEST
+
     meshes = [UserMesh(**p) for p in placements]
-    out = convert_meshes(meshes, cache_folder(meshes, root, frequency=frequency),
-                         frequency=frequency)
+    folder = cache_folder(meshes, root, frequency=frequency)
+    if folder.is_dir() and not (folder / MANIFEST).is_file():
+        shutil.rmtree(folder)         # a cache of a raysim that kept no list of its outputs
+    out = convert_meshes(meshes, folder, frequency=frequency)
     if out.notes:
         warnings.warn(out.summary(), UserWarning, stacklevel=2)
     return out
