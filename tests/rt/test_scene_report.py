@@ -164,10 +164,12 @@ def test_write_report_files(tmp_path, warm_kernels):
                                 grid_step_deg=12.0, range_window=(14.0, 20.0))
     summary = sr.write_scene_report(tmp_path, scenes=["flat_reflectors"], settings=tiny,
                                     progress=False)
+    from raysim.io.files import MANIFEST
+
     names = sorted(p.name for p in tmp_path.iterdir())
     assert names == sorted(["flat_reflectors.json", "flat_reflectors_ra.png",
                             "flat_reflectors_rd.png", "flat_reflectors_ae.png", "index.html",
-                            "report.md", "summary.json"])
+                            "report.md", "summary.json", MANIFEST])
     data = json.loads((tmp_path / "summary.json").read_text())
     assert set(data["flat_reflectors"]["chains"]) == set(CHAINS)
     assert data["flat_reflectors"]["reference"]["key"] == REFERENCE
