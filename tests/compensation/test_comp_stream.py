@@ -166,3 +166,43 @@ def test_bad_input_is_refused():
         proj.gated_range_transform(_if_frame(rng, 6), out=np.empty((6, 12, 3), np.complex64))
     with pytest.raises(ValueError, match="seconds must be finite per-frame times"):
         latency_summary([0.01, np.nan])
+
+
+def test_bench_stream_json_has_the_percentiles_per_gate_count():
+    """Schema of ``raysim bench``'s ``realtime`` key on a tiny run (no timing asserted)."""
+    import json
+
+    from raysim.bench.realtime import bench_stream
+
+    got = json.loads(json.dumps(bench_stream(frames=3, gate_counts=(1, 2), threads=1,
+                                             paper=False)))
+    assert got["frames"] == 3 and got["frame_duration_s"] > 0
+    assert "wall" in got["clock"] and got["included"] and got["load_average"]["after"]
+    assert [c["gates"] for c in got["cases"]] == [1, 2]
+    for case in got["cases"]:
+        for key in ("latency", "service"):
+            row = case[key]
+            assert {"p50_s", "p95_s", "p99_s", "max_s", "frames", "budget_s", "over_budget",
+                    "p95_within_budget"} <= set(row)
+            assert row["frames"] == 3 and 0 < row["p50_s"] <= row["p95_s"] <= row["p99_s"]
+        assert case["realtime_factor_p95"] > 0 and case["threads"] == 1
+        assert set(case["stages"]) == {"gated_range_transform", "strapdown", "projection",
+                                       "doppler_and_power"}
+    with pytest.raises(ValueError, match="frames must be a positive count, got 0"):
+        bench_stream(frames=0)
+
+
+def test_overlapped_range_transform_gives_the_same_beams_and_errors_surface():
+    """overlap=True (transform on a worker thread while the poses are computed) = overlap=False."""
+    rng = np.random.default_rng(25)
+    proj, _, _ = _projector()
+    x, m = _if_frame(rng, 6), _motion(rng, 18)
+    with RealtimeStream(proj, overlap=True, copy=True) as fast:
+        a = fast.process(x, lambda: m).data
+        with pytest.raises(ZeroDivisionError):
+            fast.process(x, lambda: 1 / 0)
+        with pytest.raises(ValueError, match="samples must be an IF cube"):
+            fast.process(x[:, :5], lambda: m)
+    assert fast._pool is None
+    b = RealtimeStream(proj, overlap=False).process(x, lambda: m).data
+    np.testing.assert_array_equal(a, b)
