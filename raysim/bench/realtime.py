@@ -386,8 +386,9 @@ def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
         "frame_duration_s": budget, "grid": [int(s["azimuth"].size), int(s["elevation"].size)],
         "clock": "wall (time.perf_counter), every frame (no best-of)",
         "cpu_count": os.cpu_count(), "compiled_kernel": compiled_isa(),
+        "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "default"),
         "included": ["Hann range transform of the raw complex64 IF frame at the gated bins "
-                     "(DFT of those bins, compiled, one thread)",
+                     "(DFT of those bins, compiled, one thread, overlapped with the strapdown)",
                      "strapdown of the frame's IMU samples to its 384 slot poses",
                      "exact projection of the gated cells onto the grid (per-slot poses, "
                      "near focus) into the stream's beam buffer"],
