@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,10 +59,6 @@ class RealtimeStream:
         Return beams in a new array each frame. Default False: every returned
         :class:`BeamCube` shares one buffer, overwritten by the next frame (use
         or copy it before asking for the next one).
-    overlap : bool
-        With a callable ``motion``, run the range transform on a worker thread
-        (kept across frames; the compiled transform releases the GIL) while the
-        calling thread computes the poses. The result is the same.
 
     Examples
     --------
@@ -81,7 +76,7 @@ class RealtimeStream:
     """
 
     def __init__(self, projector: RealtimeProjector, *, window: str | None = "hann",
-                 chirp_weights=None, copy: bool = False, overlap: bool = True) -> None:
+                 chirp_weights=None, copy: bool = False) -> None:
         if not isinstance(projector, RealtimeProjector):
             raise ValueError(f"projector must be a compensation.RealtimeProjector, got "
                              f"{type(projector)!r}")
@@ -89,8 +84,6 @@ class RealtimeStream:
         self.window = window
         self.chirp_weights = None if chirp_weights is None else np.asarray(chirp_weights)
         self.copy = bool(copy)
-        self.overlap = bool(overlap)
-        self._pool: ThreadPoolExecutor | None = None
         self._gated: np.ndarray | None = None     # [chirp, channel, gate] complex64
         self._beams: np.ndarray | None = None     # [chirp, gate, azimuth, elevation]
         #: Frames processed so far.
@@ -128,38 +121,14 @@ class RealtimeStream:
             raise ValueError(f"samples must be an IF frame [chirp, channel, sample], got an "
                              f"array of shape {x.shape}")
         gated, beams = self._buffers(x.shape[0])
+        self.projector.gated_range_transform(x, window=self.window, out=gated)
         if callable(motion) and not isinstance(motion, PlatformMotion):
-            if self.overlap:
-                if self._pool is None:
-                    self._pool = ThreadPoolExecutor(1, thread_name_prefix="range-transform")
-                job = self._pool.submit(self.projector.gated_range_transform, x,
-                                        window=self.window, out=gated)
-                try:
-                    motion = motion()
-                finally:
-                    job.result()         # the transform's own error, if any, surfaces here
-            else:
-                self.projector.gated_range_transform(x, window=self.window, out=gated)
-                motion = motion()
-        else:
-            self.projector.gated_range_transform(x, window=self.window, out=gated)
+            motion = motion()
         out = self.projector.project(gated, motion, gated=True,
                                      out=None if self.copy else beams,
                                      chirp_weights=self.chirp_weights)
         self.frames += 1
         return out
-
-    def close(self) -> None:
-        """Stop the worker thread of ``overlap`` (started again if needed)."""
-        if self._pool is not None:
-            self._pool.shutdown()
-            self._pool = None
-
-    def __enter__(self) -> RealtimeStream:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
 
     def __call__(self, frames: Iterable) -> Iterator[BeamCube]:
         """Beams of each ``(samples, motion)`` pair of ``frames``, as :meth:`process`."""

@@ -191,18 +191,3 @@ def test_bench_stream_json_has_the_percentiles_per_gate_count():
     with pytest.raises(ValueError, match="frames must be a positive count, got 0"):
         bench_stream(frames=0)
 
-
-def test_overlapped_range_transform_gives_the_same_beams_and_errors_surface():
-    """overlap=True (transform on a worker thread while the poses are computed) = overlap=False."""
-    rng = np.random.default_rng(25)
-    proj, _, _ = _projector()
-    x, m = _if_frame(rng, 6), _motion(rng, 18)
-    with RealtimeStream(proj, overlap=True, copy=True) as fast:
-        a = fast.process(x, lambda: m).data
-        with pytest.raises(ZeroDivisionError):
-            fast.process(x, lambda: 1 / 0)
-        with pytest.raises(ValueError, match="samples must be an IF cube"):
-            fast.process(x[:, :5], lambda: m)
-    assert fast._pool is None
-    b = RealtimeStream(proj, overlap=False).process(x, lambda: m).data
-    np.testing.assert_array_equal(a, b)
