@@ -24,6 +24,11 @@ Modules
     :class:`RealtimeProjector`: the exact per-slot projection of
     ``rigid_body_projection(method="direct")`` for a stream of frames of one
     geometry (tables set up once, threads), equal within float32 rounding.
+``stream``
+    :class:`RealtimeStream`: raw IF frames in, compensated beams out (range
+    transform of the gated bins, then the projection, buffers kept across
+    frames); :func:`~compensation.stream.replay` plays a capture at its frame
+    rate and gives each frame's latency.
 ``geometry``
     Direction and angle-grid helpers.
 ``multiframe``
@@ -68,13 +73,15 @@ from .paper import (
 from .projection import BeamCube, beam_projection
 from .realtime import RealtimeProjector
 from .strapdown import STANDARD_GRAVITY, PlatformMotion, integrate_imu, static_motion
+from .stream import RealtimeStream
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BeamCube", "CalibrationResult", "ClockOffset", "CompensationWarning", "DPCABeams",
     "DPCAPlan", "EgoVelocity",
-    "GyroBias", "PAPER_STEPS", "PlatformMotion", "RealtimeProjector", "STANDARD_GRAVITY",
+    "GyroBias", "PAPER_STEPS", "PlatformMotion", "RealtimeProjector", "RealtimeStream",
+    "STANDARD_GRAVITY",
     "Scatterer", "accumulate", "fit_ego_velocity", "fit_gyro_bias", "fit_time_shift",
     "integrate_record", "project_record", "self_calibrate",
     "az_el", "beam_projection", "direction", "dpca_plan", "dpca_projection", "grid_directions",

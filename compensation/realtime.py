@@ -238,7 +238,8 @@ class RealtimeProjector:
         """Directions of the grid ``azimuth * elevation``."""
         return int(self.u.shape[0])
 
-    def gated_range_transform(self, samples, *, window: str | None = "hann") -> np.ndarray:
+    def gated_range_transform(self, samples, *, window: str | None = "hann",
+                              out: np.ndarray | None = None) -> np.ndarray:
         """Range transform of the IF samples at the gated bins only.
 
         The bins ``range_gates`` of the windowed range FFT (window divided by its
@@ -254,11 +255,13 @@ class RealtimeProjector:
             IF samples.
         window : str or None
             ``scipy.signal.get_window`` name (periodic), or None for none.
+        out : ndarray, shape ``[chirp, channel, gate]``, complex64, optional
+            C-contiguous buffer for the result (reused frame after frame).
 
         Returns
         -------
         ndarray, shape ``[chirp, channel, gate]``, complex64
-            Input of :meth:`project` with ``gated=True``.
+            Input of :meth:`project` with ``gated=True`` (``out`` if given).
         """
         x = np.asarray(samples)
         real = not np.iscomplexobj(x)
@@ -274,14 +277,21 @@ class RealtimeProjector:
                                 np.ascontiguousarray(self._dft.imag.T))   # [G, K] float32
             self._dft_key = key
         n_gate = self.gates.size
+        shape = (*x.shape[:2], n_gate)
+        if out is None:
+            out = np.empty(shape, dtype=np.complex64)
+        elif not isinstance(out, np.ndarray) or out.shape != shape or \
+                out.dtype != np.complex64 or not out.flags.c_contiguous:
+            raise ValueError(f"out must be a C-contiguous complex64 array of shape {shape}, got "
+                             f"{getattr(out, 'dtype', type(out))} {getattr(out, 'shape', '')}")
         if real or self._engine == "numpy":
             x = x.astype(np.float32 if real else np.complex64, copy=False)
-            return (x.reshape(-1, x.shape[-1]) @ self._dft).reshape(*x.shape[:2], n_gate)
+            np.matmul(x.reshape(-1, x.shape[-1]), self._dft, out=out.reshape(-1, n_gate))
+            return out
         # compiled, one thread: no BLAS call and no thread barrier (thread pools busy-wait
         # at their barriers, which costs several times this small product's CPU time on a
         # loaded machine)
         x = np.ascontiguousarray(x, dtype=np.complex64)
-        out = np.empty((*x.shape[:2], n_gate), dtype=np.complex64)
         wr, wi = self._dft_planar
         _ext.gated_dft(x.ctypes.data, wr.ctypes.data, wi.ctypes.data, out.ctypes.data,
                        x.shape[0] * x.shape[1], x.shape[2], n_gate, 1,

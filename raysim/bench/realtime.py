@@ -22,7 +22,12 @@ on every frame:
    values of ``abs(BeamCube.doppler()) ** 2`` in fewer passes, buffers kept
    across frames, as the projector's beam buffer).
 
-It reports frames per second against the radar's frame rate for 1, 3 and 8
+:func:`bench_stream` (key ``realtime`` of ``raysim bench``, and ``raysim bench
+--realtime-only``) runs the same chain as a user would: 200 consecutive raw IF
+frames replayed at the frame rate through :class:`compensation.RealtimeStream`,
+with p50/p95/p99 of each frame's latency and service time.
+
+:func:`bench_realtime` reports frames per second against the radar's frame rate for 1, 3 and 8
 gated cells, the threads and engine used, the per-stage split (wall and CPU),
 the projection with the NumPy engine and with the direct engine
 (:func:`compensation.rigid_body_projection`, ``method="direct"``), and the
@@ -309,3 +314,174 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
         })
     out["load_average"] = {"before": load_before, "after": list(os.getloadavg())}
     return out
+
+
+#: Consecutive frames replayed per gate count by :func:`bench_stream`.
+STREAM_FRAMES = 200
+#: Chirps of the paper frame projected by :func:`bench_stream` (its cost per chirp is
+#: constant, so the whole 256-chirp frame is this times 256 / PAPER_CHIRPS).
+PAPER_CHIRPS = 8
+
+
+def _percentiles(seconds, budget: float) -> dict:
+    from compensation.stream import latency_summary
+
+    return latency_summary(seconds, budget=budget)
+
+
+def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
+                 threads: int | None = None, paper: bool = True) -> dict:
+    """Per-frame latency of the TI-size stream replayed at its frame rate.
+
+    A capture of ``frames`` consecutive raw IF frames ``[128 chirps, 12
+    channels, 256 samples]`` (complex64, the frame of :func:`ti_setup` replayed;
+    its content does not change the work) is played through
+    :class:`compensation.RealtimeStream` at the radar's frame rate
+    (:func:`compensation.stream.replay`, frame ``i`` arriving at ``i * 19.66
+    ms``). Each frame's work: the Hann range transform of the gated bins (a DFT
+    of those bins), the strapdown of the frame's IMU samples to its 384 slot
+    poses, and the exact projection onto the 61 x 61 grid into the stream's
+    beam buffer. Wall clock (``time.perf_counter``).
+
+    Parameters
+    ----------
+    frames : int
+        Frames replayed per gate count (>= 1; the bench uses 200).
+    gate_counts : sequence of int
+        Gated range cells (consecutive, centred on the target).
+    threads : int, optional
+        Projector threads (default: the CPUs of this process, at most 8).
+    paper : bool
+        Also project :data:`PAPER_CHIRPS` chirps of the paper frame (256 x 400
+        x 600, one slot, 20 x 20 array, one gate, same grid) and scale to its
+        256 chirps: what the paper frame needs against its 15.36 ms.
+
+    Returns
+    -------
+    dict
+        JSON-ready. ``cases``: per gate count ``latency`` (arrival to beams) and
+        ``service`` (start of processing to beams), each with ``p50_s``,
+        ``p95_s``, ``p99_s``, ``max_s``, ``frames``, ``budget_s`` (the frame
+        time), ``over_budget`` and ``p95_within_budget``; ``stages`` (p50 and
+        p95 of each stage over a second, back-to-back pass of the same frames,
+        the Doppler FFT and power of the beams, which the stream leaves to its
+        user, included there) and ``realtime_factor_p95`` (frame time / p95
+        service time). ``load_average`` before and after.
+    """
+    import compensation
+    from compensation.realtime import RealtimeProjector, compiled_isa
+    from compensation.stream import RealtimeStream, replay
+
+    n_frames = int(frames)
+    if n_frames < 1:
+        raise ValueError(f"frames must be a positive count, got {frames!r}")
+    s = ti_setup()
+    cfg, arr = s["config"], s["array"]
+    cube = s["cube"].astype(np.complex64)
+    budget = cfg.frame_duration
+
+    def strapdown():
+        return compensation.integrate_imu(*s["imu"], s["slot_times"], lever_arm=LEVER,
+                                          velocity="given",
+                                          initial_velocity=s["initial_velocity"],
+                                          vibration_hz=MOTION_BAND_HZ)
+
+    out = {
+        "frames": n_frames, "frame_shape": list(cube.shape), "tdm_slots": cfg.num_tx_slots,
+        "frame_duration_s": budget, "grid": [int(s["azimuth"].size), int(s["elevation"].size)],
+        "clock": "wall (time.perf_counter), every frame (no best-of)",
+        "cpu_count": os.cpu_count(), "compiled_kernel": compiled_isa(),
+        "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "default"),
+        "included": ["Hann range transform of the raw complex64 IF frame at the gated bins "
+                     "(DFT of those bins, compiled, one thread)",
+                     "strapdown of the frame's IMU samples to its 384 slot poses",
+                     "exact projection of the gated cells onto the grid (per-slot poses, "
+                     "near focus) into the stream's beam buffer"],
+        "excluded": ["Doppler FFT of the beams (in stages.doppler_and_power, not in latency)",
+                     "set-up once per geometry", "IF and IMU simulation (the capture)"],
+        "replay": "frame i arrives at i * frame_duration_s; latency = its beams' time - its "
+                  "arrival (a late frame waits for the one before it)",
+        "load_average": {"before": list(os.getloadavg())}, "cases": [],
+    }
+    for n_gate in gate_counts:
+        g0 = s["target_gate"] - n_gate // 2
+        gates = np.arange(g0, g0 + n_gate)
+        proj = RealtimeProjector(arr.virtual_positions, channel_slot=arr.tx_slot,
+                                 threads=threads, wavelength=cfg.center_wavelength,
+                                 range_axis=cfg.range_axis(), range_gates=gates,
+                                 azimuth=s["azimuth"], elevation=s["elevation"])
+        stream = RealtimeStream(proj)
+        for _ in range(3):                                           # warm-up
+            stream.process(cube, strapdown)
+        timing = [t for _, t in replay(stream, ((cube, strapdown) for _ in range(n_frames)),
+                                       frame_period=budget)]
+        service = [t.service for t in timing]
+        # the stages apart, back to back (clock read between them)
+        shape = (cube.shape[0], n_gate, *out["grid"])
+        dop = DopplerPower(shape, threads=proj.threads)
+        gated = np.empty((cube.shape[0], arr.num_channels, n_gate), np.complex64)
+        beams = np.empty(shape, np.complex64)
+        split = {k: [] for k in ("gated_range_transform", "strapdown", "projection",
+                                 "doppler_and_power")}
+        for _ in range(max(1, min(n_frames, 50))):
+            t0 = time.perf_counter()
+            proj.gated_range_transform(cube, out=gated)
+            t1 = time.perf_counter()
+            motion = strapdown()
+            t2 = time.perf_counter()
+            proj.project(gated, motion, gated=True, out=beams, chirp_weights=dop.chirp_weights)
+            t3 = time.perf_counter()
+            dop(beams, weighted=True)
+            t4 = time.perf_counter()
+            for key, dt in zip(split, (t1 - t0, t2 - t1, t3 - t2, t4 - t3), strict=True):
+                split[key].append(dt)
+        svc = _percentiles(service, budget)
+        out["cases"].append({
+            "gates": int(n_gate), "threads": proj.threads, "engine": proj.engine,
+            "latency": _percentiles([t.latency for t in timing], budget), "service": svc,
+            "realtime_factor_p95": budget / svc["p95_s"],
+            "stages": {k: {"p50_s": float(np.percentile(v, 50)),
+                           "p95_s": float(np.percentile(v, 95))} for k, v in split.items()},
+        })
+    if paper:
+        out["paper_frame"] = _paper_frame_need(threads)
+    out["load_average"]["after"] = list(os.getloadavg())
+    return out
+
+
+def _paper_frame_need(threads: int | None) -> dict:
+    """Wall time of the paper frame's stream (1 gate, 61 x 61 grid) against its frame time."""
+    from compensation.realtime import RealtimeProjector
+    from compensation.strapdown import static_motion
+    from compensation.stream import RealtimeStream
+    from raysim.scenario import scenario_from_case
+
+    case = scenario_from_case("rotation_y")
+    cfg, arr = case.radar_config(), case.virtual_array()
+    n = PAPER_CHIRPS
+    off = np.deg2rad(np.linspace(-30.0, 30.0, 61))
+    gate = cfg.num_samples // 4
+    proj = RealtimeProjector(arr.virtual_positions, wavelength=cfg.center_wavelength,
+                             range_axis=cfg.range_axis(), range_gates=[gate], azimuth=off,
+                             elevation=off.copy(), threads=threads)
+    stream = RealtimeStream(proj)
+    k = np.arange(cfg.num_samples)
+    frame = np.broadcast_to(np.exp(2j * np.pi * gate * k / cfg.num_samples),
+                            (n, arr.num_channels, cfg.num_samples)).astype(np.complex64)
+    motion = static_motion(np.arange(n) * cfg.chirp_duration)
+    stream.process(frame, motion)                                    # warm-up
+    walls = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        stream.process(frame, motion)
+        walls.append(time.perf_counter() - t0)
+    wall = float(np.median(walls)) * cfg.num_chirps / n
+    return {"frame_shape": [cfg.num_chirps, arr.num_channels, cfg.num_samples],
+            "gates": 1, "grid": [61, 61], "threads": proj.threads, "engine": proj.engine,
+            "measured_chirps": n, "wall_s": wall, "frame_duration_s": cfg.frame_duration,
+            "speedup_needed": wall / cfg.frame_duration,
+            "clock": f"wall, median of 3 frames of {n} chirps, scaled by "
+                     f"{cfg.num_chirps}/{n} (constant cost per chirp)",
+            "layout": "400 channels in one slot on a 20 x 20 grid: not on a line, so the "
+                      "channel sum is a product with 400 steering phases per chirp and "
+                      "direction"}

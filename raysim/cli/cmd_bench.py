@@ -10,6 +10,7 @@ examples:
   raysim bench --quick --out bench_quick.json
   raysim bench --out bench.json --chart speed_accuracy.png
   raysim bench --quick --chart-only --chart speed_accuracy.png
+  raysim bench --realtime-only --out realtime.json
 
 Measures the fused kernel (+ slow-time decimation) against FINUFFT for 1e5 paths
 (key synthesis_1e5: speedup_vs_finufft, relative_error, threads, clock), NUFFT
@@ -18,7 +19,11 @@ paper frame (256 chirps x 400 channels x 600 samples), the oracle against a
 pure-write floor and a naive NumPy synthesis (wall and CPU seconds),
 compensation + processing against the bare FFT chain, real-time compensation
 of a TI-size frame (key realtime_compensation: frames per second against the
-frame rate), the per-frame time split, re-projection, and the peak memory of a
+frame rate, best of repeats), the real-time stream (key realtime: 200
+consecutive raw IF frames replayed at the frame rate through
+compensation.RealtimeStream, p50/p95/p99 of each frame's latency including the
+range transform, per gated-cell count 1, 3, 8, and what the paper frame
+needs), the per-frame time split, re-projection, and the peak memory of a
 1e5-path frame (child process). Slow references are timed on
 a subset and extrapolated linearly; the JSON says which. The chart adds the
 ray-tracing knobs (trace samples, depth, re-trace interval) on the bundled
@@ -49,6 +54,8 @@ def register(subparsers) -> None:
                    help="also draw the speed-versus-accuracy chart to this PNG")
     p.add_argument("--chart-only", action="store_true",
                    help="only measure and draw the chart (needs --chart)")
+    p.add_argument("--realtime-only", action="store_true",
+                   help="only the real-time stream (key realtime, about a minute)")
     p.add_argument("--no-memory", action="store_true",
                    help="skip the child-process memory measurement")
     p.add_argument("--clock", choices=("cpu", "wall"), default="cpu",
@@ -75,7 +82,13 @@ def run(args) -> int:
 
     bench.set_clock(args.clock)
 
-    if args.chart_only:
+    if args.realtime_only:
+        from raysim.bench.realtime import bench_stream
+
+        log("real-time stream: 200 TI frames replayed at the frame rate, per-frame latency")
+        result = {"schema": bench.SCHEMA, "machine": bench.machine_info(),
+                  "realtime": bench_stream()}
+    elif args.chart_only:
         result = {"schema": bench.SCHEMA, "quick": args.quick, "machine": bench.machine_info()}
     else:
         result = bench.run(quick=args.quick, memory=not args.no_memory, log=log)

@@ -46,7 +46,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 
 from raysim.platform.imu_spec import (  # noqa: F401  (re-exported: the IMU's public names)
     CONSUMER_MEMS,
@@ -384,6 +383,8 @@ class Imu:
             drive = rngs[f"{what}_gm"].standard_normal((n, 3)) * (sigma * math.sqrt(1 - phi**2))
             init = rngs[f"{what}_gm"].standard_normal(3) * sigma  # stationary start
             drive[0] = init
+            from scipy.signal import lfilter
+
             bias += lfilter([1.0], [1.0, -phi], drive, axis=0)
         if err.bias_random_walk > 0:
             steps = rngs[f"{what}_rw"].standard_normal((n, 3)) * (err.bias_random_walk
