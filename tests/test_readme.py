@@ -1,8 +1,11 @@
 """The README is documentation a newcomer runs: every Python block runs, every command line parses.
 
-Python blocks of ``README.md`` run in a fresh interpreter in a temporary
-folder (so they define every name they use and write nothing into the
-checkout). Every ``raysim ...`` line of a ``bash`` block of ``README.md`` and
+Python blocks of ``README.md`` and ``docs/user_guide.md`` run in a fresh
+interpreter in a temporary folder (so they define every name they use and
+write nothing into the checkout). The folder holds ``examples/`` and, for a
+user-guide block that reads what an earlier step of the guide wrote (a
+rendered store, a flight log), a small one of those files. Every
+``raysim ...`` line of a ``bash`` block of ``README.md`` and
 ``docs/user_guide.md`` (continuation lines joined, comments dropped) is parsed
 by the command line's own parser without running the job, and each
 subcommand used shows its ``--help``.
@@ -48,11 +51,13 @@ def _argv(line: str) -> list[str]:
 
 
 README_PY = code_blocks(ROOT / "README.md", "python")
+GUIDE_PY = code_blocks(ROOT / "docs" / "user_guide.md", "python")
 LINES = [(p.name, line) for p in DOCS for line in command_lines(p)]
 
 
 def test_the_docs_have_what_this_test_checks():
     assert README_PY, "README.md lost its Python block"
+    assert len(GUIDE_PY) >= 4, "docs/user_guide.md lost Python blocks"
     assert len(LINES) >= 20, LINES
 
 
@@ -61,6 +66,38 @@ def test_readme_python_block_runs(block, tmp_path):
     res = subprocess.run([sys.executable, "-c", block], cwd=tmp_path, capture_output=True,
                          text=True, timeout=300, env=_env())
     assert res.returncode == 0, f"README block failed:\n{block}\n{res.stderr[-3000:]}"
+
+
+def prepare(block: str, folder: Path) -> None:
+    """Put into ``folder`` what ``block`` reads: ``examples/``, and small stores and logs."""
+    (folder / "examples").symlink_to(ROOT / "examples", target_is_directory=True)
+    if "rotation_y.zarr" in block or "rotation_y.nc" in block:
+        from raysim.pipeline.run import render
+        from raysim.scenario import scenario_from_case
+
+        small = scenario_from_case("rotation_y").with_values(
+            {"radar.num_chirps": 32, "array.nx": 4, "array.ny": 4})
+        render(small, folder / "rotation_y.zarr", export_netcdf=folder / "rotation_y.nc")
+    if "flight.ulg" in block or "rosbag2_" in block:
+        from raysim.io.flight_logs.rosbag import write_ros2_imu
+        from raysim.io.flight_logs.ulog import write_px4_ulog
+        from raysim.pipeline.sensors import imu_record
+        from raysim.scenario import scenario_from_case
+
+        s = scenario_from_case("rotation_y")
+        imu = imu_record(s.trajectory(), "ideal", rate=500.0, times=[0.5, 0.6], start=0.0)
+        write_px4_ulog(folder / "flight.ulg", imu)
+        bags = re.findall(r'read_imu_log\("(rosbag2_[^"]+)", topic="([^"]+)"', block)
+        for bag, topic in bags:
+            write_ros2_imu(folder / bag, imu, topic=topic)
+
+
+@pytest.mark.parametrize("block", GUIDE_PY, ids=[f"block{i}" for i in range(len(GUIDE_PY))])
+def test_user_guide_python_block_runs(block, tmp_path):
+    prepare(block, tmp_path)
+    res = subprocess.run([sys.executable, "-c", block], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=300, env=_env())
+    assert res.returncode == 0, f"user guide block failed:\n{block}\n{res.stderr[-3000:]}"
 
 
 def _env() -> dict:
