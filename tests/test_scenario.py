@@ -95,6 +95,65 @@ def test_cross_field_radar_check_is_reported():
         loads_scenario(SMALL.replace("num_chirps = 32", "num_chirps = 32\nbandwidth_hz = 1e12"))
 
 
+def _problems(text: str, tmp_path) -> list[str]:
+    """The lines of the error of a scenario file holding ``text`` (after its head line)."""
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    with pytest.raises(ValueError) as err:
+        load_scenario(f)
+    head, *lines = str(err.value).splitlines()
+    assert head == f"{f}: {len(lines)} invalid value{'s' if len(lines) > 1 else ''}:", head
+    return [line.strip() for line in lines]
+
+
+def test_two_field_errors_in_different_sections_are_both_reported(tmp_path):
+    lines = _problems(SMALL.replace("num_chirps = 32", "num_chirps = 32\nsample_rate_hz = -1")
+                      + "\n[imu]\npreset = \"navy\"\n", tmp_path)
+    assert len(lines) == 2, lines
+    assert lines[0] == "radar.sample_rate_hz: got -1, expected > 0"
+    assert lines[1].startswith('imu.preset: got "navy", expected one of')
+
+
+def test_field_error_and_two_cross_section_errors_are_all_reported(tmp_path):
+    # a bad key in [scene] used to hide the radar and IMU-rate checks entirely
+    text = (SMALL.replace("num_chirps = 32", "num_chirps = 32\nbandwidth_hz = 1e12")
+            .replace("range_m = 15.0", "range_m = 15.0\nazdeg = 3")
+            + "\n[[motion.sinusoids]]\naxis = \"pitch\"\namplitude_deg = 5.0\n"
+              "frequency_hz = 20.0\n\n[imu]\nrate_hz = 30.0\n")
+    lines = _problems(text, tmp_path)
+    assert len(lines) == 3, lines
+    assert lines[0].startswith("scene.targets.0.azdeg: got 3, expected no such key")
+    assert "did you mean 'az_deg'" in lines[0]
+    assert lines[1].startswith("radar: inconsistent waveform: bandwidth")
+    assert lines[2] == ("imu.rate_hz: got 30 Hz, below the Nyquist rate of the motion: the "
+                        "pitch sinusoid at 20 Hz needs imu.rate_hz >= 40 Hz")
+
+
+def test_cross_section_check_of_an_invalid_section_is_not_guessed(tmp_path):
+    # [imu] itself is invalid: the IMU-rate check would read a default, so it is left out
+    text = (SMALL + "\n[[motion.sinusoids]]\naxis = \"pitch\"\namplitude_deg = 5.0\n"
+                    "frequency_hz = 20.0\n\n[imu]\nrate_hz = 30.0\nseed = -1\n")
+    lines = _problems(text, tmp_path)
+    assert lines == ["imu.seed: got -1, expected >= 0"], lines
+
+
+def test_every_problem_of_one_table_is_reported(tmp_path):
+    # a rotor giving both spin rates and an all-zero axis; then a point scene without
+    # targets holding a (valid) rotor, which needs a ray-traced scene
+    lines = _problems('[scene]\nkind = "bundled"\n\n[[scene.rotors]]\nhub_m = [0.0, 0.0, 0.0]\n'
+                      'blade_length_m = 0.2\nrate_rps = 10.0\nrate_radps = 60.0\n'
+                      'axis = [0.0, 0.0, 0.0]\n', tmp_path)
+    assert len(lines) == 2, lines
+    assert lines[0].startswith("scene.rotors.0: give one of rate_rps"), lines
+    assert lines[1].startswith("scene.rotors.0: axis must not be all zero"), lines
+    lines = _problems('[scene]\nkind = "points"\n\n[[scene.rotors]]\nhub_m = [0.0, 0.0, 0.0]\n'
+                      'blade_length_m = 0.2\nrate_rps = 10.0\n', tmp_path)
+    assert len(lines) == 2, lines
+    assert lines[0] == "scene: kind 'points' needs at least one [[scene.targets]] entry"
+    assert lines[1].startswith("scene: [[scene.rotors]] need a ray-traced scene with "
+                               "[scene.clutter] mode = 'field'"), lines
+
+
 def test_motion_sums_case_sinusoids_velocity_and_jitter():
     s = loads_scenario(SMALL + """
 [motion]

@@ -27,12 +27,11 @@ self-calibration's estimates and the output written.
 
 from __future__ import annotations
 
-import argparse
 import sys
 
 import numpy as np
 
-from raysim.cli.options import chains_option, span_grid, span_option
+from raysim.cli.options import DefaultsHelpFormatter, chains_option, span_grid, span_option
 from raysim.vocabulary import CHAIN_NAMES, ChainSpec, parse_chain
 
 EPILOG = """\
@@ -75,9 +74,8 @@ def _floats(text: str, n: int, name: str) -> np.ndarray:
     return vals
 
 
-class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter,
-                     argparse.RawDescriptionHelpFormatter):
-    """Defaults in the option help, the epilog's examples as written."""
+class _HelpFormatter(DefaultsHelpFormatter):
+    """Defaults in the option help (once), the epilog's examples as written."""
 
 
 def _chain(text: str) -> ChainSpec:
@@ -149,8 +147,10 @@ def register(subparsers) -> None:
     p.add_argument("--range-m", default=None, metavar="LO:HI",
                    help="range cells [m]; left out: every cell when the job fits 1.2 GB, else "
                    "the cells around the strongest return that fit (a note says which)")
-    p.add_argument("--az-deg", default="-60:60:1", metavar="LO:HI:STEP")
-    p.add_argument("--el-deg", default="-60:60:1", metavar="LO:HI:STEP")
+    p.add_argument("--az-deg", default="-60:60:1", metavar="LO:HI:STEP",
+                   help="azimuth grid of the beams [deg], LO to HI inclusive in steps of STEP")
+    p.add_argument("--el-deg", default="-60:60:1", metavar="LO:HI:STEP",
+                   help="elevation grid of the beams [deg], LO to HI inclusive in steps of STEP")
     p.add_argument("--lever-arm", default=None, metavar="X,Y,Z",
                    help="r_IR in B [m] (default: from the cube, else 0,0,0)")
     p.add_argument("--time-offset", default="0", metavar="SECONDS|auto",
@@ -173,7 +173,8 @@ def register(subparsers) -> None:
     p.add_argument("--chain", default="exact", metavar="CHAIN",
                    help=f"one of {', '.join(CHAIN_NAMES)} or paper:published")
     p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
-                   help="target direction for the paper chain's slow-time correction [deg]")
+                   help="target direction for the paper chain's slow-time correction [deg]; "
+                   "needed by --chain paper, not used by the others")
     p.set_defaults(func=run)
 
 

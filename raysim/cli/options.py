@@ -41,6 +41,25 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = NEGATIVE_VALUE
 
 
+class DefaultsHelpFormatter(argparse.ArgumentDefaultsHelpFormatter,
+                            argparse.RawDescriptionHelpFormatter):
+    """Option defaults in the help, once; the description and epilog as written.
+
+    ``(default: VALUE)`` is appended to an option's help only where the help
+    does not state its default itself (the word "default" or "left out:") and
+    the option has a value to show: not ``None`` (the help says what happens
+    without the option), not a flag's ``False``, not a positional argument.
+    """
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if ("%(default)" in text or "default" in text.lower() or "left out" in text
+                or action.default in (None, False, argparse.SUPPRESS)
+                or not action.option_strings):
+            return text
+        return text + " (default: %(default)s)"
+
+
 def known_name(value: str, choices: Iterable[str], option: str, what: str) -> str:
     """``value`` if it is one of ``choices``; else ValueError naming ``option``, the
     accepted names and the closest one."""

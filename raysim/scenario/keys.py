@@ -151,13 +151,16 @@ def _literal_choices(err: dict) -> list[str]:
 
 
 def format_validation_error(exc: ValidationError, source: str = "scenario",
-                            known_keys: Callable[[tuple], Iterable[str]] | None = None
-                            ) -> ValueError:
+                            known_keys: Callable[[tuple], Iterable[str]] | None = None,
+                            extra_lines: Iterable[str] = ()) -> ValueError:
     """Turn a pydantic error into a ValueError listing ``key.path: got V, expected E``.
 
-    ``known_keys(loc)`` (optional) gives the valid keys of the table holding
-    ``loc``; an unknown key is then followed by "did you mean" the closest one,
-    as is a string outside a fixed set of names.
+    Every error of ``exc`` is one line (a check of a whole table that found
+    several problems raises them joined by newlines: one line each, under the
+    table's key path), then ``extra_lines`` (problems found outside pydantic,
+    e.g. the checks across sections). ``known_keys(loc)`` (optional) gives the
+    valid keys of the table holding ``loc``; an unknown key is then followed by
+    "did you mean" the closest one, as is a string outside a fixed set of names.
     """
     lines = []
     for err in exc.errors():
@@ -168,12 +171,14 @@ def format_validation_error(exc: ValidationError, source: str = "scenario",
         elif err.get("type") == "literal_error":
             hint = did_you_mean(err.get("input"), _literal_choices(err))
         if err.get("type") == "value_error" and isinstance(err.get("input"), dict):
-            lines.append(f"{loc}: {_expected(err)}" if err.get("loc") else _expected(err))
+            lines += [f"{loc}: {part}" if err.get("loc") else part
+                      for part in _expected(err).splitlines() if part.strip()]
         elif err.get("type") == "missing":
             lines.append(f"{loc}: missing, expected {_expected(err)}")
         else:
             lines.append(f"{loc}: got {_fmt_value(err.get('input'))}, expected {_expected(err)}"
                          f"{hint}")
+    lines += list(extra_lines)
     n = len(lines)
     head = f"{source}: {n} invalid value{'s' if n > 1 else ''}:\n  "
     return ValueError(head + "\n  ".join(lines))
@@ -324,14 +329,17 @@ class RotorSection(BaseModel):
 
     @model_validator(mode="after")
     def _check(self) -> RotorSection:
+        problems = []               # every one, one line each
         if (self.rate_rps is None) == (self.rate_radps is None):
-            raise ValueError(f"give one of rate_rps [rev/s] or rate_radps [rad/s], got "
-                             f"rate_rps={self.rate_rps!r}, rate_radps={self.rate_radps!r}")
+            problems.append(f"give one of rate_rps [rev/s] or rate_radps [rad/s], got "
+                            f"rate_rps={self.rate_rps!r}, rate_radps={self.rate_radps!r}")
         if not any(self.axis):
-            raise ValueError(f"axis must not be all zero, got {list(self.axis)}")
+            problems.append(f"axis must not be all zero, got {list(self.axis)}")
         if self.root_m >= self.blade_length_m:
-            raise ValueError(f"root_m must be below blade_length_m = {self.blade_length_m} m, "
-                             f"got {self.root_m}")
+            problems.append(f"root_m must be below blade_length_m = {self.blade_length_m} m, "
+                            f"got {self.root_m}")
+        if problems:
+            raise ValueError("\n".join(problems))
         return self
 
     @property

@@ -48,7 +48,14 @@ import math
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    Field,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from raysim.radar.config import RCS_DBSM_RANGE
 from raysim.scenario.keys import (
@@ -67,7 +74,8 @@ from raysim.scenario.radar import RadarSection, _in_range, _Section
 __all__ = [
     "RadarSection", "ArraySection", "TargetSpec", "SceneSection", "SinusoidSpec",
     "HoverJitterSection", "MotionSection", "SensorErrorsSection", "ImuSection",
-    "OutputSection", "Scenario", "validate_scenario", "ANGLE_AXES", "TRANSLATION_AXES",
+    "OutputSection", "Scenario", "validate_scenario", "cross_problems", "ANGLE_AXES",
+    "TRANSLATION_AXES",
 ]
 
 #: Motion axes whose amplitudes are angles (given in degrees in files).
@@ -161,19 +169,22 @@ class SceneSection(_Section):
                 raise ValueError(f"give only one of targets / name / path / meshes, got {chosen}")
             kind = chosen[0] if chosen else "points"
             object.__setattr__(self, "kind", kind)
+        problems = []               # every one, one line each
         if kind == "points" and not self.targets:
-            raise ValueError("kind 'points' needs at least one [[scene.targets]] entry")
+            problems.append("kind 'points' needs at least one [[scene.targets]] entry")
         if kind == "bundled" and not self.name:
-            raise ValueError("kind 'bundled' needs name (see `raysim scenes list`)")
+            problems.append("kind 'bundled' needs name (see `raysim scenes list`)")
         if kind == "meshes" and not self.meshes:
-            raise ValueError("kind 'meshes' needs at least one [[scene.meshes]] entry")
+            problems.append("kind 'meshes' needs at least one [[scene.meshes]] entry")
         if kind == "mesh" and not self.path:
-            raise ValueError("kind 'mesh' needs path (a Mitsuba XML or mesh file)")
+            problems.append("kind 'mesh' needs path (a Mitsuba XML or mesh file)")
         for key, items in (("movers", self.movers), ("rotors", self.rotors)):
             if items and (kind == "points" or self.clutter.mode != "field"):
-                raise ValueError(f"[[scene.{key}]] need a ray-traced scene with "
-                                 f"[scene.clutter] mode = 'field', got kind {kind!r}, "
-                                 f"mode {self.clutter.mode!r}")
+                problems.append(f"[[scene.{key}]] need a ray-traced scene with "
+                                f"[scene.clutter] mode = 'field', got kind {kind!r}, "
+                                f"mode {self.clutter.mode!r}")
+        if problems:
+            raise ValueError("\n".join(problems))
         return self
 
 
@@ -363,22 +374,12 @@ class Scenario(_Section):
     output: OutputSection = Field(default_factory=OutputSection)
 
     @model_validator(mode="after")
-    def _radar_consistent(self) -> Scenario:
-        # RadarConfig's own cross-field checks (bandwidth < carrier, >= 2 samples, ...)
-        try:
-            self.radar_config()
-        except ValueError as exc:
-            raise ValueError(f"inconsistent radar: {exc}") from None
-        return self
-
-    @model_validator(mode="after")
-    def _imu_above_nyquist(self) -> Scenario:
-        # an IMU sampling below twice the fastest motion component aliases it
-        freq, what = self.fastest_motion()
-        if freq > 0 and self.imu.rate_hz < 2.0 * freq:
-            raise ValueError(
-                f"imu.rate_hz: got {self.imu.rate_hz:g} Hz, below the Nyquist rate of the "
-                f"motion: {what} at {freq:g} Hz needs imu.rate_hz >= {2.0 * freq:g} Hz")
+    def _cross_checks(self, info: ValidationInfo) -> Scenario:
+        # checks across sections, every problem at once (one line each)
+        if not (info.context or {}).get("skip_cross_checks"):
+            problems = [line for _, line in cross_problems(self)]
+            if problems:
+                raise ValueError("\n".join(problems))
         return self
 
     def fastest_motion(self) -> tuple[float, str]:
@@ -551,20 +552,73 @@ def _drop_none(obj):
 
 
 # ------------------------------------------------------------------ loading
+def cross_problems(s: Scenario) -> list[tuple[frozenset[str], str]]:
+    """Problems that involve several sections of a scenario, every one of them.
+
+    Returns ``(sections, line)`` pairs: the top-level keys the check reads and
+    one message line naming the key, the value and what was expected. Checked:
+    the radar's own consistency (``[radar]``, ``[array]``, ``frames``: bandwidth
+    below the carrier, at least 2 samples, ...) and the IMU rate against the
+    fastest motion (``[motion]``, ``[imu]``: at least twice its frequency).
+    """
+    out = []
+    try:
+        s.radar_config()
+    except ValueError as exc:
+        out.append((frozenset({"radar", "array", "frames"}),
+                    f"radar: inconsistent waveform: {exc}"))
+    freq, what = s.fastest_motion()
+    if freq > 0 and s.imu.rate_hz < 2.0 * freq:
+        out.append((frozenset({"motion", "imu"}),
+                    f"imu.rate_hz: got {s.imu.rate_hz:g} Hz, below the Nyquist rate of the "
+                    f"motion: {what} at {freq:g} Hz needs imu.rate_hz >= {2.0 * freq:g} Hz"))
+    return out
+
+
+#: A stand-in scene for checking the other sections of a scenario whose scene is invalid.
+_STAND_IN_SCENE = {"kind": "points", "targets": [{"range_m": 1.0}]}
+
+
+def _cross_problems_of_valid_sections(data: dict, exc: ValidationError) -> list[str]:
+    """Cross-section problems among the sections that validated on their own.
+
+    Pydantic skips a model's own checks once one of its fields failed, so a
+    file with a bad value in ``[scene]`` and an IMU rate below the motion's
+    Nyquist rate would report only the first. The sections with errors are
+    replaced by their defaults, the rest validated again without the
+    cross-section checks, and the checks run that read only valid sections.
+    """
+    bad = {str(e["loc"][0]) for e in exc.errors() if e.get("loc")}
+    if not bad:                     # only cross-section problems: already listed
+        return []
+    repaired = {k: v for k, v in data.items() if k not in bad}
+    if "scene" in bad or "scene" not in repaired:
+        repaired["scene"] = _STAND_IN_SCENE
+    try:
+        partial = Scenario.model_validate(repaired, context={"skip_cross_checks": True})
+    except (ValidationError, ValueError):
+        return []
+    return [line for keys, line in cross_problems(partial) if not keys & bad]
+
+
 def validate_scenario(data: dict, source: str = "scenario") -> Scenario:
     """Validate plain data (as parsed from TOML) into a :class:`Scenario`.
 
     Raises
     ------
     ValueError
-        Listing every offending key path with its value and what was expected.
+        Listing every problem at once, one line each: the key path, the value
+        and what was expected (each section's values and checks, and the
+        checks across sections that read only valid sections).
     """
     if not isinstance(data, dict):
         raise ValueError(f"{source}: expected a table of keys, got {type(data).__name__}")
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        raise format_validation_error(exc, source, known_keys=_known_keys) from None
+        raise format_validation_error(
+            exc, source, known_keys=_known_keys,
+            extra_lines=_cross_problems_of_valid_sections(data, exc)) from None
 
 
 def _known_keys(loc: tuple) -> list[str]:
