@@ -164,7 +164,8 @@ def run(args: argparse.Namespace) -> int:
         backend.configure("cpu", threads=args.threads)
         print(json.dumps(bench_scene_reprojection(), indent=1))
         return 0
-    check_output(args.out, "dir", "--out", names=("index.html", "report.md", "summary.json"))
+    check_output(args.out, "dir", "--out", names=("index.html", "report.md", "summary.json",
+                                                 "placement.png"))
     knobs = {}
     if args.jitter_axes is not None:
         knobs["jitter_axes"] = tuple(a.strip() for a in args.jitter_axes.split(",")

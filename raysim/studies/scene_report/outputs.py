@@ -5,6 +5,7 @@ from __future__ import annotations
 import html
 import os
 import re
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -15,6 +16,7 @@ from raysim.measure.scene import SCENE_METRICS
 from raysim.vocabulary import CHAINS, MAP_TITLES, REFERENCE, chain_label, parse_chains
 
 from .evaluate import SceneResult, evaluate_scenario, evaluate_scene
+from .meshes import NEAR_MESH_M, mesh_boxes, plot_placement
 from .settings import (
     ENTROPY_MARGIN_NATS,
     FULL,
@@ -90,12 +92,14 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
                 xlim = (-half * dv, half * dv)
             im = plot_map(ax, mp, title=f"{chain_label(key)}\nH = {r.entropy[m]:.3f} nats",
                           reference_power=ref, dynamic_range_db=dynamic_range_db, xlim=xlim)
-            if m == "ae":
+            if m in ("ae", "ra"):
                 for t in result.targets:
-                    ax.plot(t["az_deg"], t["el_deg"], "r+", ms=9)
-            elif m == "ra":
-                for t in result.targets:
-                    ax.plot(t["az_deg"], t["range_m"], "r+", ms=9)
+                    xy = (t["az_deg"], t["el_deg"] if m == "ae" else t["range_m"])
+                    ax.plot(*xy, "c^" if t.get("mesh") else "r+", ms=7 if t.get("mesh") else 9,
+                            mfc="none")
+                    if t.get("mesh"):               # users' meshes: named markers
+                        ax.annotate(t["name"], xy, xytext=(3, 3), textcoords="offset points",
+                                    fontsize=7, color="c")
             else:                           # movers: their centres' range and range rate
                 for mv in result.movers:
                     c = np.asarray(mv["centres"])
@@ -207,6 +211,32 @@ def _price_lines(results: dict) -> list[str]:
     return lines
 
 
+def _mesh_lines(results: dict) -> list[str]:
+    """The per-mesh table of scenarios with users' meshes (what the radar saw of each)."""
+    have = {s: r for s, r in results.items() if r.meshes}
+    if not have:
+        return []
+    cols = _chain_keys(have)
+    lines = ["", "Users' meshes: where each is seen from the radar (its bounding box's centre, "
+             "or the point nearest the radar for a mesh under it; marked and named on the RA "
+             "and AE maps), traced paths whose first bounce is on it, their total power "
+             "(isotropic elements), CFAR detections within "
+             f"{NEAR_MESH_M:g} m of its bounding box per map", "",
+             "| scene | mesh | range_m | az_deg | el_deg | paths | power [dBW] | detections "
+             + " / ".join([REFERENCE] + cols) + " |", "|---|---|---|---|---|---|---|---|"]
+    for s, r in have.items():
+        where = {t["name"]: t for t in r.targets if t.get("mesh")}
+        for m in r.meshes:
+            t = where.get(m["name"], {})
+            pw = "-" if m["power_dbw"] is None else f"{m['power_dbw']:.1f}"
+            det = " / ".join(str(m["detections"].get(c, "-")) for c in [REFERENCE] + cols)
+            lines.append(f"| {s} | {m['name']} | {t.get('range_m', float('nan')):.2f} | "
+                         f"{t.get('az_deg', float('nan')):.1f} | "
+                         f"{t.get('el_deg', float('nan')):.1f} | {m['num_paths']} | {pw} | "
+                         f"{det} |")
+    return lines
+
+
 def report_markdown(results: dict, settings: ReportSettings) -> str:
     """The report's markdown: entropy, ridge leakage and reflector tables, figure links.
 
@@ -293,6 +323,7 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
                   "|---|---|---|---|---|"]
         lines += [f"| {s} | {c['num_scatterers']} | {c['expected']:.0f} | "
                   f"{c['density_scale']:.3g} | {c['build_s']:.2f} |" for s, c in fields.items()]
+    lines += _mesh_lines(results)
     lines += ["", "Known reflectors: position error of the nearest detection [m] "
               "(* = outside the match radius)", "",
               "| scene | target | range_m | az_deg | el_deg | "
@@ -326,6 +357,9 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
                 lines.append(f"| {s} | {mv['name']} | {mv['range_m']:.2f} | "
                              f"{mv['velocity_mps']:+.2f} | " + " | ".join(cells) + " |")
     lines.append("")
+    if any(r.meshes for r in results.values()):
+        lines += ["Placement of the meshes and the radar (top view):", "",
+                  "![placement](placement.png)", ""]
     for s in results:
         lines.append(f"## {s}")
         lines += [f"![{s} {m}]({s}_{m}.png)" for m in REPORT_MAPS]
@@ -375,7 +409,10 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
                        chains: Sequence[str] | str = CHAINS, scenarios: Sequence = ()) -> dict:
     """Evaluate scenes and scenarios; write figures, JSON, ``report.md`` and ``index.html``.
 
-    Every file is written atomically (temporary file, then ``os.replace``).
+    Every file is written atomically (temporary file, then ``os.replace``). A
+    scenario with users' meshes gets ``placement.png`` (a top view of its meshes and
+    the radar, :func:`raysim.studies.scene_report.meshes.plot_placement`) before
+    any tracing, and a per-mesh table in ``report.md``.
 
     Parameters
     ----------
@@ -423,6 +460,9 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
                      settings.for_scenario(sc)))
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    placed = [(label, mesh_boxes(st), st) for label, st in jobs]
+    if plot_placement(placed, out / "placement.png") is not None and progress:
+        print(f"placement preview: {out / 'placement.png'}", file=sys.stderr)
     results, summary = {}, {}
     for label, st in jobs:
         r = (evaluate_scene(st.scenario.scene.name, st, progress=progress, chains=chains)
