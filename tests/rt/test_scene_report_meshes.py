@@ -91,3 +91,17 @@ def test_scene_report_names_and_marks_three_user_meshes(tmp_path, capsys, warm_k
     assert "<img src=\"placement.png\"" in (out / "index.html").read_text()
     for m in ("ra", "ae"):
         assert (out / f"my_town_{m}.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_bundled_user_mesh_example_loads_its_package_meshes():
+    """The bundled `[[scene.meshes]]` example: its mesh files ship beside it and load."""
+    import raysim.data
+    from raysim.scenario import load_scenario
+    from raysim.studies.scene_report import QUICK
+    from raysim.studies.scene_report.meshes import mesh_boxes
+
+    path = raysim.data.example_path("scene_user_meshes.toml")
+    s = load_scenario(path)
+    assert s.scene.kind == "meshes"
+    names = [b["name"] for b in mesh_boxes(QUICK.for_scenario(s))]
+    assert names == ["ground.ply", "building.obj", "car.glb"]

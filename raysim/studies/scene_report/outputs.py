@@ -221,7 +221,7 @@ def _mesh_lines(results: dict) -> list[str]:
              "or the point nearest the radar for a mesh under it; marked and named on the RA "
              "and AE maps), traced paths whose first bounce is on it, their total power "
              "(isotropic elements), CFAR detections within "
-             f"{NEAR_MESH_M:g} m of its bounding box per map", "",
+             f"{NEAR_MESH_M:g} m of its bounding box in the stationary frame and each chain", "",
              "| scene | mesh | range_m | az_deg | el_deg | paths | power [dBW] | detections "
              + " / ".join([REFERENCE] + cols) + " |", "|---|---|---|---|---|---|---|---|"]
     for s, r in have.items():
