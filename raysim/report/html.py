@@ -110,10 +110,59 @@ def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
     keys = [c.key for c in parse_chains(chains)]
     traj = scenario.trajectory()
     frames = LazyFrames(frame_source(scenario, traj), scenario.frames)
-    res = evaluate(scenario, chains=keys, frames=frames, reference=frames.reference,
-                   return_maps=True)
+    ref, notes = direction_for_chains(frames, frames.reference, keys)
+    res = evaluate(scenario, chains=keys, frames=frames, reference=ref, return_maps=True)
+    res["notes"] = notes + res["notes"]
     return ReportData(scenario.name, res, frames[0], len(frames), scenario.to_toml(),
                       _paper_values(scenario), source or scenario.name, traj.name)
+
+
+def direction_for_chains(frames, reference, chains: Sequence[str]):
+    """A look direction for the chains that need one, on a scene without a reference target.
+
+    The ``paper`` chains correct the slow-time phase towards one direction (the
+    reference target's). A ray-traced scene without a discrete target (users'
+    meshes, a bare ground) has none: its strongest return is taken instead, the
+    peak of frame 0 uncompensated (:func:`raysim.measure.point.measure` with
+    chain ``none``: the range-profile peak ``range_m`` [m] and the AE map's peak
+    ``map_az_deg``, ``map_el_deg`` [deg]), and a note says so. When the peak is
+    not finite, boresight at that range is taken, also stated.
+
+    Parameters
+    ----------
+    frames : sequence of RadarFrame
+        ``data`` ``[chirp, channel, sample]``; only frame 0 is read.
+    reference : Reference or None
+        The scene's reference target (returned unchanged when given).
+    chains : sequence of str
+        Chain keys of the report.
+
+    Returns
+    -------
+    reference : Reference or None
+        The reference, or the strongest return's direction when a chain needs one.
+    notes : list of str
+        What was chosen and why (empty when nothing was).
+    """
+    from raysim.pipeline.sources import Reference
+
+    needs = [c for c in chains if str(c).split(":")[0] == "paper"]
+    if reference is not None or not needs or len(frames) == 0:
+        return reference, []
+    from raysim.measure.point import measure
+
+    m = measure([frames[0]], None, chain="none")
+    r, az, el = m["range_m"], m.get("map_az_deg"), m.get("map_el_deg")
+    if az is None or el is None or not (np.isfinite(az) and np.isfinite(el)):
+        ref = Reference(float(r), 0.0, 0.0)
+        how = "boresight (the AE map has no finite peak)"
+    else:
+        ref = Reference(float(r), float(az), float(el))
+        how = "the strongest return's direction (frame 0, uncompensated)"
+    note = (f"the scene has no reference target: the chains {', '.join(needs)} correct "
+            f"towards {how}: range {ref.range_m:.2f} m, azimuth {ref.az_deg:.1f} deg, "
+            f"elevation {ref.el_deg:.1f} deg; the angle errors are measured from it")
+    return ref, [note]
 
 
 def _paper_values(scenario) -> dict:
@@ -204,6 +253,8 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
     if imu is None:
         keys = [c for c in keys if c == "none"] or ["none"]
         notes.append("the store has no IMU log: compensation chains skipped")
+    ref, picked = direction_for_chains(frames, ref, keys)
+    notes += picked
     res = evaluate(scenario, chains=keys, frames=frames, imu=imu, reference=ref,
                    return_maps=True)
     res["notes"] = notes + res["notes"]

@@ -1,4 +1,5 @@
-"""Users' scenes through the scene report: three mesh formats named, marked and summarised."""
+"""Users' scenes through the main jobs: the scene report names, marks and summarises three
+mesh formats; `render` + `report` work on them with the default chains."""
 
 from __future__ import annotations
 
@@ -105,3 +106,27 @@ def test_bundled_user_mesh_example_loads_its_package_meshes():
     assert s.scene.kind == "meshes"
     names = [b["name"] for b in mesh_boxes(QUICK.for_scenario(s))]
     assert names == ["ground.ply", "building.obj", "car.glb"]
+
+
+
+def test_render_then_report_a_mesh_scene_with_the_default_chains(tmp_path, capsys,
+                                                                   warm_kernels):
+    """No reference target in the scene: the paper chain corrects towards the strongest
+    return, the report says so, and every default chain is measured."""
+    from raysim.cli import main
+    from raysim.vocabulary import CHAINS
+
+    write_three_meshes(tmp_path)
+    scen = tmp_path / "s.toml"
+    store = tmp_path / "town.zarr"
+    assert main(["render", str(scen), "--out", str(store), "--no-progress"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "town.html"
+    assert main(["report", str(store), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "the scene has no reference target" in err and "strongest return" in err
+    page = out.read_text()
+    assert "strongest return" in page
+    assert "needs direction" not in page
+    for c in CHAINS:
+        assert c in page
