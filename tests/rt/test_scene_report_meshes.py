@@ -7,6 +7,8 @@ import json
 
 import pytest
 
+from raysim.measure.scene import CFAR_THRESHOLD_DB, MISS_REASONS
+
 pytestmark = pytest.mark.sionna
 
 #: A user's scenario: a PLY ground 15.1 m below the radar, an OBJ building and a GLB car
@@ -81,10 +83,16 @@ def test_scene_report_names_and_marks_three_user_meshes(tmp_path, capsys, warm_k
     assert marks["ground.ply"]["az_deg"] == marks["ground.ply"]["el_deg"] == 0.0
     for m in data["meshes"]:
         assert set(m["detections"]) == {"stationary", "none", "exact"}
+    for t in marks.values():                        # the CFAR's verdict on each mesh's cell
+        assert set(t["cfar"]) == {"stationary", "none", "exact"}
+        for v in t["cfar"].values():
+            assert v["status"] in ("detected", *MISS_REASONS)
+            assert v["threshold_db"] == CFAR_THRESHOLD_DB
     ground, building, _ = data["meshes"]       # the flat metal car top returns no path here
     assert ground["num_paths"] > 0 and ground["power_dbw"] is not None
     assert building["num_paths"] > 0                # its concrete roof scatters diffusely
     md = (out / "report.md").read_text()
+    assert f"threshold {CFAR_THRESHOLD_DB:g} dB" in md and "SNR " in md
     for n in names:
         assert f"| my_town | {n} |" in md                # the per-mesh table
     assert "![placement](placement.png)" in md

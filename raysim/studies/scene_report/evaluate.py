@@ -70,7 +70,10 @@ class SceneResult:
         ``el_deg`` from the nominal radar phase centre, ``rcs_dbsm``; the
         nearest detection of the reference (``reference_match``) and of every
         chain (``match``: chain key -> ``detected``, ``error_m`` [m],
-        ``radius_m`` [m], ``detection`` index).
+        ``radius_m`` [m], ``detection`` index); ``cfar``: key (the reference and
+        every chain) -> the CFAR's verdict on the reflector's cell (``status``:
+        ``detected`` or the reason of a miss, ``snr_db``, ``threshold_db`` [dB],
+        :func:`raysim.measure.scene.explain_detection`).
     num_paths : int
         Traced paths (after culls).
     path_kinds : dict
@@ -227,12 +230,18 @@ def _nearest(target: dict, result: ChainResult, radius: float) -> dict:
 
 def _match(targets: list, reference: ChainResult, chains: dict,
            settings: ReportSettings) -> None:
-    """Attach the nearest detection of the reference and of every chain to every reflector."""
+    """Attach the nearest detection of the reference and of every chain to every reflector,
+    and what the CFAR made of it (``cfar``: key -> :func:`raysim.measure.scene.explain_detection`:
+    ``status``, ``snr_db``, ``threshold_db``, ``cell``)."""
+    from raysim.measure.scene import explain_detection
+
     beam = 2.0 / settings.array_size                  # ~ null-to-null half width [rad]
     for t in targets:
         radius = max(1.0, t["range_m"] * beam / 2)
         t["reference_match"] = _nearest(t, reference, radius)
         t["match"] = {c: _nearest(t, r, radius) for c, r in chains.items()}
+        t["cfar"] = {k: explain_detection(r, t["range_m"], t["az_deg"], t["el_deg"])
+                     for k, r in {REFERENCE: reference, **chains}.items()}
 
 
 #: Centres of a mover within this of its strongest (``rcs / R^4``) make up its truth [dB].

@@ -12,7 +12,12 @@ from pathlib import Path
 import numpy as np
 
 from raysim.io.files import atomic_savefig, atomic_write_json, atomic_write_text
-from raysim.measure.scene import SCENE_METRICS
+from raysim.measure.scene import (
+    CFAR_THRESHOLD_DB,
+    CFAR_TRAIN,
+    MISS_REASONS,
+    SCENE_METRICS,
+)
 from raysim.vocabulary import CHAINS, MAP_TITLES, REFERENCE, chain_label, parse_chains
 
 from .evaluate import SceneResult, evaluate_scenario, evaluate_scene
@@ -211,6 +216,23 @@ def _price_lines(results: dict) -> list[str]:
     return lines
 
 
+def _reflector_cell(match: dict | None, cfar: dict | None) -> str:
+    """A known reflector in one column: error [m] (* missed), SNR [dB] and a miss's reason."""
+    if match is None and cfar is None:
+        return "-"
+    head = ("no detection" if match is None or "error_m" not in match else
+            f"{match['error_m']:.2f}" + ("" if match["detected"] else "*"))
+    if cfar is None:
+        return head
+    snr = "" if cfar["snr_db"] is None else f"SNR {cfar['snr_db']:.1f} dB"
+    missed = match is None or not match.get("detected")
+    why = ""
+    if missed:
+        why = ("a detection in its cell, outside the match radius"
+               if cfar["status"] == "detected" else cfar["status"])
+    return head + " (" + ": ".join(x for x in (snr, why) if x) + ")"
+
+
 def _mesh_lines(results: dict) -> list[str]:
     """The per-mesh table of scenarios with users' meshes (what the radar saw of each)."""
     have = {s: r for s, r in results.items() if r.meshes}
@@ -325,21 +347,19 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
                   f"{c['density_scale']:.3g} | {c['build_s']:.2f} |" for s, c in fields.items()]
     lines += _mesh_lines(results)
     lines += ["", "Known reflectors: position error of the nearest detection [m] "
-              "(* = outside the match radius)", "",
+              "(* = outside the match radius), the SNR of the reflector's cell over the "
+              f"CFAR's noise estimate (threshold {CFAR_THRESHOLD_DB:g} dB over the mean of "
+              f"{2 * CFAR_TRAIN} training cells along range) and, for a miss, why: "
+              + "; ".join(MISS_REASONS), "",
               "| scene | target | range_m | az_deg | el_deg | "
               + " | ".join(cols) + " |", "|---|---|---|---|---|" + "---|" * len(cols)]
     for s, r in results.items():
         for t in r.targets:
             matches = {REFERENCE: t.get("reference_match"), **t.get("match", {})}
-            cells = []
-            for c in cols:
-                mt = matches.get(c)
-                if mt is None or "error_m" not in mt:
-                    cells.append("-")
-                else:
-                    cells.append(f"{mt['error_m']:.2f}" + ("" if mt["detected"] else "*"))
             lines.append(f"| {s} | {t['name']} | {t['range_m']:.2f} | {t['az_deg']:.1f} | "
-                         f"{t['el_deg']:.1f} | " + " | ".join(cells) + " |")
+                         f"{t['el_deg']:.1f} | " + " | ".join(
+                             _reflector_cell(matches.get(c), t.get("cfar", {}).get(c))
+                             for c in cols) + " |")
     if any(r.movers for r in results.values()):
         lines += ["", "Movers: strongest RD cell off the zero-Doppler ridge within the mover's "
                   "range span: range rate [m/s], Doppler error to its nearest centre [bins], "
