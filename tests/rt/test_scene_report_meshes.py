@@ -138,3 +138,20 @@ def test_render_then_report_a_mesh_scene_with_the_default_chains(tmp_path, capsy
     assert "needs direction" not in page
     for c in CHAINS:
         assert c in page
+
+
+def test_a_mesh_off_the_maps_is_named(tmp_path, capsys, warm_kernels):
+    """A range window that stops short of the meshes: the report says which are off the maps
+    and why, and the detection table gives the reason."""
+    from raysim.cli import main
+
+    write_three_meshes(tmp_path)
+    out = tmp_path / "out"
+    assert main(["scene-report", "--scenario", str(tmp_path / "s.toml"), "--quick",
+                 "--chains", "none", "--range-window", "5,12", "--out", str(out),
+                 "--no-progress", "--threads", "2"]) == 0
+    err = capsys.readouterr().err
+    for n in ("ground.ply", "building.obj", "car.glb"):
+        assert f"warning: my_town: mesh {n} (range" in err
+    assert "is outside the range window (range window 5-12 m" in err
+    assert "outside the range window" in (out / "report.md").read_text()

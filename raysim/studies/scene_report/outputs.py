@@ -490,6 +490,14 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
              evaluate_scenario(st, progress=progress, chains=chains, label=label))
         results[label] = r
         summary[label] = r.to_dict()
+        for t in r.targets:                    # a mesh the maps cannot show: say why
+            status = t.get("cfar", {}).get(REFERENCE, {}).get("status", "")
+            if t.get("mesh") and status.startswith("outside"):
+                print(f"warning: {label}: mesh {t['name']} (range {t['range_m']:.1f} m, "
+                      f"azimuth {t['az_deg']:.1f} deg, elevation {t['el_deg']:.1f} deg) is "
+                      f"{status} (range window {st.range_window[0]:g}-"
+                      f"{st.range_window[1]:g} m, grid +-{st.grid_half_width_deg:g} deg): "
+                      "it is off the maps", file=sys.stderr)
         plot_scene(r, out)
         atomic_write_json(out / f"{label}.json", summary[label], indent=1)
     atomic_write_json(out / "summary.json", summary, indent=1)
