@@ -27,6 +27,8 @@ examples:
   raysim scene-report --scenario examples/case_rotation_y.toml --quick --out out/rot
       a point-target scenario: the scene maps, and the point metrics of its target
       per chain (the values `raysim simulate --scenario` prints)
+  raysim scene-report --scenario examples/scene_user_meshes.toml --quick --out out/meshes
+      the bundled example of users' meshes (PLY ground, OBJ building, GLB car)
   raysim scene-report --scenario my_meshes.toml --scenes flat_reflectors --out out/
       a scenario with [[scene.meshes]] beside a bundled scene
   raysim scene-report --bench-reprojection --threads 2
@@ -38,7 +40,11 @@ other options set the report's knobs (rays, grid, range window) and, when given,
 
 outputs (every file written atomically): <scene>_rd.png, <scene>_ra.png, <scene>_ae.png
 (one panel for the stationary reference, one per chain), <scene>.json, summary.json,
-report.md, index.html (a scenario is named by its `name`).
+report.md, index.html (a scenario is named by its `name`). A scenario with
+[[scene.meshes]] also gets placement.png (top view of the meshes and the radar, written
+before the trace), its meshes named and marked on the RA and AE maps, and a table of
+what the radar saw of each (paths, power, detections). The known-reflector table gives
+each reflector's SNR over the CFAR noise, the threshold and the reason of a miss.
 """
 
 
@@ -164,7 +170,8 @@ def run(args: argparse.Namespace) -> int:
         backend.configure("cpu", threads=args.threads)
         print(json.dumps(bench_scene_reprojection(), indent=1))
         return 0
-    check_output(args.out, "dir", "--out", names=("index.html", "report.md", "summary.json"))
+    check_output(args.out, "dir", "--out", names=("index.html", "report.md", "summary.json",
+                                                 "placement.png"))
     knobs = {}
     if args.jitter_axes is not None:
         knobs["jitter_axes"] = tuple(a.strip() for a in args.jitter_axes.split(",")

@@ -32,6 +32,28 @@ def register(subparsers) -> None:
     p.set_defaults(func=lambda args: (p.print_help(), 2)[1])
 
 
+#: The one frame ``scenes describe`` gives positions in: the one ``[[scene.meshes]]`` uses.
+FRAME = ("world frame W, NED: north, east, down [m] from the hover point (the frame of "
+         "[[scene.meshes]] position_m; docs/conventions.md)")
+
+
+def _in_world(target: dict, hover_altitude) -> dict:
+    """A sidecar target with its scene-frame (ENU, ground at z = 0) ``position`` as
+    ``position_m`` in W (NED from the hover point) [m], ``[3]``."""
+    import numpy as np
+
+    from raysim.echoes.rt.scenes import ENU_FROM_NED
+
+    out = {k: v for k, v in target.items() if k != "position"}
+    pos = target.get("position")
+    if pos is None or hover_altitude is None:
+        out["position_m"] = None
+        return out
+    p = np.asarray(pos, dtype=float) - np.array([0.0, 0.0, float(hover_altitude)])
+    out["position_m"] = (p @ ENU_FROM_NED.T).tolist()
+    return out
+
+
 def _registry():
     try:
         from raysim.echoes.rt.scenes import SCENES
@@ -73,7 +95,10 @@ def run_describe(args) -> int:
     meta = d.metadata()
     info = {"name": d.name, "description": d.description, "path": str(d.path),
             "present": d.path.exists(), "hover_altitude_m": meta.get("hover_altitude"),
-            "targets": meta.get("targets", []), "materials": meta.get("materials", {})}
+            "frame": FRAME,
+            "targets": [_in_world(t, meta.get("hover_altitude")) for t in
+                        meta.get("targets", [])],
+            "materials": meta.get("materials", {})}
     if args.json:
         print(json.dumps(info, indent=2, default=str))
         return 0
@@ -81,9 +106,14 @@ def run_describe(args) -> int:
     print(f"file: {d.path}{'' if d.path.exists() else ' (missing: run python scenes/generate.py)'}")
     if info["hover_altitude_m"] is not None:
         print(f"hover altitude: {info['hover_altitude_m']} m")
+    if info["targets"]:
+        print(f"positions: {FRAME}")
     for t in info["targets"]:
-        print(f"target {t.get('name')}: position (scene frame, ENU) {t.get('position')} m, "
-              f"{t.get('rcs_dbsm')} dBsm")
+        pos = t.get("position_m")
+        where = ("?" if pos is None else
+                 "(" + ", ".join(f"{v:.2f}" for v in pos) + ")")
+        print(f"target {t.get('name')}: position (north, east, down) {where} m, "
+              f"{t.get('rcs_dbsm', float('nan')):.1f} dBsm")
     mats = info["materials"]
     if mats:
         names = mats if isinstance(mats, list) else list(mats)

@@ -28,7 +28,9 @@ its ``scene_entropy_<map>_nats``; ``ridge_leakage_db`` is
 :func:`raysim.measure.ridge.ridge_leakage_db` of ``rd``. Discrete scatterers are
 found by a cell-averaging CFAR along range on the coherent cube
 (:func:`cfar_detect`, parameters :data:`CFAR_TRAIN`, :data:`CFAR_GUARD`,
-:data:`CFAR_THRESHOLD_DB`; the :data:`MAX_DETECTIONS` strongest kept).
+:data:`CFAR_THRESHOLD_DB`; the :data:`MAX_DETECTIONS` strongest kept);
+:func:`explain_detection` gives a known point's SNR over the CFAR's noise
+estimate and why it was missed (:data:`MISS_REASONS`).
 
 The ``dpca`` chain tapers its sub-aperture, not the array: the channel taper
 the cube carries is divided out again and the same window, built for the
@@ -58,6 +60,7 @@ from raysim.processing.metrics import image_entropy
 from raysim.vocabulary import MAPS, REFERENCE, ChainSpec, parse_chain
 
 __all__ = ["SCENE_MAPS", "SCENE_METRICS", "scene_metric", "CFAR_TRAIN", "CFAR_GUARD",
+           "cfar_noise", "explain_detection", "MISS_REASONS",
            "CFAR_THRESHOLD_DB", "MAX_DETECTIONS", "BORESIGHT", "GRID_HALF_WIDTH_DEG",
            "GRID_STEP_DEG", "RANGE_WINDOW_M", "SPATIAL_WINDOWS", "TAYLOR_SLL_DB",
            "TAYLOR_NBAR", "SceneMeasurement", "angle_grid", "channel_taper", "sub_aperture_taper",
@@ -343,7 +346,7 @@ def cfar_detect(cube: np.ndarray, *, train: int = CFAR_TRAIN, guard: int = CFAR_
     ndarray of int, shape ``[detection, 3]``
         Indices ``(range, azimuth, elevation)``, strongest first.
     """
-    from scipy.ndimage import maximum_filter, uniform_filter1d
+    from scipy.ndimage import maximum_filter
 
     p = np.asarray(cube, dtype=float)
     if p.ndim != 3 or np.any(p < 0):
@@ -351,15 +354,115 @@ def cfar_detect(cube: np.ndarray, *, train: int = CFAR_TRAIN, guard: int = CFAR_
                          f"shape {p.shape}")
     if train < 1 or guard < 0:
         raise ValueError(f"need train >= 1 and guard >= 0, got train={train!r}, guard={guard!r}")
-    big = uniform_filter1d(p, 2 * (train + guard) + 1, axis=0, mode="nearest") * (
-        2 * (train + guard) + 1)
-    small = uniform_filter1d(p, 2 * guard + 1, axis=0, mode="nearest") * (2 * guard + 1)
-    noise = np.maximum((big - small) / (2 * train), np.finfo(float).tiny)
+    noise = cfar_noise(p, train=train, guard=guard)
     hit = (p > noise * 10 ** (threshold_db / 10)) & (p == maximum_filter(p, size=3,
                                                                           mode="nearest"))
     idx = np.argwhere(hit)
     order = np.argsort(-p[hit])
     return idx[order]
+
+
+def cfar_noise(cube: np.ndarray, *, train: int = CFAR_TRAIN,
+               guard: int = CFAR_GUARD) -> np.ndarray:
+    """The cell-averaging CFAR's noise estimate of every cell (:func:`cfar_detect`).
+
+    Parameters
+    ----------
+    cube : ndarray, shape ``[range, azimuth, elevation]``
+        Non-negative power [W].
+    train, guard : int
+        Training and guard cells on each side along range.
+
+    Returns
+    -------
+    ndarray, shape of ``cube``
+        Mean power of the ``2 train`` training cells around each cell [W]
+        (edges: the nearest cell repeated), at least the smallest positive float.
+    """
+    from scipy.ndimage import uniform_filter1d
+
+    p = np.asarray(cube, dtype=float)
+    if train < 1 or guard < 0:
+        raise ValueError(f"need train >= 1 and guard >= 0, got train={train!r}, guard={guard!r}")
+    big = uniform_filter1d(p, 2 * (train + guard) + 1, axis=0, mode="nearest") * (
+        2 * (train + guard) + 1)
+    small = uniform_filter1d(p, 2 * guard + 1, axis=0, mode="nearest") * (2 * guard + 1)
+    return np.maximum((big - small) / (2 * train), np.finfo(float).tiny)
+
+
+#: Why a known reflector has no detection (:func:`explain_detection`), beside ``"detected"``.
+MISS_REASONS = ("outside the range window", "outside the grid", "below threshold",
+                "masked by a stronger neighbour", "beyond the strongest detections kept")
+
+
+def explain_detection(result: SceneMeasurement, range_m: float, az_deg: float, el_deg: float,
+                      *, threshold_db: float = CFAR_THRESHOLD_DB, train: int = CFAR_TRAIN,
+                      guard: int = CFAR_GUARD, max_detections: int = MAX_DETECTIONS) -> dict:
+    """What the CFAR of :func:`measure_scene` made of a known point: its SNR and verdict.
+
+    The point's cell is the strongest cell of the coherent cube within one cell
+    (each axis) of the grid cell nearest ``(range_m, az_deg, el_deg)``, so a
+    point between grid cells is judged on its own peak.
+
+    Parameters
+    ----------
+    result : SceneMeasurement
+        Its ``cube`` ``[range, azimuth, elevation]`` [W] and the maps' axes (range
+        [m] of the window's gates, azimuth and elevation [rad]).
+    range_m : float
+        Range of the point from the nominal phase centre [m].
+    az_deg, el_deg : float
+        Its direction [deg] (frame A at the nominal attitude).
+    threshold_db, train, guard, max_detections
+        The CFAR's parameters (:func:`cfar_detect`) and the detections kept.
+
+    Returns
+    -------
+    dict
+        ``status``: ``"detected"`` or one of :data:`MISS_REASONS`;
+        ``snr_db``: the cell's power over the CFAR noise estimate [dB] (None
+        outside the window or the grid); ``threshold_db`` [dB]; ``cell``: the
+        cell's ``(range, azimuth, elevation)`` index (None outside).
+    """
+    for name, v in (("range_m", range_m), ("az_deg", az_deg), ("el_deg", el_deg)):
+        if not np.isfinite(v):
+            raise ValueError(f"{name}: got {v!r}, expected a finite number")
+    rng = np.asarray(result.maps["ra"].coords["range"], dtype=float)
+    az = np.rad2deg(np.asarray(result.maps["ra"].coords["azimuth"], dtype=float))
+    el = np.rad2deg(np.asarray(result.maps["ae"].coords["elevation"], dtype=float))
+    out = {"status": None, "snr_db": None, "threshold_db": float(threshold_db), "cell": None}
+
+    def half(axis):
+        return 0.5 * float(np.abs(np.diff(axis[:2]))[0]) if axis.size > 1 else 0.5
+
+    if not rng[0] - half(rng) <= range_m <= rng[-1] + half(rng):
+        out["status"] = "outside the range window"
+        return out
+    if not (az.min() - half(az) <= az_deg <= az.max() + half(az)
+            and el.min() - half(el) <= el_deg <= el.max() + half(el)):
+        out["status"] = "outside the grid"
+        return out
+    near = [int(np.argmin(np.abs(a - v))) for a, v in ((rng, range_m), (az, az_deg),
+                                                       (el, el_deg))]
+    cube = np.asarray(result.cube, dtype=float)
+    box = tuple(slice(max(i - 1, 0), i + 2) for i in near)
+    k = np.unravel_index(int(np.argmax(cube[box])), cube[box].shape)
+    cell = tuple(int(s.start + j) for s, j in zip(box, k, strict=True))
+    noise = cfar_noise(cube, train=train, guard=guard)[cell]
+    snr = float(10 * np.log10(max(cube[cell], np.finfo(float).tiny) / noise))
+    out.update(snr_db=snr, cell=list(cell))
+    if not snr > threshold_db:
+        out["status"] = "below threshold"
+        return out
+    hood = tuple(slice(max(i - 1, 0), i + 2) for i in cell)
+    if cube[hood].max() > cube[cell]:
+        out["status"] = "masked by a stronger neighbour"
+        return out
+    found = cfar_detect(cube, train=train, guard=guard, threshold_db=threshold_db)
+    rank = np.nonzero(np.all(found == np.asarray(cell), axis=1))[0]
+    out["status"] = ("detected" if rank.size and rank[0] < max_detections
+                     else "beyond the strongest detections kept")
+    return out
 
 
 def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.ndarray,

@@ -99,21 +99,107 @@ class ReportData:
 
 # ------------------------------------------------------------------ collect
 def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
-                          source: str = "") -> ReportData:
+                          source: str = "", progress: bool = False) -> ReportData:
     """Render a scenario in memory and measure every available chain.
 
-    ``chains``: names or specs (:func:`raysim.vocabulary.parse_chains`).
+    ``chains``: names or specs (:func:`raysim.vocabulary.parse_chains`);
+    ``progress``: a tqdm bar on stderr (one step per frame rendered, then the
+    chains' measurement, :func:`progress_bar`).
     """
     from raysim.pipeline.run import evaluate
     from raysim.pipeline.sources import frame_source
 
     keys = [c.key for c in parse_chains(chains)]
     traj = scenario.trajectory()
-    frames = LazyFrames(frame_source(scenario, traj), scenario.frames)
-    res = evaluate(scenario, chains=keys, frames=frames, reference=frames.reference,
-                   return_maps=True)
+    bar = progress_bar(scenario.frames, scenario.name, progress)
+    source_of = frame_source(scenario, traj)
+    frames = LazyFrames(_counted(source_of, bar, "rendering",
+                                 lambda: f"measuring chains {', '.join(keys)}"),
+                        scenario.frames)
+    frames.reference = getattr(source_of, "reference", None)
+    ref, notes = direction_for_chains(frames, frames.reference, keys)
+    res = evaluate(scenario, chains=keys, frames=frames, reference=ref, return_maps=True)
+    bar.close()
+    res["notes"] = notes + res["notes"]
     return ReportData(scenario.name, res, frames[0], len(frames), scenario.to_toml(),
                       _paper_values(scenario), source or scenario.name, traj.name)
+
+
+def progress_bar(frames: int, desc: str, enabled: bool):
+    """A tqdm bar on stderr over ``frames`` frame reads (disabled: a silent stand-in)."""
+    import sys
+
+    from tqdm.auto import tqdm
+
+    return tqdm(total=int(frames), desc=str(desc), unit="frame", file=sys.stderr,
+                disable=not enabled, leave=False, mininterval=0.0)
+
+
+def _counted(read, bar, what: str, then):
+    """``read(f)`` that advances ``bar`` the first time each frame is read; once every
+    frame was read the bar says ``then()`` (the work that follows)."""
+    seen: set[int] = set()
+
+    def counted(f: int):
+        if f not in seen:
+            bar.set_postfix_str(f"{what} frame {f}")
+        out = read(f)
+        if f not in seen:
+            seen.add(f)
+            if len(seen) == bar.total:
+                bar.set_postfix_str(then(), refresh=False)
+            bar.update()
+        return out
+
+    return counted
+
+
+def direction_for_chains(frames, reference, chains: Sequence[str]):
+    """A look direction for the chains that need one, on a scene without a reference target.
+
+    The ``paper`` chains correct the slow-time phase towards one direction (the
+    reference target's). A ray-traced scene without a discrete target (users'
+    meshes, a bare ground) has none: its strongest return is taken instead, the
+    peak of frame 0 uncompensated (:func:`raysim.measure.point.measure` with
+    chain ``none``: the range-profile peak ``range_m`` [m] and the AE map's peak
+    ``map_az_deg``, ``map_el_deg`` [deg]), and a note says so. When the peak is
+    not finite, boresight at that range is taken, also stated.
+
+    Parameters
+    ----------
+    frames : sequence of RadarFrame
+        ``data`` ``[chirp, channel, sample]``; only frame 0 is read.
+    reference : Reference or None
+        The scene's reference target (returned unchanged when given).
+    chains : sequence of str
+        Chain keys of the report.
+
+    Returns
+    -------
+    reference : Reference or None
+        The reference, or the strongest return's direction when a chain needs one.
+    notes : list of str
+        What was chosen and why (empty when nothing was).
+    """
+    from raysim.pipeline.sources import Reference
+
+    needs = [c for c in chains if str(c).split(":")[0] == "paper"]
+    if reference is not None or not needs or len(frames) == 0:
+        return reference, []
+    from raysim.measure.point import measure
+
+    m = measure([frames[0]], None, chain="none")
+    r, az, el = m["range_m"], m.get("map_az_deg"), m.get("map_el_deg")
+    if az is None or el is None or not (np.isfinite(az) and np.isfinite(el)):
+        ref = Reference(float(r), 0.0, 0.0)
+        how = "boresight (the AE map has no finite peak)"
+    else:
+        ref = Reference(float(r), float(az), float(el))
+        how = "the strongest return's direction (frame 0, uncompensated)"
+    note = (f"the scene has no reference target: the chains {', '.join(needs)} correct "
+            f"towards {how}: range {ref.range_m:.2f} m, azimuth {ref.az_deg:.1f} deg, "
+            f"elevation {ref.el_deg:.1f} deg; the angle errors are measured from it")
+    return ref, [note]
 
 
 def _paper_values(scenario) -> dict:
@@ -136,6 +222,8 @@ class StoredFrames(LazyFrames):
         Frame Dataset (:mod:`raysim.io.storage` layout), lazy or in memory.
     source : str
         The store, for messages.
+    on_read : callable, optional
+        ``on_read(read)`` wraps the frame reader ``read(f) -> RadarFrame`` (progress).
 
     Raises
     ------
@@ -143,7 +231,7 @@ class StoredFrames(LazyFrames):
         When a frame's chunks cannot be read or decoded (naming the store and the frame).
     """
 
-    def __init__(self, ds, source: str = "dataset"):
+    def __init__(self, ds, source: str = "dataset", on_read=None):
         from raysim.io.storage import array_from_dataset, config_from_attrs
 
         self._ds = ds
@@ -165,27 +253,32 @@ class StoredFrames(LazyFrames):
             return RadarFrame(data, config, array, times, lever, int(sub["frame"].values),
                               {"source": source})
 
-        super().__init__(read, int(ds.sizes["frame"]))
+        super().__init__(read if on_read is None else on_read(read), int(ds.sizes["frame"]))
 
     def chirp_times(self) -> np.ndarray:
         """Stored chirp start times of all frames, shape ``[frame * chirp]`` [s]."""
         return np.asarray(self._ds["chirp_time"].values, dtype=float).ravel()
 
 
-def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = "") -> ReportData:
+def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = "",
+                         progress: bool = False) -> ReportData:
     """Frames of a stored Dataset (Zarr / NetCDF), measured through every chain its IMU log
     and scenario allow.
 
     Frames are read one at a time (:class:`StoredFrames`): give a lazy Dataset
     (``raysim.io.storage.open_store(path, load=False)``) and a report of a
-    store of any length holds about two frames in memory.
+    store of any length holds about two frames in memory. ``progress``: a tqdm bar
+    on stderr (one step per frame read, then the chains' measurement).
     """
     from raysim.io.storage import scenario_of
     from raysim.measure.point import measure
     from raysim.pipeline.run import evaluate
 
     keys = [c.key for c in parse_chains(chains)]
-    frames = StoredFrames(ds, source or "dataset")
+    bar = progress_bar(ds.sizes.get("frame", 0), source or "store", progress)
+    frames = StoredFrames(ds, source or "dataset",
+                          on_read=lambda read: _counted(
+                              read, bar, "reading", lambda: f"measuring chains {', '.join(keys)}"))
     scenario = scenario_of(ds)
     motion = str(ds.attrs.get("motion_name", ""))
     ref = None
@@ -195,6 +288,7 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
     title = str(ds.attrs.get("scenario_name", "stored frames"))
     if scenario is None:
         m, maps = measure(frames, ref, return_maps=True)
+        bar.close()
         res = {"reference": ref, "chains": {"none": m}, "maps": {"none": maps},
                "warnings": {"none": []},
                "notes": ["the store carries no scenario: compensation chains skipped"]}
@@ -204,8 +298,11 @@ def collect_from_dataset(ds, *, chains: Sequence[str] = CHAINS, source: str = ""
     if imu is None:
         keys = [c for c in keys if c == "none"] or ["none"]
         notes.append("the store has no IMU log: compensation chains skipped")
+    ref, picked = direction_for_chains(frames, ref, keys)
+    notes += picked
     res = evaluate(scenario, chains=keys, frames=frames, imu=imu, reference=ref,
                    return_maps=True)
+    bar.close()
     res["notes"] = notes + res["notes"]
     return ReportData(title, res, frames[0], len(frames), scenario.to_toml(),
                       _paper_values(scenario), source, motion or scenario.trajectory().name)

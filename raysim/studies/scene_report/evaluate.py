@@ -21,6 +21,7 @@ import numpy as np
 
 from raysim.vocabulary import CHAINS, REFERENCE, chain_order, parse_chains
 
+from .meshes import mesh_boxes, mesh_summary, mesh_targets
 from .process import ChainResult, chain_result, point_metrics, report_cube
 from .settings import (
     CFAR_THRESHOLD_DB,
@@ -69,7 +70,10 @@ class SceneResult:
         ``el_deg`` from the nominal radar phase centre, ``rcs_dbsm``; the
         nearest detection of the reference (``reference_match``) and of every
         chain (``match``: chain key -> ``detected``, ``error_m`` [m],
-        ``radius_m`` [m], ``detection`` index).
+        ``radius_m`` [m], ``detection`` index); ``cfar``: key (the reference and
+        every chain) -> the CFAR's verdict on the reflector's cell (``status``:
+        ``detected`` or the reason of a miss, ``snr_db``, ``threshold_db`` [dB],
+        :func:`raysim.measure.scene.explain_detection`).
     num_paths : int
         Traced paths (after culls).
     path_kinds : dict
@@ -93,6 +97,11 @@ class SceneResult:
         no motion): the reference at the chain's resolution, so the report can
         tell the aperture's price from what the motion leaves. Empty without
         ``dpca``.
+    meshes : list of dict
+        Users' meshes of a ``[[scene.meshes]]`` scenario: what the radar saw of
+        each (:func:`raysim.studies.scene_report.meshes.mesh_summary`: ``name``,
+        ``num_paths``, ``power_w``, ``power_dbw``, ``detections``); they are
+        also in ``targets`` (``"mesh": True``) as named markers. Empty otherwise.
     point : dict
         Point metrics of the scenario's reference target
         (:func:`raysim.pipeline.sources.reference_target`): ``reference``
@@ -115,6 +124,7 @@ class SceneResult:
     clutter: dict = field(default_factory=dict)
     point: dict = field(default_factory=dict)
     same_aperture: dict = field(default_factory=dict)
+    meshes: list = field(default_factory=list)
 
     def within_margin(self, key: str) -> bool | None:
         """True when every map entropy of chain ``key`` is within the margin of the reference.
@@ -180,6 +190,7 @@ class SceneResult:
                                "metrics": {k: _finite(v)
                                            for k, v in self.point["metrics"].items()}}
                               if self.point else {}),
+            "meshes": self.meshes,
             "seconds": self.seconds,
         }
 
@@ -219,12 +230,18 @@ def _nearest(target: dict, result: ChainResult, radius: float) -> dict:
 
 def _match(targets: list, reference: ChainResult, chains: dict,
            settings: ReportSettings) -> None:
-    """Attach the nearest detection of the reference and of every chain to every reflector."""
+    """Attach the nearest detection of the reference and of every chain to every reflector,
+    and what the CFAR made of it (``cfar``: key -> :func:`raysim.measure.scene.explain_detection`:
+    ``status``, ``snr_db``, ``threshold_db``, ``cell``)."""
+    from raysim.measure.scene import explain_detection
+
     beam = 2.0 / settings.array_size                  # ~ null-to-null half width [rad]
     for t in targets:
         radius = max(1.0, t["range_m"] * beam / 2)
         t["reference_match"] = _nearest(t, reference, radius)
         t["match"] = {c: _nearest(t, r, radius) for c, r in chains.items()}
+        t["cfar"] = {k: explain_detection(r, t["range_m"], t["az_deg"], t["el_deg"])
+                     for k, r in {REFERENCE: reference, **chains}.items()}
 
 
 #: Centres of a mover within this of its strongest (``rcs / R^4``) make up its truth [dB].
@@ -461,8 +478,10 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
                                "el_deg": target.el_deg}, "metrics": metrics}
         seconds["point_metrics"] = time.perf_counter() - t
     bar.close()
-    targets = _targets(sim.get("scene"), settings)
+    boxes = mesh_boxes(settings)
+    targets = _targets(sim.get("scene"), settings) + mesh_targets(boxes, settings)
     _match(targets, reference, results, settings)
+    meshes = mesh_summary(boxes, sim.get("paths"), {REFERENCE: reference, **results})
     movers = []
     for m in sim.get("movers", []):
         truth = mover_truth(m, settings, config)
@@ -480,4 +499,5 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
     paths = sim.get("paths")
     return SceneResult(label, settings, reference, results, targets,
                        0 if paths is None else paths.num_paths, sim.get("path_kinds", {}),
-                       motion_rms, seconds, movers, sim.get("clutter", {}), point, same)
+                       motion_rms, seconds, movers, sim.get("clutter", {}), point, same,
+                       meshes)

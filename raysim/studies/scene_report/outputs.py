@@ -5,16 +5,23 @@ from __future__ import annotations
 import html
 import os
 import re
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from raysim.io.files import atomic_savefig, atomic_write_json, atomic_write_text
-from raysim.measure.scene import SCENE_METRICS
+from raysim.measure.scene import (
+    CFAR_THRESHOLD_DB,
+    CFAR_TRAIN,
+    MISS_REASONS,
+    SCENE_METRICS,
+)
 from raysim.vocabulary import CHAINS, MAP_TITLES, REFERENCE, chain_label, parse_chains
 
 from .evaluate import SceneResult, evaluate_scenario, evaluate_scene
+from .meshes import NEAR_MESH_M, mesh_boxes, plot_placement
 from .settings import (
     ENTROPY_MARGIN_NATS,
     FULL,
@@ -90,12 +97,14 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
                 xlim = (-half * dv, half * dv)
             im = plot_map(ax, mp, title=f"{chain_label(key)}\nH = {r.entropy[m]:.3f} nats",
                           reference_power=ref, dynamic_range_db=dynamic_range_db, xlim=xlim)
-            if m == "ae":
+            if m in ("ae", "ra"):
                 for t in result.targets:
-                    ax.plot(t["az_deg"], t["el_deg"], "r+", ms=9)
-            elif m == "ra":
-                for t in result.targets:
-                    ax.plot(t["az_deg"], t["range_m"], "r+", ms=9)
+                    xy = (t["az_deg"], t["el_deg"] if m == "ae" else t["range_m"])
+                    ax.plot(*xy, "c^" if t.get("mesh") else "r+", ms=7 if t.get("mesh") else 9,
+                            mfc="none")
+                    if t.get("mesh"):               # users' meshes: named markers
+                        ax.annotate(t["name"], xy, xytext=(3, 3), textcoords="offset points",
+                                    fontsize=7, color="c")
             else:                           # movers: their centres' range and range rate
                 for mv in result.movers:
                     c = np.asarray(mv["centres"])
@@ -207,6 +216,49 @@ def _price_lines(results: dict) -> list[str]:
     return lines
 
 
+def _reflector_cell(match: dict | None, cfar: dict | None) -> str:
+    """A known reflector in one column: error [m] (* missed), SNR [dB] and a miss's reason."""
+    if match is None and cfar is None:
+        return "-"
+    head = ("no detection" if match is None or "error_m" not in match else
+            f"{match['error_m']:.2f}" + ("" if match["detected"] else "*"))
+    if cfar is None:
+        return head
+    snr = "" if cfar["snr_db"] is None else f"SNR {cfar['snr_db']:.1f} dB"
+    missed = match is None or not match.get("detected")
+    why = ""
+    if missed:
+        why = ("a detection in its cell, outside the match radius"
+               if cfar["status"] == "detected" else cfar["status"])
+    return head + " (" + ": ".join(x for x in (snr, why) if x) + ")"
+
+
+def _mesh_lines(results: dict) -> list[str]:
+    """The per-mesh table of scenarios with users' meshes (what the radar saw of each)."""
+    have = {s: r for s, r in results.items() if r.meshes}
+    if not have:
+        return []
+    cols = _chain_keys(have)
+    lines = ["", "Users' meshes: where each is seen from the radar (its bounding box's centre, "
+             "or the point nearest the radar for a mesh under it; marked and named on the RA "
+             "and AE maps), traced paths whose first bounce is on it, their total power "
+             "(isotropic elements), CFAR detections within "
+             f"{NEAR_MESH_M:g} m of its bounding box in the stationary frame and each chain", "",
+             "| scene | mesh | range_m | az_deg | el_deg | paths | power [dBW] | detections "
+             + " / ".join([REFERENCE] + cols) + " |", "|---|---|---|---|---|---|---|---|"]
+    for s, r in have.items():
+        where = {t["name"]: t for t in r.targets if t.get("mesh")}
+        for m in r.meshes:
+            t = where.get(m["name"], {})
+            pw = "-" if m["power_dbw"] is None else f"{m['power_dbw']:.1f}"
+            det = " / ".join(str(m["detections"].get(c, "-")) for c in [REFERENCE] + cols)
+            lines.append(f"| {s} | {m['name']} | {t.get('range_m', float('nan')):.2f} | "
+                         f"{t.get('az_deg', float('nan')):.1f} | "
+                         f"{t.get('el_deg', float('nan')):.1f} | {m['num_paths']} | {pw} | "
+                         f"{det} |")
+    return lines
+
+
 def report_markdown(results: dict, settings: ReportSettings) -> str:
     """The report's markdown: entropy, ridge leakage and reflector tables, figure links.
 
@@ -293,22 +345,21 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
                   "|---|---|---|---|---|"]
         lines += [f"| {s} | {c['num_scatterers']} | {c['expected']:.0f} | "
                   f"{c['density_scale']:.3g} | {c['build_s']:.2f} |" for s, c in fields.items()]
+    lines += _mesh_lines(results)
     lines += ["", "Known reflectors: position error of the nearest detection [m] "
-              "(* = outside the match radius)", "",
+              "(* = outside the match radius), the SNR of the reflector's cell over the "
+              f"CFAR's noise estimate (threshold {CFAR_THRESHOLD_DB:g} dB over the mean of "
+              f"{2 * CFAR_TRAIN} training cells along range) and, for a miss, why: "
+              + "; ".join(MISS_REASONS), "",
               "| scene | target | range_m | az_deg | el_deg | "
               + " | ".join(cols) + " |", "|---|---|---|---|---|" + "---|" * len(cols)]
     for s, r in results.items():
         for t in r.targets:
             matches = {REFERENCE: t.get("reference_match"), **t.get("match", {})}
-            cells = []
-            for c in cols:
-                mt = matches.get(c)
-                if mt is None or "error_m" not in mt:
-                    cells.append("-")
-                else:
-                    cells.append(f"{mt['error_m']:.2f}" + ("" if mt["detected"] else "*"))
             lines.append(f"| {s} | {t['name']} | {t['range_m']:.2f} | {t['az_deg']:.1f} | "
-                         f"{t['el_deg']:.1f} | " + " | ".join(cells) + " |")
+                         f"{t['el_deg']:.1f} | " + " | ".join(
+                             _reflector_cell(matches.get(c), t.get("cfar", {}).get(c))
+                             for c in cols) + " |")
     if any(r.movers for r in results.values()):
         lines += ["", "Movers: strongest RD cell off the zero-Doppler ridge within the mover's "
                   "range span: range rate [m/s], Doppler error to its nearest centre [bins], "
@@ -326,6 +377,9 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
                 lines.append(f"| {s} | {mv['name']} | {mv['range_m']:.2f} | "
                              f"{mv['velocity_mps']:+.2f} | " + " | ".join(cells) + " |")
     lines.append("")
+    if any(r.meshes for r in results.values()):
+        lines += ["Placement of the meshes and the radar (top view):", "",
+                  "![placement](placement.png)", ""]
     for s in results:
         lines.append(f"## {s}")
         lines += [f"![{s} {m}]({s}_{m}.png)" for m in REPORT_MAPS]
@@ -375,7 +429,10 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
                        chains: Sequence[str] | str = CHAINS, scenarios: Sequence = ()) -> dict:
     """Evaluate scenes and scenarios; write figures, JSON, ``report.md`` and ``index.html``.
 
-    Every file is written atomically (temporary file, then ``os.replace``).
+    Every file is written atomically (temporary file, then ``os.replace``). A
+    scenario with users' meshes gets ``placement.png`` (a top view of its meshes and
+    the radar, :func:`raysim.studies.scene_report.meshes.plot_placement`) before
+    any tracing, and a per-mesh table in ``report.md``.
 
     Parameters
     ----------
@@ -423,6 +480,9 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
                      settings.for_scenario(sc)))
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    placed = [(label, mesh_boxes(st), st) for label, st in jobs]
+    if plot_placement(placed, out / "placement.png") is not None and progress:
+        print(f"placement preview: {out / 'placement.png'}", file=sys.stderr)
     results, summary = {}, {}
     for label, st in jobs:
         r = (evaluate_scene(st.scenario.scene.name, st, progress=progress, chains=chains)
@@ -430,6 +490,14 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
              evaluate_scenario(st, progress=progress, chains=chains, label=label))
         results[label] = r
         summary[label] = r.to_dict()
+        for t in r.targets:                    # a mesh the maps cannot show: say why
+            status = t.get("cfar", {}).get(REFERENCE, {}).get("status", "")
+            if t.get("mesh") and status.startswith("outside"):
+                print(f"warning: {label}: mesh {t['name']} (range {t['range_m']:.1f} m, "
+                      f"azimuth {t['az_deg']:.1f} deg, elevation {t['el_deg']:.1f} deg) is "
+                      f"{status} (range window {st.range_window[0]:g}-"
+                      f"{st.range_window[1]:g} m, grid +-{st.grid_half_width_deg:g} deg): "
+                      "it is off the maps", file=sys.stderr)
         plot_scene(r, out)
         atomic_write_json(out / f"{label}.json", summary[label], indent=1)
     atomic_write_json(out / "summary.json", summary, indent=1)
