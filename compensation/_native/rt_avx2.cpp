@@ -1,4 +1,11 @@
 // AVX2 + FMA copy of the kernel, used when the CPU reports both at run time.
+// The standard headers come before the target pragma: their inline functions keep the
+// baseline target, so the AVX2 code may inline them (GCC 13 refuses the reverse).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+#include "rt_params.h"
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
 #pragma GCC target("avx2,fma")
 #define RT_HAVE_AVX2 1
