@@ -116,3 +116,14 @@ def check_memory(peak_bytes: float, what: str, hint: str) -> None:
         raise ValueError(f"{what} needs about {format_bytes(peak_bytes)} of memory, "
                          f"{format_bytes(avail)} are available; expected a size that fits: "
                          f"reduce {hint}")
+
+
+def free_disk(path) -> int:
+    """Free bytes on the disk that holds ``path`` (or would: its nearest existing parent)."""
+    import shutil
+    from pathlib import Path
+
+    parent = Path(os.path.abspath(path))
+    while not parent.exists():
+        parent = parent.parent
+    return int(shutil.disk_usage(parent).free)

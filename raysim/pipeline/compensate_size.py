@@ -17,14 +17,19 @@ range-compressed frame is never held.
 from __future__ import annotations
 
 import os
-import shutil
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from raysim.processing.maps import range_compress
-from raysim.resources import LARGE_OUTPUT_BYTES, available_memory, check_memory, format_bytes
+from raysim.resources import (
+    LARGE_OUTPUT_BYTES,
+    available_memory,
+    check_memory,
+    format_bytes,
+    free_disk,
+)
 
 __all__ = ["AUTO_BUDGET_BYTES", "BEAM_CELL_BYTES", "job_bytes", "output_bytes",
            "choose_range_window", "check_job", "gated_range_compress", "range_profile"]
@@ -161,10 +166,7 @@ def check_job(peak: int, out: Path, disk: int, what: str) -> None:
     """
     hint = "--range-m, the --az-deg / --el-deg grid (fewer or coarser angles) or --frames"
     check_memory(peak, f"compensate {what}", hint)
-    parent = Path(os.path.abspath(out)).parent
-    while not parent.exists():
-        parent = parent.parent
-    free = shutil.disk_usage(parent).free
+    free = free_disk(Path(os.path.abspath(out)).parent)
     if disk > free:
         raise ValueError(f"--out {str(out)!r}: compensate {what} would write about "
                          f"{format_bytes(disk)}, {format_bytes(free)} are free on its disk; "

@@ -263,19 +263,15 @@ def size_flight(cfg, frames: int, channels: int, folder: Path) -> int:
     int
         Estimated capture size [bytes].
     """
-    import shutil
     import sys
 
-    from raysim.resources import LARGE_OUTPUT_BYTES, check_memory, format_bytes
+    from raysim.resources import LARGE_OUTPUT_BYTES, check_memory, format_bytes, free_disk
 
     cells = int(frames) * int(cfg.num_chirps) * int(channels) * int(cfg.num_samples)
     check_memory(cells * (16 * 3 + 4), f"a flight of {frames} frame(s) [{cfg.num_chirps} "
                  f"chirps, {channels} channels, {cfg.num_samples} samples]", "--frames")
     disk = cells * 4
-    parent = folder.resolve()
-    while not parent.exists():
-        parent = parent.parent
-    free = shutil.disk_usage(parent).free
+    free = free_disk(folder.resolve())
     if disk > free:
         raise ValueError(f"the capture of {frames} frame(s) would take about "
                          f"{format_bytes(disk)}, {format_bytes(free)} are free in "

@@ -160,20 +160,16 @@ def announce_store_size(scenario: Scenario, store: Path, *, progress: bool = Fal
     int
         Estimated bytes still to write.
     """
-    import shutil
     import sys
 
-    from raysim.resources import LARGE_OUTPUT_BYTES, cube_bytes, format_bytes
+    from raysim.resources import LARGE_OUTPUT_BYTES, cube_bytes, format_bytes, free_disk
 
     cfg = scenario.radar_config()
     shape = (cfg.num_chirps, scenario.virtual_array().num_channels, cfg.num_samples)
     per_frame = cube_bytes(*shape) + cfg.num_chirps * 7 * 8
     missing = max(0, scenario.frames - int(frames_done))
     total = per_frame * missing
-    parent = store.resolve().parent
-    while not parent.exists():
-        parent = parent.parent
-    free = shutil.disk_usage(parent).free
+    free = free_disk(store.resolve().parent)
     if total > free:
         raise ValueError(f"store {str(store)!r} would take about {format_bytes(total)} "
                          f"({missing} missing frame(s) of {list(shape)} complex64), "
