@@ -66,9 +66,9 @@ def _reference_strapdown(scn: StabilityPoint, t_chirp: np.ndarray):
     interpolates (slerp for the attitude, linear otherwise) to the chirp times.
     Returns ``(attitude [chirp, 3, 3], position [chirp, 3])``.
     """
-    from raysim.studies.stability.motion import imu_record
+    from raysim.studies.stability.motion import point_imu_record
 
-    t, gyro, accel = imu_record(scn, t_chirp).to_arrays()
+    t, gyro, accel = point_imu_record(scn, t_chirp).to_arrays()
     k0 = max(int(np.searchsorted(t, t_chirp[0], side="right")) - 1, 0)
     t, gyro, accel = t[k0:], gyro[k0:], accel[k0:]
     q, qd, _ = scn.trajectory.states(t[:1])

@@ -12,13 +12,13 @@ import numpy as np
 from raysim.pipeline.estimate import estimate_motion
 from raysim.studies.stability.point import StabilityPoint
 
-__all__ = ["HOVER_WINDOW_S", "imu_record", "point_motion"]
+__all__ = ["HOVER_WINDOW_S", "point_imu_record", "point_motion"]
 
 #: Hover-assumption window either side of the frame for ``init="hover"`` [s].
 HOVER_WINDOW_S = 0.25
 
 
-def imu_record(point: StabilityPoint, chirp_times: np.ndarray):
+def point_imu_record(point: StabilityPoint, chirp_times: np.ndarray):
     """IMU samples covering the frame (plus :data:`HOVER_WINDOW_S` either side for ``hover``).
 
     Parameters
@@ -60,7 +60,7 @@ def point_motion(point: StabilityPoint, chirp_times: np.ndarray | None = None):
         Pose at every chirp; ``lever_arm`` is the believed one.
     """
     times = point.chirp_times() if chirp_times is None else np.asarray(chirp_times, dtype=float)
-    t, gyro, accel = imu_record(point, times).to_arrays()
+    t, gyro, accel = point_imu_record(point, times).to_arrays()
     options = {}
     if point.init == "hover":
         options = dict(initial_attitude=np.eye(3), initial_position=np.zeros(3))
