@@ -52,7 +52,6 @@ itself, the fixed phase centre still holds).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from math import factorial
 from typing import Literal
 
 import numpy as np
@@ -62,82 +61,30 @@ from .exact import rigid_body_projection
 from .guards import BEAMWIDTH_FACTOR, merge
 from .projection import LATTICE_TOL, BeamCube, lattice_vectors
 from .strapdown import PlatformMotion
+from .subaperture_shift import (
+    BAND,
+    REACH,
+    STENCILS,
+    interpolation_error,  # noqa: F401  (part of this module's interface)
+    lagrange_groups,
+    lagrange_weights,  # noqa: F401
+    order_checked,
+    shift_channels,
+)
 
 #: A shift within this many element spacings of an integer counts as that integer.
 FRAC_TOL = 1e-6
-#: Interpolation stencils (sub-aperture offsets ``l`` around ``floor(shift)``) by order.
-STENCILS = {1: (0, 1), 3: (-1, 0, 1, 2)}
-#: ``max_f |prod_l (f - l)|`` over ``0 <= f < 1`` for each stencil (Lagrange remainder).
-_NODE_PRODUCT = {1: 0.25, 3: 9.0 / 16.0}
-#: Lebesgue constant ``max_f sum_l |h_l(f)|`` of each stencil (bounds the error by ``1 + L``).
-_LEBESGUE = {1: 1.0, 3: 1.25}
+#: Ways to estimate a sub-aperture at a fractional shift: ``"bandlimited"`` (the
+#: channels estimated at the shifted positions from the whole array,
+#: :mod:`compensation.subaperture_shift`; a full rectangular lattice, one TDM slot)
+#: and ``"lagrange"`` (beam outputs of neighbouring sub-apertures combined, any lattice).
+INTERPOLATIONS = ("bandlimited", "lagrange")
 #: Fraction of the elements per axis below which the sub-aperture is reported
 #: (``"dpca aperture"`` warning: beamwidth more than doubled).
 MIN_KEEP_FRACTION = 0.5
 #: Largest in-plane movement of a sub-aperture element from its world position
 #: over the frame, in element spacings, before ``"dpca rotation"`` is reported.
 ROTATION_LIMIT = 0.5
-
-
-def lagrange_weights(frac, order: int = 3) -> np.ndarray:
-    """Lagrange weights ``h_l(f)`` of the stencil :data:`STENCILS` ``[order]``.
-
-    Parameters
-    ----------
-    frac : array_like, shape ``[chirp]``
-        Fractional shifts ``0 <= f < 1`` [element spacings].
-    order : {1, 3}
-        Polynomial order (1 linear, 3 cubic).
-
-    Returns
-    -------
-    ndarray, shape ``[chirp, stencil]``
-        Weights of the sub-apertures at ``floor(shift) + l``; each row sums to one.
-    """
-    nodes = np.asarray(STENCILS[_order(order)], dtype=float)
-    f = np.atleast_1d(np.asarray(frac, dtype=float))[:, None]
-    out = np.ones((f.shape[0], nodes.size))
-    for i, li in enumerate(nodes):
-        for lm in nodes:
-            if lm != li:
-                out[:, i] *= (f[:, 0] - lm) / (li - lm)
-    return out
-
-
-def interpolation_error(delta_psi, order: int = 3) -> np.ndarray:
-    """Bound of the interpolation error for a scatterer off the beam direction, per axis.
-
-    A scatterer whose per-element phase step differs from the beam's by
-    ``dpsi`` contributes ``Y_s = Y_0 exp(j dpsi s)`` to the sub-aperture at
-    integer offset ``s``; the Lagrange combination at ``s = i + f`` gives
-    ``sum_l h_l(f) Y_(i + l)``. Relative to ``|Y_0|`` the error is at most
-    ``|dpsi|^L / L! max_f |prod_l (f - l)|`` (``L`` stencil points; the
-    Hermite-Genocchi form of the remainder holds for complex functions), i.e.
-    ``dpsi^2 / 8`` (order 1) and ``3 dpsi^4 / 128`` (order 3), and never more
-    than one plus the Lebesgue constant. Zero at the beam direction. Along
-    two axes the errors ``e_x, e_y`` combine to at most ``e_x (1 + e_y) + e_y``.
-
-    Parameters
-    ----------
-    delta_psi : array_like
-        ``2 pi / lambda (u - u_G) . a`` [rad] (``a`` the lattice step).
-    order : {1, 3}
-
-    Returns
-    -------
-    ndarray, same shape as ``delta_psi`` [1]
-    """
-    order = _order(order)
-    n = len(STENCILS[order])
-    x = np.abs(np.asarray(delta_psi, dtype=float))
-    return np.minimum(x ** n / factorial(n) * _NODE_PRODUCT[order], 1.0 + _LEBESGUE[order])
-
-
-def _order(order) -> int:
-    if order not in STENCILS:
-        raise ValueError(f"order must be one of {tuple(STENCILS)} (1 linear, 3 cubic "
-                         f"Lagrange interpolation between sub-apertures), got {order!r}")
-    return int(order)
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,7 +107,7 @@ class DPCAPlan:
         Where the reference sub-aperture's elements sit in A at the nominal
         pose [m]: the positions the DPCA holds fixed in the world.
     order : int
-        Interpolation order (1 linear, 3 cubic).
+        Lagrange interpolation order (1 linear, 3 cubic; unused when band-limited).
     full_shape, sub_shape : (int, int)
         Elements per axis of the array and of the sub-aperture (extent of the indices).
     beamwidth_full, beamwidth_sub : (float, float)
@@ -178,6 +125,11 @@ class DPCAPlan:
         :data:`ROTATION_LIMIT` of their world positions.
     warnings : tuple of str
         ``"dpca aperture: ..."``, ``"dpca rotation: ..."``; empty when none.
+    interpolation : str
+        ``"bandlimited"`` or ``"lagrange"`` (:data:`INTERPOLATIONS`).
+    band : float
+        Design band of the band-limited interpolation (largest direction
+        cosine along a lattice axis it is designed for, :data:`BAND`).
     """
 
     shift: np.ndarray
@@ -195,6 +147,40 @@ class DPCAPlan:
     rotation_misplacement: float
     overlap: float
     warnings: tuple[str, ...] = ()
+    interpolation: str = "lagrange"
+    band: float = BAND
+
+    def positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where the sub-aperture's elements are estimated at every chirp (band-limited).
+
+        Returns
+        -------
+        tx, ty : ndarray, shape ``[chirp, kx]``, ``[chirp, ky]``
+            Lattice positions along ``a`` and ``b`` [element spacings]:
+            ``reference_index + shift``.
+        """
+        lo = self.reference_index.min(axis=0)
+        tx = lo[0] + np.arange(self.sub_shape[0])[None, :] + self.shift[:, :1]
+        ty = lo[1] + np.arange(self.sub_shape[1])[None, :] + self.shift[:, 1:]
+        return tx, ty
+
+    def anchor_chirps(self) -> np.ndarray:
+        """Chirps whose shifts reach the frame's extremes along each axis.
+
+        The reference sub-aperture of a projection depends on the extremes of
+        the shifts of its chirps; projecting these chirps with any others
+        reproduces the whole frame's reference.
+        """
+        if self.interpolation == "bandlimited":
+            lo, hi = self.shift, self.shift
+        else:
+            nodes = STENCILS[self.order]
+            floor = np.floor(self.shift).astype(int)
+            whole = (self.shift - floor) == 0
+            lo = floor + np.where(whole, 0, min(nodes))
+            hi = floor + np.where(whole, 0, max(nodes))
+        pick = [np.argmin(lo[:, a]) for a in (0, 1)] + [np.argmax(hi[:, a]) for a in (0, 1)]
+        return np.unique(np.asarray(pick, dtype=int))
 
     @property
     def resolution_loss(self) -> tuple[float, float]:
@@ -220,7 +206,9 @@ class DPCAPlan:
         """One line: elements kept per axis, beamwidth growth, gain lost."""
         (nx, ny), (kx, ky) = self.full_shape, self.sub_shape
         rx, ry = self.resolution_loss
-        return (f"dpca: sub-aperture {kx} x {ky} of {nx} x {ny} elements (order {self.order}),"
+        how = (f"band-limited, |u| <= {self.band:g}" if self.interpolation == "bandlimited"
+               else f"order {self.order}")
+        return (f"dpca: sub-aperture {kx} x {ky} of {nx} x {ny} elements ({how}),"
                 f" beamwidth x{rx:.3g} / x{ry:.3g}, gain -{self.gain_loss_db:.3g} dB")
 
 
@@ -286,26 +274,51 @@ def _shifts(lat, motion: PlatformMotion, centre, n_slot: int):
     return shift, np.linalg.norm(resid, axis=1) / 2.0
 
 
-def _groups(shift, order: int) -> dict[tuple[int, int], tuple[np.ndarray, np.ndarray]]:
-    """Chirps ``[k]`` and Lagrange weights ``[k]`` of every integer sub-aperture offset.
+def _interpolation(interpolation, n_chan: int, full, n_slot: int) -> str:
+    """The interpolation a plan uses: ``"auto"`` is band-limited on a full lattice, one slot."""
+    choice("interpolation", interpolation, ("auto",) + INTERPOLATIONS)
+    complete = n_chan == int(np.prod(full)) and n_slot == 1
+    if interpolation == "auto":
+        return "bandlimited" if complete else "lagrange"
+    if interpolation == "bandlimited" and not complete:
+        raise ValueError(f'interpolation="bandlimited" needs every point of a rectangular '
+                         f'lattice and one TDM slot (got {n_chan} channels on a {full[0]} x '
+                         f'{full[1]} lattice, {n_slot} slots); use "lagrange" or "auto"')
+    return interpolation
 
-    Chirp ``n`` takes the offsets ``floor(shift[n]) + (lx, ly)`` over the
-    stencil of each axis with weight ``h_lx(fx) h_ly(fy)``; zero weights (an
-    integer shift) are dropped, so an integer shift uses one sub-aperture.
+
+def _bandlimited_block(shift, full) -> tuple[set, tuple[int, int]]:
+    """Largest block whose shifted positions stay within :data:`REACH` of the array.
+
+    Lattice indices ``(ix, iy)`` of the block (empty when none is left) and the
+    elements per axis the shifts would need for one element.
     """
-    floor = np.floor(shift).astype(int)
-    frac = shift - floor
-    h = [lagrange_weights(frac[:, ax], order) for ax in (0, 1)]
-    acc: dict[tuple[int, int], list[tuple[np.ndarray, np.ndarray]]] = {}
-    for ix, lx in enumerate(STENCILS[order]):
-        for iy, ly in enumerate(STENCILS[order]):
-            w = h[0][:, ix] * h[1][:, iy]
-            off = floor + np.array([lx, ly])
-            for o in np.unique(off[w != 0], axis=0):
-                sel = np.flatnonzero(np.all(off == o, axis=1) & (w != 0))
-                acc.setdefault((int(o[0]), int(o[1])), []).append((sel, w[sel]))
-    return {o: (np.concatenate([c for c, _ in v]), np.concatenate([w for _, w in v]))
-            for o, v in acc.items()}
+    tol = 1e-9
+    lo = np.ceil(-REACH - shift.min(axis=0) - tol).astype(int)            # first index
+    hi = np.floor(np.array(full) - 1 + REACH - shift.max(axis=0) + tol).astype(int)
+    need = tuple(int(v) for v in np.ceil(np.ptp(shift, axis=0) - 2 * REACH - tol) + 1)
+    if np.any(hi < lo):
+        return set(), need
+    return {(ix, iy) for ix in range(lo[0], hi[0] + 1) for iy in range(lo[1], hi[1] + 1)}, need
+
+
+def _given_block(subaperture, allowed: set) -> np.ndarray:
+    """The lattice indices ``[sub, 2]`` of a given sub-aperture, checked against ``allowed``."""
+    q = np.asarray(subaperture)
+    if q.shape[1:] != (2,) or q.size == 0 or not np.issubdtype(q.dtype, np.integer):
+        raise ValueError(f"subaperture as lattice indices must be integers of shape [sub, 2], "
+                         f"got shape {q.shape} dtype {q.dtype}")
+    got = {tuple(e) for e in q.tolist()}
+    lo, n = q.min(axis=0), np.ptp(q, axis=0) + 1
+    if len(got) != int(np.prod(n)) or len(got) != q.shape[0]:
+        raise ValueError(f"subaperture as lattice indices must be a full rectangular block "
+                         f"without repeats, got {q.shape[0]} indices spanning {n[0]} x {n[1]}")
+    if not got <= allowed:
+        raise ValueError(f"subaperture: the block of {n[0]} x {n[1]} elements at {tuple(lo)} "
+                         f"leaves what this motion allows (a block within "
+                         f"{tuple(np.min(sorted(allowed), axis=0))} .. "
+                         f"{tuple(np.max(sorted(allowed), axis=0))})")
+    return np.array(sorted(got), dtype=int)
 
 
 def _beamwidth(n: int, step, wavelength: float) -> float:
@@ -315,7 +328,8 @@ def _beamwidth(n: int, step, wavelength: float) -> float:
 
 def dpca_plan(element_positions, motion: PlatformMotion, *, wavelength: float,
               grid_shape: tuple[int, int] | None = None, channel_slot=None, order: int = 3,
-              subaperture: tuple[int, int] | None = None) -> DPCAPlan:
+              subaperture: tuple[int, int] | None = None, interpolation: str = "auto",
+              band: float = BAND) -> DPCAPlan:
     """Choose the DPCA sub-apertures of a frame and state their price.
 
     Parameters
@@ -334,10 +348,18 @@ def dpca_plan(element_positions, motion: PlatformMotion, *, wavelength: float,
     channel_slot : array_like of int, shape ``[channel]``, optional
         TDM slot of each channel; the shift of a chirp is the mean over its slots' poses.
     order : {1, 3}
-        Interpolation between sub-apertures: 1 linear, 3 cubic (default).
-    subaperture : (int, int), optional
+        Lagrange interpolation between sub-apertures: 1 linear, 3 cubic (default).
+    subaperture : (int, int) or array_like of int, optional
         Elements per axis to keep (centred in the largest possible
-        sub-aperture); default the largest.
+        sub-aperture), or the lattice indices ``[sub, 2]`` of a full block
+        (e.g. another plan's ``reference_index``: the same elements);
+        default the largest.
+    interpolation : {"auto", "bandlimited", "lagrange"}
+        How a fractional shift is estimated (:data:`INTERPOLATIONS`); ``"auto"``
+        (default): band-limited on a full rectangular lattice with one TDM
+        slot, Lagrange otherwise.
+    band : float
+        Design band of the band-limited interpolation (:data:`BAND`).
 
     Returns
     -------
@@ -352,8 +374,12 @@ def dpca_plan(element_positions, motion: PlatformMotion, *, wavelength: float,
     """
     if not isinstance(motion, PlatformMotion):
         raise ValueError(f"motion must be a compensation.PlatformMotion, got {type(motion)!r}")
-    order = _order(order)
+    order = order_checked(order)
     lam = positive("wavelength", wavelength)
+    band = positive("band", band)
+    if band > 1.0:
+        raise ValueError(f"band must be in (0, 1] (largest direction cosine along a lattice "
+                         f"axis the interpolation is designed for), got {band!r}")
     p = finite_array("element_positions", element_positions, shape=(None, 3),
                      what="(one row per channel)")
     n_chan = p.shape[0]
@@ -369,25 +395,33 @@ def dpca_plan(element_positions, motion: PlatformMotion, *, wavelength: float,
                          "needs distinct elements (drop the repeats)")
     centre = p.mean(axis=0)
     shift, resid = _shifts(lat, motion, centre, n_slot)
-    offsets = np.array(sorted(_groups(shift, order)))                      # [offset, 2]
-    elements = {tuple(e) for e in idx.tolist()}
-    ref = set(elements)
-    for ox, oy in offsets.tolist():
-        ref &= {(ex - ox, ey - oy) for ex, ey in elements}
     full = tuple(int(v) for v in np.ptp(idx, axis=0) + 1)
-    span = tuple(int(v) for v in np.ptp(offsets, axis=0))
+    interp = _interpolation(interpolation, n_chan, full, n_slot)
+    if interp == "bandlimited":
+        ref, need = _bandlimited_block(shift, full)
+        how = f"band-limited interpolation (up to {REACH:g} spacings beyond the array)"
+    else:
+        offsets = np.array(sorted(lagrange_groups(shift, order)))          # [offset, 2]
+        elements = {tuple(e) for e in idx.tolist()}
+        ref = set(elements)
+        for ox, oy in offsets.tolist():
+            ref &= {(ex - ox, ey - oy) for ex, ey in elements}
+        need = tuple(int(v) + 1 for v in np.ptp(offsets, axis=0))
+        how = f"the order-{order} stencil"
     if not ref:
         span_m = [float(np.ptp(shift[:, ax])) * float(np.linalg.norm(lat[1 + ax])) / 2.0
                   for ax in (0, 1)]
         raise ValueError(
             f"dpca: the displacement over the frame shifts the sub-aperture by "
             f"{np.ptp(shift[:, 0]):.3g} x {np.ptp(shift[:, 1]):.3g} element spacings "
-            f"({1e3 * span_m[0]:.3g} x {1e3 * span_m[1]:.3g} mm); with the order-{order} "
-            f"stencil that needs {span[0] + 1} x {span[1] + 1} elements but the array has "
+            f"({1e3 * span_m[0]:.3g} x {1e3 * span_m[1]:.3g} mm); with {how} "
+            f"that needs {need[0]} x {need[1]} elements but the array has "
             f"{full[0]} x {full[1]}: no sub-aperture is left (displacement larger than the "
             f"spare aperture); use the exact chain, a shorter frame or a larger array")
     q = np.array(sorted(ref), dtype=int)
-    if subaperture is not None:
+    if subaperture is not None and np.ndim(subaperture) == 2:
+        q = _given_block(subaperture, ref)
+    elif subaperture is not None:
         have = np.ptp(q, axis=0) + 1
         try:
             want = tuple(int(v) for v in subaperture)
@@ -423,7 +457,7 @@ def dpca_plan(element_positions, motion: PlatformMotion, *, wavelength: float,
         warn.append(f"dpca aperture: the sub-aperture keeps {sub[0]} x {sub[1]} of "
                     f"{full[0]} x {full[1]} elements (displacement over the frame "
                     f"{np.ptp(shift[:, 0]):.3g} x {np.ptp(shift[:, 1]):.3g} element spacings, "
-                    f"order-{order} stencil): beamwidth x{full[0] / sub[0]:.3g} / "
+                    f"{how}): beamwidth x{full[0] / sub[0]:.3g} / "
                     f"x{full[1] / sub[1]:.3g}, gain -{gain:.3g} dB")
     worst = float(move.max()) if move.size else 0.0
     overlap = float(np.mean(move <= ROTATION_LIMIT)) if move.size else 1.0
@@ -438,7 +472,8 @@ def dpca_plan(element_positions, motion: PlatformMotion, *, wavelength: float,
                     reference_positions=ref_pos, order=order, full_shape=full, sub_shape=sub,
                     beamwidth_full=bw_full, beamwidth_sub=bw_sub, gain_loss_db=float(gain),
                     residual_displacement=float(resid.max()) if resid.size else 0.0,
-                    rotation_misplacement=worst, overlap=overlap, warnings=tuple(warn))
+                    rotation_misplacement=worst, overlap=overlap, warnings=tuple(warn),
+                    interpolation=interp, band=band)
 
 
 def _sub_weights(weights, plan: DPCAPlan) -> np.ndarray | None:
@@ -464,13 +499,15 @@ def dpca_projection(rc, element_positions, motion: PlatformMotion, *, wavelength
                     method: Literal["auto", "nufft", "lattice", "direct"] = "auto",
                     weights=None, channel_slot=None, order: int = 3,
                     subaperture: tuple[int, int] | None = None, chirp_block: int = 32,
-                    gate_block: int = 8) -> DPCABeams:
+                    gate_block: int = 8, interpolation: str = "auto",
+                    band: float = BAND) -> DPCABeams:
     """Beams of a range-compressed cube from a sub-aperture held fixed in the world.
 
     Same inputs and output as :func:`compensation.exact.rigid_body_projection`;
-    per chirp, the sub-aperture (and Lagrange interpolation between the
-    neighbouring ones) whose phase centre stays fixed in world coordinates
-    (module docstring), each projected with the exact chain.
+    per chirp, the sub-aperture whose elements stay fixed in world coordinates
+    (module docstring): its channels estimated at the shifted positions from the
+    whole array (band-limited) or the neighbouring integer sub-apertures' beams
+    combined (Lagrange), projected with the exact chain.
 
     Parameters
     ----------
@@ -505,9 +542,16 @@ def dpca_projection(rc, element_positions, motion: PlatformMotion, *, wavelength
         TDM slot of each channel: each slot's channels of a sub-aperture are
         projected with the pose of their own transmit instant.
     order : {1, 3}
-        Interpolation order between sub-apertures (1 linear, 3 cubic).
-    subaperture : (int, int), optional
-        Elements per axis to keep; default the largest the motion allows.
+        Lagrange interpolation order between sub-apertures (1 linear, 3 cubic).
+    subaperture : (int, int) or array_like of int, optional
+        Elements per axis to keep, or the lattice indices ``[sub, 2]`` of the
+        block (:func:`dpca_plan`); default the largest the motion allows.
+    interpolation : {"auto", "bandlimited", "lagrange"}
+        How a fractional shift is estimated (module docstring); ``"auto"``:
+        band-limited on a full rectangular lattice with one TDM slot.
+    band : float
+        Design band of the band-limited interpolation
+        (:data:`compensation.subaperture_shift.BAND`).
 
     Returns
     -------
@@ -551,12 +595,17 @@ def dpca_projection(rc, element_positions, motion: PlatformMotion, *, wavelength
         raise ValueError(f"motion must hold chirp * slots = {n_chirp} * {n_slot} = "
                          f"{n_chirp * n_slot} poses (chirp major), got {motion.num_chirps}")
     plan = dpca_plan(p, motion, wavelength=wavelength, grid_shape=grid_shape,
-                     channel_slot=slot, order=order, subaperture=subaperture)
+                     channel_slot=slot, order=order, subaperture=subaperture,
+                     interpolation=interpolation, band=band)
     w_sub = _sub_weights(weights, plan)
-    groups = _groups(plan.shift, plan.order)
     common = dict(wavelength=wavelength, range_axis=range_axis, azimuth=azimuth,
                   elevation=elevation, range_gates=range_gates, focus=focus,
                   chirp_block=chirp_block, gate_block=gate_block)
+    if plan.interpolation == "bandlimited":
+        part = _bandlimited_beams(x, p, motion, plan, w_sub, method, common)
+        return DPCABeams(part.data, part.chirp_time, part.range, part.azimuth, part.elevation,
+                         part.wavelength, merge(motion.warnings, plan.warnings), plan=plan)
+    groups = lagrange_groups(plan.shift, plan.order)
     gridded = slot is None and plan.is_grid
     out, part = None, None
     for offset, (chirps, wts) in sorted(groups.items()):
@@ -577,6 +626,41 @@ def dpca_projection(rc, element_positions, motion: PlatformMotion, *, wavelength
     chirp_time = motion.time[::n_slot]
     return DPCABeams(out, chirp_time, part.range, part.azimuth, part.elevation, part.wavelength,
                      merge(motion.warnings, plan.warnings), plan=plan)
+
+
+def _bandlimited_beams(x, p, motion: PlatformMotion, plan: DPCAPlan, w_sub, method, common):
+    """The sub-aperture's channels estimated at its shifted positions, projected once.
+
+    The estimates sit in A at ``p_q + shift_n . (a, b)``, i.e. in W at the
+    positions of ``p_q`` on a radar displaced by ``R_n shift_n . (a, b) / 2``
+    more (virtual positions move twice the displacement): the exact projection
+    of ``p_q`` with that motion.
+    """
+    from dataclasses import replace
+
+    gates = common["range_gates"]
+    if gates is not None:                          # estimate the asked bins only
+        gates = np.asarray(gates, dtype=int)
+        x = x[:, :, gates]
+        common = dict(common, range_axis=np.asarray(common["range_axis"])[gates],
+                      range_gates=None)
+    idx = plan.element_index - plan.element_index.min(axis=0)
+    order = np.lexsort((idx[:, 1], idx[:, 0]))                     # x major, y minor
+    tx, ty = plan.positions()
+    lam = float(common["wavelength"])
+    visible = tuple(2.0 * np.pi * float(np.linalg.norm(v)) / lam for v in plan.lattice[1:])
+    est = shift_channels(x[:, order], plan.full_shape, tx, ty, band=plan.band,
+                         visible=visible)
+    step = plan.shift @ plan.lattice[1:]                                # [chirp, 3] in A
+    moved = replace(motion, position=motion.position
+                    + np.einsum("nij,nj->ni", motion.attitude, step) / 2.0)
+    try:                                  # the elements' own positions where they exist
+        ref_pos = p[plan.channels((0, 0))]
+    except ValueError:                    # a block beyond the array: its lattice positions
+        ref_pos = plan.reference_positions
+    return rigid_body_projection(est, ref_pos, moved,
+                                 grid_shape=plan.sub_shape, method=method, weights=w_sub,
+                                 **common)
 
 
 def _tdm_part(xs, ps, slots, motion: PlatformMotion, chirps, n_slot: int, w_sub, common):

@@ -500,9 +500,10 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
         The channel taper ``rc`` carries (:func:`channel_taper`); ``dpca``
         divides it out and tapers its sub-aperture with the same window
         (:func:`sub_aperture_taper`). The other chains use ``rc`` as it is.
-    subaperture : (int, int), optional
-        ``dpca``: elements per axis of its sub-aperture (default the largest
-        the motion leaves; fix it to compare frames).
+    subaperture : (int, int) or array_like of int, optional
+        ``dpca``: elements per axis of its sub-aperture, or the lattice indices
+        ``[sub, 2]`` of its elements (``DPCAPlan.reference_index``); default the
+        largest the motion leaves; fix it to compare frames.
 
     Returns
     -------

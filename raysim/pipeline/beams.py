@@ -53,9 +53,10 @@ class Beamformer:
         sub-aperture kept, beamwidth growth, gain lost) and its plan's
         ``dpca aperture`` / ``dpca rotation`` warnings, so both reach every
         command that reports the warnings.
-    subaperture : (int, int), optional
-        ``dpca``: elements per axis of its sub-aperture (default the largest
-        the frame's motion leaves, :attr:`plan`).
+    subaperture : (int, int) or array_like of int, optional
+        ``dpca``: elements per axis of its sub-aperture, or the lattice indices
+        ``[sub, 2]`` of its elements (default the largest the frame's motion
+        leaves, :attr:`plan`).
 
     Attributes
     ----------
@@ -164,7 +165,7 @@ class Beamformer:
                       elevation=np.atleast_1d(elevation), motion=mot, direction=direction,
                       grid_shape=arr.grid_shape, channel_slot=channel_slot,
                       range_gates=range_gates, weights=weights,
-                      subaperture=None if self.plan is None else self.plan.sub_shape)
+                      subaperture=None if self.plan is None else self.plan.reference_index)
         # dpca: the frame's plan stated its aperture and rotation warnings; a call on
         # some of the frame's chirps would restate them for those chirps only
         fresh = [w for w in out.warnings if self.plan is None or not w.startswith("dpca ")]
@@ -216,20 +217,10 @@ def common_subaperture(positions: np.ndarray, motions, wavelength: float, *, gri
 
 
 def _anchors(plan) -> np.ndarray:
-    """Chirps whose sub-aperture offsets reach the frame's extremes along each axis.
+    """Chirps whose sub-aperture shifts reach the frame's extremes along each axis.
 
-    Chirp ``n`` uses the offsets ``floor(shift) + l`` over the stencil
-    (:data:`compensation.dpca.STENCILS`) along each axis, only ``l = 0`` for an
-    integer shift; the reference sub-aperture of a projection is what every
-    offset keeps inside the array, so projecting these chirps with any others
-    reproduces the whole frame's reference (a rectangular lattice).
+    The reference sub-aperture of a projection is what every shift of its
+    chirps keeps inside the array (:meth:`compensation.DPCAPlan.anchor_chirps`),
+    so projecting these chirps with any others reproduces the whole frame's reference.
     """
-    from compensation.dpca import STENCILS
-
-    nodes = STENCILS[plan.order]
-    floor = np.floor(plan.shift).astype(int)
-    whole = (plan.shift - floor) == 0
-    lo = floor + np.where(whole, 0, min(nodes))
-    hi = floor + np.where(whole, 0, max(nodes))
-    pick = [np.argmin(lo[:, a]) for a in (0, 1)] + [np.argmax(hi[:, a]) for a in (0, 1)]
-    return np.unique(np.asarray(pick, dtype=int))
+    return plan.anchor_chirps()

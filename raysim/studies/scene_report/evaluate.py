@@ -464,7 +464,7 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
         bar.set_postfix_str(f"{REFERENCE}, dpca sub-aperture")
         same["dpca"] = chain_result("dpca", rc["stationary"], static_motion(motion.time),
                                     settings, config, array,
-                                    subaperture=results["dpca"].plan.sub_shape)
+                                    subaperture=results["dpca"].plan.reference_index)
         seconds["dpca_same_aperture"] = same["dpca"].seconds
     point = {}
     target = sim.get("reference")

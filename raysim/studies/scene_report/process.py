@@ -61,9 +61,9 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
         Pose estimate at the chirps (needed by the compensated chains).
     settings, config, array
         Report settings, waveform and virtual array.
-    subaperture : (int, int), optional
-        ``dpca``: elements per axis of its sub-aperture (default the largest
-        the motion leaves).
+    subaperture : (int, int) or array_like of int, optional
+        ``dpca``: elements per axis of its sub-aperture, or the lattice indices
+        ``[sub, 2]`` of its elements (default the largest the motion leaves).
 
     Returns
     -------
