@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from raysim.measure.scene import SCENE_METRICS
 from raysim.vocabulary import CHAINS, REFERENCE, chain_order, parse_chains
 
 from .meshes import mesh_boxes, mesh_summary, mesh_targets
@@ -126,16 +127,36 @@ class SceneResult:
     same_aperture: dict = field(default_factory=dict)
     meshes: list = field(default_factory=list)
 
+    def margin_reference(self, key: str) -> ChainResult:
+        """The reference chain ``key``'s margin is judged against.
+
+        The stationary frame through the same aperture: :attr:`same_aperture`
+        for a chain that gives up aperture (``dpca``: the elements it holds
+        fixed in the world; what it loses against the full array is its price,
+        :meth:`aperture_cost`), else :attr:`reference`.
+        """
+        return self.same_aperture.get(key, self.reference)
+
     def within_margin(self, key: str) -> bool | None:
-        """True when every map entropy of chain ``key`` is within the margin of the reference.
+        """True when every map entropy of chain ``key`` is within the margin of its reference.
 
         The margin is :data:`ENTROPY_MARGIN_NATS` on every map of
-        :data:`REPORT_MAPS`; None when the chain was not evaluated.
+        :data:`REPORT_MAPS`, against :meth:`margin_reference`; None when the
+        chain was not evaluated.
         """
         if key not in self.chains:
             return None
-        ex, st = self.chains[key].entropy, self.reference.entropy
+        ex, st = self.chains[key].entropy, self.margin_reference(key).entropy
         return bool(all(abs(ex[m] - st[m]) <= ENTROPY_MARGIN_NATS for m in REPORT_MAPS))
+
+    def aperture_cost(self, key: str) -> dict:
+        """Map name -> entropy of the stationary frame through chain ``key``'s aperture minus
+        through the full array [nats] (no motion: the aperture's own cost); empty for a
+        chain with the full array."""
+        if key not in self.same_aperture:
+            return {}
+        same = self.same_aperture[key].entropy
+        return {m: same[m] - self.reference.entropy[m] for m in REPORT_MAPS}
 
     def exact_within_margin(self) -> bool | None:
         """:meth:`within_margin` of ``exact`` (None when it was not evaluated)."""
@@ -153,8 +174,12 @@ class SceneResult:
         "within_margin", "warnings"}`` (``dpca`` also ``"price"``:
         :meth:`raysim.measure.scene.SceneMeasurement.price`, the aperture,
         gain and resolution it gives up, and ``"same_aperture_reference"``:
-        ``{"metrics", "minus_same_aperture"}`` of the stationary frame through
-        its sub-aperture, :attr:`same_aperture`) where ``minus_reference`` holds the
+        ``{"metrics", "minus_same_aperture", "aperture_cost_nats"}`` of the
+        stationary frame through its sub-aperture, :attr:`same_aperture`, the
+        reference its ``within_margin`` is judged against, and the entropy that
+        aperture costs against the full array, :meth:`aperture_cost`;
+        ``"margin_reference"`` names the reference of ``within_margin``) where
+        ``minus_reference`` holds the
         differences of every metric to the reference's; ``point_metrics``:
         ``{"reference": target, "metrics": {key: {name: value}}}`` for a
         scenario with a target (NaN written as null).
@@ -171,7 +196,11 @@ class SceneResult:
             if c in self.same_aperture:
                 sm = self.same_aperture[c].metrics()
                 chains[c]["same_aperture_reference"] = {
-                    "metrics": sm, "minus_same_aperture": {k: m[k] - sm[k] for k in m}}
+                    "metrics": sm, "minus_same_aperture": {k: m[k] - sm[k] for k in m},
+                    "aperture_cost_nats": {SCENE_METRICS[k]: v
+                                           for k, v in self.aperture_cost(c).items()}}
+            chains[c]["margin_reference"] = ("same_aperture" if c in self.same_aperture
+                                             else REFERENCE)
         return {
             "scene": self.scene,
             "settings": settings_dict(self.settings),
