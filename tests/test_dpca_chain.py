@@ -210,11 +210,17 @@ def test_scene_report_takes_dpca_with_its_price(tmp_path, capsys):
     assert set(same["metrics"]) == set(dpca["metrics"])
     assert same["minus_same_aperture"]["scene_entropy_ae_nats"] == pytest.approx(
         dpca["metrics"]["scene_entropy_ae_nats"] - same["metrics"]["scene_entropy_ae_nats"])
+    # the margin verdict is against that reference; the aperture's cost is stated apart
+    assert dpca["margin_reference"] == "same_aperture"
+    assert data["chains"]["exact"]["margin_reference"] == "stationary"
+    cost = same["aperture_cost_nats"]["scene_entropy_ae_nats"]
+    assert cost == pytest.approx(same["metrics"]["scene_entropy_ae_nats"]
+                                 - data["reference"]["metrics"]["scene_entropy_ae_nats"])
     for w in dpca["warnings"]:
         assert f"warning: small_rotation_y: dpca: {w}" in err
     md = (out / "report.md").read_text()
     assert "Price of `dpca`" in md and "dpca - stationary" in md
-    assert "through the same sub-aperture" in md
+    assert "through the same sub-aperture" in md and "aperture cost rd / ra / ae" in md
     assert "dpca" in data["point_metrics"]["metrics"]
 
 
