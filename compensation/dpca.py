@@ -19,34 +19,54 @@ attitude: ``-2 D / spacing`` for a horizontal ``D``). The part normal to the
 array (vertical displacement) cannot be undone by a shift and is left to the
 projection.
 
-Integer shifts select a sub-aperture; for a fractional shift ``s = i + f``
-the beam outputs of the neighbouring integer sub-apertures ``i + l`` are
-combined with Lagrange weights ``h_l(f)`` (``order`` 1: ``l = 0, 1``, linear;
-``order`` 3: ``l = -1 .. 2``, cubic), separably along ``a`` and ``b``. Every
-sub-aperture is projected exactly as :func:`compensation.exact.rigid_body_projection`
-does (its true element positions, the attitude and displacement of every
-chirp and TDM slot), so rotation is handled as in the exact chain and the
-beam direction itself is reproduced exactly for any shift (the weights sum
-to one). Interpolating the beam outputs is interpolating the channel data
-demodulated by the beam's steering phase: a scatterer whose per-element
-phase step differs from the beam's by ``dpsi = 2 pi / lambda (u - u_G) . a``
-gets ``sum_l h_l exp(j dpsi l)`` instead of ``exp(j dpsi f)``, an error of at
-most (Lagrange remainder, :func:`interpolation_error`)::
+A fractional shift is estimated one of two ways (``interpolation``;
+``"auto"`` takes the first on a full rectangular lattice with one TDM slot):
 
-    order 1:  dpsi^2 / 8            order 3:  3 dpsi^4 / 128
+* ``"bandlimited"`` (:mod:`compensation.subaperture_shift`): the
+  sub-aperture's channels are estimated at their shifted positions
+  ``q + s_n`` from all the array's channels, separably along ``a`` and ``b``,
+  with the least-squares interpolator of a signal band-limited to
+  ``|u . a| / |a| <= band`` (echoes beyond it, near endfire, are estimated
+  with larger errors); positions may reach
+  :data:`~compensation.subaperture_shift.REACH` spacings beyond the array.
+  The estimates sit in A at ``p_q + s_n . (a, b)``, which is ``p_q`` on a
+  radar displaced by ``R_n s_n . (a, b) / 2`` more: one exact projection of
+  the reference positions with that motion. The error for an echo at phase
+  step ``psi`` per element is closed-form
+  (:func:`~compensation.subaperture_shift.shift_error`); a beam with taper
+  ``w`` is off by at most ``sum_q |w_q| e_q / |sum_q w_q|`` of the echo's
+  amplitude.
+* ``"lagrange"``: integer shifts select a sub-aperture; for ``s = i + f``
+  the beam outputs of the neighbouring integer sub-apertures ``i + l`` are
+  combined with Lagrange weights ``h_l(f)`` (``order`` 1: ``l = 0, 1``,
+  linear; ``order`` 3: ``l = -1 .. 2``, cubic), separably along ``a`` and
+  ``b``; any lattice, each TDM slot's channels at their own pose.
+  Interpolating the beam outputs is interpolating the channel data
+  demodulated by the beam's steering phase: a scatterer whose per-element
+  phase step differs from the beam's by ``dpsi = 2 pi / lambda (u - u_G) . a``
+  gets ``sum_l h_l exp(j dpsi l)`` instead of ``exp(j dpsi f)``, an error of
+  at most (Lagrange remainder, :func:`interpolation_error`)::
 
-per axis. Inside the main lobe of a ``K``-element sub-aperture
-(``|dpsi| < 2 pi / K``) that is below -29 dB (linear) and -55 dB (cubic)
-for ``K = 12``; beyond ``|dpsi| = pi / 2`` neither helps much.
+      order 1:  dpsi^2 / 8            order 3:  3 dpsi^4 / 128
 
-Price (:class:`DPCAPlan`): the sub-aperture keeps ``K = N - span - (stencil
-- 1)`` elements per axis, with ``span`` the range of the integer shifts over
-the frame; the beamwidth grows by ``N / K`` and the coherent gain falls by
-``10 log10(M / M_sub)`` dB. Failure: no element left (``ValueError``); the
-aperture halved (``"dpca aperture"`` warning); a rotation that moves the
-sub-aperture's elements by more than half a spacing from their world
-positions (``"dpca rotation"`` warning: the sub-aperture no longer overlaps
-itself, the fixed phase centre still holds).
+  per axis: below -29 dB (linear) and -55 dB (cubic) inside the main lobe of
+  a 12-element sub-aperture (``|dpsi| < 2 pi / 12``); beyond
+  ``|dpsi| = pi / 2``, in the sidelobes, neither helps much.
+
+Every sub-aperture is projected as :func:`compensation.exact.rigid_body_projection`
+does (the attitude and displacement of every chirp and TDM slot), so
+rotation and the vertical displacement are handled as in the exact chain and
+the beam direction itself is reproduced for any shift.
+
+Price (:class:`DPCAPlan`): the sub-aperture keeps the largest block whose
+shifted positions stay within reach of the array (band-limited) or ``K = N -
+span - (stencil - 1)`` elements per axis (Lagrange, ``span`` the range of the
+integer shifts over the frame); the beamwidth grows by ``N / K`` and the
+coherent gain falls by ``10 log10(M / M_sub)`` dB. Failure: no element left
+(``ValueError``); the aperture halved (``"dpca aperture"`` warning); a
+rotation that moves the sub-aperture's elements by more than half a spacing
+from their world positions (``"dpca rotation"`` warning: the sub-aperture no
+longer overlaps itself, the fixed phase centre still holds).
 """
 
 from __future__ import annotations
