@@ -137,7 +137,8 @@ def shift_channels(x: np.ndarray, grid_shape: tuple[int, int], tx: np.ndarray, t
     band : float
         Design band (:data:`BAND`).
     visible : (float, float)
-        Endfire phase step along ``a`` and ``b`` [rad].
+        Endfire phase step along ``a`` and ``b`` [rad] (unused along an axis of
+        one element, whose positions are 0).
 
     Returns
     -------
@@ -147,12 +148,15 @@ def shift_channels(x: np.ndarray, grid_shape: tuple[int, int], tx: np.ndarray, t
     nx, ny = (int(v) for v in grid_shape)
     n_chirp = x.shape[0]
     cube = np.asarray(x).reshape(n_chirp, nx, ny, -1)
-    kx, ky = tx.shape[1], ty.shape[1]
-    gx = shift_kernel(tx.ravel(), nx, band=band, visible=visible[0]).reshape(n_chirp, kx, nx)
-    gy = shift_kernel(ty.ravel(), ny, band=band, visible=visible[1]).reshape(n_chirp, ky, ny)
+    def weights(t, n, vis):                 # an axis of one element holds still
+        if n == 1:
+            return np.ones((n_chirp, t.shape[1], 1))
+        return shift_kernel(t.ravel(), n, band=band, visible=vis).reshape(n_chirp, -1, n)
+
+    gx, gy = weights(tx, nx, visible[0]), weights(ty, ny, visible[1])
     out = np.einsum("cqi,cijg->cqjg", gx.astype(np.float32), cube, optimize=True)
     out = np.einsum("crj,cqjg->cqrg", gy.astype(np.float32), out, optimize=True)
-    return out.reshape(n_chirp, kx * ky, -1).astype(np.complex64, copy=False)
+    return out.reshape(n_chirp, tx.shape[1] * ty.shape[1], -1).astype(np.complex64, copy=False)
 
 
 def lagrange_weights(frac, order: int = 3) -> np.ndarray:
