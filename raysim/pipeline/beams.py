@@ -6,10 +6,11 @@ poses of the chirps it is given from the frame's motion, at every transmit
 slot for a compensated chain on a TDM array, and collects the chain's guard
 warnings. For ``dpca`` it plans the sub-aperture once from the whole frame's
 motion (:func:`compensation.dpca_plan`, :attr:`Beamformer.plan`) and holds it
-for every call: the size is fixed, and every call also projects the (zero)
-cells of the frame's :attr:`Beamformer.anchors`, the chirps whose sub-aperture
-offsets are the frame's extremes, so the reference sub-aperture (its phase
-centre) is the whole frame's whichever chirps a call asks for. Beams of a
+for every call: every call is given the plan's elements
+(``DPCAPlan.reference_index``) and also projects the (zero) cells of the
+frame's :attr:`Beamformer.anchors`, the chirps whose sub-aperture shifts are
+the frame's extremes, so the reference sub-aperture (its phase centre) is the
+whole frame's whichever chirps a call asks for. Beams of a
 chirp are then the same in every call. :mod:`raysim.measure.point` measures
 every point metric through it.
 """
