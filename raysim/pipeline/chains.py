@@ -54,11 +54,16 @@ def project(chain: str | ChainSpec, rc, element_positions, *, wavelength: float,
         TDM transmit slot of each channel (``paper``, ``exact``, ``dpca``):
         ``motion`` then holds the pose at every transmit slot, chirp major,
         slot minor, and each channel is compensated with the pose of its own slot.
-    subaperture : (int, int), optional
-        ``dpca`` only: elements per axis of the sub-aperture (default the
-        largest the motion of ``rc`` leaves; fix it to compare frames).
+    subaperture : (int, int) or array_like of int, optional
+        ``dpca`` only: elements per axis of the sub-aperture, or the lattice
+        indices ``[sub, 2]`` of its elements (default the largest the motion
+        of ``rc`` leaves; fix it to compare frames).
     order : {1, 3}
-        ``dpca`` only: Lagrange interpolation order between sub-apertures.
+        ``dpca`` only: Lagrange interpolation order between sub-apertures,
+        used where ``dpca`` interpolates with Lagrange weights (TDM arrays,
+        lattices with holes); on a full lattice it estimates the shifted
+        channels band-limited (:func:`compensation.dpca_projection`,
+        ``interpolation="auto"``).
 
     Returns
     -------
