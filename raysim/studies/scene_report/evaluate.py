@@ -94,10 +94,12 @@ class SceneResult:
         build time); empty with Sionna's clutter.
     same_aperture : dict
         Chain key -> :class:`ChainResult` of the stationary platform's frame
-        through that chain's own smaller aperture (``dpca``: its sub-aperture,
-        no motion): the reference at the chain's resolution, so the report can
-        tell the aperture's price from what the motion leaves. Empty without
-        ``dpca``.
+        through that chain's own smaller aperture (``dpca``: the elements of
+        its sub-aperture, ``DPCAPlan.reference_index``, or a centred block of
+        its size where those reach beyond the array; no motion): the
+        reference at the chain's resolution, which its margin verdict uses
+        (:meth:`margin_reference`), so the report can tell the aperture's price
+        from what the motion leaves. Empty without ``dpca``.
     meshes : list of dict
         Users' meshes of a ``[[scene.meshes]]`` scenario: what the radar saw of
         each (:func:`raysim.studies.scene_report.meshes.mesh_summary`: ``name``,
@@ -491,9 +493,14 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
         from compensation import static_motion
 
         bar.set_postfix_str(f"{REFERENCE}, dpca sub-aperture")
+        plan = results["dpca"].plan
+        q = plan.reference_index
+        # the very elements dpca holds; a block partly beyond the array (a motion
+        # displaced over the whole frame) has no stationary twin: its size, centred
+        inside = bool(np.all((q >= 0) & (q < np.asarray(plan.full_shape))))
         same["dpca"] = chain_result("dpca", rc["stationary"], static_motion(motion.time),
                                     settings, config, array,
-                                    subaperture=results["dpca"].plan.reference_index)
+                                    subaperture=q if inside else plan.sub_shape)
         seconds["dpca_same_aperture"] = same["dpca"].seconds
     point = {}
     target = sim.get("reference")
