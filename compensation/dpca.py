@@ -49,14 +49,13 @@ A fractional shift is estimated one of two ways (``interpolation``;
 
       order 1:  dpsi^2 / 8            order 3:  3 dpsi^4 / 128
 
-  per axis: below -29 dB (linear) and -55 dB (cubic) inside the main lobe of
-  a 12-element sub-aperture (``|dpsi| < 2 pi / 12``); beyond
-  ``|dpsi| = pi / 2``, in the sidelobes, neither helps much.
+  per axis: -29 dB (linear) and -55 dB (cubic) inside the main lobe of a
+  12-element sub-aperture; beyond ``|dpsi| = pi / 2`` neither helps much.
 
 Every sub-aperture is projected as :func:`compensation.exact.rigid_body_projection`
-does (the attitude and displacement of every chirp and TDM slot), so
-rotation and the vertical displacement are handled as in the exact chain and
-the beam direction itself is reproduced for any shift.
+does (attitude and displacement of every chirp and TDM slot), rotation and the
+vertical displacement as in the exact chain (an echo from the beam direction
+is exact with Lagrange weights, within the interpolation error band-limited).
 
 Price (:class:`DPCAPlan`): the sub-aperture keeps the largest block whose
 shifted positions stay within reach of the array (band-limited) or ``K = N -
