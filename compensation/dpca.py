@@ -88,6 +88,7 @@ from .subaperture_shift import (
     lagrange_groups,
     lagrange_weights,  # noqa: F401
     order_checked,
+    reachable_block,
     shift_channels,
 )
 
@@ -306,21 +307,6 @@ def _interpolation(interpolation, n_chan: int, full, n_slot: int) -> str:
     return interpolation
 
 
-def _bandlimited_block(shift, full) -> tuple[set, tuple[int, int]]:
-    """Largest block whose shifted positions stay within :data:`REACH` of the array.
-
-    Lattice indices ``(ix, iy)`` of the block (empty when none is left) and the
-    elements per axis the shifts would need for one element.
-    """
-    tol = 1e-9
-    lo = np.ceil(-REACH - shift.min(axis=0) - tol).astype(int)            # first index
-    hi = np.floor(np.array(full) - 1 + REACH - shift.max(axis=0) + tol).astype(int)
-    need = tuple(int(v) for v in np.ceil(np.ptp(shift, axis=0) - 2 * REACH - tol) + 1)
-    if np.any(hi < lo):
-        return set(), need
-    return {(ix, iy) for ix in range(lo[0], hi[0] + 1) for iy in range(lo[1], hi[1] + 1)}, need
-
-
 def _given_block(subaperture, allowed: set) -> np.ndarray:
     """The lattice indices ``[sub, 2]`` of a given sub-aperture, checked against ``allowed``."""
     q = np.asarray(subaperture)
@@ -417,7 +403,7 @@ def dpca_plan(element_positions, motion: PlatformMotion, *, wavelength: float,
     full = tuple(int(v) for v in np.ptp(idx, axis=0) + 1)
     interp = _interpolation(interpolation, n_chan, full, n_slot)
     if interp == "bandlimited":
-        ref, need = _bandlimited_block(shift, full)
+        ref, need = reachable_block(shift, full)
         how = f"band-limited interpolation (up to {REACH:g} spacings beyond the array)"
     else:
         offsets = np.array(sorted(lagrange_groups(shift, order)))          # [offset, 2]

@@ -159,6 +159,32 @@ def shift_channels(x: np.ndarray, grid_shape: tuple[int, int], tx: np.ndarray, t
     return out.reshape(n_chirp, tx.shape[1] * ty.shape[1], -1).astype(np.complex64, copy=False)
 
 
+def reachable_block(shift, full) -> tuple[set, tuple[int, int]]:
+    """Largest block of lattice indices whose shifted positions stay within :data:`REACH`.
+
+    Parameters
+    ----------
+    shift : ndarray, shape ``[chirp, 2]``
+        Shifts along ``a`` and ``b`` [element spacings].
+    full : (int, int)
+        Elements per axis of the array (indices from 0).
+
+    Returns
+    -------
+    block : set of (int, int)
+        Indices ``(ix, iy)`` of the block (empty when none is left).
+    need : (int, int)
+        Elements per axis the shifts would need for a block of one element.
+    """
+    tol = 1e-9
+    lo = np.ceil(-REACH - shift.min(axis=0) - tol).astype(int)            # first index
+    hi = np.floor(np.array(full) - 1 + REACH - shift.max(axis=0) + tol).astype(int)
+    need = tuple(int(v) for v in np.ceil(np.ptp(shift, axis=0) - 2 * REACH - tol) + 1)
+    if np.any(hi < lo):
+        return set(), need
+    return {(ix, iy) for ix in range(lo[0], hi[0] + 1) for iy in range(lo[1], hi[1] + 1)}, need
+
+
 def lagrange_weights(frac, order: int = 3) -> np.ndarray:
     """Lagrange weights ``h_l(f)`` of the stencil :data:`STENCILS` ``[order]``.
 
