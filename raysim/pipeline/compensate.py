@@ -254,6 +254,31 @@ def _attitude(value):
     return Rotation.from_euler("ZYX", ypr).as_matrix()
 
 
+def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
+    """``initial_attitude_deg``: as given, else the IMU log's attitude at the first ramp
+    (:mod:`raysim.io.flight_logs.attitude`), else level (0, 0, 0); the choice in ``notes``."""
+    if value is not None:
+        return value
+    att = None
+    if isinstance(imu, (str, os.PathLike)):
+        from raysim.io.flight_logs.attitude import read_attitude_log
+
+        att = read_attitude_log(imu, topic=topic)
+    if att is None:
+        notes.append("initial attitude: the IMU log holds no attitude; the platform is "
+                      "assumed level, heading 0, at the first ramp (--initial-attitude-deg "
+                      "0,0,0)")
+        return (0.0, 0.0, 0.0)
+    shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
+    t = float(np.min(inp.slot_times)) + shift             # the first ramp on the log's clock
+    ypr = att.euler_deg(t)
+    notes.append(f"initial attitude: yaw, pitch, roll {ypr[0]:.3f}, {ypr[1]:.3f}, "
+                 f"{ypr[2]:.3f} deg from {att.source} at {t:.6f} s (the first ramp on the "
+                 f"log's clock{', offset 0 taken' if isinstance(time_offset, str) else ''}); "
+                 f"--initial-attitude-deg overrides")
+    return ypr
+
+
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
              velocity, initial_velocity, initial_attitude_deg, imu_grade):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
@@ -334,10 +359,11 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                capture_t0: float = 0.0, range_m=None, azimuth_deg=None,
                elevation_deg=None, lever_arm=None, time_offset: float | str = 0.0,
                velocity: str = "hover", initial_velocity=None,
-               initial_attitude_deg=(0.0, 0.0, 0.0), imu_grade: str | None = None,
+               initial_attitude_deg=None, imu_grade: str | None = None,
                direction_deg=None, max_gap: float | None = None, imu_topic: str | None = None,
                imu_instance: int | None = None, board: str | None = None,
-               antenna_positions=None, progress: bool = False) -> CompensateResult:
+               antenna_positions=None, mounting_deg=None,
+               progress: bool = False) -> CompensateResult:
     """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
 
     Parameters
@@ -387,10 +413,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         or estimated from the Doppler of stationary scatterers (per frame).
     initial_velocity : array_like, shape ``[3]``, optional
         Body velocity in W at the first chirp [m/s] (``velocity="given"``).
-    initial_attitude_deg : (float, float, float) or "level"
+    initial_attitude_deg : (float, float, float) or "level", optional
         Attitude at the first chirp, Z-Y-X Euler angles (yaw, pitch, roll)
         [deg], or ``"level"`` (roll and pitch from accelerometer levelling,
-        heading 0).
+        heading 0); default the IMU log's attitude at the first ramp on its
+        clock (:mod:`raysim.io.flight_logs.attitude`; the offset ``"auto"``
+        takes 0), else level (0, 0, 0); a note says which.
     imu_grade : {"ideal", "tactical", "consumer_mems"}, optional
         Sets the hover window of ``velocity`` hover / radar and of ``"level"``;
         default the whole record.
@@ -417,6 +445,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         CSV / JSON file of the TX and RX positions of a capture
         (:func:`raysim.io.mmwave_config.read_antenna_positions`); replaces
         ``board``.
+    mounting_deg : str or (float, float, float), optional
+        Radar mounting ``R_BA``: (yaw, pitch, roll) [deg] or a name of
+        :data:`raysim.platform.mounting.MOUNTING_PRESETS`; default ``down``
+        (A parallel to B). Other mountings give beams in the nominal radar
+        frame (:func:`raysim.platform.mounting.mount_motion`); they need a given
+        clock offset and ``velocity`` hover or given.
     progress : bool
         A progress bar on stderr for records of several frames.
 
@@ -442,6 +476,13 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                              f"seconds or 'auto'")
     else:
         time_offset = float(_vector(time_offset, 1, "--time-offset")[0])
+    from raysim.platform.mounting import is_default_mounting, mount_motion
+
+    mounted = not is_default_mounting(mounting_deg)
+    if mounted and (velocity == "radar" or isinstance(time_offset, str)):
+        raise ValueError(f"--mounting-deg {mounting_deg!r}: the self-calibration (--velocity "
+                         f"radar, --time-offset auto) assumes the down-looking mounting; give "
+                         f"--time-offset SECONDS and --velocity hover or given")
     out = Path(out)
     as_npz = check_compensated_output(out, "--out", inputs=[("CUBE", source), ("--imu", imu),
                                                             ("--radar-config", radar_config)])
@@ -485,10 +526,14 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                     warnings.warn(text, CompensationWarning, stacklevel=2)
             lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
                      else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
+            attitude = _log_attitude(initial_attitude_deg, imu, inp, time_offset, imu_topic,
+                                     notes)
             motions, calibration, offset = _motions(
                 inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
-                initial_attitude_deg=initial_attitude_deg, imu_grade=imu_grade)
+                initial_attitude_deg=attitude, imu_grade=imu_grade)
+            if mounted:          # beams in the nominal radar frame
+                motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found = [], list(window_notes)
         sub = None
         if spec.name == "dpca":        # one sub-aperture size for every frame: comparable maps
@@ -536,6 +581,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 attrs["self_calibration"] = json.dumps(calibration)
             if offset is not None:     # the offset applied: given, or estimated ('auto')
                 attrs["time_offset_s"] = offset
+            if mounted:
+                from raysim.platform.mounting import mounting_deg as _ypr
+
+                attrs["mounting_deg"] = list(_ypr(mounting_deg))
             write_compensated_store(os.fspath(out), inp, results, chain=spec.key,
                                     warnings=found, azimuth_deg=np.rad2deg(az),
                                     elevation_deg=np.rad2deg(el), extra_attrs=attrs)
