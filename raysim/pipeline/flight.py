@@ -131,7 +131,6 @@ class FlightFiles:
         az)`` in the nominal radar frame N): where the compensated beams of a run starting
         at ``frame`` see it."""
         from compensation.geometry import direction
-
         from raysim.platform.mounting import mounting_matrix
 
         r, az, el = self.targets[target]
@@ -277,8 +276,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     from raysim.io.ti_dca1000 import Dca1000Format, write_dca1000
     from raysim.pipeline.flight_log import flight_log
     from raysim.platform.motion import hover_jitter
-    from raysim.platform.mounting import mount_array, mounting_deg as mount_ypr
-    from raysim.platform.mounting import nominal_target_position
+    from raysim.platform.mounting import mount_array, nominal_target_position
+    from raysim.platform.mounting import mounting_deg as mount_ypr
     from raysim.radar.arrays import tdm_mimo
     from raysim.radar.config import RadarConfig
 

@@ -123,7 +123,6 @@ def flight_log(trajectory, imu: str, *, rate: float, times, seed: int, time_offs
     (ImuSamples, AttitudeLog or None, list of (float, float))
     """
     from compensation.ingestion import WINDOW_MARGIN
-
     from raysim.io.flight_logs.attitude import AttitudeLog
     from raysim.pipeline.sensors import imu_record
     from raysim.platform.imu import Imu
