@@ -198,3 +198,39 @@ def test_default_mounting_changes_nothing(tmp_path):
         assert "mounting_deg" not in ds.attrs
         beams.append(ds["beams"].values)
     assert np.array_equal(beams[0], beams[1]) and np.array_equal(beams[0], beams[2])
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_ros2_orientation_read_as_ned_frd(tmp_path, storage):
+    """A REP 103 orientation (FLU body to ENU) is read back as ``R_WB`` (FRD to NED)."""
+    pytest.importorskip("rosbags")
+    from scipy.spatial.transform import Rotation
+
+    from raysim.io.flight_logs.rosbag import write_ros2_imu
+    from raysim.platform.imu import ImuSamples
+
+    n = 20
+    t = 1.0 + np.arange(n) * 0.01
+    ypr = np.column_stack([np.linspace(30, 40, n), np.full(n, 4.0), np.full(n, -6.0)])
+    rot = Rotation.from_euler("ZYX", ypr, degrees=True)
+    s = ImuSamples(t, np.zeros((n, 3)), np.tile([0.0, 0.0, -9.8], (n, 1)), spec=None,
+                   truth=None, source="test", rate=100.0)
+    bag = write_ros2_imu(tmp_path / "bag", s, storage=storage, orientation=rot)
+    att = read_attitude_log(bag)
+    assert "ROS 2" in att.source and np.allclose(att.time, t)
+    got = att.rotation.as_euler("ZYX", degrees=True)
+    assert np.max(np.abs(got - ypr)) < 1e-9
+    # as written (REP 103): a yaw of 30 deg east of north points the FLU x axis 60 deg
+    # counter-clockwise from east in ENU, and the pitch up of 4 deg raises it (z up)
+    from rosbags.highlevel import AnyReader
+
+    from raysim.io.flight_logs.rosbag import _typestore
+
+    with AnyReader([bag], default_typestore=_typestore()) as reader:
+        conn, _, raw = next(iter(reader.messages()))
+        o = reader.deserialize(raw, conn.msgtype).orientation
+    fwd = Rotation.from_quat([o.x, o.y, o.z, o.w]).apply([1.0, 0.0, 0.0])
+    assert np.degrees(np.arctan2(fwd[1], fwd[0])) == pytest.approx(60.0, abs=1e-6)
+    assert np.degrees(np.arcsin(fwd[2])) == pytest.approx(4.0, abs=1e-6)
+    plain = write_ros2_imu(tmp_path / "plain", s, storage=storage)
+    assert read_attitude_log(plain) is None                      # REP 145: none provided

@@ -158,6 +158,8 @@ def _ros(path: Path, topic: str | None) -> AttitudeLog | None:
         for kind in (IMU_MSGTYPE, odom):
             conns = [c for c in reader.connections if c.msgtype == kind
                      and (topic is None or kind == odom or c.topic == topic)]
+            if not conns:            # no connections would read every message
+                continue
             stamps, quats = [], []
             for conn, _, raw in reader.messages(connections=conns):
                 msg = reader.deserialize(raw, conn.msgtype)
