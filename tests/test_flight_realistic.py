@@ -234,3 +234,22 @@ def test_ros2_orientation_read_as_ned_frd(tmp_path, storage):
     assert np.degrees(np.arcsin(fwd[2])) == pytest.approx(4.0, abs=1e-6)
     plain = write_ros2_imu(tmp_path / "plain", s, storage=storage)
     assert read_attitude_log(plain) is None                      # REP 145: none provided
+
+
+def test_flight_cli_writes_a_realistic_flight_and_names_bad_options(tmp_path, capsys):
+    d = tmp_path / "f"
+    assert main(["flight", str(d), "--targets", "default5", "--imu-rate", "250",
+                 "--imu-boxcar", "--log-gaps", "2", "--gaps-in-capture", "--frames", "1",
+                 "--board", "xWR16xx", "--clock-drift-ppm", "20"]) == 0
+    out, err = capsys.readouterr()
+    assert "--board xWR16xx" in out and "--max-gap" in out and "--range-m 4.0:9.3" in out
+    assert "flight: writing about" in err and "logger gaps" in err      # sized, announced
+    s = read_imu_log(d / "flight.ulg")
+    assert abs(s.rate / 250.0 - 1) < RATE_RTOL
+    assert main(["flight", str(tmp_path / "g"), "--mounting-deg", "sideways"]) == 2
+    assert "--mounting-deg" in capsys.readouterr().err
+    assert main(["flight", str(tmp_path / "h"), "--targets", "default5", "--target",
+                 "5,0,0"]) == 2
+    assert main(["flight", str(tmp_path / "i"), "--target", "50,0,0"]) == 2
+    assert "--target" in capsys.readouterr().err
+    assert not (tmp_path / "g").exists() and not (tmp_path / "i").exists()
