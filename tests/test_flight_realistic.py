@@ -253,3 +253,41 @@ def test_flight_cli_writes_a_realistic_flight_and_names_bad_options(tmp_path, ca
     assert main(["flight", str(tmp_path / "i"), "--target", "50,0,0"]) == 2
     assert "--target" in capsys.readouterr().err
     assert not (tmp_path / "g").exists() and not (tmp_path / "i").exists()
+
+
+def test_ros2_odometry_pose_read_when_the_imu_has_no_orientation(tmp_path):
+    pytest.importorskip("rosbags")
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from scipy.spatial.transform import Rotation
+
+    from raysim.io.flight_logs.rosbag import _typestore
+
+    ts = _typestore()
+    odom_t = ts.types["nav_msgs/msg/Odometry"]
+    hdr_t, time_t = ts.types["std_msgs/msg/Header"], ts.types["builtin_interfaces/msg/Time"]
+    pose_cov_t, pose_t = (ts.types["geometry_msgs/msg/PoseWithCovariance"],
+                          ts.types["geometry_msgs/msg/Pose"])
+    twist_cov_t, twist_t = (ts.types["geometry_msgs/msg/TwistWithCovariance"],
+                            ts.types["geometry_msgs/msg/Twist"])
+    vec_t, pt_t = ts.types["geometry_msgs/msg/Vector3"], ts.types["geometry_msgs/msg/Point"]
+    quat_t = ts.types["geometry_msgs/msg/Quaternion"]
+    heading = np.array([10.0, 20.0, 30.0])                 # ENU, counter-clockwise from east
+    with Writer(tmp_path / "bag", version=9, storage_plugin=StoragePlugin.SQLITE3) as w:
+        conn = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        for k, h in enumerate(heading):
+            q = Rotation.from_euler("z", h, degrees=True).as_quat()
+            msg = odom_t(header=hdr_t(stamp=time_t(sec=5 + k, nanosec=0), frame_id="odom"),
+                         child_frame_id="base_link",
+                         pose=pose_cov_t(pose=pose_t(position=pt_t(x=0.0, y=0.0, z=0.0),
+                                                     orientation=quat_t(x=q[0], y=q[1],
+                                                                        z=q[2], w=q[3])),
+                                         covariance=np.zeros(36)),
+                         twist=twist_cov_t(twist=twist_t(linear=vec_t(x=0.0, y=0.0, z=0.0),
+                                                         angular=vec_t(x=0.0, y=0.0, z=0.0)),
+                                           covariance=np.zeros(36)))
+            w.write(conn, (5 + k) * 1_000_000_000, ts.serialize_cdr(msg, conn.msgtype))
+    att = read_attitude_log(tmp_path / "bag")
+    assert "nav_msgs/msg/Odometry" in att.source and np.allclose(att.time, [5, 6, 7])
+    ypr = att.rotation.as_euler("ZYX", degrees=True)
+    assert np.allclose(ypr[:, 0], 90.0 - heading, atol=1e-9)   # yaw from north, clockwise
+    assert np.allclose(ypr[:, 1:], 0.0, atol=1e-9)
