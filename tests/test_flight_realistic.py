@@ -291,3 +291,43 @@ def test_ros2_odometry_pose_read_when_the_imu_has_no_orientation(tmp_path):
     ypr = att.rotation.as_euler("ZYX", degrees=True)
     assert np.allclose(ypr[:, 0], 90.0 - heading, atol=1e-9)   # yaw from north, clockwise
     assert np.allclose(ypr[:, 1:], 0.0, atol=1e-9)
+
+
+#: Ground clutter in the flight: its range cells gain at least this much power over the
+#: flight without it [dB], the target's cell changes by at most this much [dB].
+CLUTTER_GAIN_DB = 20.0
+TARGET_CHANGE_DB = 1.0
+
+
+def test_flight_with_a_scene_ground_clutter(tmp_path):
+    from raysim.io.ti_dca1000 import read_dca1000
+    from raysim.pipeline.flight_clutter import clutter_points
+
+    altitude = 14.0
+    kw = dict(frames=1, target=(8.0, 10.0, 0.0))
+    f = write_flight(tmp_path / "c", clutter_scene="flat_reflectors",
+                     clutter_altitude=altitude, clutter_max_scatterers=300, **kw)
+    n = write_flight(tmp_path / "n", **kw)
+
+    def profile(flight):
+        from raysim.io.mmwave_config import read_mmwave_config
+
+        m = read_mmwave_config(flight.radar_config)
+        x = read_dca1000(flight.capture, m.fmt).cube[0].astype(complex)  # [chirp, channel, sample]
+        spec = np.fft.fft(x * np.hanning(x.shape[-1]), axis=-1)
+        ranges = m.config.bin_ranges(x.shape[-1])
+        return ranges, 10 * np.log10((np.abs(spec) ** 2).sum(axis=(0, 1)) + 1e-30)
+
+    ranges, with_clutter = profile(f)
+    _, without = profile(n)
+    ground = (ranges > altitude + 0.5) & (ranges < 20.0)
+    assert np.median(with_clutter[ground] - without[ground]) >= CLUTTER_GAIN_DB
+    k = int(np.argmin(np.abs(ranges - 8.0)))
+    # the capture is scaled to full scale: compare the target against the capture's peak
+    assert abs((with_clutter[k] - with_clutter.max()) - (without[k] - without.max())) \
+        <= TARGET_CHANGE_DB
+    with pytest.raises(ValueError, match="--clutter-scene"):
+        clutter_points("moon", None, None, (0, 0, 0))
+    with pytest.raises(ValueError, match="down mounting"):
+        write_flight(tmp_path / "m", clutter_scene="flat_reflectors",
+                     mounting_deg="forward", **kw)

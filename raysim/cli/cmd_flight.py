@@ -25,6 +25,8 @@ examples:
       --log-gaps 3 --clock-drift-ppm 20             # as a flight controller logs it
   raysim flight flight_dir --target 6,-10,0 --target 8,15,5 --board xWR16xx
   raysim flight flight_dir --mounting-deg forward --target 7,10,0 --no-attitude
+  raysim flight flight_dir --targets default5 --clutter-scene parking_lot \\
+      --clutter-altitude 8                          # ground 8 m below, in range
 
 exit status: 0 written, 2 invalid input (the message names the option and the value).
 """
@@ -75,6 +77,14 @@ def register(subparsers) -> None:
     p.add_argument("--mounting-deg", default=None, metavar="YAW,PITCH,ROLL|NAME",
                    help="radar mounting on the body, Z-Y-X Euler angles of R_BA [deg], or "
                    "down (default), forward, oblique")
+    p.add_argument("--clutter-scene", default=None, metavar="SCENE",
+                   help="add the ground clutter field of a bundled scene (flat_reflectors, "
+                   "parking_lot, rough_terrain), rendered by the same oracle; down mounting")
+    p.add_argument("--clutter-altitude", type=float, default=None, metavar="METRES",
+                   help="hover height above the clutter scene's ground [m] (default: the "
+                   "scene's)")
+    p.add_argument("--clutter-max-scatterers", type=int, default=200_000, metavar="N",
+                   help="bound on the clutter field's scatterers (cost; density scaled down)")
     p.add_argument("--lever-arm", default="0,0,0.05", metavar="X,Y,Z",
                    help="radar phase centre in the body frame [m]")
     p.add_argument("--attitude", choices=("log", "flight_controller", "level"), default="log",
@@ -122,6 +132,8 @@ def run(args) -> int:
                      imu_boxcar=args.imu_boxcar, imu_fast_rate=args.imu_fast_rate,
                      log_gaps=args.log_gaps, gaps_in_capture=args.gaps_in_capture,
                      clock_drift_ppm=args.clock_drift_ppm, attitude=not args.no_attitude,
+                     clutter_scene=args.clutter_scene, clutter_altitude=args.clutter_altitude,
+                     clutter_max_scatterers=args.clutter_max_scatterers,
                      progress=not args.no_progress)
     out = f"{args.folder.rstrip('/')}/compensated.zarr"
     print(f"wrote {f.imu_log}, {f.capture}, {f.radar_config}")

@@ -213,6 +213,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
                  mounting_deg=None, imu_boxcar: bool = False, imu_fast_rate: float = 2000.0,
                  log_gaps: int = 0, gaps_in_capture: bool = False,
                  clock_drift_ppm: float = 0.0, attitude: bool = True,
+                 clutter_scene: str | None = None, clutter_altitude: float | None = None,
+                 clutter_max_scatterers: int = 200_000,
                  progress: bool = False) -> FlightFiles:
     """Simulate a flight and write its ULog, DCA1000 capture and SDK ``.cfg``.
 
@@ -261,6 +263,14 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         IMU clock rate error [ppm].
     attitude : bool
         Write the flight controller's attitude as ``vehicle_attitude``.
+    clutter_scene : str, optional
+        Add the ground clutter field of this bundled scene
+        (:mod:`raysim.pipeline.flight_clutter`), rendered by the same oracle with the
+        element pattern; ``down`` mounting only.
+    clutter_altitude : float, optional
+        Hover height above that ground [m]; default the scene's.
+    clutter_max_scatterers : int
+        Bound on the clutter field's scatterers (cost).
     progress : bool
         A progress bar over the frames on stderr and the sizes announced.
 
@@ -312,6 +322,20 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
                                                   mount), np.zeros(3))
               for r, az, el in tgts]
     mounted = mount_array(array, mount)
+    clutter = []
+    if clutter_scene is not None:
+        from raysim.pipeline.flight_clutter import clutter_points
+
+        if mounted is not array:
+            raise ValueError("--clutter-scene needs the down mounting (the oracle's element "
+                             f"pattern is in body axes); got --mounting-deg {mount}")
+        clutter, summary = clutter_points(clutter_scene, cfg, array, lever,
+                                          altitude=clutter_altitude, seed=seed,
+                                          max_scatterers=clutter_max_scatterers)
+        if progress:
+            import sys
+
+            print(f"flight: {summary}", file=sys.stderr, flush=True)
     ks = range(frames)
     if progress and frames > 1:
         import sys
@@ -319,8 +343,15 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         from tqdm import tqdm
 
         ks = tqdm(ks, unit="frame", desc="flight", file=sys.stderr)
-    cube = np.stack([simulate_point_targets(cfg, mounted, points, traj, lever_arm=lever,
-                                            frame=f, t0=start).data for f in ks])
+    def frame(f: int) -> np.ndarray:
+        data = simulate_point_targets(cfg, mounted, points, traj, lever_arm=lever, frame=f,
+                                      t0=start).data
+        if clutter:
+            data = data + simulate_point_targets(cfg, mounted, clutter, traj, lever_arm=lever,
+                                                 frame=f, t0=start, pattern=cfg.pattern).data
+        return data
+
+    cube = np.stack([frame(f) for f in ks])
     feed = np.tile(lay.rx_phase[list(rx_on)], len(tx_order))      # [channel]: RX feed signs
     if np.any(feed != 1):
         cube = cube * feed[None, None, :, None]
