@@ -33,12 +33,11 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from raysim.io.flight_logs import check_increasing, median_rate, time_base
+from raysim.io.flight_logs import ENU_TO_NED, check_increasing, median_rate, time_base
 
-__all__ = ["AttitudeLog", "read_attitude_log", "ENU_TO_NED"]
+__all__ = ["AttitudeLog", "read_attitude_log"]
 
-#: ENU -> NED for world vectors (swap x and y, negate z); also FLU <-> FRD is diag(1, -1, -1).
-ENU_TO_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+#: FLU <-> FRD (its own inverse).
 _FLU_TO_FRD = np.diag([1.0, -1.0, -1.0])
 
 

@@ -31,7 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.flight_logs import check_increasing, flu_to_frd, median_rate, time_base
+from raysim.io.flight_logs import (
+    ENU_TO_NED,
+    check_increasing,
+    flu_to_frd,
+    median_rate,
+    time_base,
+)
 from raysim.platform.imu import ImuSamples
 
 __all__ = ["IMU_MSGTYPE", "read_ros2_imu", "write_ros2_imu"]
@@ -170,8 +176,6 @@ def write_ros2_imu(path: str | os.PathLike, samples: ImuSamples, topic: str = "/
     unknown[0] = -1.0   # REP 145: orientation not provided
     quat = np.tile([0.0, 0.0, 0.0, 1.0], (stamps.size, 1))
     if orientation is not None:
-        from raysim.io.flight_logs.attitude import ENU_TO_NED
-
         if len(orientation) != stamps.size:
             raise ValueError(f"orientation has {len(orientation)} rotations, expected one per "
                              f"sample ({stamps.size})")
