@@ -74,7 +74,7 @@ from ._checks import finite_array, positive
 from .guards import CompensationWarning
 from .projection import BeamCube
 
-__all__ = ["Autofocus", "autofocus", "estimate_phase_error", "correct_phase",
+__all__ = ["Autofocus", "autofocus_beams", "estimate_phase_error", "correct_phase",
            "CONVERGENCE_RAD", "MIN_CHIRPS"]
 
 #: Iterations stop when the rms update of the phase falls below this [rad].
@@ -116,6 +116,12 @@ class Autofocus:
         the phase applies exactly (BeamCube input only).
     angle_spread : float or None
         Power-weighted rms angle of the cells' directions about ``u0`` [rad].
+    range_rate : float or None
+        With ``doppler="stationary"``: the common range rate the stationary
+        cells showed [m/s] (positive receding), removed with the phase as its
+        linear part; None with ``doppler="keep"`` (the linear phase left as is).
+    range_rate_sigma : float or None
+        Its one-sigma uncertainty [m/s].
     warnings : tuple of str
         ``"autofocus: ..."`` texts: nothing estimated, or an estimate not
         above its uncertainty.
@@ -129,6 +135,8 @@ class Autofocus:
     wavelength: float | None = None
     direction: tuple | None = None
     angle_spread: float | None = None
+    range_rate: float | None = None
+    range_rate_sigma: float | None = None
     warnings: tuple = ()
 
     @property
@@ -170,6 +178,9 @@ class Autofocus:
                "iterations": int(self.iterations), "warnings": list(self.warnings)}
         if self.wavelength is not None:
             out["rms_displacement_m"] = float(np.sqrt(np.mean(self.displacement() ** 2)))
+        if self.range_rate is not None:
+            out["range_rate_mps"] = self.range_rate
+            out["range_rate_sigma_mps"] = self.range_rate_sigma
         if self.direction is not None:
             out["direction_rad"] = [float(a) for a in self.direction]
             out["angle_spread_rad"] = self.angle_spread
@@ -282,11 +293,33 @@ def _pga(g: np.ndarray, noise: float, iterations: int, q: np.ndarray
     s2 = noise / n                                                       # per sample
     var_th = s2 / (2 * np.maximum(w.sum(axis=1), 1e-300))
     if k > 1:                      # spread of the cells' phases about the common one
-        dev = np.angle(h * np.conj(np.sum(h, axis=0))[None, :])
+        # each cell's own constant and linear phase (its position, its Doppler) is not error
+        dev = _detrend(np.unwrap(np.angle(h * np.conj(np.sum(h, axis=0))[None, :]), axis=0),
+                       q)
         var_sp = (w ** 2 * dev ** 2).sum(axis=1) / w.sum(axis=1) ** 2 * k / (k - 1)
     else:
         var_sp = np.zeros(n)
     return _detrend(total, q), np.maximum(var_th, var_sp), it
+
+
+def _common_doppler(g: np.ndarray, noise: float) -> tuple[float, float]:
+    """Common linear phase of the cells ``g [chirp, cell]`` (slope [rad/chirp]) and its variance.
+
+    Each cell's least-squares phase slope (its Doppler; unwrapped, the cells
+    are stationary so a step stays far below pi), averaged with the weights of
+    the cells' powers; variance from thermal noise
+    (``12 s2 / (2 N (N^2 - 1) sum p)``) or the cells' spread, the larger.
+    """
+    n, k = g.shape
+    psi = np.unwrap(np.angle(g * np.conj(g[n // 2])[None, :]), axis=0)
+    x = np.arange(n) - (n - 1) / 2.0
+    slope = x @ psi / (x @ x)                                            # [cell]
+    p = np.mean(np.abs(g) ** 2, axis=0)
+    s = float(p @ slope / p.sum())
+    var = 12 * (noise / n) / (2 * n * (n * n - 1) * p.sum())
+    if k > 1:
+        var = max(var, float((p ** 2 @ (slope - s) ** 2) / p.sum() ** 2 * k / (k - 1)))
+    return s, var
 
 
 def _cells_of(data) -> tuple[np.ndarray, tuple, np.ndarray | None, float | None]:
@@ -305,7 +338,7 @@ def _cells_of(data) -> tuple[np.ndarray, tuple, np.ndarray | None, float | None]
 def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
                          wavelength: float | None = None, max_cells: int = 32,
                          min_snr_db: float = 20.0, stationary_bins: float = 2.0,
-                         iterations: int = 8) -> Autofocus:
+                         iterations: int = 8, doppler: str = "keep") -> Autofocus:
     """Estimate the residual per-chirp phase common to the cells (phase-gradient autofocus).
 
     Parameters
@@ -330,6 +363,13 @@ def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
         (moving targets and micro-Doppler are left out).
     iterations : int
         Most PGA iterations.
+    doppler : {"keep", "stationary"}
+        ``"keep"``: the linear phase is left as is (a Doppler shift the data
+        cannot tell from a velocity of the scene). ``"stationary"``: the
+        selected cells are taken as stationary, so their common Doppler is a
+        platform velocity error along ``u0``: it is estimated
+        (:attr:`Autofocus.range_rate`) and its linear phase joins the
+        estimate (a lateral velocity error, ``v . (u - u0)``, stays).
 
     Returns
     -------
@@ -384,6 +424,8 @@ def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
     if not np.isfinite(snr):
         raise ValueError(f"min_snr_db must be a finite number of dB, got {min_snr_db!r}")
     stationary_bins = positive("stationary_bins", stationary_bins)
+    if doppler not in ("keep", "stationary"):
+        raise ValueError(f"doppler must be 'keep' or 'stationary', got {doppler!r}")
 
     noise = _noise_per_bin(x)
     sel = _candidates(x, cell_shape, noise * 10 ** (snr / 10), stationary_bins, max_cells)
@@ -396,6 +438,16 @@ def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
     g = x[:, sel]
     phase, var_grad, it = _pga(g, noise, int(iterations), q)
     sigma = np.sqrt(_propagate(var_grad, q))
+    rate = rate_sigma = None
+    if doppler == "stationary":
+        slope, var_slope = _common_doppler(g * np.exp(-1j * phase)[:, None], noise)
+        x = np.arange(n) - (n - 1) / 2.0
+        phase = phase + slope * x
+        sigma = np.sqrt(sigma ** 2 + var_slope * x ** 2)
+        if lam is not None:          # phase 4 pi R / lambda: range rate from the slope
+            dt = float(np.mean(np.diff(t)))
+            rate = slope / dt * lam / (4 * np.pi)
+            rate_sigma = float(np.sqrt(var_slope)) / dt * lam / (4 * np.pi)
     direction = spread = None
     if isinstance(data, BeamCube):
         direction, spread = _cells_direction(data, sel, g)
@@ -403,7 +455,8 @@ def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
     if np.sqrt(np.mean(phase ** 2)) <= np.sqrt(np.mean(sigma ** 2)):
         warns = (f"autofocus: estimated residual phase rms {np.sqrt(np.mean(phase ** 2)):.3g} "
                  f"rad is not above its uncertainty {np.sqrt(np.mean(sigma ** 2)):.3g} rad",)
-    return Autofocus(phase, sigma, t, int(sel.size), it, lam, direction, spread, warns)
+    return Autofocus(phase, sigma, t, int(sel.size), it, lam, direction, spread, rate,
+                     rate_sigma, warns)
 
 
 def _cells_direction(beams: BeamCube, sel: np.ndarray, g: np.ndarray) -> tuple:
@@ -461,7 +514,7 @@ def correct_phase(data, estimate: Autofocus, *, times=None):
     return replace(data, data=out) if isinstance(data, BeamCube) else out
 
 
-def autofocus(beams: BeamCube, *, slot_times=None, **options) -> tuple[BeamCube, Autofocus]:
+def autofocus_beams(beams: BeamCube, *, slot_times=None, **options) -> tuple[BeamCube, Autofocus]:
     """Estimate the residual per-chirp phase of compensated beams and remove it.
 
     Parameters

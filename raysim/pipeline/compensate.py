@@ -68,7 +68,7 @@ Output (``out``): a labelled Zarr store
 Autofocus (``autofocus=True``, ``--autofocus``): after the IMU-driven chain,
 the residual per-chirp phase common to the stationary scatterers (vibration
 the IMU log cannot see) is estimated from the beams and removed
-(:func:`compensation.autofocus.autofocus`; TDM: stamped at each chirp's mean
+(:func:`compensation.autofocus.autofocus_beams`; TDM: stamped at each chirp's mean
 slot time); its report (rms phase, band, sigma, cells) is
 :attr:`CompensateResult.autofocus`. The warnings are the
 chains' and the integration's assumption warnings (:mod:`compensation.guards`),
@@ -350,7 +350,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                direction_deg=None, max_gap: float | None = None, imu_topic: str | None = None,
                imu_instance: int | None = None, board: str | None = None,
                antenna_positions=None, progress: bool = False,
-               autofocus: bool = False) -> CompensateResult:
+               autofocus: bool | str = False) -> CompensateResult:
     """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
 
     Parameters
@@ -432,10 +432,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         ``board``.
     progress : bool
         A progress bar on stderr for records of several frames.
-    autofocus : bool
+    autofocus : bool or {"phase", "stationary"}
         After the chain, estimate and remove the residual per-chirp phase
-        common to the stationary scatterers (:func:`compensation.autofocus.autofocus`);
-        not with the chain ``none``.
+        common to the stationary scatterers (:func:`compensation.autofocus.autofocus_beams`):
+        ``True`` or ``"phase"`` leaves the linear phase (Doppler) as it is,
+        ``"stationary"`` also removes the common Doppler of those scatterers (a
+        platform velocity error along the line of sight). Not with the chain ``none``.
 
     Returns
     -------
@@ -451,6 +453,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         disk available (the size and the settings to reduce).
     """
     spec = parse_chain(chain)
+    if autofocus not in (False, None, True, "phase", "stationary"):
+        raise ValueError(f"--autofocus: got {autofocus!r}, expected 'phase' or 'stationary'")
+    doppler = "stationary" if autofocus == "stationary" else "keep"
     if autofocus and not spec.compensated:
         raise ValueError(f"--autofocus: follows the IMU-driven chain; the chain {spec.key!r} "
                          f"compensates nothing")
@@ -542,9 +547,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             if sub is not None:   # dpca: its price travels with the beams (first warning)
                 beams = replace(beams, warnings=(price, *beams.warnings))
             if focus is not None:   # vibration the IMU log cannot see, from the beams
-                from compensation.autofocus import autofocus as _autofocus
+                from compensation.autofocus import autofocus_beams
 
-                beams, est = _autofocus(beams, slot_times=inp.slot_times[k])
+                beams, est = autofocus_beams(beams, slot_times=inp.slot_times[k], doppler=doppler)
                 focus.append(est.report())
             found.extend(w for w in beams.warnings if w not in found)
             results.append(beams)
