@@ -255,8 +255,8 @@ def run(args) -> int:
     for k, rep in enumerate(result.autofocus or ()):
         sigma = "n/a" if rep["sigma_rad"] is None else f"{rep['sigma_rad']:.3g}"
         rate = "" if rep.get("range_rate_mps") is None else (
-            f", range rate {rep['range_rate_mps']:.4f} +- "
-            f"{rep['range_rate_sigma_mps']:.4f} m/s")
+            f", range rate {rep['range_rate_mps']:.3g} +- "
+            f"{rep['range_rate_sigma_mps']:.2g} m/s")
         print(f"autofocus frame {result.frames[k]}: residual phase rms {rep['rms_phase_rad']:.3g} "
               f"rad (sigma {sigma} rad), band {rep['band_hz'][0]:.0f}-{rep['band_hz'][1]:.0f} "
               f"Hz, {rep['cells']} cells{rate}")

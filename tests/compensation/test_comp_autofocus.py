@@ -245,14 +245,14 @@ def test_rotor_vibration_the_log_cannot_see(tmp_path, gap):
     cfg, table, v0, att = _flight(tmp_path, True, GAPS[gap])
     imu_only, _ = _leakage(tmp_path, cfg, table, v0, att, False)
     focused, res = _leakage(tmp_path, cfg, table, v0, att, "stationary")
-    print(f"gap {gap}: leakage [dB] IMU only {np.round(imu_only, 1)}, "
-          f"IMU + autofocus {np.round(focused, 1)}")
     rep = res.autofocus[0]
+    u0 = np.rad2deg(rep["direction_rad"][0])
+    print(f"gap {gap}: leakage [dB] IMU only {np.round(imu_only, 1)}, "
+          f"IMU + autofocus {np.round(focused, 1)}, u0 {u0:.2f} deg")
     assert rep["cells"] >= 4 and rep["rms_phase_rad"] > 3 * rep["sigma_rad"]
     assert abs(rep["range_rate_mps"]) > 3 * rep["range_rate_sigma_mps"]
     assert np.all(imu_only > LEAKAGE_DB)                       # the IMU chain alone fails
     assert np.all(focused <= imu_only - GAIN_DB)
-    u0 = np.rad2deg(rep["direction_rad"][0])
     near = np.abs(np.array([a for _, a in TARGETS]) - u0) <= MODEL_ANGLE_DEG
     assert near.sum() >= 2 and np.all(focused[near] <= LEAKAGE_DB)
     stored = np.load(tmp_path / "bstationary.npz")
