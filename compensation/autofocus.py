@@ -18,8 +18,10 @@ et al. 1994; Jakowatz et al. 1996, ch. 4):
    stationary (their pulse-pair Doppler within ``stationary_bins`` of zero),
    at least ``min_snr_db`` above the noise in their Doppler peak, the
    ``max_cells`` strongest;
-2. each cell's Doppler peak is circularly shifted to zero and the Doppler
-   bins where the summed spectrum holds only noise are masked (the window);
+2. each cell's Doppler peak is circularly shifted to zero; the window is the
+   whole Doppler band (a vibration puts its sidebands anywhere in it, and the
+   narrowing window of SAR PGA would cut the paired echoes the estimate
+   needs);
 3. the phase gradient between successive chirps is the ML kernel
    ``dphi_n = arg sum_c conj(g_{n-1,c}) g_{n,c}``;
 4. ``phi = cumsum(dphi)`` less its least-squares constant and linear trend
@@ -33,7 +35,9 @@ What it cannot observe
   cannot tell from a velocity of the scene (an along-line-of-sight velocity
   error of the platform, ``v = lambda / (4 pi) dphi/dt``). Both are removed
   from the estimate and left in the data (the velocity is the IMU chain's, or
-  the ego-velocity fit's, :mod:`compensation.ego_velocity`).
+  the ego-velocity fit's, :mod:`compensation.ego_velocity`) unless the cells
+  are declared stationary (``doppler="stationary"``): their common Doppler is
+  then a platform velocity error along ``u0``, estimated and removed too.
 * Direction dependence: one phase per chirp for all cells. The phase at a
   direction ``u`` differs from the estimate (the phase at the cells'
   power-weighted direction ``u0``) by ``2 k d_n . (u - u0)``; for a
@@ -54,12 +58,14 @@ phase evaluated at each slot's time (:func:`correct_phase` with ``times``
 chirp rate). The spread of the phase over the slots of one chirp,
 ``2 k |d'| dT``, is not corrected.
 
-Uncertainty: the per-chirp gradient has the variance of the kernel in thermal
-noise (noise power from the median of the Doppler spectra) or, when larger,
-the weighted spread of the cells' gradients around it (which includes the
-direction-dependent part); the gradients are taken as independent and the
-variance is propagated through the sum and the trend removal, giving
-:attr:`Autofocus.sigma` per chirp.
+Uncertainty (:attr:`Autofocus.sigma`, per chirp): the error of the estimate
+at a chirp is the power-weighted mean of the cells' phase errors there (the
+gradients' errors telescope in the sum); its variance is the larger of the
+thermal value ``s2 / (2 sum_c |g_c|^2)`` (``s2`` the noise power per sample,
+from the median of the Doppler spectra) and the weighted spread of the cells'
+phases about the common one (each cell's own constant and linear phase
+removed; this includes the direction-dependent part), propagated through the
+trend removal. The cells are taken as independent.
 """
 
 from __future__ import annotations
@@ -81,9 +87,6 @@ __all__ = ["Autofocus", "autofocus_beams", "estimate_phase_error", "correct_phas
 CONVERGENCE_RAD = 1e-4
 #: Fewest chirps an estimate needs (a trend of 2 parameters, then a shape).
 MIN_CHIRPS = 8
-#: A Doppler bin of the summed, centred spectrum takes part when it exceeds the
-#: noise of the cells summed by this factor (6 dB) [1].
-MASK_FACTOR = 4.0
 #: Cells per block when the cube is scanned for scatterers (bounds the memory of
 #: the Doppler FFT to ``chirp x BLOCK_CELLS`` complex64 values).
 BLOCK_CELLS = 1 << 15
@@ -265,9 +268,7 @@ def _pga(g: np.ndarray, noise: float, iterations: int, q: np.ndarray
          ) -> tuple[np.ndarray, np.ndarray, int]:
     """PGA on the cells ``g [chirp, cell]``: phase ``[chirp]``, its variance, iterations.
 
-    The window is the whole Doppler band: the sidebands of a vibration lie
-    anywhere in it, and a narrower window would cut the paired echoes the
-    estimate is made of.
+    The window is the whole Doppler band (module docstring, step 2).
     """
     n, k = g.shape
     g = g.astype(np.complex128)
@@ -296,7 +297,8 @@ def _pga(g: np.ndarray, noise: float, iterations: int, q: np.ndarray
         # each cell's own constant and linear phase (its position, its Doppler) is not error
         dev = _detrend(np.unwrap(np.angle(h * np.conj(np.sum(h, axis=0))[None, :]), axis=0),
                        q)
-        var_sp = (w ** 2 * dev ** 2).sum(axis=1) / w.sum(axis=1) ** 2 * k / (k - 1)
+        var_sp = (w ** 2 * dev ** 2).sum(axis=1) / np.maximum(w.sum(axis=1) ** 2,
+                                                              1e-300) * k / (k - 1)
     else:
         var_sp = np.zeros(n)
     return _detrend(total, q), np.maximum(var_th, var_sp), it
