@@ -178,6 +178,7 @@ def _flight(tmp_path, vibration: bool, gap):
     """A TDM frame (TI 3 Tx x 4 Rx, exact oracle, noise) of stationary point targets from
     a hovering drone, and its consumer-MEMS IMU at 1 kHz logged as a 250 Hz boxcar."""
     from raysim.echoes.oracle import PointTarget, simulate_point_targets
+    from raysim.io.imu_log import write_imu_csv
     from raysim.io.mmwave_config import ti_antenna_positions
     from raysim.pipeline.flight import FLIGHT_RADAR
     from raysim.pipeline.sensors import imu_record
@@ -208,6 +209,7 @@ def _flight(tmp_path, vibration: bool, gap):
                                  seed=2, start=0.0, lead_s=0.5), 250.0)
     if gap is not None:
         s = drop_gaps(s, [(gap, 0.05)])
+    write_imu_csv(tmp_path / "imu.csv", s)
     # the velocity the IMU chain starts from: the hover's (what an ego-velocity fit over
     # frames gives; the vibration's instantaneous velocity is what the log cannot see)
     v0 = hover.velocity(np.array([T0]))[0]
@@ -276,3 +278,24 @@ def test_stage_refuses_autofocus_without_chain(tmp_path):
                    autofocus=True)
     with pytest.raises(ValueError, match="--autofocus: got 'sharp'"):
         compensate(tmp_path / "c.npz", None, out=tmp_path / "x.npz", autofocus="sharp")
+
+
+def test_cli_autofocus(tmp_path, capsys):
+    """``raysim compensate ... --autofocus stationary`` prints the estimate per frame; an
+    unknown mode exits with status 2."""
+    from raysim.cli import main
+
+    _, _, v0, att = _flight(tmp_path, True, GAPS["outside"])
+    args = ["compensate", str(tmp_path / "c.npz"), "--imu", str(tmp_path / "imu.csv"),
+            "--range-m", "8.5:13.3", "--az-deg", "-20:20:1", "--el-deg", "0:0:1",
+            "--velocity", "given", "--initial-velocity", ",".join(f"{x!r}" for x in v0.tolist()),
+            "--initial-attitude-deg", ",".join(f"{x!r}" for x in att.tolist()), "--out",
+            str(tmp_path / "cli.npz")]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CompensationWarning)
+        assert main([*args, "--autofocus", "stationary"]) == 0
+    out = capsys.readouterr().out
+    assert "autofocus frame 0: residual phase rms" in out and "range rate" in out
+    with pytest.raises(SystemExit) as exc:
+        main([*args, "--autofocus", "sharp"])
+    assert exc.value.code == 2 and "--autofocus" in capsys.readouterr().err
