@@ -64,15 +64,16 @@ Output (``out``): a labelled Zarr store
 ``autofocus`` (JSON, per frame); or, for one frame and a path ending in
 ``.npz``, the file of :func:`raysim.io.compensate_io.write_compensated_npz`
 (the autofocus report under ``autofocus`` in its ``self_calibration`` JSON).
+The warnings are the chains' and the integration's assumption warnings
+(:mod:`compensation.guards`), in the output and in
+:attr:`CompensateResult.warnings`.
 
-Autofocus (``autofocus=True``, ``--autofocus``): after the IMU-driven chain,
-the residual per-chirp phase common to the stationary scatterers (vibration
-the IMU log cannot see) is estimated from the beams and removed
-(:func:`compensation.autofocus.autofocus_beams`; TDM: stamped at each chirp's mean
-slot time); its report (rms phase, band, sigma, cells) is
-:attr:`CompensateResult.autofocus`. The warnings are the
-chains' and the integration's assumption warnings (:mod:`compensation.guards`),
-in the output and in :attr:`CompensateResult.warnings`.
+Autofocus (``autofocus``, ``--autofocus [phase|stationary]``): after the
+IMU-driven chain, the residual per-chirp phase common to the stationary
+scatterers (vibration the IMU log cannot see) is estimated from each frame's
+beams and removed (:func:`compensation.autofocus.autofocus_beams`; TDM: stamped
+at each chirp's mean slot time); its report (rms phase, band, sigma, cells) is
+:attr:`CompensateResult.autofocus`.
 
 Errors name the parameter by its ``raysim compensate`` option (``--frames``,
 ``--range-m`` ...): parameter ``x_y`` is option ``--x-y``.
