@@ -266,8 +266,34 @@ def test_rotor_vibration_the_log_cannot_see(tmp_path, gap):
 def test_no_vibration_no_harm(tmp_path):
     cfg, table, v0, att = _flight(tmp_path, False, None)
     imu_only, _ = _leakage(tmp_path, cfg, table, v0, att, False)
-    focused, _ = _leakage(tmp_path, cfg, table, v0, att, "phase")
-    assert np.all(focused <= imu_only + HARM_DB)
+    for mode in ("phase", "stationary"):
+        focused, _ = _leakage(tmp_path, cfg, table, v0, att, mode)
+        assert np.all(focused <= imu_only + HARM_DB), mode
+
+
+def test_stage_warns_when_nothing_to_focus_on(tmp_path):
+    """Noise only, a platform at rest: the compensate stage leaves the beams as the chain
+    made them and says so in its warnings (printed by the command)."""
+    from raysim.pipeline.compensate import compensate
+
+    rng = np.random.default_rng(3)
+    cfg_keys = dict(carrier_frequency=77e9, bandwidth=1e9, chirp_duration=60e-6,
+                    sample_rate=2.5e6)
+    data = (rng.standard_normal((64, 4, 150)) + 1j * rng.standard_normal((64, 4, 150)))
+    p = np.zeros((4, 3))
+    p[:, 0] = np.arange(4) * LAM / 2
+    np.savez(tmp_path / "n.npz", data=data.astype(np.complex64),
+             chirp_times=0.5 + 70e-6 * np.arange(64), element_positions=p, **cfg_keys)
+    t = np.arange(0.0, 1.2, 1 / 250)
+    table = np.column_stack([t, np.zeros((t.size, 5)), np.full(t.size, -9.80665)])
+    kw = dict(range_m=(5, 10), azimuth_deg=np.arange(-30, 31, 3.0), elevation_deg=[0.0])
+    with pytest.warns(CompensationWarning, match="autofocus: no stationary scatterer"):
+        res = compensate(tmp_path / "n.npz", table, out=tmp_path / "f.npz", autofocus=True,
+                         **kw)
+    plain = compensate(tmp_path / "n.npz", table, out=tmp_path / "p.npz", **kw)
+    assert any(w.startswith("autofocus: no stationary scatterer") for w in res.warnings)
+    assert res.autofocus[0]["cells"] == 0
+    assert np.array_equal(res.beams[0].data, plain.beams[0].data)
 
 
 def test_stage_refuses_autofocus_without_chain(tmp_path):
