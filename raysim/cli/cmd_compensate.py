@@ -51,6 +51,7 @@ examples:
   raysim compensate rotation_y.zarr --chain paper:published --direction-deg 20,0 \\
       --out published.npz
   raysim compensate rotation_y.zarr --chain none --out none.npz  # no compensation
+  raysim compensate cube.npz --imu flight.ulg --autofocus --out beams.npz  # + radar autofocus
 
 chains: exact (rigid-body projection), paper (the published chain, needs
 --direction-deg; paper:published with the paper's rotation phase), none
@@ -181,6 +182,13 @@ def register(subparsers) -> None:
     p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
                    help="target direction for the paper chain's slow-time correction [deg]; "
                    "needed by --chain paper, not used by the others")
+    p.add_argument("--autofocus", nargs="?", const="phase", default=None,
+                   choices=("phase", "stationary"),
+                   help="after the IMU-driven chain, estimate the residual per-chirp phase "
+                   "common to the stationary scatterers from the beams and remove it (rotor "
+                   "vibration a low-rate IMU log cannot see); 'phase' (alone: --autofocus) "
+                   "leaves the linear phase (Doppler) as it is, 'stationary' also removes "
+                   "those scatterers' common Doppler (a velocity error along the line of sight)")
     p.set_defaults(func=run)
 
 
@@ -241,7 +249,8 @@ def run(args) -> int:
         else _floats(args.direction_deg, 2, "--direction-deg"),
         max_gap=args.max_gap, imu_topic=args.imu_topic, imu_instance=args.imu_instance,
         board=args.board, antenna_positions=args.antenna_positions,
-        mounting_deg=args.mounting_deg, progress=not args.no_progress)
+        mounting_deg=args.mounting_deg, progress=not args.no_progress,
+        autofocus=args.autofocus or False)
     for note in result.notes:
         print(f"note: {note}", file=sys.stderr)
     if result.imu_source is not None:
@@ -250,6 +259,14 @@ def run(args) -> int:
         print(f"warning: {result.chain}: {w}", file=sys.stderr)
     if result.calibration is not None:
         print(_calibration_text(result.calibration))
+    for k, rep in enumerate(result.autofocus or ()):
+        sigma = "n/a" if rep["sigma_rad"] is None else f"{rep['sigma_rad']:.3g}"
+        rate = "" if rep.get("range_rate_mps") is None else (
+            f", range rate {rep['range_rate_mps']:.3g} +- "
+            f"{rep['range_rate_sigma_mps']:.2g} m/s")
+        print(f"autofocus frame {result.frames[k]}: residual phase rms {rep['rms_phase_rad']:.3g} "
+              f"rad (sigma {sigma} rad), band {rep['band_hz'][0]:.0f}-{rep['band_hz'][1]:.0f} "
+              f"Hz, {rep['cells']} cells{rate}")
     print(f"wrote {args.out}: beams {result.shape} [frame, chirp, range, azimuth, elevation], "
           f"chain {result.chain}" + (f", {len(result.warnings)} warning(s)"
                                      if result.warnings else ""))

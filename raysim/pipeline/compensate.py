@@ -60,11 +60,20 @@ Output (``out``): a labelled Zarr store
 (:func:`raysim.io.compensate_io.write_compensated_store`) with ``beams
 [frame, chirp, range, azimuth, elevation]``, ``doppler_power``, ``chirp_time``,
 ``slot_time``, the axes and the attributes ``chain``, ``warnings``,
-``velocity``, ``time_offset_s`` and ``self_calibration``; or, for one frame and
-a path ending in ``.npz``, the file of
-:func:`raysim.io.compensate_io.write_compensated_npz`. The warnings are the
-chains' and the integration's assumption warnings (:mod:`compensation.guards`),
-in the output and in :attr:`CompensateResult.warnings`.
+``velocity``, ``time_offset_s``, ``self_calibration`` and, with ``autofocus``,
+``autofocus`` (JSON, per frame); or, for one frame and a path ending in
+``.npz``, the file of :func:`raysim.io.compensate_io.write_compensated_npz`
+(the autofocus report under ``autofocus`` in its ``self_calibration`` JSON).
+The warnings are the chains' and the integration's assumption warnings
+(:mod:`compensation.guards`), in the output and in
+:attr:`CompensateResult.warnings`.
+
+Autofocus (``autofocus``, ``--autofocus [phase|stationary]``): after the
+IMU-driven chain, the residual per-chirp phase common to the stationary
+scatterers (vibration the IMU log cannot see) is estimated from each frame's
+beams and removed (:func:`compensation.autofocus.autofocus_beams`; TDM: stamped
+at each chirp's mean slot time); its report (rms phase, band, sigma, cells) is
+:attr:`CompensateResult.autofocus`.
 
 Errors name the parameter by its ``raysim compensate`` option (``--frames``,
 ``--range-m`` ...): parameter ``x_y`` is option ``--x-y``.
@@ -129,6 +138,9 @@ class CompensateResult:
     notes : tuple of str
         What the run chose or cleaned for the user (the default range window,
         debris of an interrupted writer removed).
+    autofocus : list of dict or None
+        Per frame, :meth:`compensation.autofocus.Autofocus.report` (rms phase
+        [rad], sigma [rad], band [Hz], cells); None without ``autofocus``.
     """
 
     out: Path
@@ -140,6 +152,7 @@ class CompensateResult:
     time_offset: float | None
     imu_source: str | None = None
     notes: tuple = ()
+    autofocus: list | None = None
 
     @property
     def shape(self) -> tuple:
@@ -362,8 +375,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                initial_attitude_deg=None, imu_grade: str | None = None,
                direction_deg=None, max_gap: float | None = None, imu_topic: str | None = None,
                imu_instance: int | None = None, board: str | None = None,
-               antenna_positions=None, mounting_deg=None,
-               progress: bool = False) -> CompensateResult:
+               antenna_positions=None, mounting_deg=None, progress: bool = False,
+               autofocus: bool | str = False) -> CompensateResult:
     """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
 
     Parameters
@@ -453,6 +466,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         clock offset and ``velocity`` hover or given.
     progress : bool
         A progress bar on stderr for records of several frames.
+    autofocus : bool or {"phase", "stationary"}
+        After the chain, estimate and remove the residual per-chirp phase
+        common to the stationary scatterers (:func:`compensation.autofocus.autofocus_beams`):
+        ``True`` or ``"phase"`` leaves the linear phase (Doppler) as it is,
+        ``"stationary"`` also removes the common Doppler of those scatterers (a
+        platform velocity error along the line of sight). Not with the chain ``none``.
 
     Returns
     -------
@@ -468,6 +487,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         disk available (the size and the settings to reduce).
     """
     spec = parse_chain(chain)
+    if autofocus not in (False, None, True, "phase", "stationary"):
+        raise ValueError(f"--autofocus: got {autofocus!r}, expected 'phase' or 'stationary'")
+    doppler = "stationary" if autofocus == "stationary" else "keep"
+    if autofocus and not spec.compensated:
+        raise ValueError(f"--autofocus: follows the IMU-driven chain; the chain {spec.key!r} "
+                         f"compensates nothing")
     if velocity not in VELOCITY_CHOICES:
         raise ValueError(f"--velocity: got {velocity!r}, expected one of {VELOCITY_CHOICES}")
     if isinstance(time_offset, str):
@@ -534,7 +559,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 initial_attitude_deg=attitude, imu_grade=imu_grade)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
-        results, found = [], list(window_notes)
+        results, found, focus = [], list(window_notes), [] if autofocus else None
         sub = None
         if spec.name == "dpca":        # one sub-aperture size for every frame: comparable maps
             from raysim.pipeline.beams import common_subaperture
@@ -566,11 +591,18 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
             if sub is not None:   # dpca: its price travels with the beams (first warning)
                 beams = replace(beams, warnings=(price, *beams.warnings))
+            if focus is not None:   # vibration the IMU log cannot see, from the beams
+                from compensation.autofocus import autofocus_beams
+
+                beams, est = autofocus_beams(beams, slot_times=inp.slot_times[k], doppler=doppler)
+                focus.append(est.report())
             found.extend(w for w in beams.warnings if w not in found)
             results.append(beams)
         if as_npz:
+            report = calibration if focus is None else {**(calibration or {}),
+                                                        "autofocus": focus[0]}
             write_compensated_npz(os.fspath(out), results[0], spec.key, np.rad2deg(az),
-                                  np.rad2deg(el), calibration)
+                                  np.rad2deg(el), report)
         else:
             import json
 
@@ -585,8 +617,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 from raysim.platform.mounting import mounting_deg as _ypr
 
                 attrs["mounting_deg"] = list(_ypr(mounting_deg))
+            if focus is not None:
+                attrs["autofocus"] = json.dumps(focus)
             write_compensated_store(os.fspath(out), inp, results, chain=spec.key,
                                     warnings=found, azimuth_deg=np.rad2deg(az),
                                     elevation_deg=np.rad2deg(el), extra_attrs=attrs)
         return CompensateResult(out, spec.key, list(inp.frames), results, tuple(found),
-                                calibration, offset, imu_source, tuple(notes))
+                                calibration, offset, imu_source, tuple(notes), focus)
