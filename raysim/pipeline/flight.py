@@ -121,9 +121,21 @@ class FlightFiles:
         out = () if self.board == DEFAULT_BOARD else ("--board", self.board)
         if tuple(self.mounting_deg) != (0.0, 0.0, 0.0):
             out += ("--mounting-deg", ",".join(repr(float(x)) for x in self.mounting_deg))
-        if self.gaps:
-            out += ("--max-gap", repr(round(max(g[1] for g in self.gaps) + 0.02, 3)))
+        if self._max_gap() is not None:
+            out += ("--max-gap", repr(self._max_gap()))
         return out
+
+    def _max_gap(self) -> float | None:
+        """``--max-gap`` [s] that fills the logger gaps inside the window a compensation of
+        every frame uses (IMU clock, :data:`compensation.ingestion.WINDOW_MARGIN` each
+        side); None when none lies there."""
+        from compensation.ingestion import WINDOW_MARGIN
+
+        lo = self.start + self.time_offset - WINDOW_MARGIN
+        hi = float(self.frame_starts[-1]) + FLIGHT_RADAR["frame_period"] + self.time_offset \
+            + WINDOW_MARGIN
+        inside = [n for s, n in self.gaps if s < hi and s + n > lo]
+        return round(max(inside) + 0.02, 3) if inside else None
 
     def apparent_direction(self, frame: int = 0, target: int = 0) -> tuple[float, float]:
         """``(az, el)`` [deg] of a target from the radar at the hover point, the platform
@@ -186,8 +198,8 @@ class FlightFiles:
                     lever_arm=tuple(float(x) for x in self.lever_arm))
         if self.board != DEFAULT_BOARD:
             opts["board"] = self.board
-        if self.gaps:
-            opts["max_gap"] = round(max(g[1] for g in self.gaps) + 0.02, 3)
+        if self._max_gap() is not None:
+            opts["max_gap"] = self._max_gap()
         return opts
 
     def calibrating_command(self, out: str | Path, *extra: str,
@@ -362,7 +374,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     radar_cfg = atomic_write_text(folder / "radar.cfg",
                                   sdk_cfg_text(cfg, tx_order=tx_order, rx_enabled=rx_on))
     end = start + frames * cfg.frame_interval + 0.05
-    tail = 0.0 if log_gaps <= int(gaps_in_capture) else 0.6 + 0.2 * log_gaps
+    tail = 0.0 if log_gaps <= int(gaps_in_capture) else 0.65 + 0.3 * log_gaps   # room after
     samples, att, gaps = flight_log(
         traj, imu, rate=imu_rate, times=[start, end + tail], seed=seed,
         time_offset=time_offset, clock_drift_ppm=clock_drift_ppm, boxcar=imu_boxcar,
