@@ -34,7 +34,12 @@ returned as they are stored; the clock offset to the radar
 (``--time-offset``) is then of the size of the stamps (docs/recordings.md).
 
 Frames: PX4 and ArduPilot log in FRD already; ROS uses FLU (REP 103), turned
-into FRD by :func:`flu_to_frd`.
+into FRD by :func:`flu_to_frd` (and ENU world into NED by :data:`ENU_TO_NED`).
+
+Attitude: :func:`raysim.io.flight_logs.attitude.read_attitude_log` reads the
+flight controller's attitude estimate the same file holds (PX4
+``vehicle_attitude``, ArduPilot ``ATT`` / ``AHRS2``, ROS orientation), on
+the same clock as its IMU samples.
 """
 
 from __future__ import annotations
