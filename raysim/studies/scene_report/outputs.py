@@ -478,9 +478,15 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
     for sc in scenarios:
         jobs.append((result_label(sc.name, [j[0] for j in jobs]),
                      settings.for_scenario(sc)))
+    for label, st in jobs:             # the default extents widened to hold every object
+        (lo, hi), w = st.range_window, st.grid_half_width_deg
+        if lo < settings.range_window[0] or hi > settings.range_window[1] or \
+                w > settings.grid_half_width_deg:
+            print(f"note: {label}: maps widened to hold every mesh and point target: range "
+                  f"window {lo:.1f}-{hi:.1f} m, grid +-{w:g} deg", file=sys.stderr)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    placed = [(label, mesh_boxes(st), st) for label, st in jobs]
+    placed = [(label, mesh_boxes(st.scenario), st) for label, st in jobs]
     if plot_placement(placed, out / "placement.png") is not None and progress:
         print(f"placement preview: {out / 'placement.png'}", file=sys.stderr)
     results, summary = {}, {}
