@@ -134,6 +134,30 @@ def test_point_targets_widen_the_window(tmp_path):
     assert st.range_window[1] == RANGE_WINDOW_M[1]
 
 
+def test_maps_are_sized_on_the_widened_extents(tmp_path, monkeypatch):
+    """Gates and beams of the widened maps (closed form: the window's range bins, a
+    (2 n + 1)^2 grid of n = half-width / step), refused before any tracing when the
+    memory they need is not there."""
+    import raysim.resources
+    from raysim.studies.scene_report import write_scene_report
+    from raysim.studies.scene_report.coverage import maps_size
+
+    s = _scenario(tmp_path)
+    st = QUICK.for_scenario(s)
+    size = maps_size(st)
+    n = round(st.grid_half_width_deg / st.grid_step_deg)
+    assert size["beams"] == (2 * n + 1) ** 2
+    lo, hi = st.range_window
+    res = st.radar().range_resolution
+    assert abs(size["gates"] - (hi - lo) / res) <= 1
+    assert size["peak_bytes"] > maps_size(QUICK.with_values(scenario=s))["peak_bytes"]
+    monkeypatch.setattr(raysim.resources, "available_memory", lambda: 1 << 20)
+    with pytest.raises(ValueError, match=rf"the maps of far_block \({size['gates']} range "
+                                         rf"gates x {size['beams']} beams, 16 chirps\)"):
+        write_scene_report(tmp_path / "out", settings=QUICK, scenarios=[s], progress=False)
+    assert not (tmp_path / "out").exists()                   # refused before writing
+
+
 @pytest.mark.sionna
 def test_scene_report_maps_hold_a_far_mesh(tmp_path, capsys, rt_backend):
     """Through the command: the note gives the widened window and grid, the block's marker
@@ -153,7 +177,7 @@ def test_scene_report_maps_hold_a_far_mesh(tmp_path, capsys, rt_backend):
     w = data["settings"]["grid_half_width_deg"]
     assert hi > RANGE_WINDOW_M[1] and w > GRID_HALF_WIDTH_DEG
     assert (f"note: far_block: maps widened to hold every mesh and point target: range "
-            f"window {lo:.1f}-{hi:.1f} m, grid +-{w:g} deg") in err
+            f"window {lo:.1f}-{hi:.1f} m, grid +-{w:g} deg (") in err
     block = {t["name"]: t for t in data["targets"] if t.get("mesh")}["block.obj"]
     assert lo <= block["range_m"] <= hi and abs(block["az_deg"]) <= w
     assert not block["cfar"]["stationary"]["status"].startswith("outside")

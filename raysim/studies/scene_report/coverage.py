@@ -8,7 +8,8 @@ in W, NED, docs/conventions.md). :func:`covering_extents` widens a range window
 and a symmetric angle grid so that all of them lie on the range-azimuth and
 azimuth-elevation maps with a margin, within the radar's unambiguous range and
 the grid's limit; objects beyond those limits are returned by name (the report
-names them as off the maps).
+names them as off the maps). :func:`maps_size` sizes the maps of the widened
+extents before any tracing.
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ import numpy as np
 
 from .meshes import mesh_boxes, mesh_targets
 
-__all__ = ["object_spans", "covering_extents", "COVER_MARGIN_M", "COVER_MARGIN_DEG",
-           "MAX_GRID_HALF_WIDTH_DEG", "BOX_FACE_SAMPLES"]
+__all__ = ["object_spans", "covering_extents", "maps_size", "COVER_MARGIN_M",
+           "COVER_MARGIN_DEG", "MAX_GRID_HALF_WIDTH_DEG", "BOX_FACE_SAMPLES"]
 
 #: Range added beyond the nearest and the farthest object when the window widens [m].
 COVER_MARGIN_M = 1.0
@@ -171,3 +172,33 @@ def covering_extents(spans: list[dict], range_window: tuple[float, float],
             beyond.append(s["name"])
     return {"range_window": (lo, hi), "grid_half_width_deg": half, "widened": widened,
             "beyond": beyond}
+
+
+def maps_size(settings) -> dict:
+    """Size of one chain's scene maps on the report's range window and angle grid.
+
+    Parameters
+    ----------
+    settings : ReportSettings
+        Its radar, array, ``range_window``, grid and ``gate_block``.
+
+    Returns
+    -------
+    dict
+        ``gates`` (range bins in the window), ``beams`` (azimuth x elevation grid
+        points), ``peak_bytes``: an upper estimate of the step's peak memory [bytes],
+        one block of beams ``[chirp, gate, azimuth, elevation]`` complex128 twice
+        (the beams and a re-pointed copy), the steering ``[channel, beam]``
+        complex128, and the coherent cube ``[gate, azimuth, elevation]`` float64
+        three times (the cube, the CFAR's noise and its local-maximum filter).
+    """
+    cfg = settings.radar()
+    r = cfg.range_axis()
+    lo, hi = settings.range_window
+    gates = int(np.count_nonzero((r >= lo) & (r <= hi)))
+    az, el = settings.grid()
+    beams = int(az.size * el.size)
+    block = cfg.num_chirps * min(settings.gate_block, max(gates, 1)) * beams * 16 * 2
+    steering = settings.array().num_channels * beams * 16
+    return {"gates": gates, "beams": beams,
+            "peak_bytes": int(block + steering + gates * beams * 8 * 3)}
