@@ -182,3 +182,24 @@ def test_scene_report_maps_hold_a_far_mesh(tmp_path, capsys, rt_backend):
     assert lo <= block["range_m"] <= hi and abs(block["az_deg"]) <= w
     assert not block["cfar"]["stationary"]["status"].startswith("outside")
     assert "off the maps" not in err
+
+
+def test_known_reflectors_of_bundled_and_xml_scenes_widen_the_grid():
+    """The parking lot's facade corner, 29.8 m north and 15 m down (azimuth
+    atan2(29.8, 15 - 0.1) = 63.4 deg from the phase centre 0.1 m below the hover point,
+    beyond the +-60 deg grid), takes the grid to +-66 deg
+    (63.4 + 2 in 6-degree steps), from the bundled name or from its XML file; the
+    flat_reflectors' reflectors are all within the default maps."""
+    from raysim.echoes.rt.scenes import SCENES
+
+    st = QUICK.for_scene("parking_lot")
+    corner = {o["name"]: o for o in object_spans(st.scenario)}["facade-corner"]
+    assert corner["az_deg"][0] == pytest.approx(math.degrees(math.atan2(29.8, 15.0 - 0.1)),
+                                                abs=1e-9)
+    assert st.grid_half_width_deg == 66.0 and st.range_window == RANGE_WINDOW_M
+    xml = QUICK.scenario.with_values({"scene.kind": "mesh",
+                                      "scene.path": str(SCENES["parking_lot"].path)})
+    assert QUICK.for_scenario(xml).grid_half_width_deg == 66.0
+    flat = QUICK.for_scene("flat_reflectors")
+    assert flat.grid_half_width_deg == GRID_HALF_WIDTH_DEG
+    assert flat.range_window == RANGE_WINDOW_M

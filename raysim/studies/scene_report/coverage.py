@@ -66,11 +66,13 @@ def _span(points: np.ndarray, lever: np.ndarray, r_min: float | None = None) -> 
             "el_deg": (float(el.min()), float(el.max()))}
 
 
-def _bundled_targets_w(scenario) -> list[tuple[str, np.ndarray]]:
-    """Known reflectors of a bundled scene, from its sidecar: name and position in W [m]."""
+def _scene_targets_w(scenario) -> list[tuple[str, np.ndarray]]:
+    """Known reflectors of a bundled scene or a Mitsuba XML scene, from its JSON sidecar
+    (none without one): name and position in W [m]."""
     from raysim.echoes.rt.scenes import ENU_FROM_NED, get_scene
 
-    meta = get_scene(scenario.scene.name).metadata()
+    scene = scenario.scene
+    meta = get_scene(scene.name if scene.kind == "bundled" else scene.path).metadata()
     h = float(meta.get("hover_altitude", 15.0))
     return [(str(t.get("name", f"target {i}")),
              (np.asarray(t["position"], dtype=float) - [0.0, 0.0, h]) @ ENU_FROM_NED.T)
@@ -82,8 +84,8 @@ def object_spans(scenario) -> list[dict]:
 
     Users' meshes span their placed bounding box (:func:`mesh_boxes`, range from
     the box's nearest point to its farthest corner) and include their map marker
-    (:func:`mesh_targets`); point targets and a bundled scene's known reflectors
-    are points.
+    (:func:`mesh_targets`); point targets and the known reflectors of a bundled
+    or Mitsuba XML scene (its JSON sidecar's targets) are points.
 
     Parameters
     ----------
@@ -105,8 +107,8 @@ def object_spans(scenario) -> list[dict]:
         for i, t in enumerate(scene.targets):
             p = lever + t.range_m * direction(math.radians(t.az_deg), math.radians(t.el_deg))
             out.append({"name": f"target {i}", "kind": "target", **_span(p, lever)})
-    elif scene.kind == "bundled":
-        for name, p in _bundled_targets_w(scenario):
+    elif scene.kind in ("bundled", "mesh"):
+        for name, p in _scene_targets_w(scenario):
             out.append({"name": name, "kind": "target", **_span(p, lever)})
     boxes = mesh_boxes(scenario)
     for b, marker in zip(boxes, mesh_targets(boxes, lever), strict=True):
