@@ -300,16 +300,20 @@ def nominal_at(trajectory, t0: float, axes=None):
 def path_kinds(paths) -> dict:
     """Path count per interaction kind of a :class:`raysim.echoes.rt.trace.PathSet`.
 
-    ``specular`` (single-bounce ground mirror), ``diffuse``, ``target`` and
-    ``other_specular`` counts.
+    ``specular`` (single-bounce ground mirror), ``diffuse`` (the clutter
+    field's scatterers among them), ``target`` (constant-RCS point targets),
+    ``po_centre`` (scattering centres of the geometry targets' meshes, physical
+    optics) and ``other_specular`` counts.
     """
+    from raysim.echoes.po.paths import PO_CENTRE
     from raysim.echoes.rt.trace import DIFFUSE, SENSING, SPECULAR
 
     k = paths.kind
     return {"specular": int(np.sum(k == SPECULAR)), "diffuse": int(np.sum((k & DIFFUSE) != 0)),
             "target": int(np.sum((k & SENSING) != 0)),
+            "po_centre": int(np.sum((k & PO_CENTRE) != 0)),
             "other_specular": int(np.sum(((k & SPECULAR) != 0) & (k != SPECULAR)
-                                         & ((k & (DIFFUSE | SENSING)) == 0)))}
+                                         & ((k & (DIFFUSE | SENSING | PO_CENTRE)) == 0)))}
 
 
 def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = None,
