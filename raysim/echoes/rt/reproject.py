@@ -63,6 +63,7 @@ materialising their ``[path, chirp, channel]`` delays
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -338,7 +339,7 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
                      trajectory: Trajectory | None = None, lever_arm=(0.0, 0.0, 0.0), *,
                      out: np.ndarray | None = None, chirps=None, path_chunk: int = 256,
                      synthesizer=None, compact="auto", eps: float = 1e-6,
-                     **options) -> tuple[np.ndarray, int]:
+                     modulation=None, **options) -> tuple[np.ndarray, int]:
     """IF cube of frozen paths via :func:`raysim.synthesis.select.synthesize`.
 
     Paths whose re-projection is the frozen-vertex formula (all but the
@@ -369,6 +370,11 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         is given, ``if_band`` is not ``"taper"`` and ``chirps`` is a run ("auto").
     eps : float
         Requested relative error of the default synthesis and of the compact way.
+    modulation : callable, optional
+        ``f(first_vertex [path, 3], chirp_times [chirp]) -> (rows [n], m [n, chirp])``
+        or None: complex per-chirp factors of the amplitudes of paths ``rows``
+        (the wind's internal clutter motion,
+        :meth:`raysim.echoes.ground.field.ClutterField.modulation`).
     **options
         ``frame``, ``t0``, ``if_band``, ``taper``, ``specular``, ``pattern`` of
         :func:`reproject`.
@@ -399,15 +405,23 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
                    and options.get("if_band", "cull") != "taper"
                    and int(frozen.sum()) >= COMPACT_MIN_PATHS)
     dropped = 0
+    times = config.chirp_times(options.get("frame", 0), options.get("t0", 0.0))
+    times = times if chirps is None else times[np.asarray(chirps)]
     if compact and frozen.any():
         dropped += _synthesize_compact(paths.select(frozen), config, array, trajectory,
-                                       lever_arm, out, run, eps, options)
+                                       lever_arm, out, run, eps, options,
+                                       modulation=modulation)
         paths = paths.select(~frozen)
     for part in iter_reprojected(paths, config, array, trajectory, lever_arm,
                                  path_chunk=path_chunk, chirps=chirps, **options):
         dropped += part.dropped_if_band
+        mod = None if modulation is None else modulation(paths.first_vertex[part.kept], times)
+        amp = part.amplitude
+        if mod is not None and mod[0].size:
+            amp = np.broadcast_to(amp, part.tau.shape[:2] + (1,)).copy()
+            amp[mod[0]] *= mod[1][..., None]
         if part.tau.shape[0]:
-            synth(part.tau, part.amplitude, config, out=out)
+            synth(part.tau, amp, config, out=out)
     return out, dropped
 
 
@@ -424,7 +438,7 @@ def _chirp_run(chirps, num_chirps: int) -> range | None:
 
 def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray, trajectory,
                         lever_arm, out: np.ndarray, run: range | None, eps: float,
-                        options: dict) -> int:
+                        options: dict, modulation=None) -> int:
     """Add the frozen-vertex ``paths`` into ``out`` the compact way; return the culled count."""
     unknown = set(options) - {"frame", "t0", "if_band", "specular", "pattern", "taper"}
     if unknown:
@@ -438,6 +452,13 @@ def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray
                                   frame=options.get("frame", 0), t0=options.get("t0", 0.0),
                                   if_band=if_band, gain="per_chirp",
                                   pattern=options.get("pattern"))
+    mod = None if modulation is None or not src.num_paths else modulation(
+        src.first_vertex, config.chirp_times(options.get("frame", 0), options.get("t0", 0.0)))
+    if mod is not None and mod[0].size:
+        # wind-blown scatterers: their per-chirp amplitudes times the ICM process
+        amp = src.amplitude.copy()
+        amp[mod[0]] *= mod[1]
+        src = dataclasses.replace(src, amplitude=amp)
     if src.num_paths:
         synthesize(src, None, config, method="auto", eps=eps, out=out, chirps=run)
     return paths.num_paths - src.num_paths
