@@ -193,3 +193,10 @@ def test_still_air_is_unchanged(patch):
     paths = still.paths(config, np.zeros(3), np.eye(3))
     assert still.modulation(paths.first_vertex, [0.0]) is None
     assert windy_soil.modulation(paths.first_vertex, [0.0]) is None
+    plain, _ = synthesize_paths(paths, config, array, chirps=np.arange(4))
+    for compact in (False, True):
+        hooked, _ = synthesize_paths(paths, config, array, chirps=np.arange(4), compact=compact,
+                                     modulation=windy_soil.modulation)
+        ref = plain if not compact else synthesize_paths(paths, config, array,
+                                                         chirps=np.arange(4), compact=True)[0]
+        np.testing.assert_array_equal(hooked, ref)
