@@ -438,7 +438,8 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     for name, motion in (("stationary", rest), ("hover", trajectory)):
         t = time.perf_counter()
         data, _ = synthesize_paths(paths, cfg, arr, motion, lever, path_chunk=path_chunk,
-                                   eps=nufft_eps)
+                                   eps=nufft_eps,
+                                   modulation=None if model is None else model.modulation)
         synthesize_tracks(tracks, cfg, arr, motion, lever, out=data, synthesizer=synth)
         if scenario.noise:
             add_noise(data, cfg, scenario.seed)

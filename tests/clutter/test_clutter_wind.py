@@ -159,7 +159,7 @@ def test_rendered_patch_spectrum(patch, wind):
         pytest.approx(ac_shape_factor(wind), rel=BETA_REL_TOL)
 
 
-def test_frames_are_one_record(patch):
+def test_frames_are_one_record(patch, monkeypatch):
     """Frame 1 of a 512-chirp record is chirps 512-1023 of a 1024-chirp frame (no restart)."""
     config, array, ground = patch
     field = ClutterField.build(ground, config, array, np.zeros(3), np.eye(3),
@@ -173,10 +173,16 @@ def test_frames_are_one_record(patch):
                                chirps=np.arange(CHIRPS, 2 * CHIRPS))
     scale = np.max(np.abs(one))
     np.testing.assert_allclose(both, one, rtol=0, atol=1e-5 * scale)
-    # the compact way (fused kernel) applies the same modulation
+    # the compact way (fused kernel) applies the same modulation, in blocks of paths too
     compact, _ = synthesize_paths(paths, config, array, modulation=field.modulation, frame=1,
                                   compact=True)
     np.testing.assert_allclose(compact, one, rtol=0, atol=1e-4 * scale)
+    import raysim.echoes.rt.reproject as reproject
+
+    monkeypatch.setattr(reproject, "MODULATION_CHUNK", 37)
+    blocks, _ = synthesize_paths(paths, config, array, modulation=field.modulation, frame=1,
+                                 compact=True)
+    np.testing.assert_array_equal(blocks, compact)
 
 
 def test_still_air_is_unchanged(patch):

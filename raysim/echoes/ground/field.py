@@ -44,6 +44,7 @@ and the synthesis applies it (:func:`raysim.echoes.rt.reproject.synthesize_paths
 
 from __future__ import annotations
 
+import functools
 import math
 import time as _time
 from dataclasses import dataclass, field
@@ -372,13 +373,18 @@ class ClutterField:
         """
         if self.icm is None or self.icm_index.size == 0:
             return None
+        keys, order = self._icm_keys
+        q = _void(np.asarray(vertices, dtype=np.float64))
+        j = np.clip(np.searchsorted(keys, q), 0, keys.size - 1)
+        hit = keys[j] == q
+        return np.nonzero(hit)[0], self.icm.modulation(times, order[j[hit]])
+
+    @functools.cached_property
+    def _icm_keys(self) -> tuple[np.ndarray, np.ndarray]:
+        """Sorted position keys of the moving scatterers and their rows in ``icm``."""
         keys = _void(self.positions[self.icm_index])
         order = np.argsort(keys)
-        q = _void(np.asarray(vertices, dtype=np.float64))
-        j = np.clip(np.searchsorted(keys[order], q), 0, keys.size - 1)
-        hit = keys[order][j] == q
-        rows = np.nonzero(hit)[0]
-        return rows, self.icm.modulation(times, order[j[hit]])
+        return keys[order], order
 
     # ------------------------------------------------------------------ paths
     def paths(self, config: RadarConfig, radar_w, r_wb, *, time: float = 0.0,

@@ -63,7 +63,6 @@ materialising their ``[path, chirp, channel]`` delays
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -85,6 +84,9 @@ SPECULAR_MODES = ("image", "frozen")
 #: Frozen-vertex paths from which :func:`synthesize_paths` takes the compact way by
 #: default (dense re-projection costs ``O(path x chirp x channel)`` memory traffic).
 COMPACT_MIN_PATHS = 1024
+#: Paths whose amplitude modulation (wind-blown clutter) is evaluated at once: bounds the
+#: ``[path, chirp]`` factors to 16384 x chirps x 16 B (33 MB at 128 chirps).
+MODULATION_CHUNK = 16384
 
 
 @dataclass(frozen=True)
@@ -415,14 +417,21 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
     for part in iter_reprojected(paths, config, array, trajectory, lever_arm,
                                  path_chunk=path_chunk, chirps=chirps, **options):
         dropped += part.dropped_if_band
-        mod = None if modulation is None else modulation(paths.first_vertex[part.kept], times)
         amp = part.amplitude
-        if mod is not None and mod[0].size:
+        if modulation is not None and part.tau.shape[0]:
             amp = np.broadcast_to(amp, part.tau.shape[:2] + (1,)).copy()
-            amp[mod[0]] *= mod[1][..., None]
+            _modulate(amp[..., 0], paths.first_vertex[part.kept], modulation, times)
         if part.tau.shape[0]:
             synth(part.tau, amp, config, out=out)
     return out, dropped
+
+
+def _modulate(amplitude: np.ndarray, vertices: np.ndarray, modulation, times) -> None:
+    """``amplitude`` [path, chirp] times ``modulation``'s factors, in place, by path blocks."""
+    for a in range(0, vertices.shape[0], MODULATION_CHUNK):
+        found = modulation(vertices[a:a + MODULATION_CHUNK], times)
+        if found is not None and found[0].size:
+            amplitude[a + found[0]] *= found[1]
 
 
 def _chirp_run(chirps, num_chirps: int) -> range | None:
@@ -452,13 +461,10 @@ def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray
                                   frame=options.get("frame", 0), t0=options.get("t0", 0.0),
                                   if_band=if_band, gain="per_chirp",
                                   pattern=options.get("pattern"))
-    mod = None if modulation is None or not src.num_paths else modulation(
-        src.first_vertex, config.chirp_times(options.get("frame", 0), options.get("t0", 0.0)))
-    if mod is not None and mod[0].size:
-        # wind-blown scatterers: their per-chirp amplitudes times the ICM process
-        amp = src.amplitude.copy()
-        amp[mod[0]] *= mod[1]
-        src = dataclasses.replace(src, amplitude=amp)
+    if modulation is not None and src.num_paths:
+        # wind-blown scatterers: their per-chirp amplitudes (src's own array) times the process
+        _modulate(src.amplitude, src.first_vertex, modulation,
+                  config.chirp_times(options.get("frame", 0), options.get("t0", 0.0)))
     if src.num_paths:
         synthesize(src, None, config, method="auto", eps=eps, out=out, chirps=run)
     return paths.num_paths - src.num_paths
