@@ -206,3 +206,33 @@ def test_still_air_is_unchanged(patch):
         ref = plain if not compact else synthesize_paths(paths, config, array,
                                                          chirps=np.arange(4), compact=True)[0]
         np.testing.assert_array_equal(hooked, ref)
+
+
+@pytest.mark.sionna
+def test_render_scene_applies_the_wind(clutter_backend, tmp_path):
+    """Two frames of a windy flat ground through render_scene are its paths synthesised with
+    the field's modulation at those frames' chirps; in still air the frames repeat."""
+    from clutter_grounds import write_flat_scene
+
+    from raysim.echoes.rt.render import render_scene
+    from raysim.echoes.rt.scenes import DRY_SOIL, load_scene
+    from raysim.echoes.rt.trace import MonostaticTracer
+    from raysim.echoes.scene_clutter import SceneClutter
+
+    scene = load_scene(write_flat_scene(tmp_path, DRY_SOIL), hover_altitude=10.0)
+    config = RadarConfig(num_chirps=16, sample_rate=2.5e6)
+    array = upa(2, 2, wavelength=config.wavelength)
+    tracer = MonostaticTracer(samples_per_src=2_000, max_depth=1)
+    windy = SceneClutter(FieldSettings(wind_mps=4.0, vegetation=("dry-soil",), seed=1))
+    still = SceneClutter(FieldSettings(seed=1))
+    out = {m: [render_scene(scene, config, array, tracer=tracer, frame=f, clutter=m)
+               for f in range(2)] for m in (windy, still)}
+    assert windy.summary()["icm_scatterers"] == windy.summary()["num_scatterers"] > 100
+    assert windy.builds == still.builds == 1
+    np.testing.assert_array_equal(out[still][0].data, out[still][1].data)
+    for f, frame in enumerate(out[windy]):
+        expect, _ = synthesize_paths(frame.truth["paths"], config, array, frame=f,
+                                     modulation=windy.modulation)
+        np.testing.assert_allclose(frame.data, expect, rtol=0,
+                                   atol=1e-6 * np.abs(expect).max())
+    assert not np.allclose(out[windy][0].data, out[windy][1].data)
