@@ -58,7 +58,10 @@ raised-cosine model of the anti-alias filter (``if_band="taper"``).
 
 Many frozen-vertex paths (a clutter field) are synthesised without
 materialising their ``[path, chirp, channel]`` delays
-(:func:`synthesize_paths`, ``compact``).
+(:func:`synthesize_paths`, ``compact``). Wind-blown clutter keeps its frozen
+points but multiplies its amplitudes chirp by chirp (``modulation``, the
+internal clutter motion of :mod:`raysim.echoes.ground.icm`); such paths vary
+within a frame at the clutter's Doppler bandwidth and are rendered at every chirp.
 """
 
 from __future__ import annotations
@@ -376,7 +379,9 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         ``f(first_vertex [path, 3], chirp_times [chirp]) -> (rows [n], m [n, chirp])``
         or None: complex per-chirp factors of the amplitudes of paths ``rows``
         (the wind's internal clutter motion,
-        :meth:`raysim.echoes.ground.field.ClutterField.modulation`).
+        :meth:`raysim.echoes.ground.field.ClutterField.modulation`), evaluated
+        at each chirp's start time; these amplitudes change from chirp to chirp,
+        so a slow-time decimation must leave such paths undecimated.
     **options
         ``frame``, ``t0``, ``if_band``, ``taper``, ``specular``, ``pattern`` of
         :func:`reproject`.
