@@ -196,14 +196,21 @@ class IcmProcess:
             om = 4.0 * math.pi / self.wavelength * self.velocity[sel]          # [n, K] rad/s
             g = self.weight[sel]
             if uniform:
-                # t = t0 + (i B + j) step: exp(j om t) = outer[i] inner[j], about 2 sqrt(T)
-                # exponentials per tone instead of T (chirps of a frame are uniform)
+                # t = t0 + (i B + j) step: exp(j om t) = outer[i] inner[j], both powers of one
+                # phasor (chirps of a frame are uniform); the tone sum in complex64, the
+                # cube's own precision
                 b = math.isqrt(t.size - 1) + 1
                 nb = -(-t.size // b)
-                inner = np.exp(1j * om[:, :, None] * (np.arange(b) * step))      # [n, K, B]
-                outer = np.exp(1j * om[:, None, :] * (t[0] + np.arange(nb) * (b * step))[
-                    None, :, None]) * g[:, None, :]                               # [n, I, K]
-                ac = np.matmul(outer, inner).reshape(sel.size, nb * b)[:, :t.size]
+                inner = np.empty(om.shape + (b,), dtype=np.complex128)            # [n, K, B]
+                inner[..., 0] = 1.0
+                inner[..., 1:] = np.exp(1j * om * step)[..., None]
+                np.cumprod(inner, axis=-1, out=inner)
+                outer = np.empty((sel.size, nb) + om.shape[1:], dtype=np.complex128)  # [n, I, K]
+                outer[:, 0] = np.exp(1j * om * t[0]) * g
+                outer[:, 1:] = np.exp(1j * om * (b * step))[:, None, :]
+                np.cumprod(outer, axis=1, out=outer)
+                ac = np.matmul(outer.astype(np.complex64), inner.astype(np.complex64)).reshape(
+                    sel.size, nb * b)[:, :t.size]
             else:
                 ac = np.matmul(g[:, None, :], np.exp(1j * om[:, :, None] * t))[:, 0]
             out[a:a + sel.size] = self.dc + ac
