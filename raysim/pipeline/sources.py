@@ -111,7 +111,9 @@ def _clutter(scenario: Scenario):
     from raysim.echoes.scene_clutter import SceneClutter
 
     return SceneClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
-                                       max_scatterers=c.max_scatterers, seed=scenario.seed),
+                                       max_scatterers=c.max_scatterers, seed=scenario.seed,
+                                       polarisation=scenario.radar.polarisation,
+                                       wind_mps=c.wind_mps, vegetation=c.vegetation),
                          ghosts=c.ghosts,
                          movers=[*(_car(m, seed=scenario.seed + i)
                                    for i, m in enumerate(scenario.scene.movers)),
@@ -440,7 +442,8 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     for name, motion in (("stationary", rest), ("hover", trajectory)):
         t = time.perf_counter()
         data, _ = synthesize_paths(paths, cfg, arr, motion, lever, path_chunk=path_chunk,
-                                   eps=nufft_eps)
+                                   eps=nufft_eps,
+                                   modulation=None if model is None else model.modulation)
         synthesize_tracks(tracks, cfg, arr, motion, lever, out=data, synthesizer=synth)
         if scenario.noise:
             add_noise(data, cfg, scenario.seed)
