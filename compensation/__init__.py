@@ -31,6 +31,11 @@ Modules
     rate and gives each frame's latency.
 ``geometry``
     Direction and angle-grid helpers.
+``autofocus``
+    :func:`autofocus_beams`: the residual per-chirp phase common to the stationary
+    scatterers after the IMU chain (vibration a low-rate IMU log cannot see),
+    estimated from the beams (phase-gradient autofocus) and removed, with its
+    uncertainty (:class:`Autofocus`).
 ``multiframe``
     Records of many frames: :func:`integrate_record` (one integration, split
     per frame), :func:`project_record`, :func:`accumulate`.
@@ -53,6 +58,7 @@ Axis names: ``chirp, channel, sample`` for IF data, ``range, doppler,
 azimuth, elevation`` for processed data (docs/conventions.md).
 """
 
+from .autofocus import Autofocus, autofocus_beams, correct_phase, estimate_phase_error
 from .calibration import CalibrationResult, Scatterer, self_calibrate
 from .clock_offset import ClockOffset, fit_time_shift
 from .dpca import DPCABeams, DPCAPlan, dpca_plan, dpca_projection
@@ -78,6 +84,7 @@ from .stream import RealtimeStream
 __version__ = "0.1.0"
 
 __all__ = [
+    "Autofocus", "autofocus_beams", "correct_phase", "estimate_phase_error",
     "BeamCube", "CalibrationResult", "ClockOffset", "CompensationWarning", "DPCABeams",
     "DPCAPlan", "EgoVelocity",
     "GyroBias", "PAPER_STEPS", "PlatformMotion", "RealtimeProjector", "RealtimeStream",

@@ -124,6 +124,35 @@ def test_px4_appended_log_gyro_matches_the_attitude_rates():
         assert abs(scale - 1) < 0.1, f"axis {i}: scale {scale}"
 
 
+#: Unit-quaternion norm of the ULog attitude read (float32 storage: about 1e-7).
+QUAT_NORM_TOL = 1e-5
+
+
+@pytest.mark.parametrize("name, rate", [("sample_log_small.ulg", 205.0),
+                                        ("sample_appended_multiple.ulg", 31.3)])
+def test_px4_vehicle_attitude_read_beside_the_imu(name, rate):
+    """``vehicle_attitude`` read on the IMU's clock: unit quaternions, the rate the log holds
+    (measured with pyulog), and its roll/pitch against the quaternion formula."""
+    from pyulog import ULog
+
+    from raysim.io.flight_logs.attitude import read_attitude_log
+
+    path = REAL / "ulog" / name
+    att = read_attitude_log(path)
+    raw = next(x.data for x in ULog(str(path), ["vehicle_attitude"]).data_list)
+    q = np.column_stack([raw[f"q[{i}]"] for i in range(4)]).astype(float)
+    assert np.all(np.abs(np.linalg.norm(q, axis=1) - 1) < QUAT_NORM_TOL)
+    assert "vehicle_attitude" in att.source and "time since boot" in att.source
+    held = 1e6 / np.median(np.diff(raw["timestamp"].astype(float)))
+    assert abs(att.rate / held - 1) < RATE_RTOL and abs(att.rate / rate - 1) < RATE_RTOL
+    assert att.time[0] == pytest.approx(raw["timestamp"][0] * 1e-6)
+    s = read_imu_log(path)                   # the same clock: the spans overlap
+    assert att.time[0] < s.time[-1] and s.time[0] < att.time[-1]
+    roll, pitch = _quat_roll_pitch_deg(q)
+    ypr = att.rotation.as_euler("ZYX", degrees=True)
+    assert np.allclose(ypr[:, 2], roll, atol=1e-6) and np.allclose(ypr[:, 1], pitch, atol=1e-6)
+
+
 # --------------------------------------------------------------------------- ArduPilot
 
 def _dataflash(path, kind):
@@ -150,6 +179,32 @@ def test_dataflash_2015_log_with_timems():
     r_acc, p_acc = _level_deg(s.accel)
     assert abs(r_acc - np.mean([a["Roll"] for a in att])) < LEVEL_TOL_DEG
     assert abs(p_acc - np.mean([a["Pitch"] for a in att])) < LEVEL_TOL_DEG
+
+
+@pytest.mark.parametrize("name", ["erle_pxf_copter_19-4-2015_7.BIN",
+                                  "amc_backend_log_80k.bin"])
+def test_dataflash_att_read_and_its_tilt_matches_the_accelerometer(name):
+    """``ATT`` read on the IMU's clock; its roll/pitch over the log against the tilt of the
+    mean specific force (the copter near rest on the ground in both logs)."""
+    pytest.importorskip("pymavlink")
+    from raysim.io.flight_logs.attitude import read_attitude_log
+
+    path = REAL / "dataflash" / name
+    att = read_attitude_log(path)
+    s = read_imu_log(path)
+    assert "ArduPilot DataFlash ATT" in att.source
+    rows = _dataflash(path, "ATT")
+    stamp = "TimeUS" if "TimeUS" in rows[0] else "TimeMS"
+    t = np.array([r[stamp] for r in rows]) * (1e-6 if stamp == "TimeUS" else 1e-3)
+    assert att.time[0] == pytest.approx(t[0])
+    assert abs(att.rate * np.median(np.diff(t)) - 1) < RATE_RTOL
+    inside = (att.time >= s.time[0]) & (att.time <= s.time[-1])
+    assert inside.sum() >= 2                                       # the same clock
+    ypr = att.rotation[inside].as_euler("ZYX", degrees=True)
+    r_acc, p_acc = _level_deg(s.accel)
+    assert abs(r_acc - ypr[:, 2].mean()) < LEVEL_TOL_DEG
+    assert abs(p_acc - ypr[:, 1].mean()) < LEVEL_TOL_DEG
+    assert att.euler_deg(att.time[0])[0] == pytest.approx(rows[0]["Yaw"], abs=1e-4)
 
 
 def test_dataflash_recent_fragment_instances_and_batch_sampler():

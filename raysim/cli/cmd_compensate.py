@@ -51,6 +51,7 @@ examples:
   raysim compensate rotation_y.zarr --chain paper:published --direction-deg 20,0 \\
       --out published.npz
   raysim compensate rotation_y.zarr --chain none --out none.npz  # no compensation
+  raysim compensate cube.npz --imu flight.ulg --autofocus --out beams.npz  # + radar autofocus
 
 chains: exact (rigid-body projection), paper (the published chain, needs
 --direction-deg; paper:published with the paper's rotation phase), none
@@ -162,9 +163,15 @@ def register(subparsers) -> None:
                    "scatterers (radar, ego-velocity fit)")
     p.add_argument("--initial-velocity", default=None, metavar="VN,VE,VD",
                    help="body velocity in W at the first chirp [m/s] (--velocity given)")
-    p.add_argument("--initial-attitude-deg", default="0,0,0", metavar="YAW,PITCH,ROLL",
+    p.add_argument("--initial-attitude-deg", default=None, metavar="YAW,PITCH,ROLL",
                    help="attitude at the first chirp, Z-Y-X Euler angles [deg], or 'level' "
-                   "(roll/pitch from accelerometer levelling over the IMU record, heading 0)")
+                   "(roll/pitch from accelerometer levelling over the IMU record, heading 0); "
+                   "left out: the IMU log's attitude at the first ramp (PX4 vehicle_attitude, "
+                   "ArduPilot ATT/AHRS2, ROS orientation), else level 0,0,0 (a note says which)")
+    p.add_argument("--mounting-deg", default=None, metavar="YAW,PITCH,ROLL|NAME",
+                   help="radar mounting on the body, Z-Y-X Euler angles of R_BA [deg], or "
+                   "down (default: parallel to the body, looking down), forward, oblique; "
+                   "beams are then in the radar frame at the nominal pose")
     p.add_argument("--imu-grade", choices=("ideal", "tactical", "consumer_mems"),
                    default=None,
                    help="IMU grade: sets the hover window of --velocity hover/radar and of "
@@ -175,6 +182,13 @@ def register(subparsers) -> None:
     p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
                    help="target direction for the paper chain's slow-time correction [deg]; "
                    "needed by --chain paper, not used by the others")
+    p.add_argument("--autofocus", nargs="?", const="phase", default=None,
+                   choices=("phase", "stationary"),
+                   help="after the IMU-driven chain, estimate the residual per-chirp phase "
+                   "common to the stationary scatterers from the beams and remove it (rotor "
+                   "vibration a low-rate IMU log cannot see); 'phase' (alone: --autofocus) "
+                   "leaves the linear phase (Doppler) as it is, 'stationary' also removes "
+                   "those scatterers' common Doppler (a velocity error along the line of sight)")
     p.set_defaults(func=run)
 
 
@@ -216,7 +230,7 @@ def run(args) -> int:
                          f"{args.imu_positional!r} were both given")
     if spec.name == "paper" and args.direction_deg is None:
         raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target direction)")
-    attitude = args.initial_attitude_deg.strip()
+    attitude = None if args.initial_attitude_deg is None else args.initial_attitude_deg.strip()
     result = compensate(
         args.cube, args.imu if args.imu is not None else args.imu_positional, out=args.out,
         chain=spec, frames=args.frames, frame=args.frame, radar_config=args.radar_config,
@@ -228,14 +242,15 @@ def run(args) -> int:
         time_offset=_time_offset(args.time_offset), velocity=args.velocity,
         initial_velocity=None if args.initial_velocity is None
         else _floats(args.initial_velocity, 3, "--initial-velocity"),
-        initial_attitude_deg="level" if attitude == "level"
+        initial_attitude_deg=attitude if attitude in (None, "level")
         else _floats(attitude, 3, "--initial-attitude-deg"),
         imu_grade=args.imu_grade,
         direction_deg=None if args.direction_deg is None
         else _floats(args.direction_deg, 2, "--direction-deg"),
         max_gap=args.max_gap, imu_topic=args.imu_topic, imu_instance=args.imu_instance,
         board=args.board, antenna_positions=args.antenna_positions,
-        progress=not args.no_progress)
+        mounting_deg=args.mounting_deg, progress=not args.no_progress,
+        autofocus=args.autofocus or False)
     for note in result.notes:
         print(f"note: {note}", file=sys.stderr)
     if result.imu_source is not None:
@@ -244,6 +259,14 @@ def run(args) -> int:
         print(f"warning: {result.chain}: {w}", file=sys.stderr)
     if result.calibration is not None:
         print(_calibration_text(result.calibration))
+    for k, rep in enumerate(result.autofocus or ()):
+        sigma = "n/a" if rep["sigma_rad"] is None else f"{rep['sigma_rad']:.3g}"
+        rate = "" if rep.get("range_rate_mps") is None else (
+            f", range rate {rep['range_rate_mps']:.3g} +- "
+            f"{rep['range_rate_sigma_mps']:.2g} m/s")
+        print(f"autofocus frame {result.frames[k]}: residual phase rms {rep['rms_phase_rad']:.3g} "
+              f"rad (sigma {sigma} rad), band {rep['band_hz'][0]:.0f}-{rep['band_hz'][1]:.0f} "
+              f"Hz, {rep['cells']} cells{rate}")
     print(f"wrote {args.out}: beams {result.shape} [frame, chirp, range, azimuth, elevation], "
           f"chain {result.chain}" + (f", {len(result.warnings)} warning(s)"
                                      if result.warnings else ""))

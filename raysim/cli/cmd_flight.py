@@ -21,6 +21,12 @@ examples:
   raysim flight flight_dir --imu tactical --frames 4 --seed 2
   raysim flight flight_dir --time-offset 0.010 --target 15,10,0
   raysim flight flight_dir --frames 4 --attitude level   # levelled attitude in the command
+  raysim flight flight_dir --targets default5 --imu-rate 250 --imu-boxcar \\
+      --log-gaps 3 --clock-drift-ppm 20             # as a flight controller logs it
+  raysim flight flight_dir --target 6,-10,0 --target 8,15,5 --board xWR16xx
+  raysim flight flight_dir --mounting-deg forward --target 7,10,0 --no-attitude
+  raysim flight flight_dir --targets default5 --clutter-scene parking_lot \\
+      --clutter-altitude 8                          # ground 8 m below, in range
 
 exit status: 0 written, 2 invalid input (the message names the option and the value).
 """
@@ -28,51 +34,119 @@ exit status: 0 written, 2 invalid input (the message names the option and the va
 
 def register(subparsers) -> None:
     """Add the ``flight`` subcommand."""
+    from raysim.io.ti_boards import board_names
+    from raysim.pipeline.flight import DEFAULT_BOARD
+
     p = subparsers.add_parser(
         "flight", help="write a simulated flight as a ULog, a DCA1000 capture and its .cfg",
         description=__doc__.split("\n\n")[0], epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("folder", help="output folder (created)")
     p.add_argument("--imu", default="consumer_mems", help="IMU preset")
-    p.add_argument("--imu-rate", type=float, default=1000.0, help="IMU rate [Hz]")
+    p.add_argument("--imu-rate", type=float, default=1000.0, help="logged IMU rate [Hz]")
+    p.add_argument("--imu-boxcar", action="store_true",
+                   help="log the IMU as a flight controller does: --imu-fast-rate samples "
+                   "averaged over each --imu-rate interval (PX4 sensor_combined, ArduPilot IMU)")
+    p.add_argument("--imu-fast-rate", type=float, default=2000.0,
+                   help="internal IMU rate of --imu-boxcar [Hz], a multiple of --imu-rate")
+    p.add_argument("--log-gaps", type=int, default=0, metavar="N",
+                   help="N logger gaps of 50-160 ms (seeded), outside the window a "
+                   "compensation uses unless --gaps-in-capture")
+    p.add_argument("--gaps-in-capture", action="store_true",
+                   help="place the first logger gap inside the capture (the printed commands "
+                   "then carry --max-gap)")
     p.add_argument("--time-offset", type=float, default=0.003,
                    help="IMU clock minus radar clock [s]")
+    p.add_argument("--clock-drift-ppm", type=float, default=0.0,
+                   help="IMU clock rate error [ppm]")
+    p.add_argument("--no-attitude", action="store_true",
+                   help="leave the flight controller's attitude (vehicle_attitude) out of the "
+                   "log")
     p.add_argument("--frames", type=int, default=2, help="radar frames")
-    p.add_argument("--seed", type=int, default=0, help="seed of the jitter and IMU errors")
-    p.add_argument("--target", default="11.3,20,0", metavar="R,AZ,EL",
-                   help="target range [m], azimuth and elevation [deg]")
-    p.add_argument("--attitude", choices=("flight_controller", "level"),
-                   default="flight_controller",
-                   help="initial attitude in the printed command: the flight controller's "
-                   "estimate at the first ramp (numbers) or accelerometer levelling")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the jitter, the IMU errors and the logger gaps")
+    p.add_argument("--target", action="append", default=None, metavar="R,AZ,EL",
+                   help="a stationary target: range [m], azimuth and elevation [deg] in the "
+                   "radar frame; repeatable (default 11.3,20,0)")
+    p.add_argument("--targets", choices=("default5",), default=None,
+                   help="a set of targets: default5 = five targets at 4.5-8.8 m, azimuth "
+                   "-25..30 deg, elevation -5/0/+5 deg")
+    p.add_argument("--board", default=DEFAULT_BOARD, metavar="BOARD",
+                   help=f"TI board of the capture (antennas, RX feed signs, LVDS lanes): one "
+                   f"of {', '.join(board_names())}")
+    p.add_argument("--mounting-deg", default=None, metavar="YAW,PITCH,ROLL|NAME",
+                   help="radar mounting on the body, Z-Y-X Euler angles of R_BA [deg], or "
+                   "down (default), forward, oblique")
+    p.add_argument("--clutter-scene", default=None, metavar="SCENE",
+                   help="add the ground clutter field of a bundled scene (flat_reflectors, "
+                   "parking_lot, rough_terrain), rendered by the same oracle; down mounting")
+    p.add_argument("--clutter-altitude", type=float, default=None, metavar="METRES",
+                   help="hover height above the clutter scene's ground [m] (default: the "
+                   "scene's)")
+    p.add_argument("--clutter-max-scatterers", type=int, default=200_000, metavar="N",
+                   help="bound on the clutter field's scatterers (cost; density scaled down)")
+    p.add_argument("--lever-arm", default="0,0,0.05", metavar="X,Y,Z",
+                   help="radar phase centre in the body frame [m]")
+    p.add_argument("--attitude", choices=("log", "flight_controller", "level"), default="log",
+                   help="initial attitude in the printed command: the log's vehicle_attitude "
+                   "(read by compensate; level when the log has none), the flight controller's "
+                   "estimate at the first ramp as numbers, or accelerometer levelling")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar and no size announcement")
     p.set_defaults(func=run)
+
+
+def _triple(text: str, option: str) -> tuple:
+    try:
+        v = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        v = ()
+    if len(v) != 3:
+        raise ValueError(f"{option}: got {text!r}, expected three comma-separated numbers")
+    return v
 
 
 def run(args) -> int:
     """Run ``raysim flight``; returns the exit code."""
+    import sys
+
     from raysim.cli.options import check_output
     from raysim.pipeline.flight import write_flight
     from raysim.platform.imu_spec import PRESETS
+    from raysim.platform.mounting import is_default_mounting, mounting_deg
 
     check_output(args.folder, "dir", "folder")
     if args.imu not in PRESETS:
         raise ValueError(f"--imu: got {args.imu!r}, expected one of {sorted(PRESETS)}")
-    try:
-        target = tuple(float(v) for v in args.target.split(","))
-    except ValueError:
-        target = ()
-    if len(target) != 3:
-        raise ValueError(f"--target: got {args.target!r}, expected R,AZ,EL (three numbers)")
+    if args.targets is not None and args.target:
+        raise ValueError("give --target or --targets, not both")
+    targets = (args.targets if args.targets is not None
+               else [_triple(t, "--target") for t in (args.target or ["11.3,20,0"])])
     if args.frames < 1:
         raise ValueError(f"--frames: got {args.frames}, expected a positive integer")
+    mounting_deg(args.mounting_deg)          # checked before anything is written
     f = write_flight(args.folder, imu=args.imu, imu_rate=args.imu_rate,
                      time_offset=args.time_offset, seed=args.seed, frames=args.frames,
-                     target=target)
+                     targets=targets, board=args.board, mounting_deg=args.mounting_deg,
+                     lever_arm=_triple(args.lever_arm, "--lever-arm"),
+                     imu_boxcar=args.imu_boxcar, imu_fast_rate=args.imu_fast_rate,
+                     log_gaps=args.log_gaps, gaps_in_capture=args.gaps_in_capture,
+                     clock_drift_ppm=args.clock_drift_ppm, attitude=not args.no_attitude,
+                     clutter_scene=args.clutter_scene, clutter_altitude=args.clutter_altitude,
+                     clutter_max_scatterers=args.clutter_max_scatterers,
+                     progress=not args.no_progress)
     out = f"{args.folder.rstrip('/')}/compensated.zarr"
     print(f"wrote {f.imu_log}, {f.capture}, {f.radar_config}")
-    cells = ("--range-m", f"{target[0] - 0.5}:{target[0] + 0.5}", "--el-deg", "0:0:1")
-    print("compensate with (velocity and clock offset estimated from the radar):")
-    print("  raysim " + shlex.join(f.calibrating_command(out, *cells, attitude=args.attitude)))
+    if f.gaps:
+        print("logger gaps (start, length) [s, IMU clock]: " + ", ".join(
+            f"({s:.3f}, {n:.3f})" for s, n in f.gaps), file=sys.stderr)
+    r = [t[0] for t in f.targets]
+    el = "0:0:1" if all(t[2] == 0 for t in f.targets) else "-5:5:5"
+    cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg", el)
+    if is_default_mounting(args.mounting_deg):
+        print("compensate with (velocity and clock offset estimated from the radar):")
+        print("  raysim " + shlex.join(f.calibrating_command(out, *cells,
+                                                             attitude=args.attitude)))
     print("or with the simulated clock offset and initial velocity given:")
     print("  raysim " + shlex.join(f.command(out, *cells)))
     return 0

@@ -19,6 +19,7 @@ fold B long), trihedral:A (triangular trihedral, edge A), sphere:R (radius R).
 The radar sits at range * u(az, el), u = (cos el sin az, sin el, cos el cos az),
 looking at the origin; canonical targets face it at az = el = 0.
 SPEC is a number, a comma list (-10,0,10) or start:stop:step with stop included.
+A progress bar on stderr counts the directions done (--no-progress: none).
 
 examples:
   raysim rcs plate:0.1 --material metal --az-deg -30:30:0.5 --el-deg 0 --plot plate.png
@@ -59,6 +60,7 @@ def register(subparsers) -> None:
                    "metres, and a file over 500 units across is refused as millimetres")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None, help="write a PNG pattern plot")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
@@ -156,7 +158,8 @@ def run(args) -> int:
     result = monostatic_rcs(mesh, material, az, el, frequency=args.freq_hz,
                             range_m=args.range_m, polarisation=args.pol,
                             max_bounces=args.max_bounces,
-                            rays_per_wavelength=args.rays_per_wavelength)
+                            rays_per_wavelength=args.rays_per_wavelength,
+                            progress=not args.no_progress)
     if args.plot:
         _plot(result, args.plot)
     if args.json:

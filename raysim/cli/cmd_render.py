@@ -12,9 +12,11 @@ examples:
   raysim render examples/case_yaw.toml --out yaw.zarr --set radar.num_chirps=64
 
 The store is an xarray/Zarr dataset with dims frame, chirp, channel, sample
-(see docs/user_guide.md). Re-running the same command after an interruption
-keeps the finished frames and continues with the next one; --overwrite starts
-again.
+(see docs/user_guide.md). After rendering, stderr says what was traced (paths
+or scatterers per source kind of the first frame rendered, paths per mesh of a
+[[scene.meshes]] scene), the frames written and the store's size. Re-running
+the same command after an interruption keeps the finished frames and continues
+with the next one; --overwrite starts again.
 
 exit status: 0 all frames rendered, 1 the renderer could not run here (e.g.
 Sionna RT unavailable), 2 invalid input, 130 interrupted (finished frames kept).
@@ -68,6 +70,8 @@ def run(args) -> int:
         return 1
     for note in summary.notes:
         print(f"note: {note}", file=sys.stderr)
+    for line in traced_lines(scenario, summary, nc):
+        print(line, file=sys.stderr)
     msg = (f"{summary.path}: {summary.frames_resumed + summary.frames_rendered}/"
            f"{summary.frames_total} frames ({summary.frames_rendered} rendered now")
     msg += f", {summary.frames_resumed} kept from before)" if summary.frames_resumed else ")"
@@ -75,3 +79,79 @@ def run(args) -> int:
     if nc:
         print(f"NetCDF export: {nc}")
     return 0
+
+
+#: Names of the path kinds of :func:`raysim.pipeline.sources.path_kinds` in the summary.
+_KIND_NAMES = {"specular": "specular ground", "diffuse": "diffuse", "target": "point targets",
+               "po_centre": "PO centres of meshes", "other_specular": "other specular"}
+
+
+def _tree_bytes(path) -> int:
+    """Bytes of the files under ``path`` (a file: its size; missing: 0)."""
+    from pathlib import Path
+
+    p = Path(path)
+    if p.is_file():
+        return p.stat().st_size
+    return sum(f.stat().st_size for f in p.rglob("*") if f.is_file()) if p.is_dir() else 0
+
+
+def traced_lines(scenario, summary, netcdf=None) -> list[str]:
+    """What ``raysim render`` traced and wrote, as lines for stderr.
+
+    Parameters
+    ----------
+    scenario : raysim.scenario.Scenario
+    summary : raysim.pipeline.run.RenderSummary
+        Its ``truth`` is the first rendered frame's: a traced scene's paths are
+        counted per kind (:func:`raysim.pipeline.sources.path_kinds`) and, for
+        users' meshes, per mesh (the scene report's
+        :func:`raysim.studies.scene_report.meshes.mesh_summary`).
+    netcdf : path-like, optional
+        The NetCDF export, whose size is given too.
+
+    Returns
+    -------
+    list of str
+        ``traced (frame F): ...`` (point targets, or the paths per kind, the
+        clutter field's scatterers and the movers), ``meshes: ...`` for a
+        ``[[scene.meshes]]`` scene, and ``wrote: ...`` (frames and sizes).
+    """
+    from raysim.pipeline.sources import path_kinds
+    from raysim.resources import format_bytes
+
+    lines = []
+    scene = scenario.scene
+    if summary.first_frame is not None:
+        head = f"traced (frame {summary.first_frame}):"
+        paths = summary.truth.get("paths")
+        if scene.kind == "points":
+            lines.append(f"{head} {len(scene.targets)} point target(s) (exact echo model)")
+        elif paths is not None:
+            kinds = path_kinds(paths)
+            parts = [f"{_KIND_NAMES.get(k, k)} {n}" for k, n in kinds.items() if n]
+            lines.append(f"{head} {paths.num_paths} paths of its first trace"
+                         + (f" ({', '.join(parts)})" if parts else ""))
+            clutter = summary.truth.get("clutter") or {}
+            if "num_scatterers" in clutter:
+                lines.append(f"  clutter field: {clutter['num_scatterers']} scatterers "
+                             f"(the diffuse paths above are those in view)")
+            movers = [f"{len(v)} {k}" for k, v in (("car(s)", scene.movers),
+                                                     ("rotor(s)", scene.rotors)) if v]
+            if movers:
+                lines.append(f"  movers: {', '.join(movers)} (moving scatterers, "
+                             f"not in the paths above)")
+            if scene.kind == "meshes":
+                from raysim.studies.scene_report.meshes import mesh_boxes, mesh_summary
+
+                per = mesh_summary(mesh_boxes(scenario), paths, {})
+                lines.append("  meshes: " + ", ".join(f"{m['name']} {m['num_paths']} paths"
+                                                      for m in per))
+    size = f"{format_bytes(_tree_bytes(summary.path))} in {summary.path}"
+    if netcdf:
+        size += f", {format_bytes(_tree_bytes(netcdf))} in {netcdf}"
+    lines.append(f"wrote: {summary.frames_rendered} frame(s) rendered now, "
+                 f"{summary.frames_resumed} kept, "
+                 f"{summary.frames_resumed + summary.frames_rendered}/{summary.frames_total} "
+                 f"in the store; {size}")
+    return lines

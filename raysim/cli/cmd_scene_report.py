@@ -94,7 +94,8 @@ def register(subparsers) -> None:
                    help="seed of the hover jitter (default: 7, or a scenario file's own)")
     p.add_argument("--range-window", default=None, metavar="LOW,HIGH",
                    help="processed range window [m] (default: 12,45, cut to a scenario radar's "
-                        "unambiguous range)")
+                        "unambiguous range and widened, as the +-60 deg grid is, to hold every "
+                        "mesh and point target; a window given is kept)")
     p.add_argument("--threads", type=int, default=None, metavar="N",
                    help="Dr.Jit threads of the ray tracer (default: all cores)")
     p.add_argument("--mover-speed", type=float, default=None, metavar="MPS",

@@ -7,7 +7,8 @@ through the chains of :mod:`raysim.vocabulary` (``none``, ``paper``,
 ``paper:published``, ``exact``; the compensated ones when the
 ``compensation`` package provides them); the metrics of
 :data:`raysim.vocabulary.METRICS` are printed as a table or, with ``--json``,
-as one JSON object. The compensation's guard warnings are printed on stderr
+as one JSON object. A progress bar on stderr counts the frames rendered
+(``--no-progress``: none). The compensation's guard warnings are printed on stderr
 (``warning: <chain>: <text>``) and, with ``--json``, listed per chain under
 ``warnings``.
 """
@@ -72,6 +73,7 @@ def register(subparsers) -> None:
     p.add_argument("--chains", default=",".join(CHAINS),
                    help=chains_help(",".join(CHAINS)))
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
@@ -185,15 +187,22 @@ def run(args) -> int:
     from raysim.measure.point import POINT_METRICS
     from raysim.pipeline.run import evaluate
     from raysim.pipeline.sources import FeatureUnavailable
+    from raysim.report.html import counted_frames, progress_bar
     from raysim.vocabulary import metric_unit
 
     chains = chains_option(args.chains)
     scenario = build_scenario(args)
+    # the report's bar: one step per frame rendered, then the chains being measured
+    bar = progress_bar(scenario.frames, "simulate", not args.no_progress)
     try:
-        result = evaluate(scenario, chains=chains)
+        frames = counted_frames(scenario, scenario.trajectory(), bar,
+                                lambda: f"measuring chains {', '.join(chains)}")
+        result = evaluate(scenario, chains=chains, frames=frames, reference=frames.reference)
     except FeatureUnavailable as exc:
         print(f"raysim simulate: {exc}", file=sys.stderr)
         return 1
+    finally:
+        bar.close()
     ref = result["reference"]
     paper = {}
     if scenario.motion.case is not None:

@@ -9,7 +9,9 @@ takes as ``clutter``: per trace it
   the rough-surface mirror (:mod:`raysim.echoes.ground.specular`),
 * adds the persistent clutter field (:mod:`raysim.echoes.ground.field`),
   building it at the first pose and again only when the radar has moved more
-  than ``settings.reuse_distance`` from the pose it was built for,
+  than ``settings.reuse_distance`` from the pose it was built for; in wind its
+  vegetation scatterers are modulated at every chirp (:meth:`SceneClutter.modulation`,
+  passed to the synthesis),
 * returns the ghosts of the scene's point targets and the moving objects as
   :class:`raysim.echoes.moving.scatterers.Tracks`.
 """
@@ -171,6 +173,14 @@ class SceneClutter:
         drop = np.zeros(paths.num_paths, bool)
         drop[np.nonzero(spec)[0][on]] = True
         return paths.select(~drop)
+
+    def modulation(self, vertices, times):
+        """ICM modulation of the current field's wind-blown scatterers among ``vertices``.
+
+        See :meth:`raysim.echoes.ground.field.ClutterField.modulation`; None
+        without a field, wind or vegetation.
+        """
+        return None if self.field is None else self.field.modulation(vertices, times)
 
     def summary(self) -> dict:
         """Field report plus the number of builds."""

@@ -60,11 +60,20 @@ Output (``out``): a labelled Zarr store
 (:func:`raysim.io.compensate_io.write_compensated_store`) with ``beams
 [frame, chirp, range, azimuth, elevation]``, ``doppler_power``, ``chirp_time``,
 ``slot_time``, the axes and the attributes ``chain``, ``warnings``,
-``velocity``, ``time_offset_s`` and ``self_calibration``; or, for one frame and
-a path ending in ``.npz``, the file of
-:func:`raysim.io.compensate_io.write_compensated_npz`. The warnings are the
-chains' and the integration's assumption warnings (:mod:`compensation.guards`),
-in the output and in :attr:`CompensateResult.warnings`.
+``velocity``, ``time_offset_s``, ``self_calibration`` and, with ``autofocus``,
+``autofocus`` (JSON, per frame); or, for one frame and a path ending in
+``.npz``, the file of :func:`raysim.io.compensate_io.write_compensated_npz`
+(the autofocus report under ``autofocus`` in its ``self_calibration`` JSON).
+The warnings are the chains' and the integration's assumption warnings
+(:mod:`compensation.guards`), in the output and in
+:attr:`CompensateResult.warnings`.
+
+Autofocus (``autofocus``, ``--autofocus [phase|stationary]``): after the
+IMU-driven chain, the residual per-chirp phase common to the stationary
+scatterers (vibration the IMU log cannot see) is estimated from each frame's
+beams and removed (:func:`compensation.autofocus.autofocus_beams`; TDM: stamped
+at each chirp's mean slot time); its report (rms phase, band, sigma, cells) is
+:attr:`CompensateResult.autofocus`.
 
 Errors name the parameter by its ``raysim compensate`` option (``--frames``,
 ``--range-m`` ...): parameter ``x_y`` is option ``--x-y``.
@@ -129,6 +138,9 @@ class CompensateResult:
     notes : tuple of str
         What the run chose or cleaned for the user (the default range window,
         debris of an interrupted writer removed).
+    autofocus : list of dict or None
+        Per frame, :meth:`compensation.autofocus.Autofocus.report` (rms phase
+        [rad], sigma [rad], band [Hz], cells); None without ``autofocus``.
     """
 
     out: Path
@@ -140,6 +152,7 @@ class CompensateResult:
     time_offset: float | None
     imu_source: str | None = None
     notes: tuple = ()
+    autofocus: list | None = None
 
     @property
     def shape(self) -> tuple:
@@ -254,6 +267,31 @@ def _attitude(value):
     return Rotation.from_euler("ZYX", ypr).as_matrix()
 
 
+def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
+    """``initial_attitude_deg``: as given, else the IMU log's attitude at the first ramp
+    (:mod:`raysim.io.flight_logs.attitude`), else level (0, 0, 0); the choice in ``notes``."""
+    if value is not None:
+        return value
+    att = None
+    if isinstance(imu, (str, os.PathLike)):
+        from raysim.io.flight_logs.attitude import read_attitude_log
+
+        att = read_attitude_log(imu, topic=topic)
+    if att is None:
+        notes.append("initial attitude: the IMU log holds no attitude; the platform is "
+                      "assumed level, heading 0, at the first ramp (--initial-attitude-deg "
+                      "0,0,0)")
+        return (0.0, 0.0, 0.0)
+    shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
+    t = float(np.min(inp.slot_times)) + shift             # the first ramp on the log's clock
+    ypr = att.euler_deg(t)
+    notes.append(f"initial attitude: yaw, pitch, roll {ypr[0]:.3f}, {ypr[1]:.3f}, "
+                 f"{ypr[2]:.3f} deg from {att.source} at {t:.6f} s (the first ramp on the "
+                 f"log's clock{', offset 0 taken' if isinstance(time_offset, str) else ''}); "
+                 f"--initial-attitude-deg overrides")
+    return ypr
+
+
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
              velocity, initial_velocity, initial_attitude_deg, imu_grade):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
@@ -334,10 +372,11 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                capture_t0: float = 0.0, range_m=None, azimuth_deg=None,
                elevation_deg=None, lever_arm=None, time_offset: float | str = 0.0,
                velocity: str = "hover", initial_velocity=None,
-               initial_attitude_deg=(0.0, 0.0, 0.0), imu_grade: str | None = None,
+               initial_attitude_deg=None, imu_grade: str | None = None,
                direction_deg=None, max_gap: float | None = None, imu_topic: str | None = None,
                imu_instance: int | None = None, board: str | None = None,
-               antenna_positions=None, progress: bool = False) -> CompensateResult:
+               antenna_positions=None, mounting_deg=None, progress: bool = False,
+               autofocus: bool | str = False) -> CompensateResult:
     """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
 
     Parameters
@@ -387,10 +426,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         or estimated from the Doppler of stationary scatterers (per frame).
     initial_velocity : array_like, shape ``[3]``, optional
         Body velocity in W at the first chirp [m/s] (``velocity="given"``).
-    initial_attitude_deg : (float, float, float) or "level"
+    initial_attitude_deg : (float, float, float) or "level", optional
         Attitude at the first chirp, Z-Y-X Euler angles (yaw, pitch, roll)
         [deg], or ``"level"`` (roll and pitch from accelerometer levelling,
-        heading 0).
+        heading 0); default the IMU log's attitude at the first ramp on its
+        clock (:mod:`raysim.io.flight_logs.attitude`; the offset ``"auto"``
+        takes 0), else level (0, 0, 0); a note says which.
     imu_grade : {"ideal", "tactical", "consumer_mems"}, optional
         Sets the hover window of ``velocity`` hover / radar and of ``"level"``;
         default the whole record.
@@ -417,8 +458,20 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         CSV / JSON file of the TX and RX positions of a capture
         (:func:`raysim.io.mmwave_config.read_antenna_positions`); replaces
         ``board``.
+    mounting_deg : str or (float, float, float), optional
+        Radar mounting ``R_BA``: (yaw, pitch, roll) [deg] or a name of
+        :data:`raysim.platform.mounting.MOUNTING_PRESETS`; default ``down``
+        (A parallel to B). Other mountings give beams in the nominal radar
+        frame (:func:`raysim.platform.mounting.mount_motion`); they need a given
+        clock offset and ``velocity`` hover or given.
     progress : bool
         A progress bar on stderr for records of several frames.
+    autofocus : bool or {"phase", "stationary"}
+        After the chain, estimate and remove the residual per-chirp phase
+        common to the stationary scatterers (:func:`compensation.autofocus.autofocus_beams`):
+        ``True`` or ``"phase"`` leaves the linear phase (Doppler) as it is,
+        ``"stationary"`` also removes the common Doppler of those scatterers (a
+        platform velocity error along the line of sight). Not with the chain ``none``.
 
     Returns
     -------
@@ -434,6 +487,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         disk available (the size and the settings to reduce).
     """
     spec = parse_chain(chain)
+    if autofocus not in (False, None, True, "phase", "stationary"):
+        raise ValueError(f"--autofocus: got {autofocus!r}, expected 'phase' or 'stationary'")
+    doppler = "stationary" if autofocus == "stationary" else "keep"
+    if autofocus and not spec.compensated:
+        raise ValueError(f"--autofocus: follows the IMU-driven chain; the chain {spec.key!r} "
+                         f"compensates nothing")
     if velocity not in VELOCITY_CHOICES:
         raise ValueError(f"--velocity: got {velocity!r}, expected one of {VELOCITY_CHOICES}")
     if isinstance(time_offset, str):
@@ -442,6 +501,13 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                              f"seconds or 'auto'")
     else:
         time_offset = float(_vector(time_offset, 1, "--time-offset")[0])
+    from raysim.platform.mounting import is_default_mounting, mount_motion
+
+    mounted = not is_default_mounting(mounting_deg)
+    if mounted and (velocity == "radar" or isinstance(time_offset, str)):
+        raise ValueError(f"--mounting-deg {mounting_deg!r}: the self-calibration (--velocity "
+                         f"radar, --time-offset auto) assumes the down-looking mounting; give "
+                         f"--time-offset SECONDS and --velocity hover or given")
     out = Path(out)
     as_npz = check_compensated_output(out, "--out", inputs=[("CUBE", source), ("--imu", imu),
                                                             ("--radar-config", radar_config)])
@@ -485,11 +551,15 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                     warnings.warn(text, CompensationWarning, stacklevel=2)
             lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
                      else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
+            attitude = _log_attitude(initial_attitude_deg, imu, inp, time_offset, imu_topic,
+                                     notes)
             motions, calibration, offset = _motions(
                 inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
-                initial_attitude_deg=initial_attitude_deg, imu_grade=imu_grade)
-        results, found = [], list(window_notes)
+                initial_attitude_deg=attitude, imu_grade=imu_grade)
+            if mounted:          # beams in the nominal radar frame
+                motions = [mount_motion(m, mounting_deg) for m in motions]
+        results, found, focus = [], list(window_notes), [] if autofocus else None
         sub = None
         if spec.name == "dpca":        # one sub-aperture size for every frame: comparable maps
             from raysim.pipeline.beams import common_subaperture
@@ -521,11 +591,18 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 beams = replace(beams, chirp_time=inp.slot_times[k, :, 0])
             if sub is not None:   # dpca: its price travels with the beams (first warning)
                 beams = replace(beams, warnings=(price, *beams.warnings))
+            if focus is not None:   # vibration the IMU log cannot see, from the beams
+                from compensation.autofocus import autofocus_beams
+
+                beams, est = autofocus_beams(beams, slot_times=inp.slot_times[k], doppler=doppler)
+                focus.append(est.report())
             found.extend(w for w in beams.warnings if w not in found)
             results.append(beams)
         if as_npz:
+            report = calibration if focus is None else {**(calibration or {}),
+                                                        "autofocus": focus[0]}
             write_compensated_npz(os.fspath(out), results[0], spec.key, np.rad2deg(az),
-                                  np.rad2deg(el), calibration)
+                                  np.rad2deg(el), report)
         else:
             import json
 
@@ -536,8 +613,14 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 attrs["self_calibration"] = json.dumps(calibration)
             if offset is not None:     # the offset applied: given, or estimated ('auto')
                 attrs["time_offset_s"] = offset
+            if mounted:
+                from raysim.platform.mounting import mounting_deg as _ypr
+
+                attrs["mounting_deg"] = list(_ypr(mounting_deg))
+            if focus is not None:
+                attrs["autofocus"] = json.dumps(focus)
             write_compensated_store(os.fspath(out), inp, results, chain=spec.key,
                                     warnings=found, azimuth_deg=np.rad2deg(az),
                                     elevation_deg=np.rad2deg(el), extra_attrs=attrs)
         return CompensateResult(out, spec.key, list(inp.frames), results, tuple(found),
-                                calibration, offset, imu_source, tuple(notes))
+                                calibration, offset, imu_source, tuple(notes), focus)

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["FlightFiles", "write_flight", "FLIGHT_RADAR", "measure_store",
-           "calibrated_flight_table"]
+           "measure_targets", "calibrated_flight_table", "DEFAULT5_TARGETS", "DEFAULT_BOARD"]
 
 #: Waveform of the flight: TI 3 Tx x 4 Rx TDM (TX0, TX2, TX1), 64 loops, 150 samples.
 FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_period=0.05)
@@ -35,6 +35,13 @@ FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_per
 FLIGHT_FILES = ("adc_data.bin", "radar.cfg", "flight.ulg")
 #: Largest ADC value of the written capture (the IF cube is scaled to it) [counts].
 FULL_SCALE_COUNTS = 8000.0
+#: The board of a flight unless told: xWR18xx, 3 TX (TX1 raised lambda/2) x 4 RX.
+DEFAULT_BOARD = "xWR18xx"
+#: ``targets="default5"``: five stationary targets (range [m], azimuth, elevation [deg])
+#: spread over 4-9 m, azimuth -25..30 deg and elevation -5, 0, +5 deg, at least 1 m apart
+#: in range so that each has its own range cells.
+DEFAULT5_TARGETS = ((4.5, -25.0, 0.0), (5.5, 12.0, 5.0), (6.5, -8.0, -5.0),
+                    (7.7, 30.0, 0.0), (8.8, 3.0, 5.0))
 
 
 @dataclass(frozen=True)
@@ -62,9 +69,26 @@ class FlightFiles:
     lever_arm : ndarray, shape ``[3]``
         ``r_IR`` in B [m].
     target : tuple of float
-        ``(range_m, az_deg, el_deg)`` of the point target from the nominal pose.
+        ``(range_m, az_deg, el_deg)`` of the (first) point target from the nominal
+        pose, directions in the nominal radar frame N (:mod:`raysim.platform.mounting`).
     imu : str
         IMU preset (grade) of the log.
+    targets : tuple of tuple
+        Every target ``(range_m, az_deg, el_deg)``; default ``(target,)``.
+    board : str
+        TI board whose antennas and lanes the capture has.
+    mounting_deg : tuple of float
+        Radar mounting ``R_BA`` (yaw, pitch, roll) [deg].
+    imu_rate : float
+        Logged IMU rate [Hz] (boxcar-averaged when ``imu_boxcar``).
+    imu_boxcar : bool
+        Whether the log is a flight controller's boxcar average.
+    gaps : tuple of (float, float)
+        Logger gaps ``(start, length)`` [s, IMU clock].
+    attitude : bool
+        Whether the log holds the flight controller's attitude.
+    clock_drift_ppm : float
+        IMU clock rate error [ppm].
     """
 
     capture: Path
@@ -79,15 +103,51 @@ class FlightFiles:
     lever_arm: np.ndarray
     target: tuple
     imu: str = "consumer_mems"
+    targets: tuple = ()
+    board: str = DEFAULT_BOARD
+    mounting_deg: tuple = (0.0, 0.0, 0.0)
+    imu_rate: float = 1000.0
+    imu_boxcar: bool = False
+    gaps: tuple = ()
+    attitude: bool = True
+    clock_drift_ppm: float = 0.0
 
-    def apparent_direction(self, frame: int = 0) -> tuple[float, float]:
-        """``(az, el)`` [deg] of the target from the radar at the hover point, the platform
+    def __post_init__(self) -> None:
+        if not self.targets:
+            object.__setattr__(self, "targets", (tuple(self.target),))
+
+    def _extra(self) -> tuple:
+        """Options every command of this flight needs beyond today's: board, mounting, gaps."""
+        out = () if self.board == DEFAULT_BOARD else ("--board", self.board)
+        if tuple(self.mounting_deg) != (0.0, 0.0, 0.0):
+            out += ("--mounting-deg", ",".join(repr(float(x)) for x in self.mounting_deg))
+        if self._max_gap() is not None:
+            out += ("--max-gap", repr(self._max_gap()))
+        return out
+
+    def _max_gap(self) -> float | None:
+        """``--max-gap`` [s] that fills the logger gaps inside the window a compensation of
+        every frame uses (IMU clock, :data:`compensation.ingestion.WINDOW_MARGIN` each
+        side); None when none lies there."""
+        from compensation.ingestion import WINDOW_MARGIN
+
+        lo = self.start + self.time_offset - WINDOW_MARGIN
+        hi = float(self.frame_starts[-1]) + FLIGHT_RADAR["frame_period"] + self.time_offset \
+            + WINDOW_MARGIN
+        inside = [n for s, n in self.gaps if s < hi and s + n > lo]
+        return round(max(inside) + 0.02, 3) if inside else None
+
+    def apparent_direction(self, frame: int = 0, target: int = 0) -> tuple[float, float]:
+        """``(az, el)`` [deg] of a target from the radar at the hover point, the platform
         displaced by ``-initial_position[frame]`` (``u = (cos el sin az, sin el, cos el cos
-        az)``): where the compensated beams of a run starting at ``frame`` see it."""
+        az)`` in the nominal radar frame N): where the compensated beams of a run starting
+        at ``frame`` see it."""
         from compensation.geometry import direction
+        from raysim.platform.mounting import mounting_matrix
 
-        r, az, el = self.target
-        v = r * direction(np.deg2rad(az), np.deg2rad(el)) - self.initial_position[frame]
+        r, az, el = self.targets[target]
+        m = mounting_matrix(self.mounting_deg)
+        v = r * direction(np.deg2rad(az), np.deg2rad(el)) - m.T @ self.initial_position[frame]
         return (float(np.rad2deg(np.arctan2(v[0], v[2]))),
                 float(np.rad2deg(np.arcsin(v[1] / np.linalg.norm(v)))))
 
@@ -106,7 +166,7 @@ class FlightFiles:
                 "--initial-velocity", v, "--initial-attitude-deg",
                 ",".join(repr(float(x)) for x in self.initial_attitude_deg[k]), "--lever-arm",
                 ",".join(repr(float(x)) for x in self.lever_arm), "--out", str(out), *sel,
-                *extra]
+                *self._extra(), *extra]
 
 
     def calibrating_options(self, attitude: str = "flight_controller") -> dict:
@@ -121,19 +181,26 @@ class FlightFiles:
         controller's estimate (PX4 logs it as ``vehicle_attitude``); here its value is the
         simulated one, the estimator's own error is not modelled. ``"level"``: roll and
         pitch levelled from the accelerometer over the record, heading 0 (a consumer
-        accelerometer bias of 20 mg tilts it by about 1 deg).
+        accelerometer bias of 20 mg tilts it by about 1 deg). ``"log"``: left to the
+        compensate stage, which reads the log's ``vehicle_attitude`` at the first ramp
+        (level 0, 0, 0 when the log holds none, ``attitude=False``).
         """
         if attitude == "flight_controller":
             att = tuple(float(x) for x in self.initial_attitude_deg[0])
-        elif attitude == "level":
-            att = "level"
+        elif attitude in ("level", "log"):
+            att = None if attitude == "log" else "level"
         else:
-            raise ValueError(f"attitude: got {attitude!r}, expected 'flight_controller' or "
-                             f"'level'")
-        return dict(source=self.capture, imu=self.imu_log, radar_config=self.radar_config,
+            raise ValueError(f"attitude: got {attitude!r}, expected 'flight_controller', "
+                             f"'level' or 'log'")
+        opts = dict(source=self.capture, imu=self.imu_log, radar_config=self.radar_config,
                     capture_t0=float(self.start), imu_grade=self.imu, velocity="radar",
                     time_offset="auto", initial_attitude_deg=att,
                     lever_arm=tuple(float(x) for x in self.lever_arm))
+        if self.board != DEFAULT_BOARD:
+            opts["board"] = self.board
+        if self._max_gap() is not None:
+            opts["max_gap"] = self._max_gap()
+        return opts
 
     def calibrating_command(self, out: str | Path, *extra: str,
                             attitude: str = "flight_controller") -> list[str]:
@@ -141,19 +208,26 @@ class FlightFiles:
         with the output ``out`` and the ``extra`` arguments."""
         o = self.calibrating_options(attitude)
         att = o["initial_attitude_deg"]
+        att = () if att is None else ("--initial-attitude-deg", att if isinstance(att, str)
+                                      else ",".join(repr(x) for x in att))
         return ["compensate", str(o["source"]), "--radar-config", str(o["radar_config"]),
                 "--imu", str(o["imu"]), "--capture-t0", repr(o["capture_t0"]),
                 "--imu-grade", o["imu_grade"], "--velocity", o["velocity"], "--time-offset",
-                o["time_offset"], "--initial-attitude-deg",
-                att if isinstance(att, str) else ",".join(repr(x) for x in att),
+                o["time_offset"], *att,
                 "--lever-arm", ",".join(repr(x) for x in o["lever_arm"]), "--out", str(out),
-                *extra]
+                *self._extra(), *extra]
 
 
 def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_mems",
                  imu_rate: float = 1000.0, time_offset: float = 0.003, seed: int = 0,
                  frames: int = 2, target=(11.3, 20.0, 0.0), lever_arm=(0.0, 0.0, 0.05),
-                 start: float = 0.5) -> FlightFiles:
+                 start: float = 0.5, targets=None, board: str = DEFAULT_BOARD,
+                 mounting_deg=None, imu_boxcar: bool = False, imu_fast_rate: float = 2000.0,
+                 log_gaps: int = 0, gaps_in_capture: bool = False,
+                 clock_drift_ppm: float = 0.0, attitude: bool = True,
+                 clutter_scene: str | None = None, clutter_altitude: float | None = None,
+                 clutter_max_scatterers: int = 200_000,
+                 progress: bool = False) -> FlightFiles:
     """Simulate a flight and write its ULog, DCA1000 capture and SDK ``.cfg``.
 
     Parameters
@@ -166,11 +240,11 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     imu : str
         IMU preset (:mod:`raysim.platform.imu_spec`).
     imu_rate : float
-        IMU output rate [Hz].
+        Logged IMU rate [Hz].
     time_offset : float
-        IMU clock minus radar clock [s].
+        IMU clock minus radar clock at truth time 0 [s].
     seed : int
-        Seed of the jitter and the IMU errors.
+        Seed of the jitter, the IMU errors and the logger gaps.
     frames : int
         Radar frames.
     target : (float, float, float)
@@ -179,6 +253,38 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         Radar phase centre in B [m].
     start : float
         Truth (radar-clock) time of the first ramp [s]; the IMU starts at 0.
+    targets : sequence of (float, float, float) or str, optional
+        Several stationary targets ``(range [m], az [deg], el [deg])``, or
+        ``"default5"`` (:data:`DEFAULT5_TARGETS`); replaces ``target``.
+    board : str
+        TI board (:data:`raysim.io.ti_boards.BOARDS`): its antennas, RX feed
+        signs and LVDS lanes; 3-TX boards fire TX0, TX2, TX1, 2-TX boards TX0,
+        TX1; the 60 GHz boards start at 60 GHz.
+    mounting_deg : str or (float, float, float), optional
+        Radar mounting (:mod:`raysim.platform.mounting`); default ``down``.
+        Target directions are in the nominal radar frame N.
+    imu_boxcar : bool
+        Log the IMU as a flight controller does: ``imu_fast_rate`` samples
+        boxcar-averaged into ``imu_rate`` (:mod:`raysim.pipeline.flight_log`).
+    imu_fast_rate : float
+        Internal IMU rate of the boxcar [Hz].
+    log_gaps : int
+        Logger gaps of 50-160 ms, seeded, outside the window a compensation
+        uses unless ``gaps_in_capture`` puts the first inside the capture.
+    clock_drift_ppm : float
+        IMU clock rate error [ppm].
+    attitude : bool
+        Write the flight controller's attitude as ``vehicle_attitude``.
+    clutter_scene : str, optional
+        Add the ground clutter field of this bundled scene
+        (:mod:`raysim.pipeline.flight_clutter`), rendered by the same oracle with the
+        element pattern; ``down`` mounting only.
+    clutter_altitude : float, optional
+        Hover height above that ground [m]; default the scene's.
+    clutter_max_scatterers : int
+        Bound on the clutter field's scatterers (cost).
+    progress : bool
+        A progress bar over the frames on stderr and the sizes announced.
 
     Returns
     -------
@@ -187,10 +293,13 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     from raysim.echoes.oracle import PointTarget, simulate_point_targets
     from raysim.io.files import atomic_write_text, check_output
     from raysim.io.flight_logs.ulog import write_px4_ulog
-    from raysim.io.mmwave_config import sdk_cfg_text, ti_antenna_positions
+    from raysim.io.mmwave_config import sdk_cfg_text
+    from raysim.io.ti_boards import BOARDS, resolve_board
     from raysim.io.ti_dca1000 import Dca1000Format, write_dca1000
-    from raysim.pipeline.sensors import imu_record
+    from raysim.pipeline.flight_log import flight_log
     from raysim.platform.motion import hover_jitter
+    from raysim.platform.mounting import mount_array, nominal_target_position
+    from raysim.platform.mounting import mounting_deg as mount_ypr
     from raysim.radar.arrays import tdm_mimo
     from raysim.radar.config import RadarConfig
 
@@ -200,33 +309,100 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         raise ValueError(f"start must be a positive time [s] (the IMU starts at 0), got "
                          f"{start!r}")
     folder = check_output(folder, "dir", "folder", names=FLIGHT_FILES)
-    cfg = RadarConfig(num_tx_slots=3, num_frames=frames, **FLIGHT_RADAR)
-    r, az, el = check_flight_target(target, cfg)
-    tx_order, rx_on = (0, 2, 1), (0, 1, 2, 3)
-    size_flight(cfg, frames, len(tx_order) * len(rx_on), folder)
+    layout = resolve_board(board, tx_order=(0,), rx_enabled=(0,), start_freq_hz=77e9
+                           if BOARDS.get(board) is None or BOARDS[board].band_ghz[0] > 70
+                           else 60e9, wavelength=1.0, where="--board: ")
+    band = BOARDS[layout.name].band_ghz
+    tx_order = (0, 2, 1) if len(layout.tx) == 3 else tuple(range(len(layout.tx)))
+    rx_on = (0, 1, 2, 3)
+    carrier = {} if band[0] <= 77.0 <= band[1] else dict(carrier_frequency=band[0] * 1e9 + 1e9)
+    cfg = RadarConfig(num_tx_slots=len(tx_order), num_frames=frames, **FLIGHT_RADAR, **carrier)
+    tgts = _targets(target if targets is None else targets, cfg)
+    mount = mount_ypr(mounting_deg)
+    size_flight(cfg, frames, len(tx_order) * len(rx_on), folder, announce=progress)
     folder.mkdir(parents=True, exist_ok=True)
     traj = hover_jitter(seed) if trajectory is None else trajectory
-    tx, rx = ti_antenna_positions(cfg.center_wavelength)
-    array = tdm_mimo(tx[list(tx_order)], rx[list(rx_on)], name="TI 3Tx x 4Rx (TX0, TX2, TX1)")
+    lay = resolve_board(layout.name, tx_order=tx_order, rx_enabled=rx_on,
+                        start_freq_hz=cfg.carrier_frequency, wavelength=cfg.center_wavelength)
+    name = ("TI 3Tx x 4Rx (TX0, TX2, TX1)" if layout.name == DEFAULT_BOARD
+            else f"TI {layout.name} (TX{', TX'.join(map(str, tx_order))})")
+    array = tdm_mimo(lay.tx[list(tx_order)], lay.rx[list(rx_on)], name=name)
     lever = np.asarray(lever_arm, dtype=float)
-    tgt = PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=lever)
-    cube = np.stack([simulate_point_targets(cfg, array, [tgt], traj, lever_arm=lever, frame=f,
-                                            t0=start).data for f in range(frames)])
+    points = [PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=lever)
+              if mounting_deg is None else
+              PointTarget(nominal_target_position(r, np.deg2rad(az), np.deg2rad(el), lever,
+                                                  mount), np.zeros(3))
+              for r, az, el in tgts]
+    mounted = mount_array(array, mount)
+    clutter = []
+    if clutter_scene is not None:
+        from raysim.pipeline.flight_clutter import clutter_points
+
+        if mounted is not array:
+            raise ValueError("--clutter-scene needs the down mounting (the oracle's element "
+                             f"pattern is in body axes); got --mounting-deg {mount}")
+        clutter, summary = clutter_points(clutter_scene, cfg, array, lever,
+                                          altitude=clutter_altitude, seed=seed,
+                                          max_scatterers=clutter_max_scatterers)
+        if progress:
+            import sys
+
+            print(f"flight: {summary}", file=sys.stderr, flush=True)
+    ks = range(frames)
+    if progress and frames > 1:
+        import sys
+
+        from tqdm import tqdm
+
+        ks = tqdm(ks, unit="frame", desc="flight", file=sys.stderr)
+    def frame(f: int) -> np.ndarray:
+        data = simulate_point_targets(cfg, mounted, points, traj, lever_arm=lever, frame=f,
+                                      t0=start).data
+        if clutter:
+            data = data + simulate_point_targets(cfg, mounted, clutter, traj, lever_arm=lever,
+                                                 frame=f, t0=start, pattern=cfg.pattern).data
+        return data
+
+    cube = np.stack([frame(f) for f in ks])
+    feed = np.tile(lay.rx_phase[list(rx_on)], len(tx_order))      # [channel]: RX feed signs
+    if np.any(feed != 1):
+        cube = cube * feed[None, None, :, None]
     cube = cube * (FULL_SCALE_COUNTS / np.abs(cube).max())
-    fmt = Dca1000Format.from_radar_config(cfg, num_rx=len(rx_on), t0=start)
+    fmt = Dca1000Format.from_radar_config(cfg, num_rx=len(rx_on), t0=start,
+                                          layout=lay.layout or "2lane")
     capture = write_dca1000(folder / "adc_data.bin", cube, fmt)
     radar_cfg = atomic_write_text(folder / "radar.cfg",
                                   sdk_cfg_text(cfg, tx_order=tx_order, rx_enabled=rx_on))
     end = start + frames * cfg.frame_interval + 0.05
-    samples = imu_record(traj, imu, rate=imu_rate, times=[start, end], seed=seed,
-                         time_offset=time_offset, start=0.0)
-    ulog = write_px4_ulog(folder / "flight.ulg", samples)
+    tail = 0.0 if log_gaps <= int(gaps_in_capture) else 0.65 + 0.3 * log_gaps   # room after
+    samples, att, gaps = flight_log(
+        traj, imu, rate=imu_rate, times=[start, end + tail], seed=seed,
+        time_offset=time_offset, clock_drift_ppm=clock_drift_ppm, boxcar=imu_boxcar,
+        fast_rate=imu_fast_rate, gaps=log_gaps, gaps_in_capture=gaps_in_capture,
+        attitude=attitude, capture=(start, end - 0.05))
+    ulog = write_px4_ulog(folder / "flight.ulg", samples, att)
     starts = start + np.arange(frames) * cfg.frame_interval
     return FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,
                        float(time_offset), np.asarray(traj.velocity(starts), dtype=float),
                        np.rad2deg(np.asarray(traj.euler(starts), dtype=float)),
-                       np.asarray(traj.position(starts), dtype=float), lever, (r, az, el),
-                       imu)
+                       np.asarray(traj.position(starts), dtype=float), lever, tgts[0],
+                       imu, tuple(tgts), layout.name, tuple(float(x) for x in mount),
+                       float(imu_rate), bool(imu_boxcar), tuple(gaps), bool(attitude),
+                       float(clock_drift_ppm))
+
+
+def _targets(value, cfg) -> list:
+    """The flight's targets, checked: one ``(r, az, el)``, several, or ``"default5"``."""
+    if isinstance(value, str):
+        if value != "default5":
+            raise ValueError(f"--targets: got {value!r}, expected 'default5'")
+        value = DEFAULT5_TARGETS
+    value = list(value)
+    if value and np.ndim(value[0]) == 0:          # one target (r, az, el)
+        value = [value]
+    if not value:
+        raise ValueError("--target: expected at least one target R,AZ,EL")
+    return [check_flight_target(t, cfg) for t in value]
 
 
 def check_flight_target(target, cfg) -> tuple[float, float, float]:
@@ -251,7 +427,7 @@ def check_flight_target(target, cfg) -> tuple[float, float, float]:
     return r, az, el
 
 
-def size_flight(cfg, frames: int, channels: int, folder: Path) -> int:
+def size_flight(cfg, frames: int, channels: int, folder: Path, announce: bool = False) -> int:
     """Size a flight before allocating: refuse it (memory, disk) or announce a large capture.
 
     The peak is the complex128 cube ``[frame, chirp, channel, sample]`` of the
@@ -276,7 +452,7 @@ def size_flight(cfg, frames: int, channels: int, folder: Path) -> int:
         raise ValueError(f"the capture of {frames} frame(s) would take about "
                          f"{format_bytes(disk)}, {format_bytes(free)} are free in "
                          f"{str(folder)!r}; expected a flight that fits: reduce --frames")
-    if disk > LARGE_OUTPUT_BYTES:
+    if disk > LARGE_OUTPUT_BYTES or announce:
         print(f"flight: writing about {format_bytes(disk)} of capture in {str(folder)!r}",
               file=sys.stderr, flush=True)
     return disk
@@ -314,6 +490,51 @@ def measure_store(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
                          wavelength=cfg.center_wavelength,
                          velocity_resolution=cfg.velocity_resolution)
         out.append([m[k] for k in BEAM_METRICS])
+    return np.array(out)
+
+
+#: Half width of the range cells measured around each target [m] (the targets of
+#: :data:`DEFAULT5_TARGETS` are at least 1 m apart).
+TARGET_RANGE_HALF_WIDTH_M = 0.45
+
+
+def measure_targets(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
+    """The beam metrics of every target in every frame of a compensated store.
+
+    Each target is measured on the range cells within
+    :data:`TARGET_RANGE_HALF_WIDTH_M` of its range, at the store's elevation
+    nearest its apparent elevation, against its apparent azimuth
+    (:meth:`FlightFiles.apparent_direction` of frame ``first``).
+
+    Returns
+    -------
+    ndarray, shape ``[target, frame, 3]``
+        ``beam_angle_error_deg`` [deg], ``beam_pseudo_velocity_bins`` [bins],
+        ``doppler_leakage_db`` [dB].
+    """
+    from raysim.io.mmwave_config import read_mmwave_config
+    from raysim.io.zarr_store import open_store
+    from raysim.measure.beams import BEAM_METRICS, beam_metrics
+
+    ds = store if hasattr(store, "data_vars") else open_store(store)
+    cfg = read_mmwave_config(flight.radar_config, board=flight.board).config
+    ranges = np.asarray(ds["range"].values, dtype=float)
+    els = np.asarray(ds["elevation"].values, dtype=float)
+    out = []
+    for j, (r, _, _) in enumerate(flight.targets):
+        az_true, el_true = flight.apparent_direction(first, j)
+        cells = np.flatnonzero(np.abs(ranges - r) <= TARGET_RANGE_HALF_WIDTH_M)
+        if cells.size == 0:
+            raise ValueError(f"the store's range cells {ranges.min():.2f}..{ranges.max():.2f} "
+                             f"m miss target {j} at {r:g} m")
+        e = int(np.argmin(np.abs(els - el_true)))
+        rows = []
+        for b in ds["beams"].values[..., e][:, :, cells]:          # [chirp, range, azimuth]
+            m = beam_metrics(b, ds.azimuth.values, az_true, chirp_interval=cfg.chirp_interval,
+                             wavelength=cfg.center_wavelength,
+                             velocity_resolution=cfg.velocity_resolution)
+            rows.append([m[k] for k in BEAM_METRICS])
+        out.append(rows)
     return np.array(out)
 
 

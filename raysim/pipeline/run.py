@@ -47,6 +47,14 @@ class RenderSummary:
         Frames computed by this call.
     frames_resumed : int
         Frames found complete in the store and skipped.
+    notes : list of str
+        What the user should know (debris removed, no IMU log).
+    first_frame : int or None
+        The first frame rendered by this call (None when none was).
+    truth : dict
+        Its :attr:`~raysim.synthesis.frame.RadarFrame.truth`: for a traced scene
+        ``paths`` (the frozen :class:`~raysim.echoes.rt.trace.PathSet` of its
+        first trace), ``num_paths``, ``clutter`` (:mod:`raysim.echoes.rt.render`).
     """
 
     path: str
@@ -54,6 +62,8 @@ class RenderSummary:
     frames_rendered: int
     frames_resumed: int
     notes: list[str] = field(default_factory=list)
+    first_frame: int | None = None
+    truth: dict = field(default_factory=dict)
 
 
 
@@ -210,6 +220,8 @@ def _render_frames(scenario: Scenario, store: Path, traj, done: int, max_frames,
                     storage.write_store(store, ds, overwrite=True)
                 else:
                     storage.append_frames(store, storage.frames_to_dataset([fr], traj))
+                if summary.first_frame is None:
+                    summary.first_frame, summary.truth = f, dict(fr.truth)
                 summary.frames_rendered += 1
                 if bar is not None:
                     bar.update(1)

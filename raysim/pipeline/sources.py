@@ -111,7 +111,9 @@ def _clutter(scenario: Scenario):
     from raysim.echoes.scene_clutter import SceneClutter
 
     return SceneClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
-                                       max_scatterers=c.max_scatterers, seed=scenario.seed),
+                                       max_scatterers=c.max_scatterers, seed=scenario.seed,
+                                       polarisation=scenario.radar.polarisation,
+                                       wind_mps=c.wind_mps, vegetation=c.vegetation),
                          ghosts=c.ghosts,
                          movers=[*(_car(m, seed=scenario.seed + i)
                                    for i, m in enumerate(scenario.scene.movers)),
@@ -300,16 +302,20 @@ def nominal_at(trajectory, t0: float, axes=None):
 def path_kinds(paths) -> dict:
     """Path count per interaction kind of a :class:`raysim.echoes.rt.trace.PathSet`.
 
-    ``specular`` (single-bounce ground mirror), ``diffuse``, ``target`` and
-    ``other_specular`` counts.
+    ``specular`` (single-bounce ground mirror), ``diffuse`` (the clutter
+    field's scatterers among them), ``target`` (constant-RCS point targets),
+    ``po_centre`` (scattering centres of the geometry targets' meshes, physical
+    optics) and ``other_specular`` counts.
     """
+    from raysim.echoes.po.paths import PO_CENTRE
     from raysim.echoes.rt.trace import DIFFUSE, SENSING, SPECULAR
 
     k = paths.kind
     return {"specular": int(np.sum(k == SPECULAR)), "diffuse": int(np.sum((k & DIFFUSE) != 0)),
             "target": int(np.sum((k & SENSING) != 0)),
+            "po_centre": int(np.sum((k & PO_CENTRE) != 0)),
             "other_specular": int(np.sum(((k & SPECULAR) != 0) & (k != SPECULAR)
-                                         & ((k & (DIFFUSE | SENSING)) == 0)))}
+                                         & ((k & (DIFFUSE | SENSING | PO_CENTRE)) == 0)))}
 
 
 def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = None,
@@ -436,7 +442,8 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     for name, motion in (("stationary", rest), ("hover", trajectory)):
         t = time.perf_counter()
         data, _ = synthesize_paths(paths, cfg, arr, motion, lever, path_chunk=path_chunk,
-                                   eps=nufft_eps)
+                                   eps=nufft_eps,
+                                   modulation=None if model is None else model.modulation)
         synthesize_tracks(tracks, cfg, arr, motion, lever, out=data, synthesizer=synth)
         if scenario.noise:
             add_noise(data, cfg, scenario.seed)

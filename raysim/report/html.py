@@ -46,7 +46,7 @@ from raysim.vocabulary import (
 )
 
 __all__ = ["ReportData", "StoredFrames", "collect_from_scenario", "collect_from_dataset",
-           "build_report",
+           "build_report", "progress_bar", "counted_frames",
            "write_report", "software_versions", "zoom_limits", "DYNAMIC_RANGE_DB"]
 
 #: Colour-scale depth of the maps [dB].
@@ -107,16 +107,11 @@ def collect_from_scenario(scenario, *, chains: Sequence[str] = CHAINS,
     chains' measurement, :func:`progress_bar`).
     """
     from raysim.pipeline.run import evaluate
-    from raysim.pipeline.sources import frame_source
 
     keys = [c.key for c in parse_chains(chains)]
     traj = scenario.trajectory()
     bar = progress_bar(scenario.frames, scenario.name, progress)
-    source_of = frame_source(scenario, traj)
-    frames = LazyFrames(_counted(source_of, bar, "rendering",
-                                 lambda: f"measuring chains {', '.join(keys)}"),
-                        scenario.frames)
-    frames.reference = getattr(source_of, "reference", None)
+    frames = counted_frames(scenario, traj, bar, lambda: f"measuring chains {', '.join(keys)}")
     ref, notes = direction_for_chains(frames, frames.reference, keys)
     res = evaluate(scenario, chains=keys, frames=frames, reference=ref, return_maps=True)
     bar.close()
@@ -133,6 +128,19 @@ def progress_bar(frames: int, desc: str, enabled: bool):
 
     return tqdm(total=int(frames), desc=str(desc), unit="frame", file=sys.stderr,
                 disable=not enabled, leave=False, mininterval=0.0)
+
+
+def counted_frames(scenario, trajectory, bar, then) -> LazyFrames:
+    """The frames of a scenario rendered on access (:class:`LazyFrames`), each first
+    render a step of ``bar`` (:func:`progress_bar`); once all are rendered the bar says
+    ``then()``. ``reference`` is the scenario's reference target, as for
+    :func:`raysim.pipeline.sources.frame_source`."""
+    from raysim.pipeline.sources import frame_source
+
+    source_of = frame_source(scenario, trajectory)
+    frames = LazyFrames(_counted(source_of, bar, "rendering", then), scenario.frames)
+    frames.reference = getattr(source_of, "reference", None)
+    return frames
 
 
 def _counted(read, bar, what: str, then):

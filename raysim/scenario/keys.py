@@ -263,7 +263,11 @@ class ClutterSection(BaseModel):
     paths (``"sionna"``) or none; ``per_cell`` field scatterers per range x
     angle cell; ``reuse_m`` [m] the field is re-used while the radar stays this
     close to the pose it was built for; ``max_scatterers`` cost bound;
-    ``ghosts`` target-ground-radar multipath (image method).
+    ``ghosts`` target-ground-radar multipath (image method); ``wind_mps`` [m/s]
+    wind moving the vegetation (internal clutter motion, Billingsley's model:
+    0 = still, else 0.224 m/s (0.5 mph) to 27 m/s, the measured winds);
+    ``vegetation`` the clutter materials that move in it (default the
+    vegetation materials, ``["grass"]``).
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
@@ -273,6 +277,8 @@ class ClutterSection(BaseModel):
     reuse_m: float = Field(0.5, ge=0, le=100)
     max_scatterers: int = Field(200_000, ge=1, le=10_000_000)
     ghosts: bool = True
+    wind_mps: float = Field(0.0, ge=0, le=27)
+    vegetation: tuple[str, ...] | None = None
 
 
 class MoverSection(BaseModel):

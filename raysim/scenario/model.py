@@ -183,6 +183,14 @@ class SceneSection(_Section):
                 problems.append(f"[[scene.{key}]] need a ray-traced scene with "
                                 f"[scene.clutter] mode = 'field', got kind {kind!r}, "
                                 f"mode {self.clutter.mode!r}")
+        c = self.clutter
+        if (c.wind_mps > 0 or c.vegetation is not None) and (kind == "points"
+                                                              or c.mode != "field"):
+            problems.append(f"[scene.clutter] wind_mps / vegetation need a ray-traced scene "
+                            f"with mode = 'field', got kind {kind!r}, mode {c.mode!r}")
+        if 0 < c.wind_mps < 0.224:
+            problems.append(f"[scene.clutter] wind_mps: got {c.wind_mps:g} m/s, expected 0 "
+                            f"(still) or at least 0.224 m/s (0.5 mph, the model's lightest air)")
         if problems:
             raise ValueError("\n".join(problems))
         return self
@@ -558,7 +566,8 @@ def cross_problems(s: Scenario) -> list[tuple[frozenset[str], str]]:
     Returns ``(sections, line)`` pairs: the top-level keys the check reads and
     one message line naming the key, the value and what was expected. Checked:
     the radar's own consistency (``[radar]``, ``[array]``, ``frames``: bandwidth
-    below the carrier, at least 2 samples, ...) and the IMU rate against the
+    below the carrier, at least 2 samples, ...), a clutter polarisation other
+    than VV only with a clutter field (``[radar]``, ``[scene]``) and the IMU rate against the
     fastest motion (``[motion]``, ``[imu]``: at least twice its frequency).
     """
     out = []
@@ -567,6 +576,12 @@ def cross_problems(s: Scenario) -> list[tuple[frozenset[str], str]]:
     except ValueError as exc:
         out.append((frozenset({"radar", "array", "frames"}),
                     f"radar: inconsistent waveform: {exc}"))
+    if s.radar.polarisation != "VV" and (s.scene.kind == "points"
+                                          or s.scene.clutter.mode != "field"):
+        out.append((frozenset({"radar", "scene"}),
+                    f"radar.polarisation: got {s.radar.polarisation!r}, which sets the ground "
+                    f"clutter field's channel: expected 'VV' or a ray-traced scene with "
+                    f"[scene.clutter] mode = 'field'"))
     freq, what = s.fastest_motion()
     if freq > 0 and s.imu.rate_hz < 2.0 * freq:
         out.append((frozenset({"motion", "imu"}),

@@ -6,6 +6,8 @@ the FMCW waveform keys and the element pattern with its gain.
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from raysim.radar.config import (
@@ -45,6 +47,9 @@ class RadarSection(_Section):
     :meth:`raysim.radar.pattern.TabulatedPattern.from_csv`). Without an explicit
     ``antenna_gain_dbi`` the gain is the pattern's peak; an explicit gain that
     disagrees with it by more than 0.5 dB is refused.
+
+    ``polarisation``: transmit-receive channel of the ground clutter's
+    ``sigma0`` (``"VV"`` default, ``"HH"``, ``"HV"``; docs/clutter.md).
     """
 
     carrier_frequency_hz: float = Field(77e9, gt=0)
@@ -59,6 +64,7 @@ class RadarSection(_Section):
     noise_figure_db: float = 12.0
     frame_period_s: float | None = Field(None, gt=0)
     element_pattern: str = "patch"
+    polarisation: Literal["VV", "HH", "HV"] = "VV"
 
     _tx_power = field_validator("tx_power_dbm")(
         lambda v: _in_range(v, TX_POWER_DBM_RANGE, "dBm", "a transmit power"))

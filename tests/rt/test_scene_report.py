@@ -18,9 +18,9 @@ STATIONARY_RIDGE_TOL_DB = -100.0
 #: The hovering, uncompensated platform leaks at least this much off the ridge [dB]
 #: (measured -15.5 to -10.0 dB, QUICK, field, full and level jitter).
 HOVER_RIDGE_MIN_DB = -18.0
-#: Exact chain: clutter leakage off the ridge at most [dB] (measured -26.3 to -24.0 dB
+#: Exact chain: clutter leakage off the ridge at most [dB] (measured -26.3 to -23.5 dB
 #: for the full jitter, set by the horizontal displacement times the beamwidth, and
-#: -35.6 to -35.3 dB without it; see docs/scenes.md).
+#: -35.6 to -35.2 dB without it; see docs/scenes.md).
 EXACT_RIDGE_MAX_DB = -20.0
 #: Settings of the tests: the ``--quick`` report (persistent clutter field).
 SETTINGS = sr.QUICK
@@ -84,7 +84,7 @@ def test_hover_spreads_the_range_doppler_map(results, level_results):
 
 
 #: The exact chain removes at least this much of the uncompensated off-ridge power [dB]
-#: (measured 10.5-15.1 dB for the full jitter, 20.1-20.3 dB without horizontal motion,
+#: (measured 10.0-15.1 dB for the full jitter, 20.0-20.3 dB without horizontal motion,
 #: field, QUICK).
 MIN_RIDGE_REDUCTION_DB = 6.0
 #: Paper chain against the exact chain for the report's gentle hover (measured within

@@ -112,7 +112,7 @@ def test_bundled_user_mesh_example_loads_its_package_meshes():
     path = raysim.data.example_path("scene_user_meshes.toml")
     s = load_scenario(path)
     assert s.scene.kind == "meshes"
-    names = [b["name"] for b in mesh_boxes(QUICK.for_scenario(s))]
+    names = [b["name"] for b in mesh_boxes(QUICK.for_scenario(s).scenario)]
     assert names == ["ground.ply", "building.obj", "car.glb"]
 
 

@@ -32,10 +32,19 @@ Thinning a bounding intensity and weighting each kept point by
 ``dA_i = 1 / rho(p_i)`` keeps ``sum_i sigma0 dA_i`` an unbiased estimate of the
 integral of ``sigma0`` over the ground. When the expected count exceeds
 ``max_scatterers`` the density is scaled down uniformly and the report says so.
+
+Wind
+----
+With ``wind_mps > 0`` the scatterers on vegetation materials (``vegetation``)
+keep their positions but their amplitudes become ``a_i m_i(t)``, the internal
+clutter motion of :mod:`raysim.echoes.ground.icm` (Billingsley's exponential
+Doppler spectrum); :meth:`ClutterField.modulation` gives ``m_i`` at the chirps
+and the synthesis applies it (:func:`raysim.echoes.rt.reproject.synthesize_paths`).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import time as _time
 from dataclasses import dataclass, field
@@ -43,7 +52,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from raysim.echoes.ground.density import two_way_pattern
-from raysim.echoes.ground.sigma0 import POLARISATIONS, sigma0
+from raysim.echoes.ground.icm import MIN_WIND_MPH, MPH, IcmProcess
+from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS, POLARISATIONS, sigma0
 from raysim.echoes.ground.surface import GroundSurface
 from raysim.echoes.rt.trace import DIFFUSE, PathSet
 from raysim.radar.arrays import VirtualArray
@@ -80,13 +90,19 @@ class FieldSettings:
         Radar displacement from the build pose up to which the field is re-used [m].
     shadowing : bool
         Cast a ray from the radar to every scatterer (Mitsuba) and drop the occluded.
-    polarisation : {"VV", "HH"}
-        Channel of ``sigma0``.
+    polarisation : {"VV", "HH", "HV"}
+        Channel of ``sigma0`` (transmit-receive).
     fov_half_angle : float, optional
         Field of view around boresight [rad], in (0, pi/2]; default (``None``)
         the element pattern's cull cone (:meth:`fov`).
     seed : int
         Seed of positions and amplitudes.
+    wind_mps : float
+        Wind speed [m/s] moving the vegetation (internal clutter motion); 0
+        (default) keeps every scatterer still, else at least 0.5 mph (0.224 m/s).
+    vegetation : tuple of str, optional
+        Clutter materials that move in the wind; default (``None``) those
+        flagged ``vegetation`` in :data:`~raysim.echoes.ground.sigma0.CLUTTER_MATERIALS`.
     """
 
     scatterers_per_cell: float = 10.0
@@ -97,6 +113,8 @@ class FieldSettings:
     polarisation: str = "VV"
     fov_half_angle: float | None = None
     seed: int = 0
+    wind_mps: float = 0.0
+    vegetation: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         if not self.scatterers_per_cell > 0:
@@ -116,6 +134,24 @@ class FieldSettings:
                              f"got {self.fov_half_angle!r}")
         if int(self.seed) != self.seed or self.seed < 0:
             raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
+        w = self.wind_mps
+        if not (isinstance(w, (int, float)) and (w == 0 or w >= MIN_WIND_MPH * MPH)
+                and math.isfinite(w)):
+            raise ValueError(f"wind_mps must be 0 (still) or >= {MIN_WIND_MPH * MPH:.3f} m/s "
+                             f"({MIN_WIND_MPH} mph), got {w!r}")
+        if self.vegetation is not None:
+            veg = (self.vegetation,) if isinstance(self.vegetation, str) else self.vegetation
+            bad = [m for m in veg if m not in CLUTTER_MATERIALS]
+            if bad:
+                raise ValueError(f"vegetation must name clutter materials "
+                                 f"{sorted(CLUTTER_MATERIALS)}, got {bad!r}")
+            object.__setattr__(self, "vegetation", tuple(veg))
+
+    def vegetation_materials(self) -> tuple[str, ...]:
+        """Materials that move in the wind (``vegetation`` or the flagged ones)."""
+        if self.vegetation is not None:
+            return self.vegetation
+        return tuple(n for n, m in CLUTTER_MATERIALS.items() if m.vegetation)
 
     def fov(self, config: RadarConfig) -> float:
         """Half-angle of the cone around boresight the field covers [rad].
@@ -197,7 +233,11 @@ class ClutterField:
     report : dict
         ``num_scatterers``, ``expected``, ``density_scale`` (1 unless capped),
         ``cell_area_nadir`` [m^2], ``resolution`` ``(dR, du, dv)``, ``build_s``
-        (wall) and ``build_cpu_s``.
+        (wall), ``build_cpu_s`` and, in wind, ``icm_scatterers``.
+    icm : IcmProcess, optional
+        Internal clutter motion of the vegetation scatterers (``settings.wind_mps > 0``).
+    icm_index : ndarray of int, shape ``[icm scatterer]``, optional
+        Which scatterers ``icm`` moves (rows of ``positions``).
     """
 
     positions: np.ndarray
@@ -208,6 +248,8 @@ class ClutterField:
     anchor: np.ndarray
     settings: FieldSettings
     report: dict = field(default_factory=dict)
+    icm: IcmProcess | None = None
+    icm_index: np.ndarray | None = None
 
     @property
     def num_scatterers(self) -> int:
@@ -301,7 +343,48 @@ class ClutterField:
                   "scatterers_per_cell": s.scatterers_per_cell,
                   "build_s": _time.perf_counter() - t_wall,
                   "build_cpu_s": _time.process_time() - t_cpu}
-        return cls(p, normals[f], ground.material[idx[f]], 1.0 / eff, z, x0.copy(), s, report)
+        material = ground.material[idx[f]]
+        icm = icm_index = None
+        if s.wind_mps > 0:
+            # a stream of its own: the still field's draws stay as they are
+            icm_index = np.nonzero(np.isin(material, s.vegetation_materials()))[0]
+            icm = IcmProcess.draw(icm_index.size, s.wind_mps, config.carrier_frequency,
+                                  seed=s.seed)
+            report["icm_scatterers"] = int(icm_index.size)
+        return cls(p, normals[f], material, 1.0 / eff, z, x0.copy(), s, report, icm, icm_index)
+
+    # ------------------------------------------------------------------ wind
+    def modulation(self, vertices, times) -> tuple[np.ndarray, np.ndarray] | None:
+        """ICM modulation of the paths among ``vertices`` that are moving scatterers.
+
+        Parameters
+        ----------
+        vertices : ndarray, shape ``[path, 3]``
+            First vertices of frozen paths in W [m]; a path is this field's
+            scatterer where its vertex equals the scatterer's position exactly.
+        times : array_like, shape ``[chirp]``
+            Absolute instants [s].
+
+        Returns
+        -------
+        (rows, m) or None
+            ``rows`` [n] indices into ``vertices`` and ``m`` [n, chirp] complex
+            multipliers of their amplitudes; None without wind or vegetation.
+        """
+        if self.icm is None or self.icm_index.size == 0:
+            return None
+        keys, order = self._icm_keys
+        q = _void(np.asarray(vertices, dtype=np.float64))
+        j = np.clip(np.searchsorted(keys, q), 0, keys.size - 1)
+        hit = keys[j] == q
+        return np.nonzero(hit)[0], self.icm.modulation(times, order[j[hit]])
+
+    @functools.cached_property
+    def _icm_keys(self) -> tuple[np.ndarray, np.ndarray]:
+        """Sorted position keys of the moving scatterers and their rows in ``icm``."""
+        keys = _void(self.positions[self.icm_index])
+        order = np.argsort(keys)
+        return keys[order], order
 
     # ------------------------------------------------------------------ paths
     def paths(self, config: RadarConfig, radar_w, r_wb, *, time: float = 0.0,
@@ -364,6 +447,12 @@ class ClutterField:
         return PathSet(pos, pos.copy(), length, amp, np.zeros((n, 3)), np.zeros(n),
                        np.full((n, 1), DIFFUSE, np.uint32), np.full(n, DIFFUSE, np.uint32), pol,
                        length / SPEED_OF_LIGHT, x0.copy(), x0.copy(), float(time), dropped)
+
+
+def _void(a: np.ndarray) -> np.ndarray:
+    """Rows of a float64 ``[n, 3]`` array as opaque keys (exact equality, sortable)."""
+    a = np.ascontiguousarray(a, dtype=np.float64) + 0.0                    # -0.0 -> 0.0
+    return a.view(np.dtype((np.void, 24))).ravel()
 
 
 def _height_above(ground: GroundSurface, x0: np.ndarray) -> float | None:

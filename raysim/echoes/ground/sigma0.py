@@ -26,10 +26,31 @@ optics) term:
   so that it carries exactly the power the Ament factor removes from the
   coherent reflection (a smooth surface keeps a mirror and no lobe).
 
-The co-polarised returns ``VV`` and ``HH`` are equal in this model: at 95 GHz
-the measured like-polarised ``sigma0`` of grass, soil and roads differ by less
-than 1-2 dB (Ulaby & Dobson 1989, 95 GHz tables). Cross-polarised returns are not
-modelled (the radar is single-polarised) and are refused.
+Polarisation
+------------
+The model above is the ``VV`` channel. The other channels scale its
+incoherent ``gamma cos(theta)`` term only; the quasi-specular (geometric optics)
+term is the same for ``VV`` and ``HH`` and has no cross-polarised part in
+backscatter (Ulaby, Moore & Fung Vol. II, sec. 12-5: the Kirchhoff
+stationary-phase ``sigma0_hv`` is zero):
+
+.. math::
+
+    \sigma^0_{HH} = \gamma\cos\theta\; 10^{-\Delta_{co}\sin^2\theta / 10} + \sigma^0_{qs},
+    \qquad
+    \sigma^0_{HV} = \gamma\cos\theta\; 10^{-\Delta_{x} / 10}
+
+``Delta_co`` [dB] is the measured ``VV / HH`` ratio of the material towards grazing
+incidence; ``sin^2(theta)`` takes it to 0 at nadir, where ``HH`` and ``VV`` are the
+same channel by symmetry. ``Delta_x`` [dB] is the measured co- to cross-polarised
+ratio ``VV / HV``. Values (:data:`CLUTTER_MATERIALS`, docs/clutter.md): roads
+(asphalt, concrete) from Sarabandi, Li & Nashashibi 1997 (35/60/94 GHz:
+``VV`` above ``HH`` by a few dB at large incidence, cross-pol about 10 dB under
+``VV``); bare soil from Nashashibi, Sarabandi & Ulaby's 35/94 GHz soil
+measurements (IGARSS 1994); grass from Ulaby et al., IEEE TAP 46(1), 1998 (95 GHz
+near grazing: co-pol channels within about 1 dB, cross-pol about 6 dB under:
+volume scattering by leaves depolarises most). These are ratios read from the
+measurements to about +-2 dB, not fits.
 
 Coherent specular reflection of a rough surface (Ament, J. Appl. Phys. 24, 1953;
 Beckmann & Spizzichino 1963, eq. 5.29), amplitude factor:
@@ -62,8 +83,8 @@ import numpy as np
 __all__ = ["ClutterMaterial", "CLUTTER_MATERIALS", "POLARISATIONS", "sigma0", "ament_factor",
            "fresnel_coefficient", "clutter_material"]
 
-#: Co-polarised channels the model gives (equal values, see the module notes).
-POLARISATIONS = ("VV", "HH")
+#: Channels the model gives (transmit-receive; see the module notes).
+POLARISATIONS = ("VV", "HH", "HV")
 
 
 @dataclass(frozen=True)
@@ -82,6 +103,13 @@ class ClutterMaterial:
         RMS surface slope ``m`` (dimensionless, > 0).
     permittivity : complex
         Complex relative permittivity ``eps' - j eps''`` at 77 GHz.
+    vv_hh_db : float
+        ``VV / HH`` ratio of the incoherent term towards grazing, ``Delta_co`` [dB].
+    vv_hv_db : float
+        Co- to cross-polarised ratio ``VV / HV`` of the incoherent term, ``Delta_x`` [dB].
+    vegetation : bool
+        The surface is vegetation that moves in the wind (internal clutter
+        motion, :mod:`raysim.echoes.ground.icm`).
     """
 
     name: str
@@ -89,6 +117,9 @@ class ClutterMaterial:
     rms_height: float
     rms_slope: float
     permittivity: complex
+    vv_hh_db: float = 0.0
+    vv_hv_db: float = 10.0
+    vegetation: bool = False
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.gamma_db):
@@ -97,6 +128,10 @@ class ClutterMaterial:
             raise ValueError(f"rms_height must be >= 0 m, got {self.rms_height!r}")
         if not self.rms_slope > 0:
             raise ValueError(f"rms_slope must be > 0, got {self.rms_slope!r}")
+        for name in ("vv_hh_db", "vv_hv_db"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise ValueError(f"{name} must be a finite ratio >= 0 dB, "
+                                 f"got {getattr(self, name)!r}")
         if not complex(self.permittivity).real >= 1.0:
             raise ValueError(f"permittivity must have a real part >= 1, "
                              f"got {self.permittivity!r}")
@@ -105,13 +140,13 @@ class ClutterMaterial:
 #: Ground materials by scene material id (see the module notes for the sources).
 CLUTTER_MATERIALS = {m.name: m for m in (
     ClutterMaterial("asphalt-77ghz", gamma_db=-17.0, rms_height=0.7e-3, rms_slope=0.12,
-                    permittivity=3.18 - 0.10j),
+                    permittivity=3.18 - 0.10j, vv_hh_db=3.0, vv_hv_db=10.0),
     ClutterMaterial("concrete", gamma_db=-20.0, rms_height=0.4e-3, rms_slope=0.08,
-                    permittivity=5.24 - 0.32j),
+                    permittivity=5.24 - 0.32j, vv_hh_db=3.0, vv_hv_db=10.0),
     ClutterMaterial("dry-soil", gamma_db=-13.0, rms_height=3e-3, rms_slope=0.25,
-                    permittivity=3.0 - 0.10j),
+                    permittivity=3.0 - 0.10j, vv_hh_db=2.0, vv_hv_db=8.0),
     ClutterMaterial("grass", gamma_db=-10.0, rms_height=10e-3, rms_slope=0.5,
-                    permittivity=5.0 - 1.5j),
+                    permittivity=5.0 - 1.5j, vv_hh_db=1.0, vv_hv_db=6.0, vegetation=True),
 )}
 
 
@@ -138,7 +173,8 @@ def fresnel_coefficient(material: str | ClutterMaterial, cos_i, polarisation: st
     """Fresnel reflection coefficient of the material's half-space (Balanis eqs. 5-24, 5-33).
 
     ``"HH"`` is the TE (perpendicular) coefficient, ``"VV"`` the TM (parallel)
-    one in the convention that makes both equal at normal incidence.
+    one in the convention that makes both equal at normal incidence; ``"HV"``
+    is 0 (a plane interface does not couple TE and TM in the plane of incidence).
 
     Parameters
     ----------
@@ -154,6 +190,8 @@ def fresnel_coefficient(material: str | ClutterMaterial, cos_i, polarisation: st
     c = np.clip(np.asarray(cos_i, dtype=float), 0.0, 1.0)
     eps = complex(m.permittivity)
     root = np.sqrt(eps - (1.0 - c**2) + 0j)
+    if polarisation == "HV":
+        return np.zeros_like(root)
     if polarisation == "HH":
         return (c - root) / (c + root)
     return -(eps * c - root) / (eps * c + root)
@@ -191,8 +229,8 @@ def sigma0(incidence, material: str | ClutterMaterial, polarisation: str = "VV",
         Incidence angle from the local surface normal [rad], in ``[0, pi/2)``.
     material : str or ClutterMaterial
         A key of :data:`CLUTTER_MATERIALS` or a material.
-    polarisation : {"VV", "HH"}
-        Co-polarised channel.
+    polarisation : {"VV", "HH", "HV"}
+        Channel (transmit-receive).
     wavelength : float
         Carrier wavelength [m] (sets ``k s`` of the incoherent share).
 
@@ -208,7 +246,11 @@ def sigma0(incidence, material: str | ClutterMaterial, polarisation: str = "VV",
     k = 2 * math.pi / wavelength
     g = (2.0 * k * m.rms_height * c) ** 2
     gamma = 10.0 ** (m.gamma_db / 10.0)
+    if polarisation == "HV":                     # the geometric-optics lobe does not depolarise
+        return gamma * c * 10.0 ** (-m.vv_hv_db / 10.0)
     r0 = abs(fresnel_coefficient(m, 1.0)) ** 2
     tan2 = (1.0 - c**2) / c**2
     qs = -np.expm1(-g) * r0 * np.exp(-tan2 / (2 * m.rms_slope**2)) / (2 * m.rms_slope**2 * c**4)
+    if polarisation == "HH":
+        return gamma * c * 10.0 ** (-m.vv_hh_db * (1.0 - c**2) / 10.0) + qs
     return gamma * c + qs

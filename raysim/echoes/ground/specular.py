@@ -58,7 +58,8 @@ def rough_specular_path(ground: GroundSurface, config: RadarConfig, radar_w, r_w
         Attitude (boresight is the third column).
     time : float
         Trace instant [s].
-    polarisation : {"VV", "HH"}
+    polarisation : {"VV", "HH", "HV"}
+        Channel of the Fresnel coefficient (``"HV"``: 0, a plane does not depolarise).
     fov_half_angle : float
         Field of view around boresight [rad].
     fit_radius : float

@@ -22,6 +22,7 @@ side ``lambda / rays_per_wavelength``.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -278,7 +279,7 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
                    frequency: float = DEFAULT_FREQUENCY, range_m: float | None = None,
                    polarisation: str = "VV", max_bounces: int = MAX_BOUNCES,
                    rays_per_wavelength: float = RAYS_PER_WAVELENGTH,
-                   variant: str | None = None) -> RcsResult:
+                   variant: str | None = None, progress: bool = False) -> RcsResult:
     """Monostatic PO + SBR RCS of ``mesh`` for every (azimuth, elevation).
 
     Parameters
@@ -301,6 +302,8 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
         SBR tube density per transverse axis.
     variant : str, optional
         Mitsuba backend if none is configured (``"cpu"``, ``"gpu"``).
+    progress : bool
+        Show a tqdm bar on stderr, one step per direction.
 
     Returns
     -------
@@ -339,6 +342,10 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
     scene = RayScene(mesh, variant)
     fine = None if near_edge is None else mesh.subdivided(near_edge)
     out = np.zeros((len(az), len(el)))
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=out.size, desc="rcs", unit="direction", file=sys.stderr,
+               disable=not progress, leave=False, mininterval=0.0)
     for i, a in enumerate(np.radians(az)):
         for j, e in enumerate(np.radians(el)):
             u = radar_direction(a, e)
@@ -351,6 +358,8 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
             f += sbr_amplitude(scene, material, u, e_pol, e_h, e_v, wavelength,
                                spacing=spacing, max_bounces=int(max_bounces), range_m=range_m)
             out[i, j] = 4 * math.pi * abs(f) ** 2
+            bar.update()
+    bar.close()
     info = {"tube_spacing_m": spacing, "rays_per_wavelength": rays_per_wavelength,
             "max_bounces": int(max_bounces), "facets": len(mesh.faces),
             "near_field_facets": None if fine is None else len(fine.faces),

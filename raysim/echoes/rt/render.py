@@ -133,7 +133,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         _, cut = synthesize_paths(paths, config, array, trajectory, lever, out=data[c0:c1],
                                   chirps=np.arange(c0, c1), path_chunk=path_chunk, frame=frame,
                                   t0=t0, if_band=if_band, synthesizer=synthesizer,
-                                  specular=specular)
+                                  specular=specular,
+                                  modulation=None if model is None else model.modulation)
         cut += synthesize_tracks(tracks, config, array, trajectory, lever, out=data[c0:c1],
                                  chirps=np.arange(c0, c1), frame=frame, t0=t0, if_band=if_band,
                                  synthesizer=synthesizer)

@@ -58,7 +58,10 @@ raised-cosine model of the anti-alias filter (``if_band="taper"``).
 
 Many frozen-vertex paths (a clutter field) are synthesised without
 materialising their ``[path, chirp, channel]`` delays
-(:func:`synthesize_paths`, ``compact``).
+(:func:`synthesize_paths`, ``compact``). Wind-blown clutter keeps its frozen
+points but multiplies its amplitudes chirp by chirp (``modulation``, the
+internal clutter motion of :mod:`raysim.echoes.ground.icm`); such paths vary
+within a frame at the clutter's Doppler bandwidth and are rendered at every chirp.
 """
 
 from __future__ import annotations
@@ -84,6 +87,9 @@ SPECULAR_MODES = ("image", "frozen")
 #: Frozen-vertex paths from which :func:`synthesize_paths` takes the compact way by
 #: default (dense re-projection costs ``O(path x chirp x channel)`` memory traffic).
 COMPACT_MIN_PATHS = 1024
+#: Paths whose amplitude modulation (wind-blown clutter) is evaluated at once: bounds the
+#: ``[path, chirp]`` factors to 16384 x chirps x 16 B (33 MB at 128 chirps).
+MODULATION_CHUNK = 16384
 
 
 @dataclass(frozen=True)
@@ -338,7 +344,7 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
                      trajectory: Trajectory | None = None, lever_arm=(0.0, 0.0, 0.0), *,
                      out: np.ndarray | None = None, chirps=None, path_chunk: int = 256,
                      synthesizer=None, compact="auto", eps: float = 1e-6,
-                     **options) -> tuple[np.ndarray, int]:
+                     modulation=None, **options) -> tuple[np.ndarray, int]:
     """IF cube of frozen paths via :func:`raysim.synthesis.select.synthesize`.
 
     Paths whose re-projection is the frozen-vertex formula (all but the
@@ -369,6 +375,13 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         is given, ``if_band`` is not ``"taper"`` and ``chirps`` is a run ("auto").
     eps : float
         Requested relative error of the default synthesis and of the compact way.
+    modulation : callable, optional
+        ``f(first_vertex [path, 3], chirp_times [chirp]) -> (rows [n], m [n, chirp])``
+        or None: complex per-chirp factors of the amplitudes of paths ``rows``
+        (the wind's internal clutter motion,
+        :meth:`raysim.echoes.ground.field.ClutterField.modulation`), evaluated
+        at each chirp's start time; these amplitudes change from chirp to chirp,
+        so a slow-time decimation must leave such paths undecimated.
     **options
         ``frame``, ``t0``, ``if_band``, ``taper``, ``specular``, ``pattern`` of
         :func:`reproject`.
@@ -399,16 +412,31 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
                    and options.get("if_band", "cull") != "taper"
                    and int(frozen.sum()) >= COMPACT_MIN_PATHS)
     dropped = 0
+    times = config.chirp_times(options.get("frame", 0), options.get("t0", 0.0))
+    times = times if chirps is None else times[np.asarray(chirps)]
     if compact and frozen.any():
         dropped += _synthesize_compact(paths.select(frozen), config, array, trajectory,
-                                       lever_arm, out, run, eps, options)
+                                       lever_arm, out, run, eps, options,
+                                       modulation=modulation)
         paths = paths.select(~frozen)
     for part in iter_reprojected(paths, config, array, trajectory, lever_arm,
                                  path_chunk=path_chunk, chirps=chirps, **options):
         dropped += part.dropped_if_band
+        amp = part.amplitude
+        if modulation is not None and part.tau.shape[0]:
+            amp = np.broadcast_to(amp, part.tau.shape[:2] + (1,)).copy()
+            _modulate(amp[..., 0], paths.first_vertex[part.kept], modulation, times)
         if part.tau.shape[0]:
-            synth(part.tau, part.amplitude, config, out=out)
+            synth(part.tau, amp, config, out=out)
     return out, dropped
+
+
+def _modulate(amplitude: np.ndarray, vertices: np.ndarray, modulation, times) -> None:
+    """``amplitude`` [path, chirp] times ``modulation``'s factors, in place, by path blocks."""
+    for a in range(0, vertices.shape[0], MODULATION_CHUNK):
+        found = modulation(vertices[a:a + MODULATION_CHUNK], times)
+        if found is not None and found[0].size:
+            amplitude[a + found[0]] *= found[1]
 
 
 def _chirp_run(chirps, num_chirps: int) -> range | None:
@@ -424,7 +452,7 @@ def _chirp_run(chirps, num_chirps: int) -> range | None:
 
 def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray, trajectory,
                         lever_arm, out: np.ndarray, run: range | None, eps: float,
-                        options: dict) -> int:
+                        options: dict, modulation=None) -> int:
     """Add the frozen-vertex ``paths`` into ``out`` the compact way; return the culled count."""
     unknown = set(options) - {"frame", "t0", "if_band", "specular", "pattern", "taper"}
     if unknown:
@@ -438,6 +466,10 @@ def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray
                                   frame=options.get("frame", 0), t0=options.get("t0", 0.0),
                                   if_band=if_band, gain="per_chirp",
                                   pattern=options.get("pattern"))
+    if modulation is not None and src.num_paths:
+        # wind-blown scatterers: their per-chirp amplitudes (src's own array) times the process
+        _modulate(src.amplitude, src.first_vertex, modulation,
+                  config.chirp_times(options.get("frame", 0), options.get("t0", 0.0)))
     if src.num_paths:
         synthesize(src, None, config, method="auto", eps=eps, out=out, chirps=run)
     return paths.num_paths - src.num_paths

@@ -34,7 +34,12 @@ returned as they are stored; the clock offset to the radar
 (``--time-offset``) is then of the size of the stamps (docs/recordings.md).
 
 Frames: PX4 and ArduPilot log in FRD already; ROS uses FLU (REP 103), turned
-into FRD by :func:`flu_to_frd`.
+into FRD by :func:`flu_to_frd` (and ENU world into NED by :data:`ENU_TO_NED`).
+
+Attitude: :func:`raysim.io.flight_logs.attitude.read_attitude_log` reads the
+flight controller's attitude estimate the same file holds (PX4
+``vehicle_attitude``, ArduPilot ``ATT`` / ``AHRS2``, ROS orientation), on
+the same clock as its IMU samples.
 """
 
 from __future__ import annotations
@@ -46,7 +51,8 @@ import numpy as np
 
 from raysim.platform.imu import ImuSamples
 
-__all__ = ["FLIGHT_LOG_SUFFIXES", "flu_to_frd", "read_imu_log", "time_base", "choose_source"]
+__all__ = ["FLIGHT_LOG_SUFFIXES", "ENU_TO_NED", "flu_to_frd", "read_imu_log", "time_base",
+           "choose_source"]
 
 #: Unix time [s] of 2000-01-01 and 2100-01-01: a first stamp between them is epoch time.
 EPOCH_RANGE_S = (946_684_800.0, 4_102_444_800.0)
@@ -56,6 +62,8 @@ FLIGHT_LOG_SUFFIXES = (".csv", ".ulg", ".bin", ".mcap", ".db3")
 
 #: FLU -> FRD: a rotation of 180 deg about the common x axis, diag(1, -1, -1).
 _FLU_TO_FRD = np.diag([1.0, -1.0, -1.0])
+#: ENU -> NED for world vectors (swap x and y, negate z); its own inverse.
+ENU_TO_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 
 
 def flu_to_frd(vectors: np.ndarray) -> np.ndarray:

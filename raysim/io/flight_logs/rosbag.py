@@ -31,7 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from raysim.io.flight_logs import check_increasing, flu_to_frd, median_rate, time_base
+from raysim.io.flight_logs import (
+    ENU_TO_NED,
+    check_increasing,
+    flu_to_frd,
+    median_rate,
+    time_base,
+)
 from raysim.platform.imu import ImuSamples
 
 __all__ = ["IMU_MSGTYPE", "read_ros2_imu", "write_ros2_imu"]
@@ -119,7 +125,7 @@ def read_ros2_imu(path: str | os.PathLike, topic: str | None = None,
 
 def write_ros2_imu(path: str | os.PathLike, samples: ImuSamples, topic: str = "/imu",
                    storage: str = "sqlite3", frame_id: str = "base_link",
-                   epoch_ns: int = 0) -> Path:
+                   epoch_ns: int = 0, orientation=None) -> Path:
     """Write IMU samples as ``sensor_msgs/msg/Imu`` messages of a new ROS 2 bag.
 
     Parameters
@@ -137,6 +143,10 @@ def write_ros2_imu(path: str | os.PathLike, samples: ImuSamples, topic: str = "/
         ``header.frame_id``.
     epoch_ns : int
         Added to the times [ns] for the header stamps (which must be >= 0).
+    orientation : scipy.spatial.transform.Rotation, optional
+        ``R_WB`` (body FRD to NED) at every sample, written as the REP 103
+        orientation (body FLU to ENU); default none (REP 145:
+        ``orientation_covariance[0] = -1``).
 
     Returns
     -------
@@ -144,6 +154,7 @@ def write_ros2_imu(path: str | os.PathLike, samples: ImuSamples, topic: str = "/
         The bag folder.
     """
     from rosbags.rosbag2 import StoragePlugin, Writer
+    from scipy.spatial.transform import Rotation
 
     if not isinstance(samples, ImuSamples):
         raise ValueError(f"samples must be ImuSamples, got {type(samples).__name__}")
@@ -163,12 +174,21 @@ def write_ros2_imu(path: str | os.PathLike, samples: ImuSamples, topic: str = "/
     gyro, accel = flu_to_frd(samples.gyro), flu_to_frd(samples.accel)   # FRD -> FLU: same map
     unknown = np.zeros(9)
     unknown[0] = -1.0   # REP 145: orientation not provided
+    quat = np.tile([0.0, 0.0, 0.0, 1.0], (stamps.size, 1))
+    if orientation is not None:
+        if len(orientation) != stamps.size:
+            raise ValueError(f"orientation has {len(orientation)} rotations, expected one per "
+                             f"sample ({stamps.size})")
+        flu = np.diag([1.0, -1.0, -1.0])
+        quat = Rotation.from_matrix(ENU_TO_NED @ orientation.as_matrix() @ flu).as_quat()
+        unknown = np.zeros(9)
     with Writer(path, version=9, storage_plugin=plugins[storage]) as writer:
         conn = writer.add_connection(topic, IMU_MSGTYPE, typestore=ts)
         for k, ns in enumerate(stamps):
             sec, nsec = divmod(int(ns), 1_000_000_000)
             msg = imu_t(header=hdr_t(stamp=time_t(sec=sec, nanosec=nsec), frame_id=frame_id),
-                        orientation=quat_t(x=0.0, y=0.0, z=0.0, w=1.0),
+                        orientation=quat_t(x=quat[k, 0], y=quat[k, 1], z=quat[k, 2],
+                                           w=quat[k, 3]),
                         orientation_covariance=unknown,
                         angular_velocity=vec_t(x=gyro[k, 0], y=gyro[k, 1], z=gyro[k, 2]),
                         angular_velocity_covariance=np.zeros(9),

@@ -66,7 +66,7 @@ from raysim.io.flight_logs import (
 )
 from raysim.platform.imu import ImuSamples
 
-__all__ = ["ULOG_TOPIC", "ULOG_IMU_TOPICS", "read_px4_ulog", "write_px4_ulog"]
+__all__ = ["ULOG_TOPIC", "ULOG_IMU_TOPICS", "ATTITUDE_TOPIC", "read_px4_ulog", "write_px4_ulog"]
 
 #: The PX4 topic the writer uses (and the usual IMU topic of a log).
 ULOG_TOPIC = "sensor_combined"
@@ -81,6 +81,11 @@ _FORMAT = ("sensor_combined:uint64_t timestamp;float[3] gyro_rad;uint32_t gyro_i
            "uint8_t gyro_clipping;uint8_t accel_calibration_count;"
            "uint8_t gyro_calibration_count;")
 _RECORD = struct.Struct("<Q3fIi3fIBBBB")
+#: The attitude topic the writer adds (PX4 ``vehicle_attitude``: ``q`` body FRD to NED).
+ATTITUDE_TOPIC = "vehicle_attitude"
+_ATT_FORMAT = ("vehicle_attitude:uint64_t timestamp;float[4] q;float[4] delta_q_reset;"
+               "uint8_t quat_reset_counter;")
+_ATT_RECORD = struct.Struct("<Q4f4fB")
 
 
 def _increasing(time: np.ndarray, *arrays) -> tuple:
@@ -221,8 +226,12 @@ def _message(kind: bytes, payload: bytes) -> bytes:
     return struct.pack("<HB", len(payload), kind[0]) + payload
 
 
-def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples) -> Path:
+def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples, attitude=None) -> Path:
     """Write IMU samples as the ``sensor_combined`` topic of a minimal PX4 ULog file.
+
+    With ``attitude`` the file also holds the flight controller's attitude as
+    ``vehicle_attitude`` (``q`` = ``w, x, y, z`` of ``R_WB``, body FRD to NED),
+    its messages interleaved with the IMU's in time order.
 
     Parameters
     ----------
@@ -232,6 +241,8 @@ def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples) -> Path:
         ``time [sample]`` [s, >= 0: time since boot; rounded to whole
         microseconds], ``gyro``/``accel [sample, 3]`` FRD [rad/s, m/s^2]
         (stored as float32).
+    attitude : raysim.io.flight_logs.attitude.AttitudeLog, optional
+        ``time [sample]`` [s, the IMU's clock, >= 0] and ``rotation`` ``R_WB``.
 
     Returns
     -------
@@ -250,13 +261,30 @@ def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples) -> Path:
     body = bytearray(_MAGIC + b"\x01" + struct.pack("<Q", int(stamps[0])))
     body += _message(b"B", bytes(8) + bytes(8) + bytes(24))   # flag bits: none set
     body += _message(b"F", _FORMAT.encode())
+    if attitude is not None:            # every format before the first subscription
+        body += _message(b"F", _ATT_FORMAT.encode())
     body += _message(b"A", struct.pack("<BH", 0, 0) + ULOG_TOPIC.encode())
+    records = []                                    # (stamp [us], order, data message)
     for k in range(stamps.size):
         g = samples.gyro[k]
         f = samples.accel[k]
         rec = _RECORD.pack(int(stamps[k]), *map(float, g), int(dt_us[k]), 0, *map(float, f),
                            int(dt_us[k]), 0, 0, 0, 0)
-        body += _message(b"D", struct.pack("<H", 0) + rec)
+        records.append((int(stamps[k]), 0, _message(b"D", struct.pack("<H", 0) + rec)))
+    if attitude is not None:
+        t_att = np.asarray(attitude.time, dtype=float)
+        check_increasing(t_att, "write_px4_ulog attitude")
+        if t_att[0] < 0:
+            raise ValueError(f"attitude times are microseconds since boot and must be >= 0; "
+                             f"the first is at {t_att[0]!r} s")
+        body += _message(b"A", struct.pack("<BH", 0, 1) + ATTITUDE_TOPIC.encode())
+        quat = attitude.rotation.as_quat()[:, [3, 0, 1, 2]]       # scipy x,y,z,w -> w,x,y,z
+        for t, q in zip(np.rint(t_att * 1e6).astype(np.int64), quat, strict=True):
+            rec = _ATT_RECORD.pack(int(t), *map(float, q), 0.0, 0.0, 0.0, 0.0, 0)
+            records.append((int(t), 1, _message(b"D", struct.pack("<H", 1) + rec)))
+        records.sort(key=lambda r: r[:2])
+    for _, _, msg in records:
+        body += msg
     from raysim.io.files import atomic_write_bytes
 
     return atomic_write_bytes(path, bytes(body))

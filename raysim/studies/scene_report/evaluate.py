@@ -514,8 +514,8 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
                                "el_deg": target.el_deg}, "metrics": metrics}
         seconds["point_metrics"] = time.perf_counter() - t
     bar.close()
-    boxes = mesh_boxes(settings)
-    targets = _targets(sim.get("scene"), settings) + mesh_targets(boxes, settings)
+    boxes = mesh_boxes(settings.scenario)
+    targets = _targets(sim.get("scene"), settings) + mesh_targets(boxes, settings.lever_arm)
     _match(targets, reference, results, settings)
     meshes = mesh_summary(boxes, sim.get("paths"), {REFERENCE: reference, **results})
     movers = []

@@ -17,8 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .settings import ReportSettings
-
 __all__ = ["mesh_boxes", "mesh_targets", "mesh_summary", "plot_placement",
            "NEAR_MESH_M"]
 
@@ -34,12 +32,12 @@ def _mesh_name(spec, taken) -> str:
     return name
 
 
-def mesh_boxes(settings: ReportSettings) -> list[dict]:
+def mesh_boxes(scenario) -> list[dict]:
     """Each user mesh of the scenario: its name, world vertices' footprint and bounding box.
 
     Parameters
     ----------
-    settings : ReportSettings
+    scenario : raysim.scenario.Scenario
         A scenario with ``[[scene.meshes]]`` (other scenes give ``[]``).
 
     Returns
@@ -50,7 +48,7 @@ def mesh_boxes(settings: ReportSettings) -> list[dict]:
         ``footprint_m`` (convex hull of the vertices in the north/east plane,
         ``[k, 2]`` [m]).
     """
-    scene = settings.scenario.scene
+    scene = scenario.scene
     if scene.kind != "meshes":
         return []
     import trimesh
@@ -80,12 +78,19 @@ def mesh_boxes(settings: ReportSettings) -> list[dict]:
     return out
 
 
-def mesh_targets(boxes: list[dict], settings: ReportSettings) -> list[dict]:
+def mesh_targets(boxes: list[dict], lever_arm) -> list[dict]:
     """Each mesh as a named marker: its centre's range [m], azimuth and elevation [deg].
 
     The centre of a mesh under the radar (a ground plane) is taken at the point of
     its top face nearest the radar's nadir-to-boresight line: the bounding-box point
     nearest the radar, so that a ground's marker is where the radar sees it.
+
+    Parameters
+    ----------
+    boxes : list of dict
+        :func:`mesh_boxes`.
+    lever_arm : sequence of float
+        Radar phase centre, shape ``[3]`` (B at the hover point, so in W) [m].
 
     Returns
     -------
@@ -95,7 +100,7 @@ def mesh_targets(boxes: list[dict], settings: ReportSettings) -> list[dict]:
     """
     from raysim.echoes.oracle import az_el
 
-    lever = np.asarray(settings.lever_arm, dtype=float)
+    lever = np.asarray(lever_arm, dtype=float)
     out = []
     for b in boxes:
         lo, hi = np.asarray(b["lower_m"]), np.asarray(b["upper_m"])

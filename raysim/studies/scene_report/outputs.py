@@ -18,8 +18,10 @@ from raysim.measure.scene import (
     MISS_REASONS,
     SCENE_METRICS,
 )
+from raysim.resources import check_memory
 from raysim.vocabulary import CHAINS, MAP_TITLES, REFERENCE, chain_label, parse_chains
 
+from .coverage import maps_size
 from .evaluate import SceneResult, evaluate_scenario, evaluate_scene
 from .meshes import NEAR_MESH_M, mesh_boxes, plot_placement
 from .settings import (
@@ -488,9 +490,20 @@ def write_scene_report(out_dir: str | os.PathLike, *, scenes: Sequence[str] | No
     for sc in scenarios:
         jobs.append((result_label(sc.name, [j[0] for j in jobs]),
                      settings.for_scenario(sc)))
+    for label, st in jobs:             # the default extents widened to hold every object
+        (lo, hi), w = st.range_window, st.grid_half_width_deg
+        size = maps_size(st)           # sized on the extents it will run with
+        check_memory(size["peak_bytes"], f"the maps of {label} ({size['gates']} range gates x "
+                     f"{size['beams']} beams, {st.num_chirps} chirps)",
+                     "the range window (--range-window) or the grid (--quick: 6 deg steps)")
+        if lo < settings.range_window[0] or hi > settings.range_window[1] or \
+                w > settings.grid_half_width_deg:
+            print(f"note: {label}: maps widened to hold every mesh and point target: range "
+                  f"window {lo:.1f}-{hi:.1f} m, grid +-{w:g} deg ({size['gates']} gates x "
+                  f"{size['beams']} beams)", file=sys.stderr)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    placed = [(label, mesh_boxes(st), st) for label, st in jobs]
+    placed = [(label, mesh_boxes(st.scenario), st) for label, st in jobs]
     if plot_placement(placed, out / "placement.png") is not None and progress:
         print(f"placement preview: {out / 'placement.png'}", file=sys.stderr)
     results, summary = {}, {}

@@ -319,15 +319,40 @@ class ReportSettings:
         The default range window (:data:`RANGE_WINDOW_M`) is cut to the
         scenario's radar where that radar sees less far: upper edge its
         unambiguous range less two range bins [m], lower edge at most half of
-        that. A window the caller set is kept and checked as given.
+        that. The default window and the default grid half-width
+        (:data:`GRID_HALF_WIDTH_DEG`) then widen so that every mesh and point
+        target of the scenario is on the maps (:meth:`covering`). A window or
+        grid the caller set is kept and checked as given.
         """
-        if tuple(self.range_window) == tuple(RANGE_WINDOW_M):
+        window = tuple(self.range_window)
+        default = window == tuple(RANGE_WINDOW_M)
+        if default:
             cfg = scenario.radar_config()
             top = cfg.max_range - 2 * cfg.range_resolution
-            if self.range_window[1] > top:
-                return self.with_values(scenario=scenario,
-                                        range_window=(min(self.range_window[0], top / 2), top))
-        return self.with_values(scenario=scenario)
+            if window[1] > top:
+                window = (min(window[0], top / 2), top)
+        return self.with_values(scenario=scenario, range_window=window).covering(
+            window=default, grid=self.grid_half_width_deg == GRID_HALF_WIDTH_DEG)
+
+    def covering(self, *, window: bool = True, grid: bool = True) -> ReportSettings:
+        """These settings with the range window and the angle grid widened to hold every
+        object of the scenario (:func:`raysim.studies.scene_report.coverage.covering_extents`
+        over :func:`~raysim.studies.scene_report.coverage.object_spans`), within the
+        radar's unambiguous range less two range bins.
+
+        ``window``, ``grid``: which of the two may widen (False keeps a user's own).
+        """
+        from .coverage import covering_extents, object_spans
+
+        if not (window or grid):
+            return self
+        cfg = self.radar()
+        got = covering_extents(object_spans(self.scenario), self.range_window,
+                               self.grid_half_width_deg, self.grid_step_deg,
+                               cfg.max_range - 2 * cfg.range_resolution,
+                               widen_window=window, widen_grid=grid)
+        return self.with_values(range_window=got["range_window"],
+                                grid_half_width_deg=got["grid_half_width_deg"])
 
     def for_scene(self, scene: str) -> ReportSettings:
         """These settings with the scenario's scene the bundled ``scene`` (and its name)."""
@@ -338,8 +363,10 @@ class ReportSettings:
         if self.scenario.scene.kind != "bundled":
             raise ValueError(f"for_scene needs a bundled-scene scenario, got scene.kind "
                              f"{self.scenario.scene.kind!r}")
-        return replace(self, scenario=self.scenario.with_values(
+        out = replace(self, scenario=self.scenario.with_values(
             {"scene.name": scene, "name": scene}))
+        return out.covering(window=tuple(self.range_window) == tuple(RANGE_WINDOW_M),
+                            grid=self.grid_half_width_deg == GRID_HALF_WIDTH_DEG)
 
     # ------------------------------------------------------------ derived
     def radar(self) -> RadarConfig:

@@ -1,0 +1,114 @@
+"""How the radar is mounted on the body: the rotation ``R_BA`` of the radar frame A.
+
+The radar frame A (docs/conventions.md) has its origin at the radar phase
+centre, at the lever arm ``r_IR`` in B, and its axes turned by the mounting
+rotation ``R_BA`` (A vectors to B vectors), given as Z-Y-X Euler angles
+``(yaw, pitch, roll)`` [deg] of the same sequence as the attitude. An element
+at ``p`` in A is at ``r_IR + R_BA p`` in B; the boresight ``+z_A`` points along
+``R_BA (0, 0, 1)`` in B. Named mountings (:data:`MOUNTING_PRESETS`):
+
+===========  ====================  ===============================================
+name         (yaw, pitch, roll)    the radar
+===========  ====================  ===============================================
+``down``     (0, 0, 0)             A parallel to B: looks down, azimuth (+x_A)
+                                   forward, elevation (+y_A) right (the default)
+``forward``  (90, 0, 90)           looks forward; azimuth right, elevation down
+``oblique``  (90, 0, 45)           looks forward and 45 deg down; azimuth right
+===========  ====================  ===============================================
+
+Beams of a mounted radar are formed in the *nominal radar frame* N: the radar
+frame at the body's nominal pose (B = W), ``u_W = R_BA u_N``; for ``down`` N is
+W itself, as before. :func:`mount_motion` expresses an estimated platform motion
+in N, so that the projection (with the element positions in A) and the
+simulation (:func:`mount_array`: the positions turned into B axes) agree.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+__all__ = ["MOUNTING_PRESETS", "mounting_matrix", "mounting_deg", "is_default_mounting",
+           "mount_array", "mount_motion", "nominal_target_position"]
+
+#: Named mountings: Z-Y-X Euler angles (yaw, pitch, roll) of ``R_BA`` [deg].
+MOUNTING_PRESETS = {"down": (0.0, 0.0, 0.0), "forward": (90.0, 0.0, 90.0),
+                    "oblique": (90.0, 0.0, 45.0)}
+
+
+def mounting_deg(value, option: str = "--mounting-deg") -> tuple[float, float, float]:
+    """``(yaw, pitch, roll)`` [deg] of a mounting: a preset name, ``"Y,P,R"`` text or 3 numbers.
+
+    Raises
+    ------
+    ValueError
+        Neither a preset name nor three finite angles (the message names ``option``).
+    """
+    if value is None:
+        return MOUNTING_PRESETS["down"]
+    if isinstance(value, str):
+        key = value.strip().lower()
+        if key in MOUNTING_PRESETS:
+            return MOUNTING_PRESETS[key]
+        value = value.split(",")
+    try:
+        v = tuple(float(x) for x in value)
+    except (TypeError, ValueError):
+        v = ()
+    if len(v) != 3 or not all(np.isfinite(v)):
+        raise ValueError(f"{option}: got {value!r}, expected YAW,PITCH,ROLL [deg] (three "
+                         f"finite numbers) or one of {sorted(MOUNTING_PRESETS)}")
+    return v
+
+
+def mounting_matrix(value) -> np.ndarray:
+    """``R_BA`` [3, 3] of a mounting (anything :func:`mounting_deg` takes)."""
+    return Rotation.from_euler("ZYX", mounting_deg(value), degrees=True).as_matrix()
+
+
+def is_default_mounting(value) -> bool:
+    """Whether the mounting is ``down`` exactly (nothing to turn: results as before)."""
+    return mounting_deg(value) == MOUNTING_PRESETS["down"]
+
+
+def mount_array(array, value):
+    """The array with its element positions turned into B axes, ``R_BA p`` [m].
+
+    The simulation (:func:`raysim.platform.kinematics.element_world_positions`)
+    then places element ``p`` at ``T + R_WB (r_IR + R_BA p)``. The default
+    mounting returns ``array`` itself.
+    """
+    if is_default_mounting(value):
+        return array
+    m = mounting_matrix(value)
+    return replace(array, tx_positions=array.tx_positions @ m.T,
+                   rx_positions=array.rx_positions @ m.T,
+                   name=f"{array.name}, mounted {mounting_deg(value)} deg")
+
+
+def mount_motion(motion, value):
+    """A platform motion (``compensation.PlatformMotion``) expressed in the nominal radar frame N.
+
+    With ``M = R_BA``: attitude ``M^T R_WB M``, position and velocity ``M^T x``,
+    angular rate ``M^T omega`` and lever arm ``M^T r_IR``; the radar phase
+    centre and every element ``T + R_WB (r_IR + M p)`` are then ``M^T`` times
+    their world positions, so beams formed with the element positions in A
+    look along directions of N (``u_W = M u_N``). The default mounting returns
+    ``motion`` itself.
+    """
+    if is_default_mounting(value):
+        return motion
+    m = mounting_matrix(value)
+    return replace(motion, attitude=m.T @ motion.attitude @ m, position=motion.position @ m,
+                   velocity=motion.velocity @ m, angular_rate=motion.angular_rate @ m,
+                   lever_arm=m.T @ motion.lever_arm)
+
+
+def nominal_target_position(range_m: float, az: float, el: float, lever_arm,
+                            value) -> np.ndarray:
+    """World position [m] of a point at ``range_m`` [m] in direction ``(az, el)`` [rad] of N
+    from the radar at the nominal pose: ``r_IR + R_BA u(az, el) range_m``."""
+    u = np.array([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)])
+    return np.asarray(lever_arm, dtype=float) + mounting_matrix(value) @ u * float(range_m)
