@@ -123,7 +123,7 @@ def test_exact_chain_restores_map_entropy(level_results):
 
 
 #: dpca chain (band-limited interpolation), full jitter, QUICK: ridge leakage at most [dB]
-#: (measured -38.1 dB flat_reflectors, -38.9 dB parking_lot; what is left is the 1.1 mm
+#: (measured -38.1 dB flat_reflectors, -37.3 dB parking_lot; what is left is the 1.1 mm
 #: vertical span a planar aperture cannot shift: -44 dB without it; docs/scenes.md).
 DPCA_RIDGE_MAX_DB = -35.0
 
