@@ -279,10 +279,16 @@ class RadarInertialResult:
                 "warnings": list(self.warnings)}
 
 
-def solve_batch(h, residual, noise_cov, prior_cov, x_lin) -> tuple[np.ndarray, np.ndarray]:
-    """One Gauss-Newton step of prior plus linear measurements.
+def solve_batch(h, residual, noise_cov, prior_cov, x_lin, consider=None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """One Gauss-Newton step of prior plus linear measurements, some components held.
 
-    Minimises ``(x_lin + d)^T P0^-1 (x_lin + d) + (r - H d)^T C^-1 (r - H d)``.
+    Minimises ``(x_lin + d)^T P0^-1 (x_lin + d) + (r - H d)^T C^-1 (r - H d)``
+    over the estimated components; the ``consider`` components stay at
+    ``x_lin`` and their prior spread is carried into the others' covariance
+    (Schmidt's consider analysis: ``P_aa = I_a^-1 + S P_cc S^T`` with the
+    sensitivity ``S = -I_a^-1 H_a^T C^-1 H_c``; Tapley, Schutz and Born,
+    Statistical Orbit Determination, 2004, sec. 6.2).
 
     Parameters
     ----------
@@ -291,23 +297,38 @@ def solve_batch(h, residual, noise_cov, prior_cov, x_lin) -> tuple[np.ndarray, n
         Measured minus predicted at ``x_lin``.
     noise_cov : array_like, shape ``[measurement, measurement]``
     prior_cov : array_like, shape ``[state, state]``
-        Prior covariance (zero mean).
+        Prior covariance (zero mean); its cross terms between held and
+        estimated components are ignored.
     x_lin : array_like, shape ``[state]``
         Linearisation point.
+    consider : array_like of bool, shape ``[state]``, optional
+        Components held at ``x_lin`` (default none).
 
     Returns
     -------
     (ndarray, ndarray)
-        The new state ``x_lin + d`` ``[state]`` and its covariance ``[state, state]``.
+        The new state ``[state]`` and its covariance ``[state, state]``.
     """
     h = np.asarray(h, dtype=float)
-    p0i = np.linalg.inv(np.asarray(prior_cov, dtype=float))
-    ci_h = np.linalg.solve(noise_cov, h)
-    info = p0i + h.T @ ci_h
-    cov = np.linalg.inv(info)
-    cov = 0.5 * (cov + cov.T)
-    d = cov @ (ci_h.T @ np.asarray(residual, dtype=float) - p0i @ x_lin)
-    return np.asarray(x_lin, dtype=float) + d, cov
+    p0 = np.asarray(prior_cov, dtype=float)
+    x0 = np.asarray(x_lin, dtype=float)
+    c = np.zeros(x0.size, dtype=bool) if consider is None else np.asarray(consider, dtype=bool)
+    a = ~c
+    ha, hc = h[:, a], h[:, c]
+    p0a_inv = np.linalg.inv(p0[np.ix_(a, a)])
+    ci_ha = np.linalg.solve(noise_cov, ha)
+    info = p0a_inv + ha.T @ ci_ha
+    paa = np.linalg.inv(info)
+    x = x0.copy()
+    x[a] = x0[a] + paa @ (ci_ha.T @ np.asarray(residual, dtype=float) - p0a_inv @ x0[a])
+    pcc = p0[np.ix_(c, c)]
+    sens = -paa @ (ci_ha.T @ hc)
+    cov = np.zeros_like(p0)
+    cov[np.ix_(a, a)] = paa + sens @ pcc @ sens.T
+    cov[np.ix_(a, c)] = sens @ pcc
+    cov[np.ix_(c, a)] = (sens @ pcc).T
+    cov[np.ix_(c, c)] = pcc
+    return x, 0.5 * (cov + cov.T)
 
 
 def observability(prior_cov, fisher, *, ratio: float = UNCONSTRAINED_RATIO
@@ -527,7 +548,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     cov = p0
     motions = integrate(x)
     chi2, kept, rejected, fisher = 1.0, 0, 0, np.zeros((14, 14))
-    keep = None
+    keep = held = None
     for _ in range(int(iterations)):
         meas = measure(motions)
         # the static-world consensus once: later passes measure the same scatterers and blocks
@@ -541,10 +562,12 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         h = jacobian(x, meas)
         c = _noise_cov(meas, imu_errors, t_ref, g)
         r = meas.range_rate
+        if held is None:            # the attitude, gyro and clock the scene leaves alone
+            held = _held(p0, h.T @ np.linalg.solve(c, h))
         wts = np.ones(kept)
         for _ in range(HUBER_PASSES):             # iteratively reweighted (Huber)
             cw = c / np.sqrt(np.outer(wts, wts))
-            x_new, cov = solve_batch(h, r, cw, p0, x)
+            x_new, cov = solve_batch(h, r, cw, p0, x, held)
             z = (r - h @ (x_new - x)) / np.sqrt(np.diag(c))
             wts = np.minimum(1.0, HUBER_K / np.maximum(np.abs(z), 1e-12))
         res = r - h @ (x_new - x)
@@ -552,7 +575,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         hat = np.trace(np.linalg.solve(np.linalg.inv(p0) + fisher, fisher))
         chi2 = float(res @ np.linalg.solve(cw, res)) / max(kept - hat, 1.0)
         if chi2 > 1.0:           # spreads understated (model error): scale the radar's
-            x_new, cov = solve_batch(h, r, cw * chi2, p0, x)
+            x_new, cov = solve_batch(h, r, cw * chi2, p0, x, held)
             fisher = fisher / chi2
         x = x_new
         motions = integrate(x)
@@ -566,6 +589,26 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     return RadarInertialResult(x, cov, p0, names, dirs, tuple(motions), v0 + x[VELOCITY], att,
                                tau0 + float(x[CLOCK_OFFSET]), bg0 + x[GYRO_BIAS], chi2, kept,
                                rejected, notes)
+
+
+#: Components held at the prior when the radar leaves them unconstrained (the others are
+#: estimated along whatever the radar constrains): the attitude, which turns the beams,
+#: and what turns or shifts it over the record.
+HELD_WHEN_UNCONSTRAINED = ("tilt_n", "tilt_e", "heading", "gyro_bias_x", "gyro_bias_y",
+                           "gyro_bias_z", "clock_offset", "clock_drift")
+
+
+def _held(p0: np.ndarray, fisher: np.ndarray) -> np.ndarray:
+    """Mask of the components held at their prior: unconstrained ones of
+    :data:`HELD_WHEN_UNCONSTRAINED`.
+
+    The tilt and the horizontal accelerometer bias give the same acceleration
+    error; when the radar constrains only their sum, the given attitude is kept
+    and the bias takes the sum: the velocity is the same, the beams are not
+    turned by a split the radar cannot make.
+    """
+    names, _ = observability(p0, fisher)
+    return np.array([n in names and n in HELD_WHEN_UNCONSTRAINED for n in STATE_NAMES])
 
 
 def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
