@@ -75,10 +75,13 @@ DOPPLER_BLOCKS = 4
 #: Fewest chirp loops in a block (the slope of fewer is too noisy).
 MIN_BLOCK_CHIRPS = 8
 #: IMU figures used when none are given: a consumer MEMS class (BMI088 datasheet, one
-#: sigma: accel 160 ug/sqrt(Hz), offset 20 mg; gyro 0.014 deg/s/sqrt(Hz), offset
-#: 0.5 deg/s), the widest of the grades, so its spreads cover the better ones.
-DEFAULT_IMU_ERRORS = ImuErrors(160e-6 * 9.80665, float(np.deg2rad(0.014)), 20e-3 * 9.80665,
-                               float(np.deg2rad(0.5)))
+#: sigma: accel 160 ug/sqrt(Hz), offset 20 mg, scale and cross-axis 1 %; gyro
+#: 0.014 deg/s/sqrt(Hz), offset 0.5 deg/s), the widest of the grades, so its spreads
+#: cover the better ones. The accelerometer bias spread adds the scale and cross-axis
+#: errors on gravity (1 % of g each, constant in hover).
+DEFAULT_IMU_ERRORS = ImuErrors(160e-6 * 9.80665, float(np.deg2rad(0.014)),
+                               float(np.hypot.reduce([20e-3, 0.01, 0.01])) * 9.80665,
+                               float(np.deg2rad(0.5)), 0.01)
 
 
 @dataclass(frozen=True)

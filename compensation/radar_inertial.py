@@ -125,16 +125,21 @@ class ImuErrors:
         Accelerometer bias (turn-on plus instability) [m/s^2].
     gyro_bias_sigma : float
         Gyro bias (turn-on plus instability) [rad/s].
+    accel_scale_sigma : float
+        Scale-factor and misalignment error of the accelerometer, each entry
+        of its error matrix [1]: on the vibration and manoeuvre accelerations
+        it looks like a tilt, so it bounds what they tell of the attitude.
     """
 
     accel_noise_density: float
     gyro_noise_density: float
     accel_bias_sigma: float
     gyro_bias_sigma: float
+    accel_scale_sigma: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("accel_noise_density", "gyro_noise_density", "accel_bias_sigma",
-                     "gyro_bias_sigma"):
+                     "gyro_bias_sigma", "accel_scale_sigma"):
             v = float(getattr(self, name))
             if not np.isfinite(v) or v < 0:
                 raise ValueError(f"ImuErrors.{name}: got {v!r}, expected a finite number >= 0")
@@ -413,17 +418,47 @@ def _ls_slope(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.tensordot(tc, y - y.mean(axis=0), axes=(0, 0)) / np.sum(tc ** 2)
 
 
-def _noise_cov(meas: DopplerMeasurements, imu: ImuErrors, t_ref: float,
-               gravity: float) -> np.ndarray:
-    """Measurement covariance: radar spreads plus the IMU white noise's velocity walk."""
+def _noise_cov(meas: DopplerMeasurements, imu: ImuErrors, t_ref: float, gravity: float,
+               dv: np.ndarray) -> np.ndarray:
+    """Measurement covariance: radar spreads plus the velocity errors the IMU's noise and
+    scale errors leave.
+
+    ``dv [measurement, 3]``: the IMU's velocity change since the reference over
+    each block [m/s]; an error matrix of iid entries of spread ``s`` on the
+    acceleration leaves ``dM dv``, of covariance ``s^2 (dv_m . dv_n) I``.
+    """
     s = np.abs(meas.window.mean(axis=1) - t_ref)
     lo, hi = np.minimum.outer(s, s), np.maximum.outer(s, s)
     q_acc = imu.accel_noise_density ** 2 * lo
     q_tilt = (gravity * imu.gyro_noise_density) ** 2 * lo ** 2 * (3 * hi - lo) / 6
+    q_scale = imu.accel_scale_sigma ** 2 * (dv @ dv.T)
     u = meas.directions
     uu = u @ u.T
     uh = u[:, :2] @ u[:, :2].T
-    return np.diag(meas.sigma ** 2) + q_acc * uu + q_tilt * uh
+    return np.diag(meas.sigma ** 2) + (q_acc + q_scale) * uu + q_tilt * uh
+
+
+def _block_velocity(motions, meas: DopplerMeasurements) -> np.ndarray:
+    """Least-squares slope of the radar position over each measurement's block, ``[m, 3]``
+    [m/s] (what the slow-time phase slope of a block measures)."""
+    blocks, which = np.unique(np.column_stack([meas.frame, meas.window]), axis=0,
+                              return_inverse=True)
+    out = np.empty((blocks.shape[0], 3))
+    for b, (k, lo, hi) in enumerate(blocks):
+        m = motions[int(k)]
+        sel = (m.time >= lo - 1e-12) & (m.time <= hi + 1e-12)
+        out[b] = _ls_slope(m.time[sel], m.radar_position[sel])
+    return out[which.ravel()]
+
+
+def _velocity_change(meas: DopplerMeasurements, motions, v_ref: np.ndarray) -> np.ndarray:
+    """Mean body velocity over each measurement's block minus ``v_ref``, ``[measurement, 3]``."""
+    out = np.empty((meas.frame.size, 3))
+    for j, (k, (a, b)) in enumerate(zip(meas.frame, meas.window, strict=True)):
+        m = motions[int(k)]
+        sel = (m.time >= a - 1e-12) & (m.time <= b + 1e-12)
+        out[j] = m.velocity[sel].mean(axis=0) - v_ref
+    return out
 
 
 def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
@@ -525,24 +560,21 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
                                     initial_velocity=v0 + x[VELOCITY], initial_attitude=att,
                                     reference_time=t_ref, **options)
 
-    def jacobian(x: np.ndarray, meas: DopplerMeasurements) -> np.ndarray:
-        blocks, which = np.unique(np.column_stack([meas.frame, meas.window]), axis=0,
-                                  return_inverse=True)
-        which = which.ravel()
+    def jacobian(x: np.ndarray, meas: DopplerMeasurements, u: np.ndarray,
+                 v_radar: np.ndarray) -> np.ndarray:
+        """``d(range rate)/dx``: the radar velocity's change, and for the attitude also
+        the direction's turn (``u`` was measured through the attitude: the two cancel
+        but for gravity and the velocity given in W)."""
         cols = []
         for i, step in enumerate(JACOBIAN_STEPS):
             e = np.zeros(14)
             e[i] = step
             plus, minus = integrate(x + e), integrate(x - e)
-            dp = [(a.radar_position - b.radar_position) / (2 * step)
-                  for a, b in zip(plus, minus, strict=True)]
-            slope = np.empty((blocks.shape[0], 3))       # d(radar velocity) per block
-            for b, (k, lo, hi) in enumerate(blocks):
-                tk = plus[int(k)].time
-                sel = (tk >= lo - 1e-12) & (tk <= hi + 1e-12)
-                slope[b] = _ls_slope(tk[sel], dp[int(k)][sel])
-            cols.append(-np.einsum("mi,mi->m", meas.directions, slope[which]))
-        return np.column_stack(cols)
+            dv = (_block_velocity(plus, meas) - _block_velocity(minus, meas)) / (2 * step)
+            cols.append(-np.einsum("mi,mi->m", u, dv))
+        h = np.column_stack(cols)
+        h[:, ATTITUDE] -= np.cross(u, v_radar)
+        return h
 
     x = np.zeros(14)
     cov = p0
@@ -559,9 +591,14 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         kept = meas.frame.size
         if kept == 0:
             break
-        h = jacobian(x, meas)
-        c = _noise_cov(meas, imu_errors, t_ref, g)
-        r = meas.range_rate
+        # directions measured through the first-guess attitude, turned by its correction
+        u = meas.directions @ Rotation.from_rotvec(x[ATTITUDE]).as_matrix().T
+        v_radar = _block_velocity(motions, meas)
+        h = jacobian(x, meas, u, v_radar)
+        c = _noise_cov(meas, imu_errors, t_ref, g,
+                       _velocity_change(meas, motions, motions[0].velocity[0]))
+        # the beams looked along the measured directions, the model along the turned ones
+        r = meas.range_rate - np.einsum("mi,mi->m", meas.directions - u, v_radar)
         if held is None:            # the attitude, gyro and clock the scene leaves alone
             held = _held(p0, h.T @ np.linalg.solve(c, h))
         wts = np.ones(kept)

@@ -38,7 +38,8 @@ def imu_errors(grade: str):
         Noise densities as given; each bias spread the root sum of squares of
         the turn-on bias, the bias instability and, for the accelerometer, the
         scale-factor and misalignment errors on gravity (constant biases of a
-        hovering platform: 1 % of g is 10 mg).
+        hovering platform: 1 % of g is 10 mg); the scale spread the larger of the
+        scale-factor and misalignment spreads.
     """
     from compensation.radar_inertial import ImuErrors
     from raysim.platform.imu_spec import STANDARD_GRAVITY, get_preset
@@ -49,7 +50,8 @@ def imu_errors(grade: str):
                      float(np.hypot.reduce([a.bias_sigma, a.bias_instability,
                                             a.scale_factor_sigma * STANDARD_GRAVITY,
                                             a.misalignment_sigma * STANDARD_GRAVITY])),
-                     float(np.hypot(g.bias_sigma, g.bias_instability)))
+                     float(np.hypot(g.bias_sigma, g.bias_instability)),
+                     max(a.scale_factor_sigma, a.misalignment_sigma))
 
 
 @dataclass(frozen=True)
