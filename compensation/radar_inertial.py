@@ -560,27 +560,21 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
                                     initial_velocity=v0 + x[VELOCITY], initial_attitude=att,
                                     reference_time=t_ref, **options)
 
-    def jacobian(x: np.ndarray, meas: DopplerMeasurements, u: np.ndarray,
-                 v_radar: np.ndarray) -> np.ndarray:
-        """``d(range rate)/dx``: the radar velocity's change, and for the attitude also
-        the direction's turn (``u`` was measured through the attitude: the two cancel
-        but for gravity and the velocity given in W)."""
-        cols = []
+    def velocity_jacobian(x: np.ndarray, meas: DopplerMeasurements) -> np.ndarray:
+        """``d(block radar velocity)/dx`` ``[measurement, 3, 14]`` by central differences."""
+        out = np.empty((meas.frame.size, 3, 14))
         for i, step in enumerate(JACOBIAN_STEPS):
             e = np.zeros(14)
             e[i] = step
-            plus, minus = integrate(x + e), integrate(x - e)
-            dv = (_block_velocity(plus, meas) - _block_velocity(minus, meas)) / (2 * step)
-            cols.append(-np.einsum("mi,mi->m", u, dv))
-        h = np.column_stack(cols)
-        h[:, ATTITUDE] -= np.cross(u, v_radar)
-        return h
+            out[:, :, i] = (_block_velocity(integrate(x + e), meas)
+                            - _block_velocity(integrate(x - e), meas)) / (2 * step)
+        return out
 
     x = np.zeros(14)
     cov = p0
     motions = integrate(x)
     chi2, kept, rejected, fisher = 1.0, 0, 0, np.zeros((14, 14))
-    keep = held = None
+    keep = held = dvdx = None
     for _ in range(int(iterations)):
         meas = measure(motions)
         # the static-world consensus once: later passes measure the same scatterers and blocks
@@ -594,7 +588,13 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         # directions measured through the first-guess attitude, turned by its correction
         u = meas.directions @ Rotation.from_rotvec(x[ATTITUDE]).as_matrix().T
         v_radar = _block_velocity(motions, meas)
-        h = jacobian(x, meas, u, v_radar)
+        if dvdx is None:     # the same blocks each pass: one linearisation (chord method)
+            dvdx = velocity_jacobian(x, meas)
+        # the radar velocity's change, and for the attitude also the direction's turn (u
+        # was measured through the attitude: the two cancel but for gravity and the
+        # velocity given in W)
+        h = -np.einsum("mi,mij->mj", u, dvdx)
+        h[:, ATTITUDE] -= np.cross(u, v_radar)
         c = _noise_cov(meas, imu_errors, t_ref, g,
                        _velocity_change(meas, motions, motions[0].velocity[0]))
         # the beams looked along the measured directions, the model along the turned ones
@@ -618,7 +618,8 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         motions = integrate(x)
     cov = _tilt_leak(cov, r0, g)
     names, dirs = observability(p0, fisher)
-    notes = _warnings(names, dirs, sig0, attitude_given, meas if kept else None)
+    notes = _warnings(names, np.sqrt(np.diag(cov)), sig0, attitude_given,
+                      meas if kept else None)
     if warn:
         for text in notes:
             warnings.warn(text, ObservabilityWarning, stacklevel=2)
@@ -678,7 +679,7 @@ def _consensus(meas: DopplerMeasurements) -> np.ndarray:
     return keep
 
 
-def _warnings(names, dirs, sig0, attitude_given: bool, meas) -> tuple[str, ...]:
+def _warnings(names, sigma, sig0, attitude_given: bool, meas) -> tuple[str, ...]:
     """The result's warnings: no measurement, geometry, unconstrained velocity or tilt."""
     out: list[str] = []
     if meas is None:
@@ -689,9 +690,10 @@ def _warnings(names, dirs, sig0, attitude_given: bool, meas) -> tuple[str, ...]:
     if vel:
         out.append(f"unconstrained: {', '.join(vel)} kept at the IMU prior "
                    f"(+- {sig0[0]:.3g} m/s)")
-    tilt = [n for n in names if n.startswith("tilt")]
-    if tilt and not attitude_given:
-        out.append(f"attitude: {', '.join(tilt)} not observable from the Doppler apart from "
-                   f"the accelerometer bias; the nominal attitude is kept "
-                   f"(+- {np.rad2deg(sig0[3]):.3g} deg): give the attitude")
+    if not attitude_given:
+        tilt = np.rad2deg(sigma[3:5])
+        out.append(f"attitude: not given; the Doppler sees the tilt only through gravity, "
+                   f"no better than the accelerometer bias is known: tilt_n +- {tilt[0]:.2g}, "
+                   f"tilt_e +- {tilt[1]:.2g} deg (of the nominal attitude's "
+                   f"{np.rad2deg(sig0[3]):.3g}); give the attitude")
     return tuple(out)
