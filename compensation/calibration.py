@@ -74,6 +74,12 @@ ITERATIONS = 3
 DOPPLER_BLOCKS = 4
 #: Fewest chirp loops in a block (the slope of fewer is too noisy).
 MIN_BLOCK_CHIRPS = 8
+#: Spread of a detected direction along an axis the array resolves [rad] (the peak
+#: refined to a quarter of the coarse step; multipath and the lever arm's parallax).
+DIRECTION_SIGMA = float(np.deg2rad(0.5))
+#: Spread along an axis it does not resolve [rad] (the scatterer may lie anywhere in a
+#: wide fan; a line array's elevation).
+UNRESOLVED_DIRECTION_SIGMA = float(np.deg2rad(10.0))
 #: IMU figures used when none are given: a consumer MEMS class (BMI088 datasheet, one
 #: sigma: accel 160 ug/sqrt(Hz), offset 20 mg, scale and cross-axis 1 %; gyro
 #: 0.014 deg/s/sqrt(Hz), offset 0.5 deg/s), the widest of the grades, so its spreads
@@ -420,6 +426,7 @@ def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavele
     y = _beams(rcs, positions, motions, scatterers, options)       # [frame, scatterer, chirp]
     nb = max(1, min(int(blocks), y.shape[2] // MIN_BLOCK_CHIRPS))
     u = np.stack([sc.direction for sc in scatterers])
+    dcov = np.stack([_direction_cov(sc, positions, wavelength) for sc in scatterers])
     d, r, s, fr, win = [], [], [], [], []
     for k, m in enumerate(motions):
         t = _loop_motion(m, y.shape[2]).time
@@ -431,8 +438,25 @@ def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavele
                 s.append(max(sig, MIN_RANGE_RATE_SIGMA))
                 fr.append(k)
                 win.append((t[blk][0], t[blk][-1]))
+    per = np.tile(np.arange(len(scatterers)), len(motions) * nb)
     return DopplerMeasurements(np.array(d), np.array(r), np.array(s), np.array(fr),
-                               np.array(win))
+                               np.array(win), dcov[per])
+
+
+def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
+    """Covariance ``[3, 3]`` of a detected direction's error: :data:`DIRECTION_SIGMA` along
+    the azimuth and elevation the array resolves, :data:`UNRESOLVED_DIRECTION_SIGMA`
+    along those it does not."""
+    has = _apertures(positions, wavelength)
+    h = 1e-6
+    out = np.zeros((3, 3))
+    for k, resolved in enumerate(has):
+        dd = np.array([h, 0.0]) if k == 0 else np.array([0.0, h])
+        axis = (direction(s.azimuth + dd[0], s.elevation + dd[1])
+                - direction(s.azimuth - dd[0], s.elevation - dd[1])) / (2 * h)
+        sig = DIRECTION_SIGMA if resolved else UNRESOLVED_DIRECTION_SIGMA
+        out += sig ** 2 * np.outer(axis, axis)
+    return out
 
 
 def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_time, gyro,

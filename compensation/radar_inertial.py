@@ -179,6 +179,11 @@ class DopplerMeasurements:
         Frame of the measurement.
     window : ndarray, shape ``[measurement, 2]``
         First and last chirp time of its block [s, radar clock].
+    direction_cov : ndarray, shape ``[measurement, 3, 3]``, optional
+        Covariance of the direction's error [1], the same for every block of
+        one scatterer (an axis the array does not resolve has a large one);
+        default none. Its effect ``-du . v`` on the range rate is constant
+        over the record: correlated across the scatterer's blocks.
     """
 
     directions: np.ndarray
@@ -186,6 +191,7 @@ class DopplerMeasurements:
     sigma: np.ndarray
     frame: np.ndarray
     window: np.ndarray
+    direction_cov: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         u = finite_array("directions", self.directions, ndim=2)
@@ -201,12 +207,16 @@ class DopplerMeasurements:
         object.__setattr__(self, "sigma", s)
         object.__setattr__(self, "frame", np.asarray(self.frame, dtype=int).reshape(m))
         object.__setattr__(self, "window", finite_array("window", self.window, shape=(m, 2)))
+        if self.direction_cov is not None:
+            object.__setattr__(self, "direction_cov", finite_array(
+                "direction_cov", self.direction_cov, shape=(m, 3, 3)))
 
     def select(self, keep) -> DopplerMeasurements:
         """The measurements where ``keep`` (bool ``[measurement]``) is true."""
         k = np.asarray(keep, dtype=bool)
         return DopplerMeasurements(self.directions[k], self.range_rate[k], self.sigma[k],
-                                   self.frame[k], self.window[k])
+                                   self.frame[k], self.window[k],
+                                   None if self.direction_cov is None else self.direction_cov[k])
 
 
 @dataclass(frozen=True)
@@ -419,13 +429,18 @@ def _ls_slope(t: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def _noise_cov(meas: DopplerMeasurements, imu: ImuErrors, t_ref: float, gravity: float,
-               dv: np.ndarray) -> np.ndarray:
-    """Measurement covariance: radar spreads plus the velocity errors the IMU's noise and
-    scale errors leave.
+               dv: np.ndarray, v_radar: np.ndarray, v_cov: np.ndarray) -> np.ndarray:
+    """Measurement covariance: radar spreads, the velocity errors the IMU's noise and
+    scale errors leave, and the scatterers' direction errors.
 
     ``dv [measurement, 3]``: the IMU's velocity change since the reference over
     each block [m/s]; an error matrix of iid entries of spread ``s`` on the
-    acceleration leaves ``dM dv``, of covariance ``s^2 (dv_m . dv_n) I``.
+    acceleration leaves ``dM dv``, of covariance ``s^2 (dv_m . dv_n) I``. A
+    direction error ``du`` (covariance ``D``) of a scatterer leaves ``-du . v``
+    in each of its blocks: covariance ``v_m^T D v_n + tr(D V)`` between them,
+    ``v`` the current radar velocity ``[measurement, 3]`` and ``V`` the
+    covariance of the velocity estimate ``[3, 3]`` (the true velocity's spread
+    about it).
     """
     s = np.abs(meas.window.mean(axis=1) - t_ref)
     lo, hi = np.minimum.outer(s, s), np.maximum.outer(s, s)
@@ -435,7 +450,14 @@ def _noise_cov(meas: DopplerMeasurements, imu: ImuErrors, t_ref: float, gravity:
     u = meas.directions
     uu = u @ u.T
     uh = u[:, :2] @ u[:, :2].T
-    return np.diag(meas.sigma ** 2) + (q_acc + q_scale) * uu + q_tilt * uh
+    out = np.diag(meas.sigma ** 2) + (q_acc + q_scale) * uu + q_tilt * uh
+    if meas.direction_cov is not None:
+        same = np.all(np.abs(u[:, None, :] - u[None, :, :]) < 1e-12, axis=2)
+        d = meas.direction_cov
+        q_dir = (np.einsum("mi,mij,nj->mn", v_radar, d, v_radar)
+                 + np.einsum("mij,ji->m", d, v_cov)[:, None])
+        out += np.where(same, q_dir, 0.0)
+    return out
 
 
 def _block_velocity(motions, meas: DopplerMeasurements) -> np.ndarray:
@@ -596,7 +618,8 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         h = -np.einsum("mi,mij->mj", u, dvdx)
         h[:, ATTITUDE] -= np.cross(u, v_radar)
         c = _noise_cov(meas, imu_errors, t_ref, g,
-                       _velocity_change(meas, motions, motions[0].velocity[0]))
+                       _velocity_change(meas, motions, motions[0].velocity[0]), v_radar,
+                       cov[VELOCITY, VELOCITY])
         # the beams looked along the measured directions, the model along the turned ones
         r = meas.range_rate - np.einsum("mi,mi->m", meas.directions - u, v_radar)
         if held is None:            # the attitude, gyro and clock the scene leaves alone
