@@ -38,12 +38,15 @@ Observability: in prior-whitened coordinates ``w = L^-1 x`` (``P0 = L L^T``)
 the Fisher information of the radar is ``L^T H^T C^-1 H L``; along an
 eigenvector of eigenvalue ``lambda`` the posterior spread is
 ``1 / sqrt(1 + lambda)`` of the prior's. A component or direction whose
-posterior spread stays above :data:`UNCONSTRAINED_RATIO` of the prior is
+posterior spread stays above :data:`compensation.observability.UNCONSTRAINED_RATIO` of the prior is
 unconstrained: the scene leaves it at the prior (the IMU's value), and it is
 named in the result. Typical: the tilt and the horizontal accelerometer bias
 give the same horizontal acceleration error (``g x phi + R b_a``), so the
 radar constrains their sum only; scatterers in one row or a narrow cone leave
-the velocity across them to the prior.
+the velocity across them to the prior. The unconstrained attitude, gyro-bias
+and clock components are held at the prior and their spread carried into the
+others' covariance (:func:`solve_batch`, consider analysis), so the given
+attitude is not turned by a split the radar cannot make.
 """
 
 from __future__ import annotations
@@ -59,37 +62,30 @@ from ._checks import finite_array, positive
 from .ego_velocity import MIN_CONSENSUS, fit_ego_velocity
 from .guards import CompensationWarning
 from .multiframe import integrate_record
+from .observability import (
+    STATE_NAMES,
+    ObservabilityWarning,
+    held_mask,
+    observability,
+    observability_warnings,
+)
 from .strapdown import STANDARD_GRAVITY, PlatformMotion
 
 __all__ = ["STATE_NAMES", "DopplerMeasurements", "ImuErrors", "ObservabilityWarning",
-           "RadarInertialResult", "estimate_radar_inertial", "geometry_warnings",
-           "observability", "prior_sigmas", "solve_batch"]
+           "RadarInertialResult", "estimate_radar_inertial", "prior_sigmas", "solve_batch"]
 
-#: Names of the state components, in order (units in the module docstring).
-STATE_NAMES = ("velocity_n", "velocity_e", "velocity_d", "tilt_n", "tilt_e", "heading",
-               "accel_bias_x", "accel_bias_y", "accel_bias_z", "gyro_bias_x", "gyro_bias_y",
-               "gyro_bias_z", "clock_offset", "clock_drift")
 #: Groups of :data:`STATE_NAMES` by slice.
 VELOCITY, ATTITUDE, ACCEL_BIAS, GYRO_BIAS = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 CLOCK_OFFSET, CLOCK_DRIFT = 12, 13
 #: Central-difference steps of the Jacobian, per component (units of the state): small
 #: against the state's reach, large against the integration's rounding.
 JACOBIAN_STEPS = np.array([1e-3] * 3 + [1e-4] * 3 + [1e-3] * 3 + [1e-5] * 3 + [1e-5, 1e-6])
-#: Posterior over prior spread above which a component (or direction) is unconstrained.
-UNCONSTRAINED_RATIO = 0.5
 #: Default Gauss-Newton passes (measure, linearise, solve, integrate).
 ITERATIONS = 3
 #: Huber threshold of the measurement residuals [standard deviations] (Huber 1964).
 HUBER_K = 3.0
 #: Reweighting passes of the Huber estimate within one Gauss-Newton pass.
 HUBER_PASSES = 4
-#: Smallest-to-largest singular value of the scatterer directions below which they lie
-#: in one row, a plane or a narrow cone [1].
-GEOMETRY_CONDITION = 0.15
-#: Smallest number of distinct directions that determine a velocity.
-MIN_DIRECTIONS = 3
-#: Directions closer than this are one scatterer for the geometry check [rad].
-SAME_DIRECTION = float(np.deg2rad(1.0))
 #: Default prior spread of the velocity correction on each axis [m/s] (the hover guess
 #: misses the platform's mean velocity over its window).
 VELOCITY_PRIOR_SIGMA = 1.0
@@ -105,10 +101,6 @@ HEADING_PRIOR_SIGMA = float(np.deg2rad(10.0))
 CLOCK_OFFSET_PRIOR_SIGMA = 1e-3
 #: Default prior spread of the clock drift [1] (100 ppm: uncompensated crystals).
 CLOCK_DRIFT_PRIOR_SIGMA = 100e-6
-
-
-class ObservabilityWarning(CompensationWarning):
-    """The scene leaves part of the radar-inertial state unconstrained (kept at its prior)."""
 
 
 @dataclass(frozen=True)
@@ -231,8 +223,9 @@ class RadarInertialResult:
         Posterior covariance of ``state``.
     prior_covariance : ndarray, shape ``[14, 14]``
     unconstrained : tuple of str
-        Components whose posterior spread stays above :data:`UNCONSTRAINED_RATIO`
-        of the prior's (left at the prior by the scene).
+        Components whose posterior spread stays above
+        :data:`compensation.observability.UNCONSTRAINED_RATIO` of the prior's
+        (left at the prior by the scene).
     weak_directions : tuple of str
         Unconstrained directions of the state, as combinations of the
         components in units of their prior spreads (largest terms).
@@ -344,82 +337,6 @@ def solve_batch(h, residual, noise_cov, prior_cov, x_lin, consider=None
     cov[np.ix_(c, a)] = (sens @ pcc).T
     cov[np.ix_(c, c)] = pcc
     return x, 0.5 * (cov + cov.T)
-
-
-def observability(prior_cov, fisher, *, ratio: float = UNCONSTRAINED_RATIO
-                  ) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """Components and directions of the state the measurements leave at the prior.
-
-    Parameters
-    ----------
-    prior_cov : array_like, shape ``[14, 14]``
-    fisher : array_like, shape ``[14, 14]``
-        Information of the measurements ``H^T C^-1 H``.
-    ratio : float
-        :data:`UNCONSTRAINED_RATIO`.
-
-    Returns
-    -------
-    (tuple of str, tuple of str)
-        Names of the unconstrained components (:data:`STATE_NAMES`), and the
-        unconstrained eigen-directions of the prior-whitened information as
-        ``"0.71 tilt_n + 0.70 accel_bias_y"`` (coefficients in prior spreads).
-    """
-    p0 = np.asarray(prior_cov, dtype=float)
-    f = np.asarray(fisher, dtype=float)
-    post = np.linalg.inv(np.linalg.inv(p0) + f)
-    names = tuple(n for n, a, b in zip(STATE_NAMES, np.diag(post), np.diag(p0), strict=True)
-                  if np.sqrt(a / b) > ratio)
-    s = np.sqrt(np.diag(p0))
-    lc = np.linalg.cholesky(p0 / np.outer(s, s))          # correlation factor of the prior
-    lam, vec = np.linalg.eigh(lc.T @ (f * np.outer(s, s)) @ lc)
-    dirs = []
-    for k in np.flatnonzero(1.0 / np.sqrt(1.0 + np.maximum(lam, 0.0)) > ratio):
-        v = lc @ vec[:, k]
-        v = v / np.linalg.norm(v)
-        v = v * np.sign(v[np.argmax(np.abs(v))])
-        big = [i for i in np.argsort(-np.abs(v)) if abs(v[i]) >= 0.3][:4]
-        if any(STATE_NAMES[i] not in names for i in big) or len(big) > 1:
-            dirs.append(" + ".join(f"{v[i]:.2f} {STATE_NAMES[i]}" for i in big)
-                        .replace("+ -", "- "))
-    return names, tuple(dirs)
-
-
-def geometry_warnings(directions) -> tuple[str, ...]:
-    """Warnings on scatterer directions that cannot determine a velocity.
-
-    Parameters
-    ----------
-    directions : array_like, shape ``[scatterer, 3]``
-        Unit directions in W.
-
-    Returns
-    -------
-    tuple of str
-        ``"geometry: ..."`` when fewer than :data:`MIN_DIRECTIONS` distinct
-        directions are seen, or when they lie in one row, plane or narrow cone
-        (smallest over largest singular value below :data:`GEOMETRY_CONDITION`),
-        with the poorly constrained velocity direction.
-    """
-    u = finite_array("directions", directions, ndim=2)
-    distinct: list[np.ndarray] = []
-    for d in u:
-        if all(np.arccos(np.clip(d @ e, -1.0, 1.0)) > SAME_DIRECTION for e in distinct):
-            distinct.append(d)
-    n = len(distinct)
-    _, sv, vt = np.linalg.svd(np.stack(distinct), full_matrices=True)
-    weak = vt[-1] * np.sign(vt[-1][np.argmax(np.abs(vt[-1]))])
-    axis = "(" + ", ".join(f"{x:.2f}" for x in weak) + ") (W, north-east-down)"
-    if n < MIN_DIRECTIONS:
-        return (f"geometry: {n} distinct scatterer direction(s); the Doppler constrains "
-                f"the velocity along {n} direction(s) only, the rest (e.g. along {axis}) "
-                f"stays at the IMU prior",)
-    cond = float(sv[-1] / sv[0]) if sv.size == 3 else 0.0
-    if cond < GEOMETRY_CONDITION:
-        return (f"geometry: the {n} scatterer directions lie in one row, plane or narrow "
-                f"cone (smallest/largest singular value {cond:.3f} < {GEOMETRY_CONDITION}); "
-                f"the velocity along {axis} is poorly constrained",)
-    return ()
 
 
 def _ls_slope(t: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -623,7 +540,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         # the beams looked along the measured directions, the model along the turned ones
         r = meas.range_rate - np.einsum("mi,mi->m", meas.directions - u, v_radar)
         if held is None:            # the attitude, gyro and clock the scene leaves alone
-            held = _held(p0, h.T @ np.linalg.solve(c, h))
+            held = held_mask(p0, h.T @ np.linalg.solve(c, h))
         wts = np.ones(kept)
         for _ in range(HUBER_PASSES):             # iteratively reweighted (Huber)
             cw = c / np.sqrt(np.outer(wts, wts))
@@ -641,8 +558,8 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         motions = integrate(x)
     cov = _tilt_leak(cov, r0, g)
     names, dirs = observability(p0, fisher)
-    notes = _warnings(names, np.sqrt(np.diag(cov)), sig0, attitude_given,
-                      meas if kept else None)
+    notes = observability_warnings(names, np.sqrt(np.diag(cov)), sig0, attitude_given,
+                                   meas.directions if kept else None)
     if warn:
         for text in notes:
             warnings.warn(text, ObservabilityWarning, stacklevel=2)
@@ -650,26 +567,6 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     return RadarInertialResult(x, cov, p0, names, dirs, tuple(motions), v0 + x[VELOCITY], att,
                                tau0 + float(x[CLOCK_OFFSET]), bg0 + x[GYRO_BIAS], chi2, kept,
                                rejected, notes)
-
-
-#: Components held at the prior when the radar leaves them unconstrained (the others are
-#: estimated along whatever the radar constrains): the attitude, which turns the beams,
-#: and what turns or shifts it over the record.
-HELD_WHEN_UNCONSTRAINED = ("tilt_n", "tilt_e", "heading", "gyro_bias_x", "gyro_bias_y",
-                           "gyro_bias_z", "clock_offset", "clock_drift")
-
-
-def _held(p0: np.ndarray, fisher: np.ndarray) -> np.ndarray:
-    """Mask of the components held at their prior: unconstrained ones of
-    :data:`HELD_WHEN_UNCONSTRAINED`.
-
-    The tilt and the horizontal accelerometer bias give the same acceleration
-    error; when the radar constrains only their sum, the given attitude is kept
-    and the bias takes the sum: the velocity is the same, the beams are not
-    turned by a split the radar cannot make.
-    """
-    names, _ = observability(p0, fisher)
-    return np.array([n in names and n in HELD_WHEN_UNCONSTRAINED for n in STATE_NAMES])
 
 
 def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
@@ -700,23 +597,3 @@ def _consensus(meas: DopplerMeasurements) -> np.ndarray:
             fit = fit_ego_velocity(meas.directions[idx], meas.range_rate[idx], meas.sigma[idx])
             keep[idx] = fit.inliers
     return keep
-
-
-def _warnings(names, sigma, sig0, attitude_given: bool, meas) -> tuple[str, ...]:
-    """The result's warnings: no measurement, geometry, unconstrained velocity or tilt."""
-    out: list[str] = []
-    if meas is None:
-        return ("observability: no Doppler measurement kept; every component stays at "
-                "the IMU prior",)
-    out.extend(geometry_warnings(meas.directions))
-    vel = [n for n in names if n.startswith("velocity")]
-    if vel:
-        out.append(f"unconstrained: {', '.join(vel)} kept at the IMU prior "
-                   f"(+- {sig0[0]:.3g} m/s)")
-    if not attitude_given:
-        tilt = np.rad2deg(sigma[3:5])
-        out.append(f"attitude: not given; the Doppler sees the tilt only through gravity, "
-                   f"no better than the accelerometer bias is known: tilt_n +- {tilt[0]:.2g}, "
-                   f"tilt_e +- {tilt[1]:.2g} deg (of the nominal attitude's "
-                   f"{np.rad2deg(sig0[3]):.3g}); give the attitude")
-    return tuple(out)

@@ -1,4 +1,5 @@
-"""Radar-inertial estimate (compensation.radar_inertial) against synthetic records of known truth.
+"""Radar-inertial estimate (compensation.radar_inertial, compensation.observability) against
+synthetic records of known truth.
 
 The truth is a strapdown integration of error-free IMU samples from a known initial
 state (velocity, attitude, clock offset and drift); the estimator gets the samples
@@ -19,13 +20,11 @@ from scipy.spatial.transform import Rotation
 
 from compensation.geometry import direction
 from compensation.multiframe import integrate_record
+from compensation.observability import STATE_NAMES, ObservabilityWarning, observability
 from compensation.radar_inertial import (
-    STATE_NAMES,
     DopplerMeasurements,
     ImuErrors,
-    ObservabilityWarning,
     estimate_radar_inertial,
-    observability,
     prior_sigmas,
     solve_batch,
 )

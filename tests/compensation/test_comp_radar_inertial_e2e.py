@@ -3,8 +3,8 @@
 A record like a drone's over a few reflectors: TI 3 Tx x 4 Rx (one Tx raised half a
 wavelength), five points at 4-9 m, azimuth -22..29 deg and elevation -5/0/+5 deg, the
 platform in hover jitter with rotor vibration plus a 0.3 m/s drift and a 5.7 deg/s
-yaw, a lever arm; a consumer-MEMS IMU at 1 kHz whose accelerometer carries a further
-18/-11/14 mg bias, its clock 4.7 ms ahead with a 30 ppm drift. The compensate stage gets
+yaw, a lever arm; a consumer-MEMS IMU at 1 kHz whose accelerometer's turn-on bias is
+18/-11/14 mg, its clock 4.7 ms ahead with a 30 ppm drift. The compensate stage gets
 what a user has (the capture, the IMU table, the IMU grade, the lever arm and the
 attitude at the first ramp) and estimates the rest from the radar (``velocity="radar"``,
 ``time_offset="auto"``). Every target is measured in every frame with
@@ -23,7 +23,7 @@ from raysim.pipeline.flight import FLIGHT_RADAR, FULL_SCALE_COUNTS
 #: (range [m], azimuth [deg], elevation [deg]) of the five points.
 TARGETS = ((4.3, -22.0, 5.0), (5.6, -8.0, -5.0), (6.8, 4.0, 0.0), (7.9, 16.0, 5.0),
            (8.9, 29.0, -5.0))
-#: Extra accelerometer bias [mg] (on top of the consumer-MEMS draw) and the clock.
+#: Accelerometer turn-on bias [mg] and the IMU clock (offset [s], drift [ppm]).
 ACCEL_BIAS_MG = (18.0, -11.0, 14.0)
 TIME_OFFSET, DRIFT_PPM = 4.7e-3, 30.0
 LEVER = (0.04, -0.03, 0.06)
@@ -41,7 +41,7 @@ def _record(folder, seed: int):
     from raysim.io.mmwave_config import sdk_cfg_text, ti_antenna_positions
     from raysim.io.ti_dca1000 import Dca1000Format, write_dca1000
     from raysim.pipeline.sensors import imu_record
-    from raysim.platform.imu_spec import MILLI_G
+    from raysim.platform.imu_spec import CONSUMER_MEMS, MILLI_G
     from raysim.platform.motion import Ramp, Trajectory, constant_velocity, hover_jitter
     from raysim.radar.arrays import tdm_mimo
     from raysim.radar.config import RadarConfig
@@ -63,7 +63,10 @@ def _record(folder, seed: int):
     radar_cfg = atomic_write_text(folder / "radar.cfg",
                                   sdk_cfg_text(cfg, tx_order=(0, 2, 1), rx_enabled=(0, 1, 2, 3)))
     end = START + FRAMES * cfg.frame_interval + 0.05
-    s = imu_record(traj, "consumer_mems", rate=1000.0, times=[START, end], seed=seed,
+    # consumer MEMS but its accelerometer's turn-on bias, which is set to ACCEL_BIAS_MG
+    spec = dataclasses.replace(CONSUMER_MEMS, accel=dataclasses.replace(CONSUMER_MEMS.accel,
+                                                                         bias_sigma=0.0))
+    s = imu_record(traj, spec, rate=1000.0, times=[START, end], seed=seed,
                    time_offset=TIME_OFFSET, clock_drift_ppm=DRIFT_PPM, start=0.0)
     bias = np.asarray(ACCEL_BIAS_MG) * MILLI_G
     s = dataclasses.replace(s, accel=s.accel + bias)
@@ -127,12 +130,19 @@ def run_case(tmp_path, seed: int = 2, *, attitude: bool = True):
 
 
 def test_five_points_compensated_with_the_radar_inertial_estimate(tmp_path):
+    """The line array resolves no elevation: the scatterers' directions lie in one plane,
+    the velocity across it (east) is named unconstrained and warned about, and the
+    directions' unknown elevations (+-5 deg) leave each scatterer a Doppler offset that
+    the stated spreads carry: the errors are within 3 sigma. The beam metrics are
+    measured and reported (docs/self_calibration.md); the task's bounds (0.05 bin,
+    -35 dB, 0.2 deg) are not reached on this array and are not asserted."""
     m, cal, v_true, bias_mg, res = run_case(tmp_path)
-    assert np.all(np.abs(np.asarray(bias_mg)) >= 5.0) and np.linalg.norm(bias_mg) >= 15.0
+    assert np.all(np.abs(bias_mg) >= 10.0) and np.max(np.abs(bias_mg)) >= 15.0
     v = np.asarray(cal["initial_velocity_mps"])
     sig = np.asarray(cal["initial_velocity_sigma_mps"])
-    # the stated uncertainty covers the error
     assert np.all(np.abs(v - v_true) <= 3 * sig), (v, v_true, sig)
-    assert cal["radar_inertial"]["measurements"] > 0
-    print("worst angle, |pseudo-velocity|, leakage:", m[..., 0].max(), np.abs(m[..., 1]).max(),
-          m[..., 2].max())
+    assert abs(cal["time_offset_s"] - TIME_OFFSET) <= 3 * cal["time_offset_sigma_s"] + 5e-5
+    assert "velocity_e" in cal["unconstrained"]
+    assert any(w.startswith("geometry:") for w in res.warnings)
+    assert cal["radar_inertial"]["measurements"] == FRAMES * 4 * len(TARGETS)
+    assert np.all(np.isfinite(m[0, :, 1]))                    # every target found in frame 0
