@@ -423,6 +423,9 @@ def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavele
         (at least :data:`MIN_RANGE_RATE_SIGMA`) and the block's first and last
         chirp time.
     """
+    if int(blocks) != blocks or blocks < 1:
+        raise ValueError(f"blocks: got {blocks!r}, expected a whole number of chirp blocks "
+                         f"per frame, at least 1")
     y = _beams(rcs, positions, motions, scatterers, options)       # [frame, scatterer, chirp]
     nb = max(1, min(int(blocks), y.shape[2] // MIN_BLOCK_CHIRPS))
     u = np.stack([sc.direction for sc in scatterers])
