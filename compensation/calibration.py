@@ -36,6 +36,7 @@ from .gyro_bias import GyroBias, fit_gyro_bias
 from .ingestion import check_frame_times
 from .multiframe import integrate_record
 from .radar_inertial import (
+    MAX_MEASUREMENTS,
     DopplerMeasurements,
     ImuErrors,
     RadarInertialResult,
@@ -413,7 +414,8 @@ def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavele
         [m].
     blocks : int
         Blocks per frame (fewer when a block would hold under
-        :data:`MIN_BLOCK_CHIRPS` chirp loops).
+        :data:`MIN_BLOCK_CHIRPS` chirp loops, or the record would give more
+        than :data:`compensation.radar_inertial.MAX_MEASUREMENTS`).
 
     Returns
     -------
@@ -427,7 +429,8 @@ def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavele
         raise ValueError(f"blocks: got {blocks!r}, expected a whole number of chirp blocks "
                          f"per frame, at least 1")
     y = _beams(rcs, positions, motions, scatterers, options)       # [frame, scatterer, chirp]
-    nb = max(1, min(int(blocks), y.shape[2] // MIN_BLOCK_CHIRPS))
+    nb = max(1, min(int(blocks), y.shape[2] // MIN_BLOCK_CHIRPS,
+                    MAX_MEASUREMENTS // max(y.shape[0] * y.shape[1], 1)))
     u = np.stack([sc.direction for sc in scatterers])
     dcov = np.stack([_direction_cov(sc, positions, wavelength) for sc in scatterers])
     d, r, s, fr, win = [], [], [], [], []

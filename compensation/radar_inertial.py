@@ -80,6 +80,9 @@ CLOCK_OFFSET, CLOCK_DRIFT = 12, 13
 #: Central-difference steps of the Jacobian, per component (units of the state): small
 #: against the state's reach, large against the integration's rounding.
 JACOBIAN_STEPS = np.array([1e-3] * 3 + [1e-4] * 3 + [1e-3] * 3 + [1e-5] * 3 + [1e-5, 1e-6])
+#: Most Doppler measurements of one estimate: their covariance is dense (the IMU's
+#: random walks correlate every block), 4000^2 float64 is 128 MB and a solve takes seconds.
+MAX_MEASUREMENTS = 4000
 #: Default Gauss-Newton passes (measure, linearise, solve, integrate).
 ITERATIONS = 3
 #: Huber threshold of the measurement residuals [standard deviations] (Huber 1964).
@@ -516,6 +519,10 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     keep = held = dvdx = None
     for _ in range(int(iterations)):
         meas = measure(motions)
+        if meas.frame.size > MAX_MEASUREMENTS:
+            raise ValueError(f"the record gives {meas.frame.size} Doppler measurements (frames "
+                             f"x blocks x scatterers); the radar-inertial estimate takes at "
+                             f"most {MAX_MEASUREMENTS}: select fewer frames or scatterers")
         # the static-world consensus once: later passes measure the same scatterers and blocks
         if keep is None or keep.size != meas.frame.size:
             keep = _consensus(meas)

@@ -22,6 +22,7 @@ from compensation.geometry import direction
 from compensation.multiframe import integrate_record
 from compensation.observability import STATE_NAMES, ObservabilityWarning, observability
 from compensation.radar_inertial import (
+    MAX_MEASUREMENTS,
     DopplerMeasurements,
     ImuErrors,
     estimate_radar_inertial,
@@ -226,6 +227,16 @@ def test_bad_input_named():
         (t, gyro, accel), measure, guess, _, _ = _record(0, "single")
         estimate_radar_inertial(t, gyro, accel, FRAMES, measure, imu_errors=IMU,
                                 iterations=0, **guess)
+    with pytest.raises(ValueError, match="select fewer frames"):
+        (t, gyro, accel), measure, guess, _, _ = _record(0, "single")
+
+        def too_many(motions):
+            m = measure(motions)
+            k = MAX_MEASUREMENTS // m.frame.size + 1
+            return DopplerMeasurements(*(np.concatenate([a] * k) for a in (
+                m.directions, m.range_rate, m.sigma, m.frame, m.window)))
+
+        estimate_radar_inertial(t, gyro, accel, FRAMES, too_many, imu_errors=IMU, **guess)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert prior_sigmas(IMU).shape == (14,)
