@@ -132,7 +132,8 @@ class CalibrationResult:
     gyro : GyroBias or None
         Last gyro-bias update (``covariance`` the uncertainty of ``gyro_bias``).
     velocity : tuple of EgoVelocity
-        Per-frame velocity correction added to the IMU velocity [m/s] (W).
+        Per-frame velocity corrections [m/s] (W); empty when the velocity
+        comes from the radar-inertial estimate (``radar_inertial``).
     initial_velocity : ndarray, shape ``[3]``
         Body velocity in W at the record's first chirp after correction [m/s].
     initial_velocity_covariance : ndarray, shape ``[3, 3]``
@@ -140,6 +141,10 @@ class CalibrationResult:
     scatterers : tuple of Scatterer
     notes : tuple of str
         Estimates asked for but not made, and why.
+    radar_inertial : RadarInertialResult or None
+        The radar-inertial estimate that gave ``motions``, ``time_offset``,
+        ``gyro_bias`` and the initial velocity (``velocity`` estimated); its
+        state, spreads and unconstrained components.
     """
 
     motions: tuple[PlatformMotion, ...]
