@@ -457,7 +457,7 @@ def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavele
 def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
     """Covariance ``[3, 3]`` of a detected direction's error: :data:`DIRECTION_SIGMA` along
     the azimuth and elevation the array resolves, :data:`UNRESOLVED_DIRECTION_SIGMA`
-    along those it does not."""
+    along those it does not, and for those the second-order shortening along ``u``."""
     has = _apertures(positions, wavelength)
     h = 1e-6
     out = np.zeros((3, 3))
@@ -467,6 +467,9 @@ def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
                 - direction(s.azimuth - dd[0], s.elevation - dd[1])) / (2 * h)
         sig = DIRECTION_SIGMA if resolved else UNRESOLVED_DIRECTION_SIGMA
         out += sig ** 2 * np.outer(axis, axis)
+        if not resolved:      # second order: an angle e off shortens u by e^2 / 2
+            u = s.direction   # (mean sig^2 / 2 and variance sig^4 / 2 of e^2 / 2, Gaussian)
+            out += 0.75 * sig ** 4 * np.outer(u, u)
     return out
 
 
