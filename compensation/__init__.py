@@ -43,6 +43,11 @@ Modules
     Estimators from the radar, each with its uncertainty: platform velocity
     (:func:`fit_ego_velocity`), IMU-radar clock offset and drift
     (:func:`fit_time_shift`), gyro bias (:func:`fit_gyro_bias`).
+``radar_inertial``
+    :func:`~compensation.radar_inertial.estimate_radar_inertial`: one state
+    over a record (velocity, attitude, IMU biases, clock) from the IMU and the
+    Doppler of stationary scatterers; ``observability``: the components the
+    scene leaves unconstrained (:class:`~compensation.observability.ObservabilityWarning`).
 ``calibration``
     :func:`self_calibrate`: the estimators run over a record and an IMU log.
 ``ingestion``

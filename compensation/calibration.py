@@ -6,15 +6,18 @@ Over a record of frames and an IMU log, stationary scatterers give:
   phase against the IMU-predicted phase rate (:mod:`compensation.clock_offset`);
 * the gyro bias, from their apparent angular drift over the frames
   (:mod:`compensation.gyro_bias`);
-* the platform velocity, from their residual range rates in each frame
-  (:mod:`compensation.ego_velocity`): the IMU's relative motion is kept, the
-  unknown velocity (initial velocity, accelerometer bias, tilt error) is
-  replaced frame by frame.
+* the platform velocity, with the tilt, the IMU biases and the clock as one
+  radar-inertial state over the record, from their residual range rates in
+  blocks of chirps (:mod:`compensation.radar_inertial`): the integration is
+  corrected as a whole, and what the scene does not constrain stays at the
+  IMU's prior, named and warned about.
 
 The clock offset and the gyro bias change the integration itself and are
-iterated (integrate, project, estimate, integrate again); the velocity is
-applied last to the final integration. Every estimate carries its
-uncertainty.
+iterated first (integrate, project, estimate, integrate again; a per-frame
+velocity, :mod:`compensation.ego_velocity`, keeps the parallax of a
+translation error out of the gyro-bias fit); the radar-inertial estimate then
+starts from them, with their uncertainties as its priors. Every estimate
+carries its uncertainty.
 """
 
 from __future__ import annotations
@@ -32,10 +35,17 @@ from .geometry import direction
 from .gyro_bias import GyroBias, fit_gyro_bias
 from .ingestion import check_frame_times
 from .multiframe import integrate_record
+from .radar_inertial import (
+    MAX_MEASUREMENTS,
+    DopplerMeasurements,
+    ImuErrors,
+    RadarInertialResult,
+    estimate_radar_inertial,
+)
 from .strapdown import PlatformMotion
 
 __all__ = ["ESTIMATES", "CalibrationResult", "Scatterer", "apply_velocity", "detect_scatterers",
-           "self_calibrate"]
+           "doppler_measurements", "self_calibrate"]
 
 #: Quantities :func:`self_calibrate` can estimate.
 ESTIMATES = ("time_offset", "gyro_bias", "velocity")
@@ -60,6 +70,25 @@ DETECT_AXIS = np.deg2rad(np.arange(-60.0, 60.5, 2.0))
 SEARCH_FRAMES = 3
 #: Default number of integrate-estimate passes for the clock offset and gyro bias.
 ITERATIONS = 3
+#: Default blocks of chirps per frame of the radar-inertial Doppler measurements (time
+#: resolution of the velocity within a frame).
+DOPPLER_BLOCKS = 4
+#: Fewest chirp loops in a block (the slope of fewer is too noisy).
+MIN_BLOCK_CHIRPS = 8
+#: Spread of a detected direction along an axis the array resolves [rad] (the peak
+#: refined to a quarter of the coarse step; multipath and the lever arm's parallax).
+DIRECTION_SIGMA = float(np.deg2rad(0.5))
+#: Spread along an axis it does not resolve [rad] (the scatterer may lie anywhere in a
+#: wide fan; a line array's elevation).
+UNRESOLVED_DIRECTION_SIGMA = float(np.deg2rad(10.0))
+#: IMU figures used when none are given: a consumer MEMS class (BMI088 datasheet, one
+#: sigma: accel 160 ug/sqrt(Hz), offset 20 mg, scale and cross-axis 1 %; gyro
+#: 0.014 deg/s/sqrt(Hz), offset 0.5 deg/s), the widest of the grades, so its spreads
+#: cover the better ones. The accelerometer bias spread adds the scale and cross-axis
+#: errors on gravity (1 % of g each, constant in hover).
+DEFAULT_IMU_ERRORS = ImuErrors(160e-6 * 9.80665, float(np.deg2rad(0.014)),
+                               float(np.hypot.reduce([20e-3, 0.01, 0.01])) * 9.80665,
+                               float(np.deg2rad(0.5)), 0.01)
 
 
 @dataclass(frozen=True)
@@ -103,7 +132,8 @@ class CalibrationResult:
     gyro : GyroBias or None
         Last gyro-bias update (``covariance`` the uncertainty of ``gyro_bias``).
     velocity : tuple of EgoVelocity
-        Per-frame velocity correction added to the IMU velocity [m/s] (W).
+        Per-frame velocity corrections [m/s] (W); empty when the velocity
+        comes from the radar-inertial estimate (``radar_inertial``).
     initial_velocity : ndarray, shape ``[3]``
         Body velocity in W at the record's first chirp after correction [m/s].
     initial_velocity_covariance : ndarray, shape ``[3, 3]``
@@ -111,6 +141,10 @@ class CalibrationResult:
     scatterers : tuple of Scatterer
     notes : tuple of str
         Estimates asked for but not made, and why.
+    radar_inertial : RadarInertialResult or None
+        The radar-inertial estimate that gave ``motions``, ``time_offset``,
+        ``gyro_bias`` and the initial velocity (``velocity`` estimated); its
+        state, spreads and unconstrained components.
     """
 
     motions: tuple[PlatformMotion, ...]
@@ -123,9 +157,17 @@ class CalibrationResult:
     initial_velocity_covariance: np.ndarray
     scatterers: tuple[Scatterer, ...] = field(default_factory=tuple)
     notes: tuple[str, ...] = ()
+    radar_inertial: RadarInertialResult | None = None
 
     def report(self) -> dict:
-        """Estimates with one-sigma uncertainties as plain numbers (SI units)."""
+        """Estimates with one-sigma uncertainties as plain numbers (SI units).
+
+        With the radar-inertial estimate, the clock offset, gyro bias and
+        initial velocity are its (those applied), ``radar_inertial`` holds its
+        whole state, spreads and unconstrained components, and ``warnings``
+        its observability warnings.
+        """
+        ri = self.radar_inertial
         out = {"time_offset_s": self.time_offset,
                "time_offset_sigma_s": None if self.clock is None else self.clock.offset_sigma,
                "gyro_bias_rad_s": self.gyro_bias.tolist(),
@@ -133,12 +175,20 @@ class CalibrationResult:
                "initial_velocity_mps": self.initial_velocity.tolist(),
                "initial_velocity_sigma_mps": np.sqrt(np.diag(
                    self.initial_velocity_covariance)).tolist(),
-               "frame_velocity_correction_mps": [v.velocity.tolist() for v in self.velocity],
-               "frame_velocity_sigma_mps": [v.sigma.tolist() for v in self.velocity],
                "scatterers": len(self.scatterers), "notes": list(self.notes)}
+        if self.velocity:
+            out["frame_velocity_correction_mps"] = [v.velocity.tolist() for v in self.velocity]
+            out["frame_velocity_sigma_mps"] = [v.sigma.tolist() for v in self.velocity]
         if self.clock is not None and np.isfinite(self.clock.drift_sigma):
             out["clock_drift"] = self.clock.drift
             out["clock_drift_sigma"] = self.clock.drift_sigma
+        if ri is not None:
+            out["time_offset_sigma_s"] = float(ri.sigma[12])
+            out["gyro_bias_sigma_rad_s"] = ri.sigma[9:12].tolist()
+            out["clock_drift"], out["clock_drift_sigma"] = float(ri.state[13]), float(ri.sigma[13])
+            out["radar_inertial"] = ri.report()
+            out["unconstrained"] = list(ri.unconstrained)
+            out["warnings"] = list(ri.warnings)
         return out
 
 
@@ -346,12 +396,91 @@ def _vertex(lo: float, mid: float, hi: float) -> float:
     return 0.0 if den >= 0 else float(np.clip(0.5 * (lo - hi) / den, -0.5, 0.5))
 
 
+#: Options of :func:`compensation.integrate_imu` the radar-inertial integration keeps (the
+#: initial state, velocity mode and hover window are its own).
+_INTEGRATION_KEYS = ("lever_arm", "gravity", "max_gap", "vibration_hz")
+
+
+def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavelength: float,
+                         blocks: int = DOPPLER_BLOCKS) -> DopplerMeasurements:
+    """Residual range rate of every scatterer in every block of chirps of every frame.
+
+    Parameters
+    ----------
+    rcs : sequence of ndarray, each shape ``[chirp, channel, range]``
+    positions : array_like, shape ``[channel, 3]``
+        Virtual element positions in A [m].
+    motions : sequence of PlatformMotion
+        Motion of each frame the beams are compensated with.
+    scatterers : sequence of Scatterer
+    options : dict
+        For :func:`compensation.rigid_body_projection` (``range_axis`` included).
+    wavelength : float
+        [m].
+    blocks : int
+        Blocks per frame (fewer when a block would hold under
+        :data:`MIN_BLOCK_CHIRPS` chirp loops, or the record would give more
+        than :data:`compensation.radar_inertial.MAX_MEASUREMENTS`).
+
+    Returns
+    -------
+    DopplerMeasurements
+        One per scatterer, block and frame: the slow-time slope of its beam
+        (:func:`compensation.ego_velocity.slow_time_velocity`), its spread
+        (at least :data:`MIN_RANGE_RATE_SIGMA`) and the block's first and last
+        chirp time.
+    """
+    if int(blocks) != blocks or blocks < 1:
+        raise ValueError(f"blocks: got {blocks!r}, expected a whole number of chirp blocks "
+                         f"per frame, at least 1")
+    y = _beams(rcs, positions, motions, scatterers, options)       # [frame, scatterer, chirp]
+    nb = max(1, min(int(blocks), y.shape[2] // MIN_BLOCK_CHIRPS,
+                    MAX_MEASUREMENTS // max(y.shape[0] * y.shape[1], 1)))
+    u = np.stack([sc.direction for sc in scatterers])
+    dcov = np.stack([_direction_cov(sc, positions, wavelength) for sc in scatterers])
+    d, r, s, fr, win = [], [], [], [], []
+    for k, m in enumerate(motions):
+        t = _loop_motion(m, y.shape[2]).time
+        for blk in np.array_split(np.arange(t.size), nb):
+            for j in range(len(scatterers)):
+                vr, sig = slow_time_velocity(y[k, j, blk], t[blk], wavelength)
+                d.append(u[j])
+                r.append(vr)
+                s.append(max(sig, MIN_RANGE_RATE_SIGMA))
+                fr.append(k)
+                win.append((t[blk][0], t[blk][-1]))
+    per = np.tile(np.arange(len(scatterers)), len(motions) * nb)
+    return DopplerMeasurements(np.array(d), np.array(r), np.array(s), np.array(fr),
+                               np.array(win), dcov[per])
+
+
+def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
+    """Covariance ``[3, 3]`` of a detected direction's error: :data:`DIRECTION_SIGMA` along
+    the azimuth and elevation the array resolves, :data:`UNRESOLVED_DIRECTION_SIGMA`
+    along those it does not, and for those the second-order shortening along ``u``."""
+    has = _apertures(positions, wavelength)
+    h = 1e-6
+    out = np.zeros((3, 3))
+    for k, resolved in enumerate(has):
+        dd = np.array([h, 0.0]) if k == 0 else np.array([0.0, h])
+        axis = (direction(s.azimuth + dd[0], s.elevation + dd[1])
+                - direction(s.azimuth - dd[0], s.elevation - dd[1])) / (2 * h)
+        sig = DIRECTION_SIGMA if resolved else UNRESOLVED_DIRECTION_SIGMA
+        out += sig ** 2 * np.outer(axis, axis)
+        if not resolved:      # second order: an angle e off shortens u by e^2 / 2
+            u = s.direction   # (mean sig^2 / 2 and variance sig^4 / 2 of e^2 / 2, Gaussian)
+            out += 0.75 * sig ** 4 * np.outer(u, u)
+    return out
+
+
 def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_time, gyro,
                    accel, *, wavelength: float, range_axis, scatterers=None,
                    estimate: Sequence[str] = ESTIMATES, time_offset: float = 0.0,
                    iterations: int = ITERATIONS, drift: bool = False,
                    offset_search: float = OFFSET_SEARCH_HALF_WIDTH,
-                   detect_grid=None, detect_gates=None, **options) -> CalibrationResult:
+                   detect_grid=None, detect_gates=None, imu_errors: ImuErrors | None = None,
+                   attitude_given: bool = True, blocks: int = DOPPLER_BLOCKS,
+                   **options) -> CalibrationResult:
     """Estimate the clock offset, gyro bias and velocity of a record from its radar data.
 
     Parameters
@@ -387,7 +516,18 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     iterations : int
         Integrate-estimate passes for the clock offset and gyro bias.
     drift : bool
-        Also estimate the clock drift (reported; the offset is applied).
+        Also estimate the clock drift in the clock-offset fit (reported; the
+        radar-inertial estimate has the drift in its state and applies it).
+    imu_errors : ImuErrors, optional
+        Noise densities and bias spreads of the IMU, the process noise and
+        priors of the radar-inertial estimate; default
+        :data:`DEFAULT_IMU_ERRORS`.
+    attitude_given : bool
+        Whether ``initial_attitude`` is an estimate (a flight controller's,
+        levelled) rather than the nominal hover attitude
+        (:func:`compensation.radar_inertial.estimate_radar_inertial`).
+    blocks : int
+        Doppler blocks per frame (:func:`doppler_measurements`).
     **options
         For :func:`compensation.integrate_imu` (``lever_arm``,
         ``initial_attitude``, ``initial_position``, ``velocity``,
@@ -473,17 +613,28 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             gb = fit_gyro_bias(mids, dirs, att)
             bias = bias + gb.bias
             motions = integrate()
+    ri = None
     if "velocity" in estimate:
-        motions, corrections = radar_velocity(motions)
-        cov0 = corrections[0].covariance
+        ri = estimate_radar_inertial(
+            imu_time, gyro, accel, frames,
+            lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
+                                            wavelength=lam, blocks=blocks),
+            imu_errors=DEFAULT_IMU_ERRORS if imu_errors is None else imu_errors,
+            initial_velocity=motions[0].velocity[0], initial_attitude=motions[0].attitude[0],
+            initial_position=motions[0].position[0], time_offset=tau, gyro_bias=bias,
+            gyro_bias_cov=None if gb is None else gb.covariance,
+            clock_offset_sigma=None if clock is None else clock.offset_sigma,
+            attitude_given=attitude_given, reference_time=frames[0][0],
+            **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
+        motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias
+        cov0 = ri.initial_velocity_covariance
     else:
         cov0 = np.full((3, 3), np.nan)
     notes = []
     if "gyro_bias" in estimate and gb is None:
         notes.append("gyro_bias: not estimated (needs two frames or more and an array that "
                      "resolves azimuth and elevation)")
-    # a constant correction moves the body origin and the radar phase centre alike
     v0 = motions[0].velocity[0]
     return CalibrationResult(tuple(motions), tau, clock, bias, gb, tuple(corrections),
-                             np.asarray(v0, dtype=float), cov0, scatterers, tuple(notes))
+                             np.asarray(v0, dtype=float), cov0, scatterers, tuple(notes), ri)
 

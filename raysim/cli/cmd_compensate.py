@@ -167,7 +167,8 @@ def register(subparsers) -> None:
                    help="attitude at the first chirp, Z-Y-X Euler angles [deg], or 'level' "
                    "(roll/pitch from accelerometer levelling over the IMU record, heading 0); "
                    "left out: the IMU log's attitude at the first ramp (PX4 vehicle_attitude, "
-                   "ArduPilot ATT/AHRS2, ROS orientation), else level 0,0,0 (a note says which)")
+                   "ArduPilot ATT/AHRS2, ROS orientation), else level 0,0,0 (a note says which; "
+                   "--velocity radar then treats the tilt as unknown, with a warning)")
     p.add_argument("--mounting-deg", default=None, metavar="YAW,PITCH,ROLL|NAME",
                    help="radar mounting on the body, Z-Y-X Euler angles of R_BA [deg], or "
                    "down (default: parallel to the body, looking down), forward, oblique; "
@@ -212,10 +213,24 @@ def _calibration_text(report: dict) -> str:
     if report.get("time_offset_sigma_s") is not None:
         lines.append(f"  time offset {1e3 * report['time_offset_s']:.4f} +- "
                      f"{1e3 * report['time_offset_sigma_s']:.4f} ms")
-    if report.get("frame_velocity_correction_mps"):
+    if report.get("frame_velocity_correction_mps") or report.get("radar_inertial"):
         v, s = report["initial_velocity_mps"], report["initial_velocity_sigma_mps"]
         lines.append("  initial velocity [m/s] (N, E, D) " + ", ".join(
             f"{a:.4f} +- {b:.4f}" for a, b in zip(v, s, strict=True)))
+    ri = report.get("radar_inertial")
+    if ri:
+        est = dict(zip(ri["state_names"], zip(ri["state"], ri["sigma"], strict=True),
+                       strict=True))
+        tilt = [f"{np.rad2deg(est[n][0]):.3f} +- {np.rad2deg(est[n][1]):.3f}"
+                for n in ("tilt_n", "tilt_e")]
+        acc = [f"{1e3 * est[n][0] / 9.80665:.2f} +- {1e3 * est[n][1] / 9.80665:.2f}"
+               for n in ("accel_bias_x", "accel_bias_y", "accel_bias_z")]
+        lines.append("  tilt correction [deg] (N, E) " + ", ".join(tilt))
+        lines.append("  accelerometer bias [mg] (x, y, z) " + ", ".join(acc))
+        lines.append("  unconstrained (kept at the IMU prior): "
+                     + (", ".join(ri["unconstrained"]) or "none"))
+        lines.append(f"  Doppler measurements used: {ri['measurements']} "
+                     f"({ri['rejected']} rejected), chi2 {ri['chi2']:.2f}")
     lines.append(f"  scatterers used: {report['scatterers']}")
     return "\n".join(lines)
 

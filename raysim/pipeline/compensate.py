@@ -255,9 +255,12 @@ def _imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarra
 
 
 def _attitude(value):
-    """``initial_attitude_deg``: ``"level"`` or (yaw, pitch, roll) [deg] -> ``R_WB`` [3, 3]."""
+    """``initial_attitude_deg``: ``"level"`` or (yaw, pitch, roll) [deg] -> ``R_WB`` [3, 3]
+    (None: the nominal hover attitude, identity)."""
     from scipy.spatial.transform import Rotation
 
+    if value is None:
+        return np.eye(3)
     if isinstance(value, str):
         if value.strip() != "level":
             raise ValueError(f"--initial-attitude-deg: got {value!r}, expected YAW,PITCH,ROLL "
@@ -281,7 +284,7 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
         notes.append("initial attitude: the IMU log holds no attitude; the platform is "
                       "assumed level, heading 0, at the first ramp (--initial-attitude-deg "
                       "0,0,0)")
-        return (0.0, 0.0, 0.0)
+        return None                   # the nominal attitude, no estimate (_attitude)
     shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
     t = float(np.min(inp.slot_times)) + shift             # the first ramp on the log's clock
     ypr = att.euler_deg(t)
@@ -325,7 +328,8 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            imu[:, 4:7], wavelength=inp.config.center_wavelength,
                            range_axis=r_axis, estimate=estimate,
                            time_offset=0.0 if auto else time_offset,
-                           grid_shape=inp.grid_shape, detect_gates=gates, **options)
+                           grid_shape=inp.grid_shape, detect_gates=gates,
+                           attitude_given=initial_attitude_deg is not None, **options)
     report = cal.report
     return list(cal.result.motions), report, float(report["time_offset_s"] if auto
                                                    else time_offset)
@@ -431,10 +435,13 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         [deg], or ``"level"`` (roll and pitch from accelerometer levelling,
         heading 0); default the IMU log's attitude at the first ramp on its
         clock (:mod:`raysim.io.flight_logs.attitude`; the offset ``"auto"``
-        takes 0), else level (0, 0, 0); a note says which.
+        takes 0), else level (0, 0, 0), which is no estimate:
+        ``velocity="radar"`` then keeps the tilt at its prior and warns that it
+        is unobservable; a note says which.
     imu_grade : {"ideal", "tactical", "consumer_mems"}, optional
-        Sets the hover window of ``velocity`` hover / radar and of ``"level"``;
-        default the whole record.
+        Sets the hover window of ``velocity`` hover / radar and of ``"level"``,
+        and the IMU figures (noise, bias spreads) of ``velocity="radar"``;
+        default the whole record and consumer-MEMS figures.
     direction_deg : (float, float), optional
         Target direction (azimuth, elevation) [deg] of the paper chain's
         slow-time correction (required by ``paper``).
@@ -560,6 +567,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None
+        if calibration is not None:   # what the scene leaves unconstrained (also warned)
+            found.extend(w for w in calibration.get("warnings", ()) if w not in found)
         sub = None
         if spec.name == "dpca":        # one sub-aperture size for every frame: comparable maps
             from raysim.pipeline.beams import common_subaperture

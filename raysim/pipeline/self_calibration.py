@@ -20,7 +20,38 @@ from raysim.platform.kinematics import slot_times
 from raysim.processing.maps import range_compress
 from raysim.synthesis.frame import RadarFrame
 
-__all__ = ["SelfCalibration", "calibrate_frames", "calibrate_record"]
+__all__ = ["SelfCalibration", "calibrate_frames", "calibrate_record", "imu_errors"]
+
+
+def imu_errors(grade: str):
+    """The radar-inertial estimator's IMU figures of an IMU preset.
+
+    Parameters
+    ----------
+    grade : str
+        Preset name of :mod:`raysim.platform.imu_spec` (``ideal``, ``tactical``,
+        ``consumer_mems``).
+
+    Returns
+    -------
+    compensation.radar_inertial.ImuErrors
+        Noise densities as given; each bias spread the root sum of squares of
+        the turn-on bias, the bias instability and, for the accelerometer, the
+        scale-factor and misalignment errors on gravity (constant biases of a
+        hovering platform: 1 % of g is 10 mg); the scale spread the larger of the
+        scale-factor and misalignment spreads.
+    """
+    from compensation.radar_inertial import ImuErrors
+    from raysim.platform.imu_spec import STANDARD_GRAVITY, get_preset
+
+    spec = get_preset(grade)
+    a, g = spec.accel, spec.gyro
+    return ImuErrors(a.noise_density, g.noise_density,
+                     float(np.hypot.reduce([a.bias_sigma, a.bias_instability,
+                                            a.scale_factor_sigma * STANDARD_GRAVITY,
+                                            a.misalignment_sigma * STANDARD_GRAVITY])),
+                     float(np.hypot(g.bias_sigma, g.bias_instability)),
+                     max(a.scale_factor_sigma, a.misalignment_sigma))
 
 
 @dataclass(frozen=True)
@@ -51,7 +82,8 @@ def _slot_times(frame: RadarFrame) -> np.ndarray:
 
 def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, imu_time,
                      gyro, accel, *, wavelength: float, range_axis, time_offset: float = 0.0,
-                     estimate=None, trajectory=None, **options) -> SelfCalibration:
+                     estimate=None, trajectory=None, attitude_given: bool | None = None,
+                     **options) -> SelfCalibration:
     """Estimate velocity, clock offset and gyro bias of a record of range-compressed frames.
 
     Parameters
@@ -79,10 +111,16 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
     trajectory : raysim.platform.motion.Trajectory, optional
         Truth of a simulation: the initial attitude and position at the first
         time come from it unless ``options`` give them. The velocity never does.
+    attitude_given : bool, optional
+        Whether the initial attitude is an estimate rather than the nominal
+        hover attitude; default: a trajectory or ``initial_attitude`` is given.
+        Without it the tilt stays at the prior, with a warning.
     **options
         For :func:`compensation.calibration.self_calibrate` (``lever_arm``,
         ``channel_slot``, ``grid_shape``, ``detect_gates``, ``velocity``,
-        ``initial_attitude``, ``imu_grade``, ``hover_window`` ...).
+        ``initial_attitude``, ``imu_grade``, ``hover_window`` ...); ``imu_grade``
+        also gives the radar-inertial estimate its IMU figures
+        (:func:`imu_errors`) unless ``imu_errors`` is given.
 
     Returns
     -------
@@ -100,13 +138,17 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
         options.setdefault("initial_attitude", trajectory.attitude([t0]).as_matrix()[0])
         options.setdefault("initial_position", trajectory.position([t0])[0])
     options.setdefault("velocity", "hover")
+    if attitude_given is None:
+        attitude_given = trajectory is not None or options.get("initial_attitude") is not None
+    if options.get("imu_grade") is not None and options.get("imu_errors") is None:
+        options["imu_errors"] = imu_errors(options["imu_grade"])
     if estimate is None:
         estimate = ESTIMATES if len(rcs) > 1 else tuple(e for e in ESTIMATES
                                                         if e != "gyro_bias")
     res = self_calibrate(list(rcs), times, element_positions, imu_time, gyro, accel,
                          wavelength=wavelength, range_axis=range_axis,
                          estimate=tuple(estimate), time_offset=time_offset,
-                         reference_time=t0, **options)
+                         reference_time=t0, attitude_given=bool(attitude_given), **options)
     ms = res.motions
     motion = PlatformMotion(np.concatenate([m.time for m in ms]),
                             np.concatenate([m.attitude for m in ms]),

@@ -48,12 +48,17 @@ def test_compensate_estimates_offset_and_velocity(tmp_path, capsys):
     assert code == 0
     printed = capsys.readouterr().out
     assert "self-calibration" in printed and "time offset" in printed
+    # the radar-inertial state: what the scene leaves unconstrained, printed and stored
+    assert "unconstrained (kept at the IMU prior):" in printed
     with np.load(out) as z:
         report = json.loads(str(z["self_calibration"]))
         gate = int(np.argmin(np.abs(z["range_m"] - 12.0)))
         slow = z["beams"][:, gate, 0, 0]
     assert abs(report["time_offset_s"] - OFFSET_S) <= OFFSET_TOL_S
     assert report["scatterers"] >= 2
+    ri = report["radar_inertial"]
+    assert len(ri["state"]) == len(ri["sigma"]) == len(ri["state_names"]) == 14
+    assert set(report["unconstrained"]) <= set(ri["state_names"])
     pv = metrics.pseudo_velocity(slow, cfg.chirp_interval, cfg.center_wavelength)
     assert abs(pv) / cfg.velocity_resolution <= PV_TOL_BINS
 

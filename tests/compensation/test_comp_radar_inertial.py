@@ -1,0 +1,242 @@
+"""Radar-inertial estimate (compensation.radar_inertial, compensation.observability) against
+synthetic records of known truth.
+
+The truth is a strapdown integration of error-free IMU samples from a known initial
+state (velocity, attitude, clock offset and drift); the estimator gets the samples
+with biases and white noise (consumer-MEMS figures) and the first guess of the state,
+and the radar's residual range rates of stationary scatterers, block by block: the
+least-squares slope of ``-u_true . p_true`` plus ``u_meas . p_est`` (the beam steered
+along the direction measured through the first-guess attitude), plus Gaussian noise.
+The errors are then judged against the stated spreads (Monte Carlo over seeds).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from compensation.geometry import direction
+from compensation.multiframe import integrate_record
+from compensation.observability import STATE_NAMES, ObservabilityWarning, observability
+from compensation.radar_inertial import (
+    MAX_MEASUREMENTS,
+    DopplerMeasurements,
+    ImuErrors,
+    estimate_radar_inertial,
+    prior_sigmas,
+    solve_batch,
+)
+
+G = 9.80665
+#: Consumer-MEMS figures (BMI088 class): accel 160 ug/sqrt(Hz), 20 mg; gyro
+#: 0.014 deg/s/sqrt(Hz), 0.5 deg/s; no scale error in the synthetic samples.
+IMU = ImuErrors(160e-6 * G, np.deg2rad(0.014), 20e-3 * G, np.deg2rad(0.5))
+IMU_RATE = 250.0
+#: Four frames of 32 chirps over 40 ms, 50 ms apart [s].
+FRAMES = [0.1 + 0.05 * k + np.linspace(0.0, 0.04, 32, endpoint=False) for k in range(4)]
+BLOCKS = 2
+LEVER = np.array([0.03, -0.02, 0.10])
+T_REF = float(FRAMES[0][0])
+#: Range-rate noise of one block [m/s].
+SIGMA_R = 2e-3
+#: Spread of the true initial velocity about the first guess [m/s] (the prior's is 1 m/s).
+VELOCITY_SPREAD = 0.3
+#: Normalised errors |error / sigma| within this bound ...
+Z_BOUND = 3.0
+#: ... in at least this fraction of all components of all seeds.
+COVERAGE = 0.99
+#: An unconstrained component's posterior spread is at least this fraction of the prior's.
+PRIOR_KEPT = 0.9
+#: Scatterer (azimuth, elevation) [deg] of each geometry, directions in W.
+GEOMETRIES = {
+    "spread": ((-22, -5), (-10, 5), (0, 0), (15, -5), (29, 5)),
+    "wide": ((-40, -20), (-10, 30), (20, -30), (45, 10), (0, 0)),
+    "elevation 0": ((-22, 0), (-10, 0), (0, 0), (15, 0), (29, 0)),
+    "one row": ((-22, 5), (-10, 5), (0, 5), (15, 5), (29, 5)),
+    "single": ((20, -10),),
+}
+
+
+def _record(seed: int, geometry: str, *, attitude_given: bool = True):
+    """(IMU log with errors, measure callable, first guess, truth state, prior spreads)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 0.35, 1.0 / IMU_RATE)
+    w_true = np.column_stack([0.05 * np.sin(2 * np.pi * 3 * t), 0.04 * np.cos(2 * np.pi * 2 * t),
+                              np.full(t.size, np.deg2rad(5.7))])
+    f_true = np.tile([0.0, 0.0, -G], (t.size, 1)) + np.column_stack(
+        [0.3 * np.sin(2 * np.pi * 1.5 * t), 0.2 * np.cos(2 * np.pi * 2.5 * t),
+         0.1 * np.sin(2 * np.pi * 4 * t)])
+    sig = prior_sigmas(IMU, tilt=np.deg2rad(1.0 if attitude_given else 5.0))
+    truth = rng.normal(0.0, sig)
+    truth[:3] = rng.normal(0.0, VELOCITY_SPREAD, 3)
+    r0 = Rotation.from_euler("ZYX", [0.3, 0.02, -0.01]).as_matrix()
+    tau0, v0 = 0.004, np.array([0.1, -0.2, 0.05])
+    tau = tau0 + truth[12]
+    t_ref_imu = T_REF + tau
+    true_motion = integrate_record(
+        t_ref_imu + (t - t_ref_imu) / (1 + truth[13]), w_true, f_true, FRAMES,
+        time_offset=tau, velocity="given", initial_velocity=v0 + truth[:3],
+        initial_attitude=Rotation.from_rotvec(truth[3:6]).as_matrix() @ r0,
+        reference_time=T_REF, lever_arm=LEVER)
+    root_hz = np.sqrt(IMU_RATE)
+    gyro = w_true + truth[9:12] + rng.normal(0.0, IMU.gyro_noise_density * root_hz, t.shape + (3,))
+    accel = f_true + truth[6:9] + rng.normal(0.0, IMU.accel_noise_density * root_hz,
+                                             t.shape + (3,))
+    u = np.array([direction(np.deg2rad(a), np.deg2rad(e)) for a, e in GEOMETRIES[geometry]])
+    u_meas = u @ Rotation.from_rotvec(-truth[3:6]).as_matrix().T   # seen through the guess
+
+    def slope(tt, p):
+        tc = tt - tt.mean()
+        return tc @ (p - p.mean(axis=0)) / (tc @ tc)
+
+    def measure(motions):
+        rows = []
+        for k, (mt, me) in enumerate(zip(true_motion, motions, strict=True)):
+            for blk in np.array_split(np.arange(mt.num_chirps), BLOCKS):
+                tt = mt.time[blk]
+                st, se = slope(tt, mt.radar_position[blk]), slope(tt, me.radar_position[blk])
+                for uj, mj in zip(u, u_meas, strict=True):
+                    rows.append((mj, -uj @ st + mj @ se + rng.normal(0.0, SIGMA_R), k,
+                                 (tt[0], tt[-1])))
+        d, r, k, win = zip(*rows, strict=True)
+        return DopplerMeasurements(np.array(d), np.array(r), np.full(len(r), SIGMA_R),
+                                   np.array(k), np.array(win))
+
+    guess = dict(initial_velocity=v0, initial_attitude=r0, time_offset=tau0)
+    sig[:3] = 1.0
+    return (t, gyro, accel), measure, guess, truth, sig
+
+
+def _estimate(seed: int, geometry: str, *, attitude_given: bool = True, warn: bool = False):
+    (t, gyro, accel), measure, guess, truth, sig = _record(seed, geometry,
+                                                          attitude_given=attitude_given)
+    res = estimate_radar_inertial(t, gyro, accel, FRAMES, measure, imu_errors=IMU,
+                                  prior_sigma=sig, attitude_given=attitude_given,
+                                  iterations=2, lever_arm=LEVER, warn=warn, **guess)
+    return res, truth
+
+
+def test_state_recovered_within_stated_sigma():
+    """Five scatterers at several azimuths and elevations: every component the radar
+    constrains within 3 sigma, the velocity among them (its spread in W is mostly the
+    heading's, 10 deg of 0.3 m/s)."""
+    res, truth = _estimate(3, "wide")
+    z = (res.state - truth) / res.sigma
+    free = np.array([n not in res.unconstrained for n in STATE_NAMES])
+    assert np.all(np.abs(z[free]) <= Z_BOUND), dict(zip(STATE_NAMES, z.round(2), strict=True))
+    assert np.all(res.sigma[:3] < 0.1)
+    assert not any(n.startswith("velocity") for n in res.unconstrained)
+    assert res.measurements == 4 * BLOCKS * 5 and res.rejected == 0
+
+
+@pytest.mark.parametrize("attitude_given", [True, False])
+def test_normalised_errors_within_three_sigma_over_seeds(attitude_given):
+    """Monte Carlo over seeds and every geometry, the degenerate ones included: at least
+    99 % of the components within 3 stated sigma."""
+    seeds = range(4) if attitude_given else range(2)
+    z = np.array([(lambda r: (r[0].state - r[1]) / r[0].sigma)(
+        _estimate(100 * s + i, g, attitude_given=attitude_given))
+        for s in seeds for i, g in enumerate(GEOMETRIES)])
+    assert np.mean(np.abs(z) <= Z_BOUND) >= COVERAGE
+
+
+@pytest.mark.parametrize(("geometry", "across"), [("elevation 0", ("velocity_e",)),
+                                                  ("single", ("velocity_n", "velocity_e"))])
+def test_degenerate_geometry_named_prior_kept_and_warned(geometry, across):
+    """Scatterers in one plane, or one scatterer: the velocity across them is named
+    unconstrained, stays at the prior (spread and no correction beyond it) and a
+    geometry warning is issued; the error is within 3 sigma."""
+    with pytest.warns(ObservabilityWarning, match="geometry"):
+        res, truth = _estimate(5, geometry, warn=True)
+    prior = np.sqrt(np.diag(res.prior_covariance))
+    for name in across:
+        i = STATE_NAMES.index(name)
+        assert name in res.unconstrained
+        assert res.sigma[i] >= PRIOR_KEPT * prior[i]
+        assert abs(res.state[i]) <= Z_BOUND * SIGMA_R / 1e-2 * prior[i] * 1e-2 + 0.05
+    assert any("unconstrained: velocity" in w for w in res.warnings)
+    assert np.all(np.abs(res.state - truth) <= Z_BOUND * res.sigma)
+
+
+def test_one_row_warned_as_a_cone():
+    """Scatterers at one elevation (a cone about the vertical of the array): warned."""
+    with pytest.warns(ObservabilityWarning, match="one row, plane or narrow cone"):
+        _estimate(6, "one row", warn=True)
+
+
+def test_attitude_not_given_keeps_the_tilt_and_warns():
+    """The nominal attitude: a warning asks for it; the heading is held at the prior,
+    the tilt known no better than the accelerometer bias allows (``b / g``, combined
+    with the prior)."""
+    with pytest.warns(ObservabilityWarning, match="attitude: not given"):
+        res, truth = _estimate(7, "wide", attitude_given=False, warn=True)
+    prior = np.sqrt(np.diag(res.prior_covariance))
+    i = STATE_NAMES.index("heading")
+    assert res.state[i] == 0.0 and res.sigma[i] == pytest.approx(prior[i])
+    # the tilt only through gravity, as well as the accelerometer bias is known
+    g_tilt = IMU.accel_bias_sigma / G
+    tilt = res.sigma[3:5]
+    assert np.all((tilt >= PRIOR_KEPT * g_tilt / np.sqrt(1 + (g_tilt / prior[3]) ** 2))
+                  & (tilt <= prior[3:5]))
+    # the tilt's acceleration goes to the accelerometer bias: the velocity stays right
+    assert np.all(np.abs(res.state[:3] - truth[:3]) <= Z_BOUND * res.sigma[:3])
+
+
+def test_consider_covariance_matches_monte_carlo():
+    """solve_batch with a held component: the covariance it states equals the scatter of
+    its errors over draws of a linear Gaussian problem (consider analysis)."""
+    rng = np.random.default_rng(0)
+    h = rng.normal(size=(12, 3))
+    h[:, 2] = h[:, 1] + 0.1 * rng.normal(size=12)      # nearly degenerate pair
+    p0, c = np.diag([1.0, 0.5, 0.3]) ** 2, 0.2 ** 2 * np.eye(12)
+    held = np.array([False, False, True])
+    errs, cov = [], None
+    for _ in range(4000):
+        x = rng.normal(0.0, np.sqrt(np.diag(p0)))
+        y = h @ x + rng.normal(0.0, 0.2, 12)
+        est, cov = solve_batch(h, y, c, p0, np.zeros(3), held)
+        assert est[2] == 0.0
+        errs.append(est - x)
+    emp = np.cov(np.array(errs).T)
+    # 4000 draws: the sample variance is within about 5 % (two standard errors)
+    assert np.allclose(np.diag(emp), np.diag(cov), rtol=0.08)
+
+
+def test_observability_names_a_degenerate_pair():
+    """Two components with the same measurement column: each unconstrained, their
+    difference named as a weak direction, a third one constrained."""
+    h = np.zeros((6, 14))
+    h[:, 3] = h[:, 6] = np.arange(1.0, 7.0)           # tilt_n and accel_bias_x alike
+    h[:, 0] = np.linspace(-1.0, 1.0, 6)
+    prior = np.ones(14)
+    names, dirs = observability(np.diag(prior ** 2), h.T @ h / 1e-4)
+    assert "tilt_n" in names and "accel_bias_x" in names
+    assert "velocity_n" not in names
+    assert any("tilt_n" in d and "accel_bias_x" in d for d in dirs)
+
+
+def test_bad_input_named():
+    with pytest.raises(ValueError, match="accel_bias_sigma"):
+        ImuErrors(1e-3, 1e-4, -1.0, 1e-3)
+    with pytest.raises(ValueError, match="sigma must be > 0"):
+        DopplerMeasurements(np.eye(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="iterations"):
+        (t, gyro, accel), measure, guess, _, _ = _record(0, "single")
+        estimate_radar_inertial(t, gyro, accel, FRAMES, measure, imu_errors=IMU,
+                                iterations=0, **guess)
+    with pytest.raises(ValueError, match="select fewer frames"):
+        (t, gyro, accel), measure, guess, _, _ = _record(0, "single")
+
+        def too_many(motions):
+            m = measure(motions)
+            k = MAX_MEASUREMENTS // m.frame.size + 1
+            return DopplerMeasurements(*(np.concatenate([a] * k) for a in (
+                m.directions, m.range_rate, m.sigma, m.frame, m.window)))
+
+        estimate_radar_inertial(t, gyro, accel, FRAMES, too_many, imu_errors=IMU, **guess)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert prior_sigmas(IMU).shape == (14,)
