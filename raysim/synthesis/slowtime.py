@@ -18,38 +18,53 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["runs", "interpolate", "scatter_add", "scatter_add_dense", "COL_BLOCK"]
+__all__ = ["blocks", "interpolate", "scatter_add", "scatter_add_dense", "COL_BLOCK",
+           "BLOCK_ROWS"]
 
-#: Columns (float32 values) per product: bounds the buffer at ``run x COL_BLOCK`` float32.
-COL_BLOCK = 1 << 15
+#: Columns (float32 values) per product: bounds the buffer at ``BLOCK_ROWS x COL_BLOCK``
+#: float32.
+COL_BLOCK = 1 << 17
+#: Interpolated chirps per product: enough rows for an efficient BLAS product (its
+#: threads wake once per product), few enough that the window of their taps skips most
+#: of the zeros of the weight matrix.
+BLOCK_ROWS = 32
 
 
-def runs(plan) -> list[tuple[int, int, int, int, np.ndarray]]:
-    """The interpolated chirps of ``plan`` as runs sharing one window of exact chirps.
+def blocks(plan, rows: int | None = None) -> list[tuple[np.ndarray | slice, int, int,
+                                                        np.ndarray]]:
+    """The interpolated chirps of ``plan`` in blocks of ``rows`` with their window of taps.
 
     Returns
     -------
-    list of (first, last, lo, hi, weights)
-        Chirps ``first .. last - 1`` (local indices, consecutive, all interpolated)
-        draw on exact rows ``lo .. hi - 1`` (indices into ``plan.exact``) with
-        ``weights`` ``[last - first, hi - lo]`` float32 (C-contiguous).
+    list of (segments, lo, hi, weights)
+        ``segments``: ``(chirps, rows)`` slices, the block's local chirps (one strided
+        slice where they are evenly spaced, else runs of consecutive chirps) and their
+        rows in the block; they draw on exact rows ``lo .. hi - 1`` (indices into
+        ``plan.exact``, the union of their taps) with ``weights`` ``[block, hi - lo]``
+        float32 (C-contiguous; zero outside each chirp's taps).
     """
+    rows = BLOCK_ROWS if rows is None else int(rows)
     w = plan.weights
-    if plan.missing.size == 0:
+    miss = plan.missing
+    if miss.size == 0:
         return []
     nz = w != 0
     any_nz = nz.any(axis=1)
     lo = np.where(any_nz, nz.argmax(axis=1), 0)
     hi = np.where(any_nz, w.shape[1] - nz[:, ::-1].argmax(axis=1), 1)
-    miss = plan.missing
-    # a new run where the chirp is not the next one or the window changes
-    cut = np.flatnonzero((np.diff(miss) != 1) | (np.diff(lo) != 0) | (np.diff(hi) != 0)) + 1
     out = []
-    for a, b in zip(np.concatenate([[0], cut]), np.concatenate([cut, [miss.size]]),
-                    strict=True):
-        a, b = int(a), int(b)
-        out.append((int(miss[a]), int(miss[a]) + (b - a), int(lo[a]), int(hi[a]),
-                    np.ascontiguousarray(w[a:b, lo[a]:hi[a]])))
+    for a in range(0, miss.size, rows):
+        b = min(a + rows, miss.size)
+        m = miss[a:b]
+        step = int(m[1] - m[0]) if m.size > 1 else 1
+        if np.all(np.diff(m) == step):             # evenly spaced: one strided view
+            segments = [(slice(int(m[0]), int(m[-1]) + 1, step), slice(0, m.size))]
+        else:                                      # runs of consecutive chirps
+            cut = np.concatenate([[0], np.flatnonzero(np.diff(m) != 1) + 1, [m.size]])
+            segments = [(slice(int(m[i]), int(m[j - 1]) + 1), slice(int(i), int(j)))
+                        for i, j in zip(cut[:-1], cut[1:], strict=True)]
+        w0, w1 = int(lo[a:b].min()), int(hi[a:b].max())
+        out.append((segments, w0, w1, np.ascontiguousarray(w[a:b, w0:w1])))
     return out
 
 
@@ -63,22 +78,23 @@ def _check(out: np.ndarray, exact_rows: np.ndarray, plan) -> None:
 
 
 def _banded(dst: np.ndarray, src: np.ndarray, plan, col_block: int, add: bool) -> None:
-    """``dst[missing] (+)= weights @ src`` run by run, ``dst`` ``[chirp, columns]`` and
+    """``dst[missing] (+)= weights @ src`` block by block, ``dst`` ``[chirp, columns]`` and
     ``src`` ``[exact, columns]`` float32 views."""
-    parts = runs(plan)
+    parts = blocks(plan)
     if not parts:
         return
-    buf = np.empty((max(b - a for a, b, *_ in parts), min(col_block, src.shape[1])),
+    buf = np.empty((max(w.shape[0] for *_, w in parts), min(col_block, src.shape[1])),
                    np.float32)
     for c0 in range(0, src.shape[1], col_block):
         c1 = min(c0 + col_block, src.shape[1])
-        for a, b, lo, hi, w in parts:
-            tmp = buf[:b - a, :c1 - c0]
+        for segments, lo, hi, w in parts:
+            tmp = buf[:w.shape[0], :c1 - c0]
             np.matmul(w, src[lo:hi, c0:c1], out=tmp)
-            if add:
-                dst[a:b, c0:c1] += tmp
-            else:
-                dst[a:b, c0:c1] = tmp
+            for chirps, rows in segments:          # views: no gather, no scatter
+                if add:
+                    dst[chirps, c0:c1] += tmp[rows]
+                else:
+                    dst[chirps, c0:c1] = tmp[rows]
 
 
 def interpolate(rows: np.ndarray, plan, col_block: int = COL_BLOCK) -> None:
