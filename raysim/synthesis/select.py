@@ -85,8 +85,6 @@ COST_KERNEL_PER_ROW = 15e-6
 DECIMATION_EPS_SHARE = 0.1
 #: Tolerance below which only the complex128 direct sum qualifies.
 DIRECT_BELOW_EPS = 1e-6
-#: Values of ``decimate`` besides an integer factor (``"off"`` is factor 1).
-DECIMATE_MODES = ("auto", "off")
 
 
 class DecimationRefused(UserWarning):
