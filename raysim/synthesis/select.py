@@ -326,8 +326,9 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         target = out if out is not None and out.flags.c_contiguous \
             else np.zeros(shape, dtype=np.complex64)
 
-        def render(part, chirp_list, rows):
-            _render_chirps(part, config, method, rows_eps, chirp_list, rows, threads)
+        def render(part, chirp_list, rows, check=False):
+            _render_chirps(part, config, method, rows_eps, chirp_list, rows, threads,
+                           double_grid=check or None)
 
         report = [] if decimation_report is None else decimation_report
         start = len(report)
@@ -372,12 +373,18 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
 
 
 def _render_chirps(src, config: RadarConfig, method: str, eps: float, chirp_list: np.ndarray,
-                   rows: np.ndarray, threads: int | None) -> None:
-    """Render the chirps ``chirp_list`` (increasing) into ``rows[i]`` (complex64, added)."""
+                   rows: np.ndarray, threads: int | None,
+                   double_grid: bool | None = None) -> None:
+    """Render the chirps ``chirp_list`` (increasing) into ``rows[i]`` (complex64, added).
+
+    ``double_grid=True`` accumulates the kernel's grid in float64 (the a-posteriori
+    check's rows: the float32 grid's rounding differs from row to row, so it does not
+    interpolate, and with many paths it reaches the interpolation's share of ``eps``).
+    """
     if method == "kernel":
         from raysim.synthesis.kernel import kernel_error, render_rows
 
-        design = kernel_error(src.num_paths, eps, config.num_samples)[1]
+        design = kernel_error(src.num_paths, eps, config.num_samples, double_grid)[1]
         render_rows(src, config, design, chirp_list, rows, threads=threads)
         return
     i = 0
@@ -435,9 +442,12 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
     eps : float
         Tolerance of the interpolation (relative l2 and worst chirp row).
     decimate : "auto" or int >= 1
-    render : callable ``(part: PathDelays, chirp_list: ndarray[int], rows: ndarray)``
+    render : callable ``(part: PathDelays, chirp_list: ndarray[int], rows: ndarray, check=False)``
         Adds the rows of the absolute chirps ``chirp_list`` into ``rows`` ``[len, channel,
-        sample]`` (complex64) with the undecimated method.
+        sample]`` (complex64) with the undecimated method; ``check=True`` for the check
+        channels, which it renders without row-to-row rounding noise where the method
+        has any (the fused kernel's float32 grid: a float64 grid there), so that the
+        check measures the interpolation and not the rows' own rounding.
     target : ndarray, shape ``[len(chirps), channel, sample]``, complex64, C-contiguous
         Receives the result (added).
     report : list, optional
@@ -481,7 +491,7 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
         if plan.factor == 1:                       # exact anyway: nothing to check
             state.append([members, part, plan, full, full, (0.0, 0.0)])
             continue
-        render(channel_subset(part, chk), every, full)
+        render(channel_subset(part, chk), every, full, check=True)
         plan, pred, errs = _fit_group(plan, full, n_local, eps)
         state.append([members, part, plan, full, pred, errs])
     while True:
