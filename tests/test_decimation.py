@@ -72,12 +72,18 @@ def test_refusals(hover):
     # too few chirps
     assert plan_decimation(pd, cfg, MIN_CHIRPS - 1, 1e-6).factor == 1
     assert "few chirps" in plan_decimation(pd, cfg, MIN_CHIRPS - 1, 1e-6).reason
-    # amplitudes varying over chirps
+    # amplitudes given per chirp: constant ones plan as the per-path ones; amplitudes
+    # that flip sign every chirp (0.5 cycles/chirp) are too wide for any factor
     amp = np.broadcast_to(pd.amplitude[:, None], (pd.num_paths, 256)).copy()
     varying = PathDelays(pd.first_vertex, pd.last_vertex, pd.interior_length, amp,
                          pd.tx_positions, pd.rx_positions, pd.velocity, pd.element_times)
     plan = plan_decimation(varying, cfg, 256, 1e-6)
-    assert plan.factor == 1 and "amplitude" in plan.reason
+    assert plan.factor == plan_decimation(pd, cfg, 256, 1e-6).factor > 1
+    flip = PathDelays(pd.first_vertex, pd.last_vertex, pd.interior_length,
+                      amp * (-1.0) ** np.arange(256), pd.tx_positions, pd.rx_positions,
+                      pd.velocity, pd.element_times)
+    plan = plan_decimation(flip, cfg, 256, 1e-6)
+    assert plan.factor == 1 and "too wide" in plan.reason
     # Doppler band too wide: fast scatterers (40 m/s)
     fast = PathDelays(pd.first_vertex, pd.last_vertex, pd.interior_length, pd.amplitude,
                       pd.tx_positions, pd.rx_positions, np.full((pd.num_paths, 3), 25.0),

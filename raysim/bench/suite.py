@@ -3,9 +3,10 @@
 :func:`run` measures, in one process (plus one child process for memory):
 
 ``synthesis_1e5``
-    The fused kernel with slow-time decimation against FINUFFT for 1e5 hover
-    paths on the paper frame, same threads (1) and clock, errors against the
-    complex128 direct sum (:func:`bench_synthesis_1e5`).
+    The fused kernel with slow-time decimation (whole frame rendered) against
+    FINUFFT for 1e5 hover paths on the paper frame with hover jitter, same threads
+    (1) and clock, errors against the complex128 direct sum and the undecimated
+    kernel (:func:`bench_synthesis_1e5`).
 ``synthesis``
     NUFFT against the direct sum (complex128 reference) and the tone sum
     (complex64) for 10, 1e3, 1e4, 1e5 paths on the paper frame (256 chirps x
@@ -55,7 +56,6 @@ processes share the cores.
 from __future__ import annotations
 
 import json
-import math
 import os
 import platform
 import subprocess
@@ -81,8 +81,8 @@ BENCH_EPS = (1e-5, 1e-6)
 #: :func:`set_clock` switches to wall time, which is what a user waits on an
 #: idle machine (multi-threaded steps look faster there).
 TIMER = time.process_time
-#: Interleaved rounds of the FINUFFT upsampling-factor comparison.
-UPSAMPFAC_REPEAT = 5
+#: Seed of the hover jitter added to the paper motion in ``synthesis_1e5``.
+JITTER_SEED = 7
 CLOCKS = {"cpu": time.process_time, "wall": time.perf_counter}
 
 
@@ -193,25 +193,31 @@ def bench_synthesis_1e5(*, quick: bool, paths: int = 100_000, eps: float = 1e-5,
                         threads: int = 1, log: Callable[[str], None] = print) -> dict:
     """Fused kernel (+ slow-time decimation) against FINUFFT, 1e5 paths, paper frame.
 
-    Same process, same ``threads`` for both (default 1, CPU clock: robust on a
-    shared machine). FINUFFT (``method="nufft"``, includes NumPy geometry and
-    strengths) is timed on 1 chirp x ``nu_ch`` channels; the kernel
-    (``method="kernel"``, includes geometry, spreading, FFT, deconvolution) on
-    ``k_chirps`` chirps x 400 channels; both extrapolated linearly per row.
-    The decimated frame costs ``sum over path groups of (group paths / paths)
-    x exact chirps x kernel per chirp`` plus the planning and the slow-time
-    interpolation (timed on the whole frame for 4 channels and scaled by 100).
-    Errors against the complex128 direct sum: the kernel on all
-    paths x 1 chirp x ``acc_ch`` channels; the decimated frame on
-    ``dec_paths`` paths x 256 chirps x 2 channels.
+    The paper motion of :func:`paper_setup` plus hover jitter
+    (:func:`raysim.platform.motion.hover_jitter`, seed :data:`JITTER_SEED`). Same
+    process, same ``threads`` for both (default 1, CPU clock: robust on a shared
+    machine). FINUFFT (``method="nufft"``, includes NumPy geometry and strengths) is
+    timed on 1 chirp x ``nu_ch`` channels; the kernel (``method="kernel"``, includes
+    geometry, spreading, FFT, deconvolution) on ``k_chirps`` chirps x 400 channels;
+    both extrapolated linearly per row. The decimated frame is rendered whole
+    (``decimate="auto"``: planning, a-posteriori check, exact rows, interpolation;
+    :func:`raysim.bench.decimated_frame.whole_frame`) and compared with the
+    undecimated kernel on every chirp of two channels; the slow-time interpolation is
+    timed before/after its banded form (:func:`~raysim.bench.decimated_frame.interpolation_ratio`).
+    Errors against the complex128 direct sum: the kernel on all paths x 1 chirp x
+    ``acc_ch`` channels; the decimated render on ``dec_paths`` paths x 256 chirps x 2
+    channels.
     """
+    from raysim.bench.decimated_frame import finufft_upsampfac, interpolation_ratio, whole_frame
+    from raysim.platform.motion import hover_jitter
     from raysim.synthesis import kernel
-    from raysim.synthesis.decimate import plan_groups, scatter_add
+    from raysim.synthesis.decimate import plan_groups
     from raysim.synthesis.select import DECIMATION_EPS_SHARE, synthesize
 
     if not kernel.available():
         return {"status": "kernel extension not built; FINUFFT only"}
     cfg, arr, traj, lever = paper_setup()
+    traj = traj + hover_jitter(JITTER_SEED)
     n_ch, k, n_chirp = arr.num_channels, cfg.num_samples, cfg.num_chirps
     pd = hover_paths(paths, cfg, arr, traj, lever, seed=1)
     nu_ch = 40 if quick else 100
@@ -226,12 +232,10 @@ def bench_synthesis_1e5(*, quick: bool, paths: int = 100_000, eps: float = 1e-5,
                     chirps=range(k_chirps))
     kernel_frame = t_k * n_chirp / k_chirps
     t_plan, groups = _timed(plan_groups, pd, cfg, n_chirp, DECIMATION_EPS_SHARE * eps)
-    rows = np.zeros((n_chirp, 4, k), np.complex64)
-    t_int = sum(_timed(scatter_add, rows, np.zeros((p.exact.size, 4, k), np.complex64), p)[0]
-                for _, p in groups)
-    interp_frame = t_int * n_ch / 4
-    work = sum(g.size * p.exact.size for g, p in groups) / (paths * n_chirp)
-    dec_frame = kernel_frame * work + interp_frame + t_plan
+    frame = whole_frame(pd, cfg, eps, threads, TIMER)
+    dec_frame = frame["s_per_frame"]
+    interp = interpolation_ratio([p for _, p in groups if p.factor > 1], n_chirp, k, n_ch,
+                                 TIMER)
     # accuracy
     acc_ch = 2 if quick else 8
     acc = subset(pd, 1, acc_ch)
@@ -243,29 +247,31 @@ def bench_synthesis_1e5(*, quick: bool, paths: int = 100_000, eps: float = 1e-5,
     ref_d = synthesize(small, None, cfg, method="direct")
     err_dec = _rel(synthesize(small, None, cfg, method="kernel", eps=eps, decimate="auto"), ref_d)
     # FINUFFT's upsampling factor: 2.0 (default) against 1.25 on the same rows
-    upsamp = _finufft_upsampfac(pd, cfg, eps, rows=8 if quick else 40)
+    upsamp = finufft_upsampfac(pd, cfg, eps, 8 if quick else 40, TIMER)
     out = {
         "paths": paths, "eps": eps, "threads": threads,
         "clock": "cpu" if TIMER is time.process_time else "wall",
         "frame": [n_chirp, n_ch, k], "isa": kernel.isa(),
+        "motion": f"paper_setup motion + hover_jitter(seed={JITTER_SEED})",
         "finufft_s_per_frame": nufft_frame,
         "kernel_s_per_frame": kernel_frame,
         "kernel_decimated_s_per_frame": dec_frame,
-        "decimation": {"groups": [{"paths": int(g.size), "factor": p.factor,
-                                   "exact_chirps": int(p.exact.size),
-                                   "doppler_bound_cycles_per_chirp": p.doppler,
-                                   "reason": p.reason} for g, p in groups],
-                       "exact_work_fraction": work, "planning_s": t_plan,
-                       "interpolation_s_per_frame": interp_frame},
+        "decimation": {"groups": frame["groups"],
+                       "exact_work_fraction": frame["exact_work_fraction"],
+                       "planning_s": t_plan, "interpolation": interp,
+                       "frame_error": frame["frame_error"]},
         "speedup_vs_finufft": nufft_frame / dec_frame,
+        "speedup_vs_kernel": kernel_frame / dec_frame,
         "speedup_vs_finufft_no_decimation": nufft_frame / kernel_frame,
-        "relative_error": max(err_kernel, err_dec),
+        "relative_error": max(err_kernel + frame["frame_error"]["check_l2_max"], err_dec),
         "relative_error_parts": {"kernel_all_paths": err_kernel, "decimated_frame": err_dec,
-                                 "finufft_all_paths": err_nufft},
+                                 "finufft_all_paths": err_nufft,
+                                 "interpolation_check_all_paths":
+                                     frame["frame_error"]["check_l2_max"]},
         "finufft_upsampfac": upsamp,
         "timed_on": {"finufft": {"chirps": 1, "channels": nu_ch},
                      "kernel": {"chirps": k_chirps, "channels": n_ch},
-                     "interpolation": {"chirps": n_chirp, "channels": 4}},
+                     "kernel_decimated": {"chirps": n_chirp, "channels": n_ch}},
         "accuracy_checked_on": {"kernel": {"paths": paths, "chirps": 1, "channels": acc_ch},
                                 "decimated": {"paths": dec_paths, "chirps": n_chirp,
                                               "channels": 2}},
@@ -274,49 +280,12 @@ def bench_synthesis_1e5(*, quick: bool, paths: int = 100_000, eps: float = 1e-5,
         "loadavg": list(os.getloadavg()),
     }
     log(f"  1e5 paths, {threads} thread(s), {out['clock']} clock: FINUFFT "
-        f"{nufft_frame:.0f} s/frame, kernel {kernel_frame:.0f} s, kernel+decimation "
-        f"({len(groups)} path groups, {work:.3f} of the rows) {dec_frame:.0f} s: "
-        f"x{out['speedup_vs_finufft']:.1f} at error "
-        f"{out['relative_error']:.1e}")
+        f"{nufft_frame:.0f} s/frame, kernel {kernel_frame:.0f} s, kernel+decimation whole "
+        f"frame ({len(frame['groups'])} path groups, {frame['exact_work_fraction']:.3f} of "
+        f"the rows) {dec_frame:.1f} s: x{out['speedup_vs_finufft']:.1f} at error "
+        f"{out['relative_error']:.1e}; interpolation banded x"
+        f"{interp['ratio_before_over_after']:.2f}")
     return out
-
-
-def _finufft_upsampfac(pd: PathDelays, cfg: RadarConfig, eps: float, rows: int) -> dict:
-    """FINUFFT time per row with ``upsampfac`` 2.0 and 1.25 on the same points.
-
-    The two settings alternate within each of ``UPSAMPFAC_REPEAT`` rounds (best of
-    the rounds per setting, ``TIMER`` clock), so that a change of machine load
-    hits both alike.
-    """
-    import finufft
-
-    from raysim.synthesis.nufft import _strengths
-
-    tau = pd.delays(0, slice(0, rows))
-    x, c = _strengths(tau, pd.amplitudes(0)[None, :], cfg, eps < 1e-6)
-    buf = np.empty(cfg.num_samples, np.complex128)
-    runs = {}
-    for up in (2.0, 1.25):
-        plan = finufft.Plan(1, (cfg.num_samples,), n_trans=1, eps=0.5 * eps, isign=1,
-                            dtype="complex128", nthreads=1, spread_sort=0, modeord=0,
-                            upsampfac=up)
-
-        def go(plan=plan):
-            for i in range(rows):
-                plan.setpts(x[i])
-                plan.execute(c[i], out=buf)
-
-        go()                                            # warm-up
-        runs[up] = go
-    best = {up: math.inf for up in runs}
-    for _ in range(UPSAMPFAC_REPEAT):
-        for up, go in runs.items():
-            best[up] = min(best[up], _clock(go, repeat=1))
-    res = {f"s_per_row_upsampfac_{up}": t / rows for up, t in best.items()}
-    res["ratio_2_over_1.25"] = res["s_per_row_upsampfac_2.0"] / res["s_per_row_upsampfac_1.25"]
-    res["paths_per_row"] = pd.num_paths
-    res["repeats_interleaved"] = UPSAMPFAC_REPEAT
-    return res
 
 
 # --------------------------------------------------------------------------- memory

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from raysim.cli.options import add_decimation_options
+
 EPILOG = """\
 examples:
   raysim render examples/case_rotation_y.toml --out rotation_y.zarr
@@ -38,6 +40,7 @@ def register(subparsers) -> None:
                    help="change a scenario key, e.g. frames=4 (repeatable)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an existing store instead of resuming it")
+    add_decimation_options(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -52,6 +55,9 @@ def run(args) -> int:
     scenario = load_scenario(args.scenario)
     if args.set:
         scenario = scenario.with_values(dict(parse_assignment(s) for s in args.set))
+    for key in ("decimate", "decimate_tolerance"):
+        if getattr(args, key) is not None:
+            scenario = scenario.with_values({f"synthesis.{key}": getattr(args, key)})
     out = args.out or scenario.output.store
     if not out:
         raise ValueError("no output store: pass --out STORE.zarr or set output.store in the "

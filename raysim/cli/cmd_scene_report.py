@@ -6,6 +6,7 @@ import argparse
 import sys
 import textwrap
 
+from raysim.cli.options import add_decimation_options
 from raysim.vocabulary import CHAINS, MAP_TITLES, MAPS, REFERENCE
 
 #: Maps of the report (:data:`raysim.studies.scene_report.REPORT_MAPS`, not imported
@@ -109,6 +110,7 @@ def register(subparsers) -> None:
     p.add_argument("--clutter-per-cell", type=float, default=None, metavar="N",
                    help="scatterers of the clutter field per range x angle cell (default: 10, "
                    "which gives Rayleigh cells)")
+    add_decimation_options(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--bench-reprojection", action="store_true",
                    help="only time re-projection vs re-tracing per chirp and print JSON")
@@ -140,6 +142,10 @@ def _overrides(args: argparse.Namespace) -> dict:
         out["clutter"] = args.clutter
     if args.clutter_per_cell is not None:
         out["clutter_per_cell"] = args.clutter_per_cell
+    if args.decimate is not None:
+        out["decimate"] = args.decimate
+    if args.decimate_tolerance is not None:
+        out["decimate_tolerance"] = args.decimate_tolerance
     return out
 
 

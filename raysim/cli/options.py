@@ -20,7 +20,8 @@ from raysim.io.files import check_output
 from raysim.scenario.keys import did_you_mean
 
 __all__ = ["Parser", "NEGATIVE_VALUE", "known_name", "chains_option", "check_output",
-           "did_you_mean", "span_option", "span_grid", "MAX_SPAN_VALUES"]
+           "did_you_mean", "span_option", "span_grid", "MAX_SPAN_VALUES",
+           "add_decimation_options"]
 
 #: Option values that are numbers, ranges or lists starting with a minus sign:
 #: ``-30``, ``-1e-3``, ``-.5``, ``-30:30:1``, ``-30,0,30``, ``-0.1,0,0.2``.
@@ -127,3 +128,20 @@ def span_grid(text: str, name: str) -> np.ndarray:
     if count > MAX_SPAN_VALUES:
         raise ValueError(f"{name}: got {text!r}, {count} values (at most {MAX_SPAN_VALUES})")
     return lo + step * np.arange(count)
+
+
+def add_decimation_options(parser: argparse.ArgumentParser) -> None:
+    """``--decimate {auto,off}`` and ``--decimate-tolerance TOL``: the scenario's
+    ``synthesis.decimate`` and ``synthesis.decimate_tolerance`` (left out: the scenario's)."""
+    from raysim.scenario.synthesis import DECIMATE_MODES
+
+    parser.add_argument("--decimate", choices=DECIMATE_MODES, default=None,
+                        help="slow-time decimation of the synthesis: 'auto' interpolates "
+                        "chirps within the tolerance where the motion allows it (checked on "
+                        "a few channels; refused with the reason otherwise), 'off' renders "
+                        "every chirp exactly (left out: synthesis.decimate of the scenario, "
+                        "'auto' unless set)")
+    parser.add_argument("--decimate-tolerance", type=float, default=None, metavar="TOL",
+                        help="relative error (l2 and worst chirp row) allowed to that "
+                        "interpolation against the undecimated render, in (0, 0.1] (left "
+                        "out: synthesis.decimate_tolerance, else 0.1 x the synthesis eps)")

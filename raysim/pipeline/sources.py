@@ -18,7 +18,7 @@ from raysim.synthesis.frame import RadarFrame
 
 __all__ = ["FeatureUnavailable", "Reference", "frame_source", "point_targets",
            "reference_target", "LazyFrames", "render_frames", "nominal_at", "path_kinds",
-           "hover_twin", "gated_source"]
+           "hover_twin", "gated_source", "decimation"]
 
 
 class FeatureUnavailable(RuntimeError):
@@ -193,10 +193,18 @@ def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFr
 
     def rt_source(f: int) -> RadarFrame:
         return render_scene(scene, cfg, arr, traj, lever, tracer=tracer, frame=f,
-                            noise=scenario.noise, seed=scenario.seed + f, clutter=clutter)
+                            noise=scenario.noise, seed=scenario.seed + f, clutter=clutter,
+                            **decimation(scenario))
 
     rt_source.reference = reference_target(scenario, scene)
     return rt_source
+
+
+def decimation(scenario: Scenario) -> dict:
+    """``decimate`` and ``decimate_tolerance`` of a scenario's ``[synthesis]`` section,
+    as keywords of :func:`raysim.echoes.rt.reproject.synthesize_paths` and ``render_scene``."""
+    return {"decimate": scenario.synthesis.decimate,
+            "decimate_tolerance": scenario.synthesis.decimate_tolerance}
 
 
 def reference_target(scenario: Scenario, rt_scene=None) -> Reference | None:
@@ -343,7 +351,8 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     samples_per_src : int, optional
         Rays shot by the tracer (default the tracer's).
     nufft_eps : float
-        Relative error of the IF synthesis.
+        Relative error of the IF synthesis (the frozen paths are decimated along slow
+        time as the scenario's ``[synthesis]`` section says, :func:`decimation`).
     path_chunk : int
         Paths re-projected and synthesised at once.
     movers : sequence
@@ -443,7 +452,8 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
         t = time.perf_counter()
         data, _ = synthesize_paths(paths, cfg, arr, motion, lever, path_chunk=path_chunk,
                                    eps=nufft_eps,
-                                   modulation=None if model is None else model.modulation)
+                                   modulation=None if model is None else model.modulation,
+                                   **decimation(scenario))
         synthesize_tracks(tracks, cfg, arr, motion, lever, out=data, synthesizer=synth)
         if scenario.noise:
             add_noise(data, cfg, scenario.seed)

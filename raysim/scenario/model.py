@@ -70,12 +70,13 @@ from raysim.scenario.keys import (
 from raysim.scenario.meshes import MeshSpec
 from raysim.scenario.paper_cases import PAPER_CASES, get_case
 from raysim.scenario.radar import RadarSection, _in_range, _Section
+from raysim.scenario.synthesis import SynthesisSection
 
 __all__ = [
     "RadarSection", "ArraySection", "TargetSpec", "SceneSection", "SinusoidSpec",
     "HoverJitterSection", "MotionSection", "SensorErrorsSection", "ImuSection",
-    "OutputSection", "Scenario", "validate_scenario", "cross_problems", "ANGLE_AXES",
-    "TRANSLATION_AXES",
+    "OutputSection", "SynthesisSection", "Scenario", "validate_scenario", "cross_problems",
+    "ANGLE_AXES", "TRANSLATION_AXES",
 ]
 
 #: Motion axes whose amplitudes are angles (given in degrees in files).
@@ -347,7 +348,7 @@ class Scenario(_Section):
     time_epoch_utc : str, optional
         UTC instant (ISO 8601) of time 0 of the truth clock, so stored frames
         align with a flight log; default the Unix epoch.
-    radar, array, scene, motion, imu, output : sections
+    radar, array, scene, motion, imu, output, synthesis : sections
     """
 
     name: str = "scenario"
@@ -380,6 +381,7 @@ class Scenario(_Section):
     motion: MotionSection = Field(default_factory=MotionSection)
     imu: ImuSection = Field(default_factory=ImuSection)
     output: OutputSection = Field(default_factory=OutputSection)
+    synthesis: SynthesisSection = Field(default_factory=SynthesisSection)
 
     @model_validator(mode="after")
     def _cross_checks(self, info: ValidationInfo) -> Scenario:

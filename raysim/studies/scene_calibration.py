@@ -168,7 +168,9 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     rcs = []
     for f in range(frames):
         cube, _ = synthesize_paths(paths, config, array, traj, lever, frame=f, t0=t0,
-                                   path_chunk=settings.path_chunk, eps=settings.nufft_eps)
+                                   path_chunk=settings.path_chunk, eps=settings.nufft_eps,
+                                   decimate=settings.decimate,
+                                   decimate_tolerance=settings.decimate_tolerance)
         synthesize_tracks(tracks, config, array, traj, lever, out=cube, frame=f, t0=t0,
                           synthesizer=synth)
         rcs.append(range_compress(cube) * taper)

@@ -27,7 +27,9 @@ frequency the steps cover: drift, acceleration) and a fast residual, whose peak
 deviation and modulating frequency ``W = max |d^2 r| / (2 pi max |d r|)`` (exact
 for a sinusoid) give ``sideband_order(beta, SIDEBAND_SHARE tol) W`` for the
 elements (:func:`platform_sidebands`, the worst channel, every line of sight)
-and for each path's own per-chirp vertices (:func:`path_sidebands`).
+and for each path's own per-chirp vertices (:func:`path_sidebands`); amplitudes
+that vary over chirps (element gains at every chirp's pose) add their own band
+(:func:`amplitude_band`).
 :func:`plan_decimation` then picks, for a band ``B``, a factor ``D`` and the
 exact chirps (every D-th chirp, the last one, and the midpoints of the gaps
 near the edges where the design below misses the tolerance), and for every
@@ -60,8 +62,7 @@ l2 and worst chirp row); the factor is halved (:func:`halve`) until both fit,
 or decimation is refused.
 
 Refusal (factor 1, every chirp exact, with the reason in ``plan.reason``):
-fewer chirps than :data:`MIN_CHIRPS`; amplitudes that vary over chirps
-(``[path, chirp]``, which the bound does not cover); a Doppler band too wide
+fewer chirps than :data:`MIN_CHIRPS`; a Doppler band too wide
 for factor 2; too few chirps saved to be worth it; or a failed check at factor 2.
 """
 
@@ -75,12 +76,13 @@ import numpy as np
 
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.synthesis.paths import PathDelays
+from raysim.synthesis.slowtime import interpolate, scatter_add  # noqa: F401 (re-exported)
 
 __all__ = ["TAPS", "TAP_CHOICES", "MAX_FACTOR", "MIN_CHIRPS", "MAX_GAIN", "DecimationPlan",
            "doppler_bound", "path_doppler", "interpolation_error", "plan_decimation", "plan_groups",
            "interpolate", "scatter_add", "bessel_tail", "sideband_order", "carson_bandwidth",
-           "platform_sidebands", "path_sidebands", "CHECK_SHARE", "check_channels",
-           "channel_subset", "check_errors", "halve"]
+           "platform_sidebands", "path_sidebands", "amplitude_band", "CHECK_SHARE",
+           "check_channels", "channel_subset", "check_errors", "halve"]
 
 #: Exact chirps each interpolated chirp draws on (its nearest ones): the fewest of these
 #: that meets the tolerance in the middle of the frame.
@@ -328,6 +330,54 @@ def path_doppler(src: PathDelays, config: RadarConfig, tol: float | None = None)
     band = step / _top_wavelength(config)
     if tol is not None:
         band += platform_sidebands(src, config, tol) + path_sidebands(src, config, tol)
+    if src.amplitude.ndim == 2:
+        band += amplitude_band(src.amplitude, tol)
+    return band
+
+
+def amplitude_band(amplitude: np.ndarray, tol: float | None = None) -> np.ndarray:
+    """Slow-time band of amplitudes that vary over chirps [cycles per chirp], ``[path]``.
+
+    An element gain read at every chirp's pose (``[path, chirp]``) modulates the
+    path. Its instantaneous part is ``max |a[n+1] - a[n]| / (2 pi max |a|)`` plus the
+    same of the second difference as margin (exact for ``a = exp(j 2 pi f n)`` and
+    for ``cos(2 pi f n)``); with ``tol`` the fast residual ``r`` after the best
+    quadratic (as :func:`_modulation`) adds its sidebands as a modulation of index
+    ``max |r| / max |a|`` at ``W`` (:func:`sideband_order` at ``SIDEBAND_SHARE tol``).
+    """
+    a = np.asarray(amplitude)
+    peak = np.abs(a).max(axis=1)
+    scale = np.where(peak > 0, peak, 1.0)
+    if a.shape[1] < 2:
+        return np.zeros(a.shape[0])
+    d1 = np.diff(a, axis=1)
+    out = np.abs(d1).max(axis=1)
+    if a.shape[1] >= 3:
+        out = out + np.abs(np.diff(d1, axis=1)).max(axis=1)
+    band = out / (2.0 * np.pi * scale)
+    if tol is not None:
+        # the fast residual after the best quadratic, as _modulation, on complex rows
+        n = a.shape[1]
+        if n < 4:
+            return band
+        basis = np.polynomial.legendre.legvander(np.linspace(-1.0, 1.0, n),
+                                                 min(SLOW_DEGREE, n - 2))
+        r = a - (a @ np.linalg.pinv(basis).T) @ basis.T
+        d1 = np.diff(r, axis=1)
+        s1 = np.abs(d1).max(axis=1)
+        s2 = np.abs(np.diff(d1, axis=1)).max(axis=1)
+        w = np.minimum(np.where(s1 > 0, s2 / (2.0 * np.pi * np.where(s1 > 0, s1, 1.0)), 0.0),
+                       0.5)
+        beta = np.abs(r).max(axis=1) / scale
+        # sideband_order grows with beta: round beta up to a grid of 2^(1/4) steps, so
+        # that a few orders serve every path
+        live = beta > 0
+        grid = np.zeros(beta.shape)
+        grid[live] = 2.0 ** (np.ceil(4.0 * np.log2(beta[live])) / 4.0)
+        keys, inverse = np.unique(grid, return_inverse=True)
+        orders = np.array([sideband_order(k, SIDEBAND_SHARE * tol) if k > 0 else 0
+                           for k in keys])
+        band += orders[inverse.reshape(-1)] * w
     return band
 
 
@@ -496,8 +546,6 @@ def _screen(src, config: RadarConfig, n_local: int, decimate) -> str | None:
         return "dense delays: no geometry to bound the Doppler band"
     if n_local < MIN_CHIRPS:
         return f"too few chirps ({n_local} < {MIN_CHIRPS})"
-    if src.amplitude.ndim == 2:
-        return "amplitudes vary over chirps"
     return None
 
 
@@ -581,58 +629,6 @@ def plan_groups(src: PathDelays, config: RadarConfig, num_chirps: int, eps: floa
         groups.append((members, plans[top]))
         i, g = s, g - 1
     return groups[::-1]
-
-
-def interpolate(rows: np.ndarray, plan: DecimationPlan, col_block: int = 1 << 16) -> None:
-    """Fill ``rows[plan.missing]`` from ``rows[plan.exact]`` in place.
-
-    Parameters
-    ----------
-    rows : ndarray, shape ``[chirp, ...]``, complex64
-        Rendered chirps (local indices), exact rows filled.
-    plan : DecimationPlan
-    col_block : int
-        Columns (float32 values) per matrix product (bounds the temporaries).
-    """
-    if plan.missing.size == 0:
-        return
-    if rows.dtype != np.complex64 or not rows.flags.c_contiguous:
-        raise ValueError(f"rows must be C-contiguous complex64, got {rows.dtype}")
-    flat = rows.reshape(rows.shape[0], -1).view(np.float32)
-    for c0 in range(0, flat.shape[1], col_block):
-        c1 = min(c0 + col_block, flat.shape[1])
-        flat[plan.missing, c0:c1] = plan.weights @ flat[plan.exact, c0:c1]
-
-
-def scatter_add(out: np.ndarray, exact_rows: np.ndarray, plan: DecimationPlan,
-                col_block: int = 1 << 16) -> None:
-    """Add the exact chirps and their interpolation into a whole block.
-
-    Parameters
-    ----------
-    out : ndarray, shape ``[chirp, ...]``, complex64, C-contiguous
-        Receives ``exact_rows`` at ``plan.exact`` and ``weights @ exact_rows`` at
-        ``plan.missing`` (added).
-    exact_rows : ndarray, shape ``[n_exact, ...]``, complex64, C-contiguous
-    plan : DecimationPlan
-    col_block : int
-        Columns (float32 values) per matrix product (bounds the temporaries).
-    """
-    for name, a in (("out", out), ("exact_rows", exact_rows)):
-        if a.dtype != np.complex64 or not a.flags.c_contiguous:
-            raise ValueError(f"{name} must be C-contiguous complex64, got {a.dtype}")
-    if exact_rows.shape != (plan.exact.size,) + out.shape[1:]:
-        raise ValueError(f"exact_rows must have shape {(plan.exact.size,) + out.shape[1:]}, "
-                         f"got {exact_rows.shape}")
-    for i, n in enumerate(plan.exact):             # row by row: no copy of the exact block
-        out[n] += exact_rows[i]
-    if plan.missing.size == 0:
-        return
-    src = exact_rows.reshape(exact_rows.shape[0], -1).view(np.float32)
-    dst = out.reshape(out.shape[0], -1).view(np.float32)
-    for c0 in range(0, src.shape[1], col_block):
-        c1 = min(c0 + col_block, src.shape[1])
-        dst[plan.missing, c0:c1] += plan.weights @ src[:, c0:c1]
 
 
 # ------------------------------------------------------------------ a-posteriori check

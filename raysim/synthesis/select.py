@@ -87,6 +87,55 @@ DECIMATION_EPS_SHARE = 0.1
 DIRECT_BELOW_EPS = 1e-6
 
 
+class DecimationRefused(UserWarning):
+    """``decimate="auto"`` rendered every chirp exactly; the message says why."""
+
+
+#: Kinds of refusal already reported by :func:`say_refused` in this process.
+_SAID: set = set()
+
+
+def check_decimate(decimate) -> str | int:
+    """``decimate`` as ``"auto"`` or an integer factor (``"off"`` is 1); ValueError otherwise."""
+    if decimate == "off":
+        return 1
+    if decimate == "auto" or (isinstance(decimate, (int, np.integer))
+                              and not isinstance(decimate, bool) and decimate >= 1):
+        return decimate if decimate == "auto" else int(decimate)
+    raise ValueError(f"decimate must be 'auto', 'off' or an integer >= 1, got {decimate!r}")
+
+
+def check_decimate_tolerance(tolerance, eps: float) -> float:
+    """The interpolation tolerance: ``tolerance``, or ``DECIMATION_EPS_SHARE * eps`` if None.
+
+    Raises ValueError unless it is a number in ``(0, 0.1]`` (relative error).
+    """
+    if tolerance is None:
+        return DECIMATION_EPS_SHARE * float(eps)
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating)) \
+            or not 0 < float(tolerance) <= 0.1:
+        raise ValueError(f"decimate_tolerance must be a relative error in (0, 0.1], "
+                         f"got {tolerance!r}")
+    return float(tolerance)
+
+
+def say_refused(report: list[dict]) -> str | None:
+    """Warn (:class:`DecimationRefused`) once per kind of reason when every group of a
+    decimation ``report`` was refused (factor 1); returns the reason, or None."""
+    import re
+    import warnings
+
+    if not report or any(g["factor"] > 1 for g in report):
+        return None
+    reason = "; ".join(dict.fromkeys(str(g["reason"]) for g in report if g["reason"]))
+    kind = re.sub(r"[-+.\deE]*\d[-+.\deE]*", "#", reason)
+    if kind not in _SAID:
+        _SAID.add(kind)
+        warnings.warn(f"slow-time decimation refused, every chirp rendered exactly: {reason}",
+                      DecimationRefused, stacklevel=3)
+    return reason
+
+
 def tones_error(num_paths: int) -> float:
     """Relative l2 error of the complex64 tone sum with ``num_paths`` paths (model).
 
@@ -177,7 +226,7 @@ def choose_method(num_paths: int, num_chirps: int, num_channels: int, num_sample
 def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
                eps: float = 1e-6, out: np.ndarray | None = None,
                chirps: range | None = None, threads: int | None = None,
-               decimate: str | int = 1,
+               decimate: str | int = 1, decimate_tolerance: float | None = None,
                decimation_report: list | None = None) -> np.ndarray:
     """IF samples of many paths on the ``[chirp, channel, sample]`` grid.
 
@@ -202,16 +251,20 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         Chirps to render (default all).
     threads : int, optional
         Threads for the NUFFT and the kernel (default: usable CPUs).
-    decimate : "auto" or int, default 1
+    decimate : "auto", "off" or int, default 1
         Slow-time decimation factor for ``"kernel"`` and ``"nufft"``
-        (:func:`raysim.synthesis.decimate.plan_groups`, with
-        ``DECIMATION_EPS_SHARE`` of ``eps``; the row method gets the rest).
-        ``1`` renders every chirp exactly; refused (every chirp exact) where
-        its assumptions fail. The interpolation is checked after the fact on a
-        few channels rendered at every chirp
-        (:func:`render_checked`): the factor is halved
-        until the measured error (relative l2 and worst chirp row) is within the
-        share, or decimation is refused.
+        (:func:`raysim.synthesis.decimate.plan_groups`; the row method gets
+        ``(1 - DECIMATION_EPS_SHARE) eps``). ``1`` or ``"off"`` renders every
+        chirp exactly; refused (every chirp exact) where its assumptions fail.
+        The interpolation is checked after the fact on a few channels rendered
+        at every chirp (:func:`render_checked`): the factor is halved until the
+        measured error (relative l2 and worst chirp row) is within
+        ``decimate_tolerance``, or decimation is refused. When ``"auto"`` is
+        refused for every path, a :class:`DecimationRefused` warning says why
+        (once per kind of reason and process) and every chirp is rendered exactly.
+    decimate_tolerance : float, optional
+        Relative l2 error, and worst chirp row, of the interpolation against
+        the undecimated render; default ``DECIMATION_EPS_SHARE * eps``.
     decimation_report : list, optional
         Receives one dict per path group of the decimation (factor, band,
         exact chirps, measured check errors, reason).
@@ -233,9 +286,8 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     eps = check_eps(eps, floor=np.finfo(float).eps)
-    if not (decimate == "auto" or (isinstance(decimate, (int, np.integer))
-                                   and not isinstance(decimate, bool) and decimate >= 1)):
-        raise ValueError(f"decimate must be 'auto' or an integer >= 1, got {decimate!r}")
+    decimate = check_decimate(decimate)
+    tol = check_decimate_tolerance(decimate_tolerance, eps)
     src = as_source(tau, amplitude)
     n_chirp = src.num_chirps
     chirps = check_chirps(chirps, n_chirp)
@@ -274,11 +326,16 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         target = out if out is not None and out.flags.c_contiguous \
             else np.zeros(shape, dtype=np.complex64)
 
-        def render(part, chirp_list, rows):
-            _render_chirps(part, config, method, rows_eps, chirp_list, rows, threads)
+        def render(part, chirp_list, rows, check=False):
+            _render_chirps(part, config, method, rows_eps, chirp_list, rows, threads,
+                           double_grid=check or None)
 
-        if render_checked(src, config, chirps, DECIMATION_EPS_SHARE * eps, decimate, render,
-                          target, report=decimation_report):
+        report = [] if decimation_report is None else decimation_report
+        start = len(report)
+        done = render_checked(src, config, chirps, tol, decimate, render, target, report=report)
+        if decimate == "auto":
+            say_refused(report[start:])
+        if done:
             if out is None or target is out:
                 return target
             out += target
@@ -316,12 +373,18 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
 
 
 def _render_chirps(src, config: RadarConfig, method: str, eps: float, chirp_list: np.ndarray,
-                   rows: np.ndarray, threads: int | None) -> None:
-    """Render the chirps ``chirp_list`` (increasing) into ``rows[i]`` (complex64, added)."""
+                   rows: np.ndarray, threads: int | None,
+                   double_grid: bool | None = None) -> None:
+    """Render the chirps ``chirp_list`` (increasing) into ``rows[i]`` (complex64, added).
+
+    ``double_grid=True`` accumulates the kernel's grid in float64 (the a-posteriori
+    check's rows: the float32 grid's rounding differs from row to row, so it does not
+    interpolate, and with many paths it reaches the interpolation's share of ``eps``).
+    """
     if method == "kernel":
         from raysim.synthesis.kernel import kernel_error, render_rows
 
-        design = kernel_error(src.num_paths, eps, config.num_samples)[1]
+        design = kernel_error(src.num_paths, eps, config.num_samples, double_grid)[1]
         render_rows(src, config, design, chirp_list, rows, threads=threads)
         return
     i = 0
@@ -379,9 +442,12 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
     eps : float
         Tolerance of the interpolation (relative l2 and worst chirp row).
     decimate : "auto" or int >= 1
-    render : callable ``(part: PathDelays, chirp_list: ndarray[int], rows: ndarray)``
+    render : callable ``(part: PathDelays, chirp_list: ndarray[int], rows: ndarray, check=False)``
         Adds the rows of the absolute chirps ``chirp_list`` into ``rows`` ``[len, channel,
-        sample]`` (complex64) with the undecimated method.
+        sample]`` (complex64) with the undecimated method; ``check=True`` for the check
+        channels, which it renders without row-to-row rounding noise where the method
+        has any (the fused kernel's float32 grid: a float64 grid there), so that the
+        check measures the interpolation and not the rows' own rounding.
     target : ndarray, shape ``[len(chirps), channel, sample]``, complex64, C-contiguous
         Receives the result (added).
     report : list, optional
@@ -425,7 +491,7 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
         if plan.factor == 1:                       # exact anyway: nothing to check
             state.append([members, part, plan, full, full, (0.0, 0.0)])
             continue
-        render(channel_subset(part, chk), every, full)
+        render(channel_subset(part, chk), every, full, check=True)
         plan, pred, errs = _fit_group(plan, full, n_local, eps)
         state.append([members, part, plan, full, pred, errs])
     while True:

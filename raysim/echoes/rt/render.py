@@ -23,7 +23,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
                  if_band: str = "cull", path_chunk: int = 256,
                  hover_altitude: float | None = None, noise: bool = False,
                  seed: int | None = None, synthesizer=None,
-                 specular: str = "image", clutter="field") -> RadarFrame:
+                 specular: str = "image", clutter="field", decimate="auto",
+                 decimate_tolerance: float | None = None) -> RadarFrame:
     """Simulate one IF frame of a ray-traced scene seen from a moving platform.
 
     The scene is traced once from the radar's pose at the first chirp of the
@@ -78,6 +79,11 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         (:class:`raysim.echoes.scene_clutter.SceneClutter`; pass one instance to
         every frame to keep the field across frames; ``"field"`` makes a fresh
         one), Sionna's own diffuse paths (``"sionna"``), or no diffuse paths.
+    decimate : {"auto", "off"} or int
+        Slow-time decimation of the frozen paths (see
+        :func:`raysim.echoes.rt.reproject.synthesize_paths`); ``"auto"`` by default.
+    decimate_tolerance : float, optional
+        Relative error allowed to its interpolation (default 0.1 x the synthesis eps).
 
     Returns
     -------
@@ -133,7 +139,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         _, cut = synthesize_paths(paths, config, array, trajectory, lever, out=data[c0:c1],
                                   chirps=np.arange(c0, c1), path_chunk=path_chunk, frame=frame,
                                   t0=t0, if_band=if_band, synthesizer=synthesizer,
-                                  specular=specular,
+                                  specular=specular, decimate=decimate,
+                                  decimate_tolerance=decimate_tolerance,
                                   modulation=None if model is None else model.modulation)
         cut += synthesize_tracks(tracks, config, array, trajectory, lever, out=data[c0:c1],
                                  chirps=np.arange(c0, c1), frame=frame, t0=t0, if_band=if_band,

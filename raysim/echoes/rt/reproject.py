@@ -58,10 +58,13 @@ raised-cosine model of the anti-alias filter (``if_band="taper"``).
 
 Many frozen-vertex paths (a clutter field) are synthesised without
 materialising their ``[path, chirp, channel]`` delays
-(:func:`synthesize_paths`, ``compact``). Wind-blown clutter keeps its frozen
-points but multiplies its amplitudes chirp by chirp (``modulation``, the
-internal clutter motion of :mod:`raysim.echoes.ground.icm`); such paths vary
-within a frame at the clutter's Doppler bandwidth and are rendered at every chirp.
+(:func:`synthesize_paths`, ``compact``), and by default with slow-time
+decimation (``decimate="auto"``: exact rows on a subset of the chirps, the others
+interpolated within ``decimate_tolerance``; docs/speed.md). Wind-blown clutter
+keeps its frozen points but multiplies its amplitudes chirp by chirp
+(``modulation``, the internal clutter motion of :mod:`raysim.echoes.ground.icm`);
+such paths vary within a frame at the clutter's Doppler bandwidth and are
+rendered at every chirp (no decimation).
 """
 
 from __future__ import annotations
@@ -79,7 +82,7 @@ from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.radar.pattern import ElementPattern
 from raysim.synthesis.paths import PathDelays, pose_gains
-from raysim.synthesis.select import synthesize
+from raysim.synthesis.select import check_decimate, check_decimate_tolerance, synthesize
 
 IF_BAND_MODES = ("cull", "taper", "none")
 #: Re-projection of single-bounce specular paths: image method or frozen vertex.
@@ -344,7 +347,9 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
                      trajectory: Trajectory | None = None, lever_arm=(0.0, 0.0, 0.0), *,
                      out: np.ndarray | None = None, chirps=None, path_chunk: int = 256,
                      synthesizer=None, compact="auto", eps: float = 1e-6,
-                     modulation=None, **options) -> tuple[np.ndarray, int]:
+                     modulation=None, decimate="auto",
+                     decimate_tolerance: float | None = None,
+                     **options) -> tuple[np.ndarray, int]:
     """IF cube of frozen paths via :func:`raysim.synthesis.select.synthesize`.
 
     Paths whose re-projection is the frozen-vertex formula (all but the
@@ -381,7 +386,15 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         (the wind's internal clutter motion,
         :meth:`raysim.echoes.ground.field.ClutterField.modulation`), evaluated
         at each chirp's start time; these amplitudes change from chirp to chirp,
-        so a slow-time decimation must leave such paths undecimated.
+        so the compact way renders them at every chirp (``decimate`` ignored).
+    decimate : {"auto", "off"} or int
+        Slow-time decimation of the compact way
+        (:func:`raysim.synthesis.select.synthesize`): ``"auto"`` (default)
+        interpolates chirps where the motion's spectrum and an a-posteriori check
+        allow it, ``"off"`` renders every chirp exactly.
+    decimate_tolerance : float, optional
+        Relative error (l2 and worst chirp row) allowed to that interpolation
+        against the undecimated render; default ``DECIMATION_EPS_SHARE * eps``.
     **options
         ``frame``, ``t0``, ``if_band``, ``taper``, ``specular``, ``pattern`` of
         :func:`reproject`.
@@ -403,6 +416,8 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
         raise ValueError(f"synthesizer must be callable, got {synthesizer!r}")
     if compact not in ("auto", True, False):
         raise ValueError(f"compact must be 'auto', True or False, got {compact!r}")
+    decimate = check_decimate(decimate)
+    check_decimate_tolerance(decimate_tolerance, eps)
     frozen = np.ones(paths.num_paths, bool)
     if options.get("specular", "image") == "image":
         frozen = ~single_bounce_specular(paths)
@@ -417,7 +432,8 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
     if compact and frozen.any():
         dropped += _synthesize_compact(paths.select(frozen), config, array, trajectory,
                                        lever_arm, out, run, eps, options,
-                                       modulation=modulation)
+                                       modulation=modulation, decimate=decimate,
+                                       decimate_tolerance=decimate_tolerance)
         paths = paths.select(~frozen)
     for part in iter_reprojected(paths, config, array, trajectory, lever_arm,
                                  path_chunk=path_chunk, chirps=chirps, **options):
@@ -452,7 +468,8 @@ def _chirp_run(chirps, num_chirps: int) -> range | None:
 
 def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray, trajectory,
                         lever_arm, out: np.ndarray, run: range | None, eps: float,
-                        options: dict, modulation=None) -> int:
+                        options: dict, *, modulation=None, decimate="off",
+                        decimate_tolerance: float | None = None) -> int:
     """Add the frozen-vertex ``paths`` into ``out`` the compact way; return the culled count."""
     unknown = set(options) - {"frame", "t0", "if_band", "specular", "pattern", "taper"}
     if unknown:
@@ -467,9 +484,12 @@ def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray
                                   if_band=if_band, gain="per_chirp",
                                   pattern=options.get("pattern"))
     if modulation is not None and src.num_paths:
-        # wind-blown scatterers: their per-chirp amplitudes (src's own array) times the process
+        # wind-blown scatterers: their per-chirp amplitudes (src's own array) times the process;
+        # a random process has no motion spectrum to bound a decimation by: every chirp exact
         _modulate(src.amplitude, src.first_vertex, modulation,
                   config.chirp_times(options.get("frame", 0), options.get("t0", 0.0)))
+        decimate = "off"
     if src.num_paths:
-        synthesize(src, None, config, method="auto", eps=eps, out=out, chirps=run)
+        synthesize(src, None, config, method="auto", eps=eps, out=out, chirps=run,
+                   decimate=decimate, decimate_tolerance=decimate_tolerance)
     return paths.num_paths - src.num_paths

@@ -85,8 +85,12 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
     paths = []
     for m in REPORT_MAPS:
         ref = float(result.reference.maps[m].values.max())
-        fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 4.0),
-                                 constrained_layout=True)
+        width = 4.2 * len(panels)
+        # fixed margins [in] instead of constrained layout (half of the plotting time)
+        fig, axes = plt.subplots(1, len(panels), figsize=(width, 4.0),
+                                 gridspec_kw={"left": 0.5 / width, "right": 1 - 0.95 / width,
+                                              "bottom": 0.5 / 4.0, "top": 1 - 0.75 / 4.0,
+                                              "wspace": 0.25})
         axes = np.atleast_1d(axes)
         im = None
         for ax, (key, r) in zip(axes, panels.items(), strict=True):
@@ -111,7 +115,8 @@ def plot_scene(result: SceneResult, folder: str | os.PathLike, *,
                 for mv in result.movers:
                     c = np.asarray(mv["centres"])
                     ax.plot(c[:, 2] * dv, c[:, 0], "wx", ms=5, mew=0.8)
-        fig.colorbar(im, ax=list(axes), label=f"power [dB re {REFERENCE} peak]", shrink=0.9)
+        fig.colorbar(im, ax=list(axes), label=f"power [dB re {REFERENCE} peak]", shrink=0.9,
+                     fraction=0.1 / width, pad=0.1 / width)
         fig.suptitle(f"{result.scene}: {MAP_TITLES[m]} map")
         out = Path(folder) / f"{result.scene}_{m}.png"
         atomic_savefig(fig, out, dpi=90)

@@ -69,7 +69,8 @@ SCENARIO_KEYS = {
     "jitter_seed": ("motion.hover_jitter.seed",), "imu": ("imu.preset",),
     "imu_rate": ("imu.rate_hz",), "imu_seed": ("imu.seed",), "trace_seed": ("seed",),
     "max_depth": ("scene.max_depth",), "clutter": ("scene.clutter.mode",),
-    "clutter_per_cell": ("scene.clutter.per_cell",),
+    "clutter_per_cell": ("scene.clutter.per_cell",), "decimate": ("synthesis.decimate",),
+    "decimate_tolerance": ("synthesis.decimate_tolerance",),
 }
 
 
@@ -280,6 +281,17 @@ class ReportSettings:
     def clutter_per_cell(self) -> float:
         """Clutter-field scatterers per range x angle cell (``scene.clutter.per_cell``)."""
         return float(self.scenario.scene.clutter.per_cell)
+
+    @property
+    def decimate(self) -> str:
+        """Slow-time decimation of the synthesis (``synthesis.decimate``: ``auto``, ``off``)."""
+        return self.scenario.synthesis.decimate
+
+    @property
+    def decimate_tolerance(self) -> float | None:
+        """Relative error allowed to that interpolation (``synthesis.decimate_tolerance``;
+        None: 0.1 x ``nufft_eps``)."""
+        return self.scenario.synthesis.decimate_tolerance
 
     def with_values(self, **changes) -> ReportSettings:
         """Copy with knobs and scenario values changed, validated again.
