@@ -208,3 +208,29 @@ def test_bad_input_is_refused(metal, capsys):
 
     got = json.loads(out.out)["rcs_dbsm"][0][0]
     assert abs(got - db(SIDE**2 / math.pi)) < PLATE_PTD_DB
+
+
+#: Scene geometry target at 20 m vs the far-field edge-on closed form [dB] (spherical
+#: wave over a 5 cm plate: the leading edge's quadratic phase is below 0.01 rad).
+SCENE_EDGE_ON_DB = 0.1
+
+
+def test_scene_geometry_target_switch():
+    from raysim.echoes.po.paths import scattering_terms
+    from raysim.echoes.rt.scenes import SceneTarget
+
+    centre = np.array([1.0, 2.0, 0.5])
+    plate = T.square_plate(SIDE)
+    placed = TriangleMesh(plate.vertices + centre, plate.faces)
+    radar = centre + [0.0, 20.0, 0.0]            # edge-on, polarisation along the leading edge
+    off = scattering_terms(placed, "metal", radar, centre, frequency=FREQ, max_bounces=1)
+    on = scattering_terms(placed, "metal", radar, centre, frequency=FREQ, max_bounces=1,
+                          diffraction=True)
+    assert len(off.amplitude) == 0
+    assert abs(db(on.rcs_m2) - db(SIDE**2 / math.pi)) < SCENE_EDGE_ON_DB
+    glass = scattering_terms(placed, "glass", radar, centre, frequency=FREQ, max_bounces=1,
+                             diffraction=True)
+    assert len(glass.amplitude) == 0                   # no fringe wave off a dielectric
+    assert not SceneTarget("t", [0.0, 0.0, 0.0]).diffraction
+    with pytest.raises(ValueError, match="diffraction must be true or false"):
+        SceneTarget("t", [0.0, 0.0, 0.0], diffraction="yes")
