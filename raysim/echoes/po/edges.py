@@ -22,14 +22,14 @@ field along the edge),
 ``d_s,h = (sin(pi/n) / n) [1 / (cos(pi/n) - 1) -+ 1 / (cos(pi/n) - cos(2 phi / n))]``,
 
 and PO's, ``f_s = tan(phi) / 2`` for a lit face 0 (``0 < phi < pi``) and
-``tan(n pi - phi) / 2`` for a lit face n, ``g_h = -f_s`` (Ufimtsev 2007, ch. 2 and
-4; Knott, Shaeffer & Tuley 1993, ch. 5). Both are singular at a face's specular
+``tan(n pi - phi) / 2`` for a lit face n, ``g_h = -f_s`` (Ufimtsev 2007; Knott,
+Shaeffer & Tuley 1993, ch. 5). Both are singular at a face's specular
 direction (``phi = pi/2``); their difference is finite there. For the half-plane
 it is ``d_s - f_s = -sin(phi/2) / (cos(phi/2) + sin(phi/2))`` and
 ``d_h - g_h = -cos(phi/2) / (cos(phi/2) + sin(phi/2))``.
 
 With the polarisation ``e`` and ``beta`` the angle between ``t`` and ``u``, the
-equivalent currents (Knott eq. 5.40 ff.; Michaeli 1984, 1986) give
+equivalent currents (Knott ch. 5; Michaeli 1984, 1986) give
 
 ``F = 1/(2 pi) sum_segments [w_s (d_s - f_s) - w_h (d_h - g_h)] int exp(2 j k u.r) dl``,
 
