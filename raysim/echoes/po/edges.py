@@ -37,8 +37,8 @@ equivalent currents (Knott ch. 5; Michaeli 1984, 1986) give
 fringe coefficients replaced by PO's, this reproduces the edge terms of Gordon's
 facet integral at ``beta = 90 deg`` (tested), and with Keller's the first-order
 GTD of a plate (Ross 1966). Away from ``beta = 90 deg`` the coefficients are
-evaluated at the angle ``phi`` of ``u`` projected on the normal plane (Knott's
-extension of the Keller cone); Michaeli's off-cone expressions are not used.
+evaluated at the angle ``phi`` of ``u`` projected on the normal plane (an
+approximation off the Keller cone); Michaeli's off-cone expressions are not used.
 
 References
 ----------
