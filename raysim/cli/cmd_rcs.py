@@ -27,6 +27,7 @@ examples:
   raysim rcs plate:0.1 --material metal --az-deg 0,1,2 --el-deg 0 --range-m 15
   raysim rcs car.glb --material metal --az-deg 0:360:5 --el-deg -10 --pol HH
   raysim rcs plate_mm.stl --scale 0.001 --az-deg 0 --el-deg 0   # file in millimetres
+  raysim rcs plate:0.05 --az-deg 0:90:1 --el-deg 0 --diffraction  # PO + edge fringe wave
 
 exit status: 0 ok, 2 bad input (values, files).
 """
@@ -58,6 +59,9 @@ def register(subparsers) -> None:
     p.add_argument("--scale", type=float, default=None, metavar="M_PER_UNIT",
                    help="metres per unit of a mesh file (0.001 for millimetres); left out: "
                    "metres, and a file over 500 units across is refused as millimetres")
+    p.add_argument("--diffraction", action="store_true",
+                   help="add the edge diffraction (PTD fringe wave) of the mesh's sharp and "
+                   "boundary edges; conductors only; its cost is printed on stderr")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None, help="write a PNG pattern plot")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -159,7 +163,12 @@ def run(args) -> int:
                             range_m=args.range_m, polarisation=args.pol,
                             max_bounces=args.max_bounces,
                             rays_per_wavelength=args.rays_per_wavelength,
-                            progress=not args.no_progress)
+                            progress=not args.no_progress, diffraction=args.diffraction)
+    if args.diffraction:
+        info = result.info
+        print(f"note: diffraction: {info['edges']} edges in {info['edge_segments']} segments, "
+              f"{info['edge_seconds']:.3g} s of {info['seconds']:.3g} s (wall clock)",
+              file=sys.stderr)
     if args.plot:
         _plot(result, args.plot)
     if args.json:

@@ -2,7 +2,8 @@
 
 Modules: :mod:`~raysim.echoes.po.mesh` (meshes, materials, Fresnel),
 :mod:`~raysim.echoes.po.integral` (Gordon's closed-form facet integral, PO
-currents), :mod:`~raysim.echoes.po.rays` (Mitsuba ray intersection),
+currents), :mod:`~raysim.echoes.po.edges` (edge diffraction: the PTD fringe
+wave of the mesh wedges), :mod:`~raysim.echoes.po.rays` (Mitsuba ray intersection),
 :mod:`~raysim.echoes.po.sbr` (ray tubes), :mod:`~raysim.echoes.po.rcs`
 (monostatic RCS driver), :mod:`~raysim.echoes.po.targets` (canonical meshes and
 closed forms), :mod:`~raysim.echoes.po.paths` (geometry targets as frozen

@@ -53,9 +53,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS, ament_factor
+from raysim.echoes.po.edges import edge_terms_near, sharp_edges
 from raysim.echoes.po.mesh import TriangleMesh, po_material
 from raysim.echoes.po.rays import RayScene
-from raysim.echoes.po.rcs import MAX_BOUNCES, facet_terms_near
+from raysim.echoes.po.rcs import EDGE_SEGMENT_WAVELENGTHS, MAX_BOUNCES, facet_terms_near
 from raysim.echoes.po.sbr import TubeTerms, sbr_contributions
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 
@@ -177,7 +178,7 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
                      tubes_per_wavelength: float = TUBES_PER_WAVELENGTH,
                      max_bounces: int = MAX_BOUNCES, min_bounces: int = 1,
                      fresnel_fraction: float = PATHS_FRESNEL_FRACTION,
-                     ground=None) -> ScatteringTerms:
+                     ground=None, diffraction: bool = False) -> ScatteringTerms:
     """PO + SBR terms of a mesh seen from a point radar (near field, exact spreading).
 
     Parameters
@@ -208,6 +209,11 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
         appear, while its own bounces (single PO, tubes that hit only the
         ground) are left out; its reflections carry the material's Ament
         factor (:func:`ground_coherence`).
+    diffraction : bool
+        Add the PTD fringe wave of the sharp edges of the conducting parts
+        (:mod:`~raysim.echoes.po.edges`) as single-bounce terms, one per edge
+        segment (at most a wavelength and a facet's Fresnel size long, at its
+        midpoint); parts of other materials have none.
 
     Returns
     -------
@@ -263,6 +269,12 @@ def scattering_terms(mesh_w, material, radar_w, reference_w, *,
                                 spacing)
         f_amp.append(a)
         cent.append(c)
+        if diffraction and mat.is_pec:
+            segments = sharp_edges(part).split(min(EDGE_SEGMENT_WAVELENGTHS * wavelength,
+                                                   fresnel_edge))
+            a, c = edge_terms_near(segments, u, e_v, k, range_m, scene)
+            f_amp.append(a)
+            cent.append(c)
     f_amp = np.concatenate(f_amp) if f_amp else np.zeros(0, complex)
     cent = np.concatenate(cent) if cent else np.zeros((0, 3))
     tubes = sbr_contributions(scene, mats if len(mats) > 1 else mats[0], u, e_v, e_h, e_v,
@@ -506,7 +518,7 @@ def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: flo
                                  frequency=config.carrier_frequency, polarisation_w=r_wb[:, 0],
                                  tubes_per_wavelength=tubes_per_wavelength,
                                  max_bounces=max_bounces, min_bounces=t.min_bounces,
-                                 ground=apron)
+                                 ground=apron, diffraction=t.diffraction)
         centre, amp, _ = cluster_terms(terms, config.range_resolution)
         stats["tubes"] += terms.tubes
         stats["terms"] += len(terms.amplitude)

@@ -23,12 +23,14 @@ from __future__ import annotations
 
 import math
 import sys
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 # u(az, el) = (cos el sin az, sin el, cos el cos az): one definition of the direction
 from compensation.geometry import direction as radar_direction
+from raysim.echoes.po.edges import edge_amplitude, edge_terms_near, sharp_edges
 from raysim.echoes.po.integral import po_vector, polygon_phase_integral
 from raysim.echoes.po.mesh import PoMaterial, TriangleMesh
 from raysim.echoes.po.rays import RayScene
@@ -37,7 +39,8 @@ from raysim.radar.config import SPEED_OF_LIGHT
 
 __all__ = ["RcsResult", "monostatic_rcs", "facet_terms_near", "radar_direction",
            "polarisation_basis", "DEFAULT_FREQUENCY", "RAYS_PER_WAVELENGTH", "FRESNEL_FRACTION",
-           "MAX_BOUNCES", "MAX_RCS_FACETS", "MAX_RCS_WORK", "rcs_job_size"]
+           "MAX_BOUNCES", "MAX_RCS_FACETS", "MAX_RCS_WORK", "rcs_job_size",
+           "EDGE_SEGMENT_WAVELENGTHS"]
 
 #: Default carrier [Hz].
 DEFAULT_FREQUENCY = 77e9
@@ -56,12 +59,15 @@ MAX_RCS_FACETS = 2_000_000
 #: Most facet and ray-tube evaluations of one RCS job (directions x (facets + tubes));
 #: 10 x 10 directions of a 0.1 m plate at the default density are about 1.3e7 (10 s).
 MAX_RCS_WORK = 2e9
+#: Diffraction: edge segments at most this many wavelengths long (each segment's midpoint
+#: decides its shadow; the phase along a segment is integrated exactly).
+EDGE_SEGMENT_WAVELENGTHS = 1.0
 #: Memory per facet while a mesh is traced (vertices, normals, scene, terms) [bytes].
 FACET_BYTES = 400
 
 
 def rcs_job_size(mesh: TriangleMesh, directions: int, spacing: float, max_bounces: int,
-                 near_edge: float | None = None) -> dict:
+                 near_edge: float | None = None, edge_segments: int = 0) -> dict:
     """Size of an RCS job before anything is traced, refused when too large.
 
     Parameters
@@ -76,6 +82,8 @@ def rcs_job_size(mesh: TriangleMesh, directions: int, spacing: float, max_bounce
         Deepest bounce (1: no ray tubes).
     near_edge : float, optional
         Near field: largest sub-facet edge [m] (facets are split to it).
+    edge_segments : int
+        Diffraction: edge segments evaluated per direction.
 
     Returns
     -------
@@ -105,10 +113,11 @@ def rcs_job_size(mesh: TriangleMesh, directions: int, spacing: float, max_bounce
     check_memory(facets * FACET_BYTES, f"a mesh of {facets} facets", "the mesh (decimate it)")
     side = 2.0 * mesh.radius / spacing + 2.0
     tubes = int(side * side) if max_bounces > 1 else 0
-    work = float(directions) * (facets + tubes)
+    work = float(directions) * (facets + tubes + edge_segments)
     if work > MAX_RCS_WORK:
+        edge_text = f" + {edge_segments} edge segments" if edge_segments else ""
         raise ValueError(f"rcs: {directions} directions x ({facets} facets + about {tubes} SBR "
-                         f"ray tubes) = {work:.3g} evaluations, expected at most "
+                         f"ray tubes{edge_text}) = {work:.3g} evaluations, expected at most "
                          f"{MAX_RCS_WORK:.3g}: reduce --az-deg / --el-deg (fewer directions), "
                          f"--rays-per-wavelength, the mesh, or give --max-bounces 1")
     return {"facets": facets, "tubes": tubes, "work": work}
@@ -279,7 +288,8 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
                    frequency: float = DEFAULT_FREQUENCY, range_m: float | None = None,
                    polarisation: str = "VV", max_bounces: int = MAX_BOUNCES,
                    rays_per_wavelength: float = RAYS_PER_WAVELENGTH,
-                   variant: str | None = None, progress: bool = False) -> RcsResult:
+                   variant: str | None = None, progress: bool = False,
+                   diffraction: bool = False) -> RcsResult:
     """Monostatic PO + SBR RCS of ``mesh`` for every (azimuth, elevation).
 
     Parameters
@@ -304,18 +314,26 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
         Mitsuba backend if none is configured (``"cpu"``, ``"gpu"``).
     progress : bool
         Show a tqdm bar on stderr, one step per direction.
+    diffraction : bool
+        Add the PTD fringe wave of the mesh's sharp edges
+        (:mod:`~raysim.echoes.po.edges`; conductors only). ``False`` (default):
+        PO + SBR alone, unchanged.
 
     Returns
     -------
     RcsResult
-        ``rcs_m2`` shaped ``[azimuth, elevation]``.
+        ``rcs_m2`` shaped ``[azimuth, elevation]``; with ``diffraction``, ``info``
+        reports ``edges``, ``edge_segments`` and the wall-clock seconds spent on
+        them (``edge_seconds``) and in all (``seconds``).
 
     Raises
     ------
     ValueError
         Non-positive frequency, range or density, unknown polarisation,
-        ``max_bounces`` outside 1..10, a job too large (:func:`rcs_job_size`).
+        ``max_bounces`` outside 1..10, a job too large (:func:`rcs_job_size`),
+        ``diffraction`` not a bool or asked of a material other than a conductor.
     """
+    started = time.perf_counter()
     if not (math.isfinite(frequency) and frequency > 0):
         raise ValueError(f"frequency must be a positive number of Hz, got {frequency!r}")
     if range_m is not None and not (math.isfinite(range_m) and range_m > 0):
@@ -327,6 +345,12 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
         raise ValueError(f"max_bounces must be an integer in 1..10, got {max_bounces!r}")
     if not (math.isfinite(rays_per_wavelength) and rays_per_wavelength > 0):
         raise ValueError(f"rays_per_wavelength must be > 0, got {rays_per_wavelength!r}")
+    if not isinstance(diffraction, (bool, np.bool_)):
+        raise ValueError(f"diffraction must be True or False, got {diffraction!r}")
+    if diffraction and not material.is_pec:
+        raise ValueError(f"diffraction: the edge fringe wave is that of a perfect conductor; "
+                         f"material {material.name!r} is not one (use 'metal' or 'pec', or "
+                         f"leave diffraction off)")
     az = _angles(azimuth_deg, "azimuth_deg")
     el = _angles(elevation_deg, "elevation_deg")
     wavelength = SPEED_OF_LIGHT / frequency
@@ -338,12 +362,19 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
             raise ValueError(f"range_m={range_m!r} puts the radar inside the target "
                              f"(radius {mesh.radius:.3g} m)")
         near_edge = FRESNEL_FRACTION * math.sqrt(wavelength * range_m)
-    rcs_job_size(mesh, len(az) * len(el), spacing, int(max_bounces), near_edge)
+    edges = segments = None
+    if diffraction:
+        edges = sharp_edges(mesh)
+        seg_len = EDGE_SEGMENT_WAVELENGTHS * wavelength
+        segments = edges.split(seg_len if near_edge is None else min(seg_len, near_edge))
+    rcs_job_size(mesh, len(az) * len(el), spacing, int(max_bounces), near_edge,
+                 0 if segments is None else len(segments))
     scene = RayScene(mesh, variant)
     fine = None if near_edge is None else mesh.subdivided(near_edge)
     out = np.zeros((len(az), len(el)))
     from tqdm.auto import tqdm
 
+    edge_seconds = 0.0
     bar = tqdm(total=out.size, desc="rcs", unit="direction", file=sys.stderr,
                disable=not progress, leave=False, mininterval=0.0)
     for i, a in enumerate(np.radians(az)):
@@ -357,11 +388,22 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
                 f = _single_near(scene, fine, material, u, e_pol, k, range_m, spacing)
             f += sbr_amplitude(scene, material, u, e_pol, e_h, e_v, wavelength,
                                spacing=spacing, max_bounces=int(max_bounces), range_m=range_m)
+            if segments is not None:
+                t0 = time.perf_counter()
+                if range_m is None:
+                    f += edge_amplitude(segments, u, e_pol, k, scene)
+                else:
+                    f += complex(np.sum(edge_terms_near(segments, u, e_pol, k, range_m,
+                                                        scene)[0]))
+                edge_seconds += time.perf_counter() - t0
             out[i, j] = 4 * math.pi * abs(f) ** 2
             bar.update()
     bar.close()
     info = {"tube_spacing_m": spacing, "rays_per_wavelength": rays_per_wavelength,
             "max_bounces": int(max_bounces), "facets": len(mesh.faces),
             "near_field_facets": None if fine is None else len(fine.faces),
-            "material": material.name}
+            "material": material.name, "diffraction": bool(diffraction)}
+    if segments is not None:
+        info.update(edges=len(edges), edge_segments=len(segments),
+                    edge_seconds=edge_seconds, seconds=time.perf_counter() - started)
     return RcsResult(frequency, range_m, az, el, out, pol, info)

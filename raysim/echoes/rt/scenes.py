@@ -221,6 +221,9 @@ class SceneTarget:
     min_bounces : int
         Smallest bounce count traced for a geometry target: 2 keeps only its
         multiple bounces, for surfaces whose single bounce Sionna already traces.
+    diffraction : bool
+        Add the edge diffraction (PTD fringe wave) of a geometry target's sharp
+        edges (scene metadata key ``"diffraction"``, default false).
     """
 
     name: str
@@ -231,6 +234,7 @@ class SceneTarget:
     mesh: str | tuple[str, ...] | None = None
     material: str | tuple[str, ...] = "metal"
     min_bounces: int = 1
+    diffraction: bool = False
 
     @property
     def is_geometry(self) -> bool:
@@ -252,6 +256,9 @@ class SceneTarget:
         if self.min_bounces not in (1, 2, 3):
             raise ValueError(f"target {self.name!r}: min_bounces must be 1, 2 or 3, "
                              f"got {self.min_bounces!r}")
+        if not isinstance(self.diffraction, (bool, np.bool_)):
+            raise ValueError(f"target {self.name!r}: diffraction must be true or false, "
+                             f"got {self.diffraction!r}")
 
 
 # ------------------------------------------------------------------------------ scenes
@@ -637,7 +644,8 @@ def load_scene(scene: str | os.PathLike | SceneDescriptor = "flat_reflectors", *
                 t["name"], placed.to_world(np.asarray(t["position"], dtype=float)),
                 float(t["rcs_dbsm"]),
                 np.asarray(t.get("velocity", [0.0, 0.0, 0.0]), dtype=float) @ ENU_FROM_NED.T,
-                float(t.get("size", 0.2)), mesh, material, int(t.get("min_bounces", 1))))
+                float(t.get("size", 0.2)), mesh, material, int(t.get("min_bounces", 1)),
+                t.get("diffraction", False)))
     all_targets = list(targets) + list(extra_targets)
     names = [t.name for t in all_targets]
     if len(set(names)) != len(names):
