@@ -447,12 +447,17 @@ def synthesize_paths(paths: PathSet, config: RadarConfig, array: VirtualArray,
     return out, dropped
 
 
-def _modulate(amplitude: np.ndarray, vertices: np.ndarray, modulation, times) -> None:
-    """``amplitude`` [path, chirp] times ``modulation``'s factors, in place, by path blocks."""
+def _modulate(amplitude: np.ndarray, vertices: np.ndarray, modulation, times) -> bool:
+    """``amplitude`` [path, chirp] times ``modulation``'s factors, in place, by path blocks.
+
+    Returns whether any path was modulated."""
+    modulated = False
     for a in range(0, vertices.shape[0], MODULATION_CHUNK):
         found = modulation(vertices[a:a + MODULATION_CHUNK], times)
         if found is not None and found[0].size:
             amplitude[a + found[0]] *= found[1]
+            modulated = True
+    return modulated
 
 
 def _chirp_run(chirps, num_chirps: int) -> range | None:
@@ -486,9 +491,9 @@ def _synthesize_compact(paths: PathSet, config: RadarConfig, array: VirtualArray
     if modulation is not None and src.num_paths:
         # wind-blown scatterers: their per-chirp amplitudes (src's own array) times the process;
         # a random process has no motion spectrum to bound a decimation by: every chirp exact
-        _modulate(src.amplitude, src.first_vertex, modulation,
-                  config.chirp_times(options.get("frame", 0), options.get("t0", 0.0)))
-        decimate = "off"
+        if _modulate(src.amplitude, src.first_vertex, modulation,
+                     config.chirp_times(options.get("frame", 0), options.get("t0", 0.0))):
+            decimate = "off"
     if src.num_paths:
         synthesize(src, None, config, method="auto", eps=eps, out=out, chirps=run,
                    decimate=decimate, decimate_tolerance=decimate_tolerance)
