@@ -271,7 +271,8 @@ def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples, attitude=None, 
         Each sample is the average over the interval since the previous stamp
         (a flight controller's boxcar output stamped at the interval's end,
         :func:`raysim.platform.imu_output.boxcar_output`): ``*_integral_dt`` is
-        that interval [us] (the first sample's: the second's). False:
+        that interval [us], the median step (a logger gap is no longer an
+        average). False:
         instantaneous samples, ``*_integral_dt`` 0. The reader places each
         sample at its interval's middle (module docstring).
 
@@ -288,8 +289,10 @@ def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples, attitude=None, 
     """
     stamps = microsecond_stamps(samples, "write_px4_ulog", "ULog time stamps").astype(np.uint64)
     steps = np.diff(stamps.astype(np.int64))
-    dt_us = (np.concatenate([steps[:1], steps]) if averaged    # interval ending at each stamp
-             else np.zeros(stamps.size, dtype=np.int64))
+    # the averaging interval ending at each stamp: the logging step (the median, as a
+    # logger gap is no longer average); 0 marks instantaneous samples
+    dt_us = np.full(stamps.size, int(np.rint(np.median(steps))) if averaged and steps.size
+                    else 0, dtype=np.int64)
     body = bytearray(_MAGIC + b"\x01" + struct.pack("<Q", int(stamps[0])))
     body += _message(b"B", bytes(8) + bytes(8) + bytes(24))   # flag bits: none set
     body += _message(b"F", _FORMAT.encode())
