@@ -30,6 +30,7 @@ import numpy as np
 from ._checks import finite_array, positive
 from .clock_offset import ClockOffset, fit_time_shift, phase_misfit
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
+from .elevation import measure_elevation, vertical_baseline
 from .exact import rigid_body_projection
 from .geometry import direction
 from .gyro_bias import GyroBias, fit_gyro_bias
@@ -101,11 +102,16 @@ class Scatterer:
         Range bin of the range-compressed cube.
     azimuth, elevation : float
         Direction in W [rad].
+    elevation_sigma : float or None
+        Spread of ``elevation`` [rad] where it was measured by phase comparison
+        across a vertical baseline too short to resolve it as a beam
+        (:func:`compensation.elevation.measure_elevation`); None otherwise.
     """
 
     gate: int
     azimuth: float
     elevation: float
+    elevation_sigma: float | None = None
 
     @property
     def direction(self) -> np.ndarray:
@@ -284,8 +290,19 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     for i in order:
         s = Scatterer(int(gates[idx[i, 0]]), float(az[idx[i, 1]]), float(el[idx[i, 2]]))
         pk = _peak(rc, element_positions, motion, s, proj, 2 * step, step / 4)
-        if pk is not None:                    # refined to a fraction of the coarse step
-            found.append(Scatterer(s.gate, *pk))
+        if pk is None:
+            continue
+        s = Scatterer(s.gate, *pk)            # refined to a fraction of the coarse step
+        if not has_el and vertical_baseline(element_positions, wavelength,
+                                            MIN_APERTURE_WAVELENGTHS):
+            x, opts = _gate(rc, s, proj)
+            e0, sig = measure_elevation(x, element_positions, motion, s.azimuth, opts)
+            # the azimuth row sees cos(el) sin(az): refined again at the measured elevation
+            pk = _peak(rc, element_positions, motion, Scatterer(s.gate, s.azimuth, e0),
+                       proj, 2 * step, step / 4)
+            if pk is not None:
+                s = Scatterer(s.gate, pk[0], e0, sig)
+        found.append(s)
     return found
 
 
@@ -466,6 +483,8 @@ def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
         axis = (direction(s.azimuth + dd[0], s.elevation + dd[1])
                 - direction(s.azimuth - dd[0], s.elevation - dd[1])) / (2 * h)
         sig = DIRECTION_SIGMA if resolved else UNRESOLVED_DIRECTION_SIGMA
+        if k == 1 and not resolved and s.elevation_sigma is not None:
+            sig, resolved = s.elevation_sigma, True    # measured by phase comparison
         out += sig ** 2 * np.outer(axis, axis)
         if not resolved:      # second order: an angle e off shortens u by e^2 / 2
             u = s.direction   # (mean sig^2 / 2 and variance sig^4 / 2 of e^2 / 2, Gaussian)
