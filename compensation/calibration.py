@@ -76,6 +76,9 @@ ITERATIONS = 3
 DOPPLER_BLOCKS = 4
 #: Fewest chirp loops in a block (the slope of fewer is too noisy).
 MIN_BLOCK_CHIRPS = 8
+#: A detected maximum within this factor of a stronger one's sidelobe response there
+#: (3 dB) is taken for that sidelobe, not for a scatterer.
+SIDELOBE_MARGIN = 2.0
 #: Spread of a detected direction along an axis the array resolves [rad] (the peak
 #: refined to a quarter of the coarse step; multipath and the lever arm's parallax).
 DIRECTION_SIGMA = float(np.deg2rad(0.5))
@@ -286,9 +289,12 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     az, el = np.asarray(azimuth, dtype=float), np.asarray(elevation, dtype=float)
     step = float(np.median(np.abs(np.diff(az)))) if az.size > 1 else DIRECTION_STEP
     proj = dict(options, wavelength=wavelength, range_axis=range_axis)
-    found = []
+    found, kept = [], []
     for i in order:
         s = Scatterer(int(gates[idx[i, 0]]), float(az[idx[i, 1]]), float(el[idx[i, 2]]))
+        if _sidelobe(idx[i], kept, power, az, el, element_positions, taper, wavelength):
+            continue
+        kept.append(idx[i])
         pk = _peak(rc, element_positions, motion, s, proj, 2 * step, step / 4)
         if pk is None:
             continue
@@ -296,14 +302,33 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
         if not has_el and vertical_baseline(element_positions, wavelength,
                                             MIN_APERTURE_WAVELENGTHS):
             x, opts = _gate(rc, s, proj)
-            e0, sig = measure_elevation(x, element_positions, motion, s.azimuth, opts)
-            # the azimuth row sees cos(el) sin(az): refined again at the measured elevation
-            pk = _peak(rc, element_positions, motion, Scatterer(s.gate, s.azimuth, e0),
-                       proj, 2 * step, step / 4)
-            if pk is not None:
-                s = Scatterer(s.gate, pk[0], e0, sig)
+            measured = measure_elevation(x, element_positions, motion, s.azimuth, opts)
+            if measured is not None:   # else left at 0 in the unresolved fan
+                e0, sig = measured
+                # the azimuth row sees cos(el) sin(az): refined again at that elevation
+                pk = _peak(rc, element_positions, motion, Scatterer(s.gate, s.azimuth, e0),
+                           proj, 2 * step, step / 4)
+                if pk is not None:
+                    s = Scatterer(s.gate, pk[0], e0, sig)
         found.append(s)
     return found
+
+
+def _sidelobe(cell, kept, power, az, el, positions, taper, wavelength: float) -> bool:
+    """Whether the maximum at ``cell`` (range, az, el indices of ``power``) is a sidelobe of
+    a stronger one kept in the same or a neighbouring range cell: its power is within
+    :data:`SIDELOBE_MARGIN` of the tapered array factor's response there to the
+    stronger one (the array's axes taken along the grid's, a small tilt aside)."""
+    p = np.asarray(positions, dtype=float)
+    k = 2 * np.pi / wavelength
+    for c in kept:
+        if abs(int(c[0]) - int(cell[0])) > 1:
+            continue
+        du = direction(az[cell[1]], el[cell[2]]) - direction(az[c[1]], el[c[2]])
+        af = abs(np.sum(taper * np.exp(1j * k * (p @ du)))) ** 2 / np.sum(taper) ** 2
+        if power[tuple(cell)] <= SIDELOBE_MARGIN * af * power[tuple(c)]:
+            return True
+    return False
 
 
 def _taper(positions) -> np.ndarray:

@@ -26,9 +26,9 @@ from .strapdown import PlatformMotion
 __all__ = ["ELEVATION_AXIS", "ELEVATION_SIGMA_FLOOR", "measure_elevation",
            "vertical_baseline"]
 
-#: Elevation grid of the comparison [rad]: +-60 deg in 1 deg steps holds the one
-#: maximum of ``P(el)`` for the scatterers a forward-looking radar sees.
-ELEVATION_AXIS = np.deg2rad(np.arange(-60.0, 60.5, 1.0))
+#: Elevation grid of the comparison [rad]: +-88 deg in 1 deg steps (the ambiguity-free
+#: range less the last steps, where ``sin el`` hardly changes).
+ELEVATION_AXIS = np.deg2rad(np.arange(-88.0, 88.5, 1.0))
 #: Floor of a measured elevation's spread [rad]: the phase error the per-chirp scatter
 #: does not show (multipath, clutter in the same range cell and beam, the channels'
 #: phase mismatch of a few degrees: 10 deg of phase is 3.2 deg of elevation at
@@ -49,8 +49,11 @@ def vertical_baseline(positions, wavelength: float, beam_wavelengths: float) -> 
 
 def _vertex(q: np.ndarray, axis: np.ndarray) -> float:
     """Position [rad] of the maximum of ``q [el]``, refined by the parabola through it and
-    its neighbours (``P`` is a cosine: near-quadratic at its peak)."""
-    e = int(np.clip(np.argmax(q), 1, axis.size - 2))
+    its neighbours (``P`` is a cosine: near-quadratic at its peak); NaN when the maximum
+    is on the grid's edge (no peak inside it)."""
+    e = int(np.argmax(q))
+    if not 0 < e < axis.size - 1:
+        return float("nan")
     lo, mid, hi = q[e - 1], q[e], q[e + 1]
     den = lo - 2.0 * mid + hi
     f = 0.0 if den >= 0 else float(np.clip(0.5 * (lo - hi) / den, -0.5, 0.5))
@@ -58,7 +61,7 @@ def _vertex(q: np.ndarray, axis: np.ndarray) -> float:
 
 
 def measure_elevation(rc, positions, motion: PlatformMotion, azimuth: float, options
-                      ) -> tuple[float, float]:
+                      ) -> tuple[float, float] | None:
     """Elevation of the scatterer at ``azimuth`` in a range gate (module docstring).
 
     Parameters
@@ -77,15 +80,20 @@ def measure_elevation(rc, positions, motion: PlatformMotion, azimuth: float, opt
 
     Returns
     -------
-    (float, float)
+    (float, float) or None
         Elevation in W [rad], from the chirps' mean power in the first gate, and its
         spread [rad]: the chirps' scatter over the root of their number with
-        :data:`ELEVATION_SIGMA_FLOOR` added in quadrature.
+        :data:`ELEVATION_SIGMA_FLOOR` added in quadrature. None (not measured) when
+        the power of the mean or of a chirp peaks on the grid's edge (no maximum in
+        it: several scatterers in the cell, or one beyond +-88 deg) or the frame
+        has one chirp.
     """
     b = rigid_body_projection(rc, positions, motion, azimuth=[float(azimuth)],
                               elevation=ELEVATION_AXIS, **options)
     p = np.abs(b.data[:, 0, 0, :]) ** 2                      # [chirp, el]
     est = _vertex(p.mean(axis=0), ELEVATION_AXIS)
     each = np.array([_vertex(q, ELEVATION_AXIS) for q in p])
-    stat = float(np.std(each, ddof=1) / np.sqrt(each.size)) if each.size > 1 else np.inf
+    if not np.isfinite(est) or not np.all(np.isfinite(each)) or each.size < 2:
+        return None
+    stat = float(np.std(each, ddof=1) / np.sqrt(each.size))
     return est, float(np.hypot(stat, ELEVATION_SIGMA_FLOOR))
