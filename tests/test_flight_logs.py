@@ -114,6 +114,12 @@ def test_ulog_is_read_by_pyulog_as_px4_sensor_combined(tmp_path):
     np.testing.assert_array_equal(d.data["accelerometer_integral_dt"], 1000)
 
 
+#: A stamp read back: whole microseconds plus float64 spacing [s].
+STAMP_TOL_S = MICROSECOND_ROUNDING_S + TIME_FLOAT64_S
+#: A float32 value and its linear interpolation, relative (a few roundings).
+FLOAT32_RTOL = 4 * FLOAT32_UNIT_ROUNDOFF
+
+
 def test_ulog_averages_are_read_at_their_intervals_middle(tmp_path):
     """A boxcar average over the interval ending at its stamp equals a linear signal at the
     interval's middle (exactly): the reader returns it there, the 250 Hz log's 2 ms delay
@@ -124,11 +130,11 @@ def test_ulog_averages_are_read_at_their_intervals_middle(tmp_path):
     sig = np.column_stack([slope * mid, np.zeros(mid.size), np.full(mid.size, -9.8)])
     s = ImuSamples(stamps, sig, sig.copy())
     back = read_px4_ulog(write_px4_ulog(tmp_path / "m.ulg", s, averaged=True))
-    np.testing.assert_allclose(back.time, mid, rtol=0, atol=MICROSECOND_ROUNDING_S + TIME_FLOAT64_S)
-    np.testing.assert_allclose(back.gyro[:, 0], slope * back.time, rtol=4 * FLOAT32_UNIT_ROUNDOFF)
-    np.testing.assert_allclose(back.accel[:, 0], slope * back.time, rtol=4 * FLOAT32_UNIT_ROUNDOFF)
+    np.testing.assert_allclose(back.time, mid, rtol=0, atol=STAMP_TOL_S)
+    np.testing.assert_allclose(back.gyro[:, 0], slope * back.time, rtol=FLOAT32_RTOL)
+    np.testing.assert_allclose(back.accel[:, 0], slope * back.time, rtol=FLOAT32_RTOL)
     inst = read_px4_ulog(write_px4_ulog(tmp_path / "i.ulg", s))
-    np.testing.assert_allclose(inst.time, stamps, rtol=0, atol=MICROSECOND_ROUNDING_S + TIME_FLOAT64_S)
+    np.testing.assert_allclose(inst.time, stamps, rtol=0, atol=STAMP_TOL_S)
 
 
 def test_ulog_accelerometer_relative_stamp_is_interpolated(tmp_path):
