@@ -264,7 +264,12 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     Returns
     -------
     list of Scatterer
-        Strongest first.
+        Strongest first. A maximum within :data:`SIDELOBE_MARGIN` of a stronger
+        one's sidelobe response (same or neighbouring range cell) is left out.
+        Where the array resolves no elevation but has a short vertical baseline
+        (the raised TX), each elevation is measured by phase comparison
+        (:func:`compensation.elevation.measure_elevation`, its spread in
+        ``elevation_sigma``) and the azimuth refined again at it.
     """
     from scipy.ndimage import maximum_filter
 
