@@ -30,6 +30,7 @@ import numpy as np
 from ._checks import finite_array, positive
 from .clock_offset import ClockOffset, fit_time_shift, phase_misfit
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
+from .elevation import measure_elevation, vertical_baseline
 from .exact import rigid_body_projection
 from .geometry import direction
 from .gyro_bias import GyroBias, fit_gyro_bias
@@ -75,6 +76,9 @@ ITERATIONS = 3
 DOPPLER_BLOCKS = 4
 #: Fewest chirp loops in a block (the slope of fewer is too noisy).
 MIN_BLOCK_CHIRPS = 8
+#: A detected maximum within this factor of a stronger one's sidelobe response there
+#: (3 dB) is taken for that sidelobe, not for a scatterer.
+SIDELOBE_MARGIN = 2.0
 #: Spread of a detected direction along an axis the array resolves [rad] (the peak
 #: refined to a quarter of the coarse step; multipath and the lever arm's parallax).
 DIRECTION_SIGMA = float(np.deg2rad(0.5))
@@ -101,11 +105,16 @@ class Scatterer:
         Range bin of the range-compressed cube.
     azimuth, elevation : float
         Direction in W [rad].
+    elevation_sigma : float or None
+        Spread of ``elevation`` [rad] where it was measured by phase comparison
+        across a vertical baseline too short to resolve it as a beam
+        (:func:`compensation.elevation.measure_elevation`); None otherwise.
     """
 
     gate: int
     azimuth: float
     elevation: float
+    elevation_sigma: float | None = None
 
     @property
     def direction(self) -> np.ndarray:
@@ -255,7 +264,12 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     Returns
     -------
     list of Scatterer
-        Strongest first.
+        Strongest first. A maximum within :data:`SIDELOBE_MARGIN` of a stronger
+        one's sidelobe response (same or neighbouring range cell) is left out.
+        Where the array resolves no elevation but has a short vertical baseline
+        (the raised TX), each elevation is measured by phase comparison
+        (:func:`compensation.elevation.measure_elevation`, its spread in
+        ``elevation_sigma``) and the azimuth refined again at it.
     """
     from scipy.ndimage import maximum_filter
 
@@ -280,13 +294,46 @@ def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, waveleng
     az, el = np.asarray(azimuth, dtype=float), np.asarray(elevation, dtype=float)
     step = float(np.median(np.abs(np.diff(az)))) if az.size > 1 else DIRECTION_STEP
     proj = dict(options, wavelength=wavelength, range_axis=range_axis)
-    found = []
+    found, kept = [], []
     for i in order:
         s = Scatterer(int(gates[idx[i, 0]]), float(az[idx[i, 1]]), float(el[idx[i, 2]]))
+        if _sidelobe(idx[i], kept, power, az, el, element_positions, taper, wavelength):
+            continue
+        kept.append(idx[i])
         pk = _peak(rc, element_positions, motion, s, proj, 2 * step, step / 4)
-        if pk is not None:                    # refined to a fraction of the coarse step
-            found.append(Scatterer(s.gate, *pk))
+        if pk is None:
+            continue
+        s = Scatterer(s.gate, *pk)            # refined to a fraction of the coarse step
+        if not has_el and vertical_baseline(element_positions, wavelength,
+                                            MIN_APERTURE_WAVELENGTHS):
+            x, opts = _gate(rc, s, proj)
+            measured = measure_elevation(x, element_positions, motion, s.azimuth, opts)
+            if measured is not None:   # else left at 0 in the unresolved fan
+                e0, sig = measured
+                # the azimuth row sees cos(el) sin(az): refined again at that elevation
+                pk = _peak(rc, element_positions, motion, Scatterer(s.gate, s.azimuth, e0),
+                           proj, 2 * step, step / 4)
+                if pk is not None:
+                    s = Scatterer(s.gate, pk[0], e0, sig)
+        found.append(s)
     return found
+
+
+def _sidelobe(cell, kept, power, az, el, positions, taper, wavelength: float) -> bool:
+    """Whether the maximum at ``cell`` (range, az, el indices of ``power``) is a sidelobe of
+    a stronger one kept in the same or a neighbouring range cell: its power is within
+    :data:`SIDELOBE_MARGIN` of the tapered array factor's response there to the
+    stronger one (the array's axes taken along the grid's, a small tilt aside)."""
+    p = np.asarray(positions, dtype=float)
+    k = 2 * np.pi / wavelength
+    for c in kept:
+        if abs(int(c[0]) - int(cell[0])) > 1:
+            continue
+        du = direction(az[cell[1]], el[cell[2]]) - direction(az[c[1]], el[c[2]])
+        af = abs(np.sum(taper * np.exp(1j * k * (p @ du)))) ** 2 / np.sum(taper) ** 2
+        if power[tuple(cell)] <= SIDELOBE_MARGIN * af * power[tuple(c)]:
+            return True
+    return False
 
 
 def _taper(positions) -> np.ndarray:
@@ -466,6 +513,8 @@ def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
         axis = (direction(s.azimuth + dd[0], s.elevation + dd[1])
                 - direction(s.azimuth - dd[0], s.elevation - dd[1])) / (2 * h)
         sig = DIRECTION_SIGMA if resolved else UNRESOLVED_DIRECTION_SIGMA
+        if k == 1 and not resolved and s.elevation_sigma is not None:
+            sig, resolved = s.elevation_sigma, True    # measured by phase comparison
         out += sig ** 2 * np.outer(axis, axis)
         if not resolved:      # second order: an angle e off shortens u by e^2 / 2
             u = s.direction   # (mean sig^2 / 2 and variance sig^4 / 2 of e^2 / 2, Gaussian)

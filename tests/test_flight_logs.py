@@ -108,7 +108,33 @@ def test_ulog_is_read_by_pyulog_as_px4_sensor_combined(tmp_path):
     np.testing.assert_array_equal(d.data["gyro_rad[2]"], s.gyro[:, 2].astype(np.float32))
     np.testing.assert_array_equal(d.data["accelerometer_m_s2[2]"],
                                   s.accel[:, 2].astype(np.float32))
-    np.testing.assert_array_equal(d.data["gyro_integral_dt"], 1000)
+    np.testing.assert_array_equal(d.data["gyro_integral_dt"], 0)      # instantaneous samples
+    (d,) = ULog(str(write_px4_ulog(tmp_path / "b.ulg", s, averaged=True))).data_list
+    np.testing.assert_array_equal(d.data["gyro_integral_dt"], 1000)   # 1 kHz averages
+    np.testing.assert_array_equal(d.data["accelerometer_integral_dt"], 1000)
+
+
+#: A stamp read back: whole microseconds plus float64 spacing [s].
+STAMP_TOL_S = MICROSECOND_ROUNDING_S + TIME_FLOAT64_S
+#: A float32 value and its linear interpolation, relative (a few roundings).
+FLOAT32_RTOL = 4 * FLOAT32_UNIT_ROUNDOFF
+
+
+def test_ulog_averages_are_read_at_their_intervals_middle(tmp_path):
+    """A boxcar average over the interval ending at its stamp equals a linear signal at the
+    interval's middle (exactly): the reader returns it there, the 250 Hz log's 2 ms delay
+    is not left to the clock offset; an instantaneous sample stays at its stamp."""
+    rate, slope = 250.0, 3.0                       # [Hz], [rad/s^2 and m/s^3]
+    stamps = 1.0 + np.arange(1, 40) / rate         # the intervals' ends [s]
+    mid = stamps - 0.5 / rate
+    sig = np.column_stack([slope * mid, np.zeros(mid.size), np.full(mid.size, -9.8)])
+    s = ImuSamples(stamps, sig, sig.copy())
+    back = read_px4_ulog(write_px4_ulog(tmp_path / "m.ulg", s, averaged=True))
+    np.testing.assert_allclose(back.time, mid, rtol=0, atol=STAMP_TOL_S)
+    np.testing.assert_allclose(back.gyro[:, 0], slope * back.time, rtol=FLOAT32_RTOL)
+    np.testing.assert_allclose(back.accel[:, 0], slope * back.time, rtol=FLOAT32_RTOL)
+    inst = read_px4_ulog(write_px4_ulog(tmp_path / "i.ulg", s))
+    np.testing.assert_allclose(inst.time, stamps, rtol=0, atol=STAMP_TOL_S)
 
 
 def test_ulog_accelerometer_relative_stamp_is_interpolated(tmp_path):

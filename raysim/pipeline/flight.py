@@ -380,7 +380,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         time_offset=time_offset, clock_drift_ppm=clock_drift_ppm, boxcar=imu_boxcar,
         fast_rate=imu_fast_rate, gaps=log_gaps, gaps_in_capture=gaps_in_capture,
         attitude=attitude, capture=(start, end - 0.05))
-    ulog = write_px4_ulog(folder / "flight.ulg", samples, att)
+    ulog = write_px4_ulog(folder / "flight.ulg", samples, att, averaged=bool(imu_boxcar))
     starts = start + np.arange(frames) * cfg.frame_interval
     return FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,
                        float(time_offset), np.asarray(traj.velocity(starts), dtype=float),

@@ -33,6 +33,11 @@ gyro times.
 
 Time base: ``time = TimeUS * 1e-6`` (``TimeMS * 1e-3``, a 1 ms resolution) [s
 since boot]. ArduPilot's body frame is FRD, so no axis conversion is made.
+Each sample stays at its stamp: ArduPilot documents ``IMU`` as the filtered
+sensor output at the logging time (a low-pass filter, not an average over a
+stated interval, so there is no interval whose middle would be the sample time)
+and ``GYR``/``ACC``/``ISBD`` as raw sensor samples; a filter's group delay is
+left to the IMU-radar clock offset.
 
 :func:`write_dataflash_imu` writes a minimal file (an ``FMT`` message for
 ``IMU`` then the data messages, each ``0xA3 0x95 <type>`` + payload), the

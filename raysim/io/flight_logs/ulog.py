@@ -21,23 +21,30 @@ rate is returned unless ``topic`` / ``instance`` choose. A FIFO sample ``i``
 of a message of ``n`` samples is placed at ``timestamp_sample - (n - 1 - i)
 dt`` (the last sample at ``timestamp_sample``); the FIFO accelerometer is
 interpolated onto the FIFO gyro times. ``vehicle_imu`` rates are the deltas
-over their intervals, placed at ``timestamp_sample`` (the interval's end).
+over their intervals, placed at the interval's middle, ``timestamp_sample -
+delta_angle_dt / 2`` (the accelerometer at ``timestamp_sample -
+delta_velocity_dt / 2``, interpolated onto the gyro times).
 
 What each source can see: an average over ``T`` seconds is a boxcar filter
 (first null at ``1/T``) and a log at ``f_s`` folds everything above ``f_s/2``:
 a 200-250 Hz ``sensor_combined`` (``T`` = 4-5 ms) cannot resolve a 100-200 Hz
 rotor band; only the FIFO topics can (docs/recordings.md).
 
-Time base: the returned ``time`` is the stamp times 1e-6 [s], as stored:
+Time base: the returned ``time`` is the stamp times 1e-6 [s], as stored (less
+half an averaging interval, below):
 microseconds since boot (PX4 ``hrt_absolute_time``) in most logs, since the
 Unix epoch in some (:func:`raysim.io.flight_logs.time_base` tells them apart
 and the result's ``source`` says which). ``sensor_combined`` publishes the gyro
 and accelerometer averaged over their ``*_integral_dt`` intervals ending at the
-stamp; they are returned as samples at the stamp (a constant delay of half the
-interval, absorbed by the IMU-radar clock offset). When
-``accelerometer_timestamp_relative`` is not zero the accelerometer is
-interpolated linearly onto the gyro stamps (held constant before its first and
-after its last sample). Frames: ``sensor_combined`` and ``vehicle_imu`` are in
+stamp; each average is returned as a sample at its interval's middle, ``timestamp
+- gyro_integral_dt / 2`` (the accelerometer at ``timestamp +
+accelerometer_timestamp_relative - accelerometer_integral_dt / 2``, interpolated
+linearly onto the gyro times, held constant before its first and after its last
+sample): a boxcar average equals the signal at its middle to second order (for a
+signal linear over the interval, exactly), so the clock offset estimated from such a
+log is the IMU-radar offset itself, not the offset plus half the interval. An
+``*_integral_dt`` of 0 (or absent) is an instantaneous sample, kept at its stamp.
+Frames: ``sensor_combined`` and ``vehicle_imu`` are in
 the body frame FRD (board rotation and calibration applied); the FIFO topics
 are in the sensor board's frame (FRD for the usual mounting, before
 ``SENS_BOARD_ROT`` and the calibration). No axis conversion is made. Values are
@@ -116,6 +123,15 @@ def _fifo(d: dict) -> tuple[np.ndarray, np.ndarray]:
     return time, vals
 
 
+def _interval(d: dict, field: str, n: int) -> np.ndarray:
+    """``*_integral_dt`` [us] of each sample, ``[sample]``; 0 (an instantaneous sample)
+    where the field is absent."""
+    dt = np.asarray(d.get(field, np.zeros(n)), dtype=float)
+    if np.any(dt < 0) or not np.all(np.isfinite(dt)):
+        raise ValueError(f"{field} negative or not finite")
+    return dt
+
+
 def _candidates(log) -> tuple[list, dict]:
     """Complete IMU sources of a parsed log: ``(topic, instance, rate, (t, gyro, accel))``."""
     by = {(d.name, d.multi_id): d.data for d in log.data_list}
@@ -123,20 +139,22 @@ def _candidates(log) -> tuple[list, dict]:
     for (name, k), d in sorted(by.items()):
         try:
             if name == "sensor_combined":
-                time = np.asarray(d["timestamp"], dtype=np.uint64).astype(float) * 1e-6
+                stamp = np.asarray(d["timestamp"], dtype=np.uint64).astype(float) * 1e-6
                 gyro = np.column_stack([d[f"gyro_rad[{i}]"] for i in range(3)]).astype(float)
                 accel = np.column_stack([d[f"accelerometer_m_s2[{i}]"]
                                          for i in range(3)]).astype(float)
                 rel = np.asarray(d.get("accelerometer_timestamp_relative",
-                                       np.zeros(time.size)), dtype=float)
-                if np.any(rel != 0):
-                    t_acc = time + rel * 1e-6
+                                       np.zeros(stamp.size)), dtype=float)
+                time = stamp - 0.5e-6 * _interval(d, "gyro_integral_dt", stamp.size)
+                t_acc = (stamp + rel * 1e-6
+                         - 0.5e-6 * _interval(d, "accelerometer_integral_dt", stamp.size))
+                if np.any(t_acc != time):
                     check_increasing(t_acc, f"{name}[{k}] accelerometer")
                     accel = np.column_stack([np.interp(time, t_acc, accel[:, i])
                                              for i in range(3)])
             elif name == "vehicle_imu":
-                time = np.asarray(d.get("timestamp_sample", d["timestamp"]),
-                                  dtype=np.uint64).astype(float) * 1e-6
+                stamp = np.asarray(d.get("timestamp_sample", d["timestamp"]),
+                                   dtype=np.uint64).astype(float) * 1e-6
                 da = np.asarray(d["delta_angle_dt"], dtype=float) * 1e-6
                 dv = np.asarray(d["delta_velocity_dt"], dtype=float) * 1e-6
                 if np.any(da <= 0) or np.any(dv <= 0):
@@ -144,6 +162,11 @@ def _candidates(log) -> tuple[list, dict]:
                 gyro = np.column_stack([d[f"delta_angle[{i}]"] for i in range(3)]) / da[:, None]
                 accel = np.column_stack([d[f"delta_velocity[{i}]"]
                                          for i in range(3)]) / dv[:, None]
+                time, t_acc = stamp - da / 2, stamp - dv / 2      # the intervals' middles
+                if np.any(t_acc != time):
+                    check_increasing(t_acc, f"{name}[{k}] accelerometer")
+                    accel = np.column_stack([np.interp(time, t_acc, accel[:, i])
+                                             for i in range(3)])
             elif name == "sensor_gyro_fifo":
                 time, gyro = _fifo(d)
                 if (_FIFO_ACCEL, k) not in by:
@@ -226,7 +249,8 @@ def _message(kind: bytes, payload: bytes) -> bytes:
     return struct.pack("<HB", len(payload), kind[0]) + payload
 
 
-def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples, attitude=None) -> Path:
+def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples, attitude=None, *,
+                   averaged: bool = False) -> Path:
     """Write IMU samples as the ``sensor_combined`` topic of a minimal PX4 ULog file.
 
     With ``attitude`` the file also holds the flight controller's attitude as
@@ -243,6 +267,14 @@ def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples, attitude=None) 
         (stored as float32).
     attitude : raysim.io.flight_logs.attitude.AttitudeLog, optional
         ``time [sample]`` [s, the IMU's clock, >= 0] and ``rotation`` ``R_WB``.
+    averaged : bool
+        Each sample is the average over the interval since the previous stamp
+        (a flight controller's boxcar output stamped at the interval's end,
+        :func:`raysim.platform.imu_output.boxcar_output`): ``*_integral_dt`` is
+        that interval [us], the median step (a logger gap is no longer an
+        average). False:
+        instantaneous samples, ``*_integral_dt`` 0. The reader places each
+        sample at its interval's middle (module docstring).
 
     Returns
     -------
@@ -257,7 +289,10 @@ def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples, attitude=None) 
     """
     stamps = microsecond_stamps(samples, "write_px4_ulog", "ULog time stamps").astype(np.uint64)
     steps = np.diff(stamps.astype(np.int64))
-    dt_us = np.concatenate([steps[:1], steps])   # integral interval ending at each stamp
+    # the averaging interval ending at each stamp: the logging step (the median, as a
+    # logger gap is no longer average); 0 marks instantaneous samples
+    dt_us = np.full(stamps.size, int(np.rint(np.median(steps))) if averaged and steps.size
+                    else 0, dtype=np.int64)
     body = bytearray(_MAGIC + b"\x01" + struct.pack("<Q", int(stamps[0])))
     body += _message(b"B", bytes(8) + bytes(8) + bytes(24))   # flag bits: none set
     body += _message(b"F", _FORMAT.encode())

@@ -1,0 +1,162 @@
+"""End to end from files like a real flight's, each compensated by ONE `raysim compensate`.
+
+Every flight (:func:`raysim.pipeline.flight.write_flight`) has the five ``default5``
+stationary targets (4.5-8.8 m, azimuth -25..30 deg, elevation -5/0/+5 deg) plus the
+ground clutter of the bundled ``parking_lot`` scene (at most
+:data:`CLUTTER_SCATTERERS` scatterers, so a flight is written in seconds), the
+xWR18xx board (3 TX, TX1 raised lambda/2, x 4 RX), a consumer-MEMS IMU whose
+realised accelerometer bias reaches :data:`MIN_ACCEL_BIAS_MG` (checked), logged at
+1 kHz or as a flight controller's 250 Hz boxcar, with :data:`LOG_GAPS` logger gaps of
+50-160 ms, with and without the flight controller's attitude (``vehicle_attitude``),
+the IMU clock :data:`TIME_OFFSET_S` ahead with a :data:`DRIFT_PPM` drift, and
+:data:`FRAMES` frames. The command gets only what a user has (the capture, its cfg,
+the ULog, the IMU grade and the lever arm) and estimates the velocity and the clock
+from the radar (``--velocity radar --time-offset auto``; the 250 Hz log adds
+``--autofocus stationary``). Every target in every frame is measured from the store
+(:func:`raysim.pipeline.flight.measure_targets`).
+
+Where the bounds do not hold the case is marked ``xfail(strict=True)`` with the
+measured figures, so the suite records the gap (and notices when it closes).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+
+import numpy as np
+import pytest
+
+from compensation.observability import HELD_WHEN_UNCONSTRAINED, UNCONSTRAINED_RATIO
+from raysim.cli import main
+from raysim.io.zarr_store import open_store
+from raysim.pipeline.flight import DEFAULT5_TARGETS, measure_targets, write_flight
+
+#: Bounds on every target and frame: residual pseudo-velocity [bin], Doppler power
+#: outside +-1 bin of the peak [dB], angle error [deg]; and the clock-offset error [s].
+PSEUDO_VELOCITY_BINS = 0.05
+LEAKAGE_DB = -35.0
+ANGLE_DEG = 0.2
+OFFSET_TOL_S = 0.5e-3
+#: The flights' clock, frames, logger gaps and seed (its realised accelerometer bias:
+#: 3.7, -28.1, 13.5 mg).
+TIME_OFFSET_S, DRIFT_PPM, FRAMES, LOG_GAPS, SEED = 6.5e-3, 30.0, 6, 2, 0
+#: Largest realised accelerometer bias component the flights must have [mg].
+MIN_ACCEL_BIAS_MG = 15.0
+#: Clutter field bound (the full field of 3200 scatterers costs about 45 s a frame).
+CLUTTER_SCATTERERS = 60
+#: Frames of the degenerate-geometry flights (what they check needs no more).
+FEW_FRAMES = 3
+CELLS = ("--range-m", "4:9.3", "--az-deg", "-40:45:0.25", "--el-deg", "-5:5:5",
+         "--no-progress")
+
+CASES = {
+    "1k_log_attitude": dict(imu_rate=1000.0, imu_boxcar=False, attitude=True),
+    "1k_no_attitude": dict(imu_rate=1000.0, imu_boxcar=False, attitude=False),
+    "250hz_boxcar_log_attitude": dict(imu_rate=250.0, imu_boxcar=True, attitude=True),
+    "250hz_boxcar_no_attitude": dict(imu_rate=250.0, imu_boxcar=True, attitude=False),
+}
+_RUNS: dict = {}
+
+
+def _run(tmp, name: str, frames: int = FRAMES, targets="default5", **kw):
+    """Write the flight once and compensate it with one command: (flight, store, stdout)."""
+    if name in _RUNS:
+        return _RUNS[name]
+    flight = write_flight(tmp / name, targets=targets, frames=frames, seed=SEED,
+                          time_offset=TIME_OFFSET_S, clock_drift_ppm=DRIFT_PPM,
+                          log_gaps=LOG_GAPS, clutter_scene="parking_lot",
+                          clutter_max_scatterers=CLUTTER_SCATTERERS, **kw)
+    extra = ("--autofocus", "stationary") if kw.get("imu_boxcar") else ()
+    args = flight.calibrating_command(tmp / f"{name}.zarr", *CELLS, *extra, attitude="log")
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(args) == 0
+    _RUNS[name] = (flight, open_store(tmp / f"{name}.zarr"), out.getvalue())
+    return _RUNS[name]
+
+
+@pytest.fixture(scope="module")
+def tmp(tmp_path_factory):
+    return tmp_path_factory.mktemp("flights")
+
+
+def _figures(flight, ds) -> str:
+    m = measure_targets(ds, flight)                             # [target, frame, 3]
+    return (f"angle {m[..., 0].max():.3f} deg, pseudo-velocity {np.abs(m[..., 1]).max():.3f} "
+            f"bin, leakage {m[..., 2].max():.1f} dB, offset error "
+            f"{(ds.attrs['time_offset_s'] - TIME_OFFSET_S) * 1e3:+.3f} ms")
+
+
+def test_the_flights_have_a_consumer_accelerometer_bias():
+    from raysim.pipeline.sensors import imu_record
+    from raysim.platform.imu_spec import MILLI_G
+    from raysim.platform.motion import hover_jitter
+
+    s = imu_record(hover_jitter(SEED), "consumer_mems", rate=1000.0, times=[0.5, 1.0],
+                   seed=SEED, start=0.0, time_offset=TIME_OFFSET_S, clock_drift_ppm=DRIFT_PPM)
+    assert np.abs(s.truth.accel_bias.mean(axis=0)).max() >= MIN_ACCEL_BIAS_MG * MILLI_G
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_clock_offset_and_scatterers_of_every_flight(tmp, case):
+    """The offset within its bound on every log (the 250 Hz averages read at their
+    intervals' middles), the five targets found and no sidelobe taken for a sixth (the
+    clutter lies beyond their cells), the flight as asked for."""
+    flight, ds, out = _run(tmp, case, **CASES[case])
+    print(case, _figures(flight, ds))          # the figures of GAPS (pytest -s)
+    assert len(flight.targets) == len(DEFAULT5_TARGETS) and ds.sizes["frame"] == FRAMES
+    assert len(flight.gaps) == LOG_GAPS
+    assert abs(ds.attrs["time_offset_s"] - TIME_OFFSET_S) <= OFFSET_TOL_S
+    assert json.loads(ds.attrs["self_calibration"])["scatterers"] == len(DEFAULT5_TARGETS)
+
+
+#: Cases that miss the bounds, with the figures measured (worst target and frame).
+GAPS = {
+    "1k_no_attitude": "level assumed without the log's attitude: angle 0.741 deg (the "
+                      "seed's 0.65 deg pitch), 0.032 bin, -40.3 dB, offset +0.010 ms",
+    "250hz_boxcar_log_attitude": "the 250 Hz boxcar folds the rotor band: angle 0.302 deg, "
+                                 "0.068 bin, -28.1 dB, offset +0.225 ms (autofocus on)",
+    "250hz_boxcar_no_attitude": "250 Hz boxcar and level assumed: angle 0.440 deg, 0.067 "
+                                "bin, -28.0 dB, offset +0.219 ms (autofocus on)",
+}
+
+
+@pytest.mark.parametrize("case", [
+    pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=GAPS[c])) if c in GAPS
+    else c for c in CASES])
+def test_every_target_and_frame_within_the_bounds(tmp, case):
+    flight, ds, out = _run(tmp, case, **CASES[case])
+    m = measure_targets(ds, flight)                             # [target, frame, 3]
+    assert m.shape == (len(DEFAULT5_TARGETS), FRAMES, 3)
+    assert np.all(m[..., 0] <= ANGLE_DEG), m[..., 0]
+    assert np.all(np.abs(m[..., 1]) <= PSEUDO_VELOCITY_BINS), m[..., 1]
+    assert np.all(m[..., 2] <= LEAKAGE_DB), m[..., 2]
+
+
+@pytest.mark.parametrize("case", ["elevation0", "single"])
+def test_degenerate_geometry_named_and_covered(tmp, case):
+    """Targets all at elevation 0, or one target: what the Doppler cannot constrain is
+    named in the command's output and kept at the prior, and the velocity's error is
+    within 3 stated sigma."""
+    targets = ([(r, az, 0.0) for r, az, _ in DEFAULT5_TARGETS] if case == "elevation0"
+               else [DEFAULT5_TARGETS[2]])
+    flight, ds, out = _run(tmp, case, frames=FEW_FRAMES, targets=targets,
+                           imu_rate=1000.0, attitude=True)
+    cal = json.loads(ds.attrs["self_calibration"])
+    assert cal["scatterers"] == len(targets)
+    v = np.asarray(cal["initial_velocity_mps"])
+    sig = np.asarray(cal["initial_velocity_sigma_mps"])
+    assert np.all(np.abs(v - flight.initial_velocity[0]) <= 3 * sig), (v, sig)
+    named = [n for n in cal["unconstrained"] if n.startswith("velocity_")]
+    line = next(ln for ln in out.splitlines() if ln.strip().startswith("unconstrained"))
+    assert all(n in line for n in cal["unconstrained"])
+    if case == "single":         # one direction: the two velocity components across it
+        assert len(named) >= 2
+    ri = cal["radar_inertial"]
+    for n in cal["unconstrained"]:       # kept at the prior: its spread hardly reduced,
+        i = ri["state_names"].index(n)   # the held ones not corrected at all
+        assert ri["sigma"][i] >= UNCONSTRAINED_RATIO * ri["prior_sigma"][i], n
+        if n in HELD_WHEN_UNCONSTRAINED:
+            assert ri["state"][i] == 0.0, n
