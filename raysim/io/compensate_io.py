@@ -51,8 +51,10 @@ class CompensateInput:
     frames : list of int
         Frame numbers within the source (capture or store) of the selected frames.
     read : callable
-        ``read(k) -> ndarray [chirp, channel, sample]`` IF samples of the
-        ``k``-th selected frame (read when needed: captures are not loaded whole).
+        ``read(k) -> array [chirp, channel, sample]`` IF samples of the
+        ``k``-th selected frame (read when needed: captures are not loaded whole;
+        a store's frame is a lazy array whose ``shape`` is known and whose chirp
+        blocks load when sliced and passed to ``np.asarray``).
     slot_times : ndarray, shape ``[frame, chirp, slot]``
         Start time of every transmit slot's ramp on the radar clock [s].
     config : RadarConfig
@@ -172,22 +174,25 @@ def _load_store(path: str, frames: str | None, frame: int) -> CompensateInput:
         sel = [frame % n]
     else:
         sel = frame_selection(frames, n)
-    loaded = [storage.frame_from_dataset(ds, f) for f in sel]
-    fr = loaded[0]
-    if not np.iscomplexobj(np.asarray(fr.data)):
+    # One frame's samples in memory at a time: metadata now, each frame's IF data when read.
+    cfg = storage.config_from_attrs(ds.attrs)
+    arr = storage.array_from_dataset(ds)
+    if not np.issubdtype(ds["if_data"].dtype, np.complexfloating):
         raise ValueError(f"store {path!r}: if_data must be complex IF samples, got "
-                         f"{np.asarray(fr.data).dtype}")
-    times = np.stack([np.asarray(f.chirp_times, dtype=float) for f in loaded])
+                         f"{ds['if_data'].dtype}")
+    times = np.stack([np.asarray(ds["chirp_time"].isel(frame=f).values, dtype=float)
+                      for f in sel])
     imu = None
     if all(k in ds.variables for k in ("imu_time", "imu_gyro", "imu_accel")):
         imu = np.column_stack([np.asarray(ds["imu_time"].values, dtype=float),
                                np.asarray(ds["imu_gyro"].values, dtype=float),
                                np.asarray(ds["imu_accel"].values, dtype=float)])
-    arr = fr.array
-    return CompensateInput(sel, lambda k: np.asarray(loaded[k].data),
-                           slot_times(times, arr.num_slots, fr.config.slot_interval),
-                           fr.config, arr.virtual_positions, arr.tx_slot, arr.grid_shape,
-                           np.asarray(fr.lever_arm, dtype=float), imu,
+    lever = np.asarray(ds.attrs.get("lever_arm_m", [0, 0, 0]), dtype=float)
+    # read(k) stays lazy (shape known, samples loaded by the chirp blocks a caller takes)
+    return CompensateInput(sel, lambda k: ds["if_data"].isel(frame=sel[k]),
+                           slot_times(times, arr.num_slots, cfg.slot_interval),
+                           cfg, arr.virtual_positions, arr.tx_slot, arr.grid_shape,
+                           lever, imu,
                            source={"store": os.path.abspath(path)})
 
 

@@ -323,7 +323,8 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
         estimate += ("gyro_bias",)
     if inp.num_slots > 1:
         options["channel_slot"] = inp.tx_slot
-    rcs.extend(range_compress(inp.read(k))[..., : r_axis.size] for k in range(len(inp.frames)))
+    rcs.extend(range_compress(np.asarray(inp.read(k)))[..., : r_axis.size]
+               for k in range(len(inp.frames)))
     cal = calibrate_record(rcs, time_t, inp.element_positions, imu[:, 0], imu[:, 1:4],
                            imu[:, 4:7], wavelength=inp.config.center_wavelength,
                            range_axis=r_axis, estimate=estimate,

@@ -87,7 +87,7 @@ def range_profile(frame: np.ndarray, n_cells: int) -> np.ndarray:
     """
     power = np.zeros(n_cells)
     for c0 in range(0, frame.shape[0], CHIRP_BLOCK):
-        rc = range_compress(frame[c0: c0 + CHIRP_BLOCK])[..., :n_cells]
+        rc = range_compress(np.asarray(frame[c0: c0 + CHIRP_BLOCK]))[..., :n_cells]
         power += np.sum(np.abs(rc) ** 2, axis=(0, 1))
     return power
 
@@ -100,7 +100,8 @@ def gated_range_compress(frame: np.ndarray, lo: int, hi: int) -> np.ndarray:
     """
     out = np.empty(frame.shape[:2] + (hi - lo,), dtype=np.complex64)
     for c0 in range(0, frame.shape[0], CHIRP_BLOCK):
-        out[c0: c0 + CHIRP_BLOCK] = range_compress(frame[c0: c0 + CHIRP_BLOCK])[..., lo:hi]
+        block = np.asarray(frame[c0: c0 + CHIRP_BLOCK])
+        out[c0: c0 + CHIRP_BLOCK] = range_compress(block)[..., lo:hi]
     return out
 
 
