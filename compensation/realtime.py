@@ -27,8 +27,8 @@ frames with the same geometry:
 Two engines compute this: the compiled kernel ``compensation._native._ext``
 (``engine="compiled"``, the default where it is built: one fused pass per
 chirp, slot and direction chunk, OpenMP threads over those items, ``exp(j .)`` by a
-float32 polynomial after reduction to a quarter turn in float64, AVX2+FMA copy
-chosen at run time) and the NumPy engine (``engine="numpy"``, the fallback
+float32 polynomial after reduction to a quarter turn in float64, AVX-512 or
+AVX2+FMA copy chosen at run time) and the NumPy engine (``engine="numpy"``, the fallback
 where the extension is not built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow
 the steps above and give the same beams within float32 rounding.
 
@@ -66,13 +66,20 @@ except ImportError:  # pragma: no cover - depends on the build
 LINE_TOL = 1e-9
 _TWO_PI = 2.0 * np.pi
 #: Engines of :class:`RealtimeProjector`: ``"auto"`` (compiled where built, else
-#: NumPy), ``"compiled"`` (best instruction set), ``"portable"`` (compiled,
-#: x86-64-v2 copy), ``"numpy"``.
-ENGINES = ("auto", "compiled", "portable", "numpy")
+#: NumPy), ``"compiled"`` (best instruction set: AVX-512, else AVX2+FMA, else
+#: x86-64-v2), ``"avx2"`` (compiled, at most AVX2+FMA: the copy without AVX-512,
+#: the benchmark's baseline), ``"portable"`` (compiled, x86-64-v2 copy), ``"numpy"``.
+ENGINES = ("auto", "compiled", "avx2", "portable", "numpy")
+#: Request of each compiled engine to the kernel's dispatch (0 best, 1 portable, 2 <= AVX2).
+_ISA_REQUEST = {"compiled": 0, "portable": 1, "avx2": 2}
 
 
 def compiled_isa() -> str:
-    """Instruction set of the compiled kernel here: ``"avx2"``, ``"portable"`` or ``"missing"``."""
+    """Instruction set of the compiled kernel here.
+
+    ``"avx512"``, ``"avx2"``, ``"portable"`` (x86-64-v2), or ``"missing"`` where
+    the extension is not built.
+    """
     return "missing" if _ext is None else _ext.isa()
 
 
@@ -130,8 +137,8 @@ class RealtimeProjector:
     threads : int, optional
         Worker threads (default: the CPUs this process may use, at most 8).
     engine : str
-        One of :data:`ENGINES`; ``"compiled"`` and ``"portable"`` need the
-        extension ``compensation._native._ext``.
+        One of :data:`ENGINES`; ``"compiled"``, ``"avx2"`` and ``"portable"``
+        need the extension ``compensation._native._ext``.
 
     Examples
     --------
@@ -193,7 +200,7 @@ class RealtimeProjector:
         self.threads = _default_threads() if threads is None else max(1, int(threads))
         if engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
-        if engine in ("compiled", "portable") and _ext is None:
+        if engine in _ISA_REQUEST and _ext is None:
             raise ValueError(f"engine={engine!r} needs the compiled extension "
                              "compensation._native._ext, which is not built here (run `python "
                              "setup.py build_ext --inplace`), or use engine='numpy'")
@@ -206,10 +213,11 @@ class RealtimeProjector:
 
     @property
     def engine(self) -> str:
-        """Engine in use: ``"avx2"`` or ``"portable"`` (compiled kernel), or ``"numpy"``."""
-        if self._engine == "compiled":
-            return _ext.isa()
-        return self._engine
+        """Engine in use: ``"avx512"``, ``"avx2"`` or ``"portable"`` (the compiled
+        kernel's copy that runs on this CPU), or ``"numpy"``."""
+        if self._engine == "numpy":
+            return "numpy"
+        return _ext.isa(_ISA_REQUEST[self._engine])
 
     def _compiled_tables(self, p: np.ndarray, w: np.ndarray) -> dict:
         """Geometry of the compiled kernel: channels ordered slot after slot (see rt_params.h)."""
@@ -295,7 +303,7 @@ class RealtimeProjector:
         wr, wi = self._dft_planar
         _ext.gated_dft(x.ctypes.data, wr.ctypes.data, wi.ctypes.data, out.ctypes.data,
                        x.shape[0] * x.shape[1], x.shape[2], n_gate, 1,
-                       int(self._engine == "portable"))
+                       _ISA_REQUEST[self._engine])
         return out
 
     def project(self, rc, motion: PlatformMotion, *, gated: bool = False,
@@ -378,7 +386,7 @@ class RealtimeProjector:
         ptrs = np.array([a.ctypes.data for a in arrays], dtype=np.uint64)
         # the arrays above stay referenced until the call returns
         _ext.project(ints.ctypes.data, ptrs.ctypes.data, tb["dbls"].ctypes.data,
-                     int(self._engine == "portable"))
+                     _ISA_REQUEST[self._engine])
 
     def _numpy(self, xg: np.ndarray, rot: np.ndarray, disp: np.ndarray,
                out: np.ndarray) -> None:
