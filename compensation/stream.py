@@ -148,21 +148,28 @@ def _pair(item) -> tuple:
 
 @dataclass(frozen=True)
 class FrameTiming:
-    """Timing of one replayed frame [s] (wall clock, ``time.perf_counter``).
+    """Timing of one replayed frame [s].
 
     ``latency`` runs from the frame's arrival (``start + index * period``) to
     its beams; ``service`` from the start of its processing (its arrival, or
-    the end of the previous frame if that was later) to its beams.
+    the end of the previous frame if that was later) to its beams (both wall
+    clock, ``time.perf_counter``). ``cpu`` is the CPU time of the process, all
+    threads (``time.process_time``), over the same span: the frame's cost to
+    the cores, which other processes on them do not change as they change the
+    wall times.
     """
 
     index: int
     latency: float
     service: float
+    cpu: float
 
 
 def replay(stream: RealtimeStream, frames: Iterable, *, frame_period: float,
            clock: Callable[[], float] = time.perf_counter,
-           sleep: Callable[[float], None] = time.sleep) -> Iterator[tuple[BeamCube, FrameTiming]]:
+           sleep: Callable[[float], None] = time.sleep,
+           cpu_clock: Callable[[], float] = time.process_time
+           ) -> Iterator[tuple[BeamCube, FrameTiming]]:
     """Play ``(samples, motion)`` frames at their frame rate through ``stream``.
 
     Frame ``i`` arrives at ``start + i * frame_period`` (``start`` = the first
@@ -178,8 +185,9 @@ def replay(stream: RealtimeStream, frames: Iterable, *, frame_period: float,
         As :meth:`RealtimeStream.process` takes them.
     frame_period : float
         Time between frames [s] (> 0).
-    clock, sleep : callable
-        Wall clock [s] and sleep (replaceable in tests).
+    clock, sleep, cpu_clock : callable
+        Wall clock [s], sleep and CPU clock of the process [s] (replaceable in
+        tests).
     """
     if not isinstance(stream, RealtimeStream):
         raise ValueError(f"stream must be a compensation.RealtimeStream, got {type(stream)!r}")
@@ -195,9 +203,10 @@ def replay(stream: RealtimeStream, frames: Iterable, *, frame_period: float,
         if now < arrival:
             sleep(arrival - now)
             now = clock()
+        cpu0 = cpu_clock()
         beams = stream.process(samples, motion)
         done = clock()
-        yield beams, FrameTiming(i, done - arrival, done - now)
+        yield beams, FrameTiming(i, done - arrival, done - now, cpu_clock() - cpu0)
 
 
 def latency_summary(seconds, *, budget: float | None = None) -> dict:

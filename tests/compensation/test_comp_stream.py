@@ -127,7 +127,9 @@ def test_replay_paces_frames_and_measures_latency_from_arrival():
             return super().process(samples, motion)
 
     x, m = _if_frame(rng, 6), _motion(rng, 18)
-    out = list(replay(Slow(proj), [(x, m)] * 4, frame_period=0.010, clock=clock, sleep=sleep))
+    cpu = iter(np.arange(8) * 0.003)                      # 3 ms of CPU per frame
+    out = list(replay(Slow(proj), [(x, m)] * 4, frame_period=0.010, clock=clock, sleep=sleep,
+                      cpu_clock=lambda: next(cpu)))
     timing = [t for _, t in out]
     assert all(isinstance(t, FrameTiming) for t in timing)
     # frame 0 at 100.000 done 100.004; frame 1 at 100.010 done 100.035; frame 2 arrived at
@@ -136,6 +138,7 @@ def test_replay_paces_frames_and_measures_latency_from_arrival():
                                atol=1e-12)
     np.testing.assert_allclose([t.service for t in timing], [0.004, 0.025, 0.004, 0.004],
                                atol=1e-12)
+    np.testing.assert_allclose([t.cpu for t in timing], [0.003] * 4, atol=1e-12)
     np.testing.assert_allclose(slept, [0.006])
     s = latency_summary([t.latency for t in timing], budget=0.010)
     assert s["frames"] == 4 and s["p50_s"] == pytest.approx(0.016)
