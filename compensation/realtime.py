@@ -70,6 +70,10 @@ _TWO_PI = 2.0 * np.pi
 #: x86-64-v2), ``"avx2"`` (compiled, at most AVX2+FMA: the copy without AVX-512,
 #: the benchmark's baseline), ``"portable"`` (compiled, x86-64-v2 copy), ``"numpy"``.
 ENGINES = ("auto", "compiled", "avx2", "portable", "numpy")
+#: Complex products of a gated range transform (rows * samples * gates) above which
+#: the compiled DFT runs on the projector's threads (the TI frame at 8 gates: 3.1 million,
+#: one thread).
+DFT_THREADED_MACS = 8_000_000
 #: Request of each compiled engine to the kernel's dispatch (0 best, 1 portable, 2 <= AVX2).
 _ISA_REQUEST = {"compiled": 0, "portable": 1, "avx2": 2}
 
@@ -92,6 +96,27 @@ def _line(p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     return (p[0], a) if np.abs(model - p).max() <= LINE_TOL else None
 
 
+def _lattice(p: np.ndarray) -> int:
+    """Row length ``n1 >= 2`` when ``p[i1 + n1 i2] = p0 + i1 a + i2 b`` (positions ``[m, 3]``
+    [m], rows of ``n1`` channels, at least two rows), else 0."""
+    m = p.shape[0]
+    if m < 4:
+        return 0
+    a = p[1] - p[0]
+    if not np.any(np.abs(a) > LINE_TOL):
+        return 0
+    # the row length: the first channel off the line p0 + i a
+    steps = np.arange(m)[:, None] * a
+    off = np.flatnonzero(np.abs(p - p[0] - steps).max(axis=1) > LINE_TOL)
+    n1 = int(off[0]) if off.size else 0
+    if n1 < 2 or m % n1:
+        return 0
+    b = p[n1] - p[0]
+    i = np.arange(m)
+    model = p[0] + (i % n1)[:, None] * a + (i // n1)[:, None] * b
+    return n1 if np.abs(model - p).max() <= LINE_TOL else 0
+
+
 @dataclass(frozen=True)
 class _Slot:
     index: int                  # TDM slot number
@@ -99,6 +124,7 @@ class _Slot:
     positions: np.ndarray       # [m, 3] virtual positions [m]
     weight: np.ndarray          # [m] w_m / sum(w) (float32)
     line: tuple | None          # (p0, a) or None
+    lattice: int = 0            # row length n1 of a lattice p0 + i1 a + i2 b (kernel), else 0
 
 
 def _default_threads() -> int:
@@ -190,8 +216,9 @@ class RealtimeProjector:
         for s in range(self.num_slots):
             sel = np.flatnonzero(slot == s)
             if sel.size:
+                line = _line(p[sel])
                 self.slots.append(_Slot(s, sel, p[sel], (w[sel] / w.sum()).astype(np.float32),
-                                        _line(p[sel])))
+                                        line, 0 if line is not None else _lattice(p[sel])))
         self.u = grid_directions(self.azimuth, self.elevation).reshape(-1, 3)   # [D, 3]
         gb = max(1, int(gate_block))
         self.gate_blocks = [np.arange(i, min(i + gb, gates.size))
@@ -232,7 +259,9 @@ class RealtimeProjector:
                              dtype=np.int64),
             "slot_index": np.array([sl.index for sl in self.slots], dtype=np.int64),
             "slot_off": np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
-            "slot_line": np.array([sl.line is not None for sl in self.slots], dtype=np.int64),
+            # 1: line (Horner), n1 >= 2: lattice with rows of n1 (two-step Horner), 0: general
+            "slot_line": np.array([1 if sl.line is not None else sl.lattice
+                                   for sl in self.slots], dtype=np.int64),
             "block_start": np.array(blocks, dtype=np.int64),
             "pos": np.ascontiguousarray(p[order], dtype=np.float64),
             "u": [np.ascontiguousarray(self.u[:, i]) for i in range(3)],
@@ -296,13 +325,15 @@ class RealtimeProjector:
             x = x.astype(np.float32 if real else np.complex64, copy=False)
             np.matmul(x.reshape(-1, x.shape[-1]), self._dft, out=out.reshape(-1, n_gate))
             return out
-        # compiled, one thread: no BLAS call and no thread barrier (thread pools busy-wait
-        # at their barriers, which costs several times this small product's CPU time on a
-        # loaded machine)
+        # compiled, no BLAS call; one thread below DFT_THREADED_MACS (a thread barrier
+        # busy-waits, which costs several times a small product's CPU time on a loaded
+        # machine), the projector's threads above (the paper frame: 61 million)
         x = np.ascontiguousarray(x, dtype=np.complex64)
         wr, wi = self._dft_planar
+        rows = x.shape[0] * x.shape[1]
+        threads = self.threads if rows * x.shape[2] * n_gate > DFT_THREADED_MACS else 1
         _ext.gated_dft(x.ctypes.data, wr.ctypes.data, wi.ctypes.data, out.ctypes.data,
-                       x.shape[0] * x.shape[1], x.shape[2], n_gate, 1,
+                       rows, x.shape[2], n_gate, threads,
                        _ISA_REQUEST[self._engine])
         return out
 

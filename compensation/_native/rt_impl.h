@@ -16,7 +16,10 @@
 //   -2 k (rho_g - rho_mid) = a (r - R_g) (1 + (t + t_g) / (L + L_g)) / (L_g + t_g),
 //   a = -2 k e / (L + t), t_g = R_g - q, L_g = sqrt(t_g^2 + e)   (no cancellation),
 //   exp(j .) by its Taylor series while |phase| <= small, else in float64 by expj;
-//   channel sum by Horner's rule in z (line) or a sum of steering x data;
+//   channel sum by Horner's rule in z (line), by Horner's rule in two steps
+//   (z_a = exp(j k v . a) along rows of n1 channels, z_b = exp(j k v . b) across
+//   them) for a slot on a lattice p_(i1 + n1 i2) = p_0 + i1 a + i2 b, or a sum of
+//   steering x data for any other layout;
 //   accumulated over slots into out[n, g, direction].
 #include <algorithm>
 #include <cmath>
@@ -257,17 +260,22 @@ static void project(const rt::Params& P) {
                 const double* R = P.rot + 9 * pose;
                 const double* d = P.disp + 3 * pose;
                 const int64_t m0 = P.slot_off[s], m = P.slot_off[s + 1] - m0;
-                const bool line = P.slot_line[s] != 0;
+                const bool line = P.slot_line[s] == 1;
+                const int64_t n1 = P.slot_line[s] >= 2 ? P.slot_line[s] : 0;   // lattice rows
+                const bool grid = n1 >= 2;
                 const double dx = d[0], dy = d[1], dz = d[2];
                 const double dd = dx * dx + dy * dy + dz * dz;
                 // rotated positions R p and d . R p: (p_0, a) on a line, else every channel
-                const int64_t nv = line ? 2 : m;
+                // p_0 and the step a (line), p_0, a and b (lattice), else every channel
+                const int64_t nv = line ? 2 : (grid ? 3 : m);
                 for (int64_t i = 0; i < nv; ++i) {
                     double v[3];
                     const double* p = P.pos + 3 * (m0 + i);
                     for (int c = 0; c < 3; ++c)
                         v[c] = (line && i == 1) ? (m > 1 ? P.pos[3 * (m0 + 1) + c] - P.pos[3 * m0 + c]
                                                          : 0.0)
+                             : (grid && i == 1) ? P.pos[3 * (m0 + 1) + c] - P.pos[3 * m0 + c]
+                             : (grid && i == 2) ? P.pos[3 * (m0 + n1) + c] - P.pos[3 * m0 + c]
                                                 : p[c];
                     for (int c = 0; c < 3; ++c)
                         rp[3 * i + c] = R[3 * c] * v[0] + R[3 * c + 1] * v[1] + R[3 * c + 2] * v[2];
@@ -313,6 +321,27 @@ static void project(const rt::Params& P) {
                         for (int64_t j = 0; j < nd; ++j) {
                             rotate(xa[j], qa[j], br[j], bi[j]);
                             rotate(xb[j], qb[j], zr[j], zi[j]);
+                        }
+                    } else if (grid) {
+                        // phases of p_0 (with the range phase), a and b; z_b into (sr, si)
+                        const double cx = rp[6], cy = rp[7], cz = rp[8], c0 = dp[2];
+                        int32_t* qc = qm;
+                        for (int64_t j = 0; j < nd; ++j) {
+                            RT_GEOMETRY
+                            const double phi0 = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0)
+                                                * inv + 2.0 * k * (q - h);
+                            const double alpha = (r * (ux[j] * bx + uy[j] * by + uz[j] * bz) - b0)
+                                                 * inv;
+                            const double beta = (r * (ux[j] * cx + uy[j] * cy + uz[j] * cz) - c0)
+                                                * inv;
+                            reduce(phi0, xa[j], qa[j]);
+                            reduce(alpha, xb[j], qb[j]);
+                            reduce(beta, sr[j], qc[j]);
+                        }
+                        for (int64_t j = 0; j < nd; ++j) {
+                            rotate(xa[j], qa[j], br[j], bi[j]);
+                            rotate(xb[j], qb[j], zr[j], zi[j]);
+                            rotate(sr[j], qc[j], sr[j], si[j]);
                         }
                     } else {
                         for (int64_t j = 0; j < nd; ++j) {
@@ -373,6 +402,41 @@ static void project(const rt::Params& P) {
                                     const float ar = accr[j], ai = acci[j];
                                     accr[j] = ar * zr[j] - ai * zi[j] + yr;
                                     acci[j] = ar * zi[j] + ai * zr[j] + yi;
+                                }
+                            }
+                            for (int64_t j = 0; j < nd; ++j) {
+                                const float ar = accr[j] * br[j] - acci[j] * bi[j];
+                                const float ai = accr[j] * bi[j] + acci[j] * br[j];
+                                accr[j] = ar; acci[j] = ai;
+                            }
+                        } else if (grid) {
+                            // rows by Horner's rule in z_a, then across rows in z_b, times
+                            // exp(j phi(p_0)); (tr, ti) holds the row being summed
+                            const float* wr = sr;
+                            const float* wi = si;
+                            float* tr = sr + CH;
+                            float* ti = si + CH;
+                            const int64_t n2 = m / n1;
+                            for (int64_t i2 = n2 - 1; i2 >= 0; --i2) {
+                                const float* xrow = xg + 2 * G * n1 * i2;
+                                const float xr = xrow[2 * G * (n1 - 1)], xi = xrow[2 * G * (n1 - 1) + 1];
+                                for (int64_t j = 0; j < nd; ++j) { tr[j] = xr; ti[j] = xi; }
+                                for (int64_t i1 = n1 - 2; i1 >= 0; --i1) {
+                                    const float yr = xrow[2 * G * i1], yi = xrow[2 * G * i1 + 1];
+                                    for (int64_t j = 0; j < nd; ++j) {
+                                        const float ar = tr[j], ai = ti[j];
+                                        tr[j] = ar * zr[j] - ai * zi[j] + yr;
+                                        ti[j] = ar * zi[j] + ai * zr[j] + yi;
+                                    }
+                                }
+                                if (i2 == n2 - 1) {
+                                    for (int64_t j = 0; j < nd; ++j) { accr[j] = tr[j]; acci[j] = ti[j]; }
+                                } else {
+                                    for (int64_t j = 0; j < nd; ++j) {
+                                        const float ar = accr[j], ai = acci[j];
+                                        accr[j] = ar * wr[j] - ai * wi[j] + tr[j];
+                                        acci[j] = ar * wi[j] + ai * wr[j] + ti[j];
+                                    }
                                 }
                             }
                             for (int64_t j = 0; j < nd; ++j) {

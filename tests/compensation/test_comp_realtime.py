@@ -94,8 +94,9 @@ def test_tdm_ti_layout_equals_direct_engine(threads, gate_block, engine):
 
 @pytest.mark.parametrize("engine", ENGINE_CASES)
 def test_grid_layout_with_taper_and_large_motion_equals_direct_engine(engine):
-    """8 x 8 UPA in one slot (matrix-product form), taper, 10 cm displacements at 1-3 m
-    (per-gate phases beyond the Taylor range, so the sin/cos path is used too)."""
+    """8 x 8 UPA in one slot (the kernel's lattice form, the NumPy engine's matrix product),
+    taper, 10 cm displacements at 1-3 m (per-gate phases beyond the Taylor range, so the
+    sin/cos path is used too)."""
     rng = np.random.default_rng(5)
     ix, iy = np.divmod(np.arange(64), 8)
     p = np.stack([ix * LAM / 2, iy * LAM / 2, np.zeros(64)], axis=1)
@@ -162,6 +163,42 @@ def test_bad_frame_is_refused():
         proj.project(bad, _motion(rng, 12))
     with pytest.raises(ValueError, match="PlatformMotion"):
         proj.project(rc, "motion")
+
+
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+@pytest.mark.parametrize("rows, cols, jitter", [(20, 20, 0.0), (5, 6, 0.0), (6, 6, 2e-4)])
+def test_lattice_and_general_layouts_equal_direct_engine(rows, cols, jitter, engine):
+    """A 20 x 20 lattice (the paper array: 19 + 19 Horner steps in float32) and a 5 x 6 one
+    (rows of 6) take the kernel's lattice form; the same 6 x 6 layout with its positions
+    moved by up to 0.2 mm is no lattice and takes the general form (one steering phase per
+    channel). 8 cm displacements at 1-3 m, 8 gates in one block."""
+    from compensation.realtime import _lattice
+
+    rng = np.random.default_rng(11)
+    m = rows * cols
+    i2, i1 = np.divmod(np.arange(m), cols)
+    p = np.stack([i2 * 0.6 * LAM, i1 * LAM / 2, np.zeros(m)], axis=1)
+    p += rng.uniform(-jitter, jitter, p.shape)
+    assert _lattice(p) == (0 if jitter else cols)
+    n, r = 4, 24
+    motion = _motion(rng, n, disp_m=0.08, angle_rad=0.2)
+    _compare(_cube(rng, n, m, r), p, motion, wavelength=LAM, range_axis=np.linspace(1.0, 3.0, r),
+             azimuth=np.deg2rad(np.linspace(-40, 40, 9)), elevation=np.deg2rad([-10.0, 5.0, 20.0]),
+             range_gates=np.arange(8, 16), gate_block=8, engine=engine)
+
+
+def test_lattice_detection():
+    """Row-major lattices only: a line, a ragged count, a missing row, a shear are not."""
+    from compensation.realtime import _lattice
+
+    i2, i1 = np.divmod(np.arange(12), 4)
+    grid = np.stack([i1 * 1e-3, i2 * 2e-3, np.zeros(12)], axis=1)
+    assert _lattice(grid) == 4
+    sheared = grid + np.stack([i2 * 0.5e-3, np.zeros(12), (i1 * i2) * 1e-4], axis=1)
+    assert _lattice(sheared) == 0                          # not p0 + i1 a + i2 b
+    assert _lattice(grid[:10]) == 0                        # 10 channels in rows of 4
+    assert _lattice(grid[:4]) == 0                         # one row: a line, not a lattice
+    assert _lattice(np.zeros((6, 3))) == 0                 # no step
 
 
 @pytest.mark.parametrize("engine", ENGINE_CASES)
@@ -270,6 +307,22 @@ def test_gated_range_transform_is_the_range_fft_at_the_gates(engine, real):
         proj.project(got, motion, gated=True, out=np.empty(full.shape, np.complex128))
     with pytest.raises(ValueError, match="not a scipy.signal window name"):
         proj.gated_range_transform(x, window="no-such-window")
+
+
+@pytest.mark.skipif(not BUILT, reason="extension compensation._native._ext not built")
+def test_gated_range_transform_on_threads_equals_one_thread(monkeypatch):
+    """Above DFT_THREADED_MACS the compiled DFT runs on the projector's threads: each row is
+    the same sum, so the result is the one-thread result, bit for bit."""
+    import compensation.realtime as rt
+
+    rng = np.random.default_rng(12)
+    p, slot = _ti_positions()
+    x = _cube(rng, 9, 12, 96)
+    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM, range_axis=np.arange(96.0),
+                             azimuth=[0.0], elevation=[0.0], range_gates=[3, 4, 50], threads=2)
+    one = proj.gated_range_transform(x).copy()
+    monkeypatch.setattr(rt, "DFT_THREADED_MACS", 0)
+    np.testing.assert_array_equal(proj.gated_range_transform(x), one)
 
 
 def test_bench_doppler_power_buffers_follow_each_frame():

@@ -191,6 +191,16 @@ def test_bench_stream_json_has_the_percentiles_per_gate_count():
         assert case["realtime_factor_p95"] > 0 and case["threads"] == 1
         assert set(case["stages"]) == {"gated_range_transform", "strapdown", "projection",
                                        "doppler_and_power"}
+        assert case["cpu"]["frames"] == 3 and case["cpu"]["p50_s"] > 0
+        # the baseline stream (engine "avx2") where it runs another copy than the default
+        if case["engine"] in ("avx512",):
+            assert case["baseline"]["engine"] == "avx2"
+            assert case["baseline"]["service"]["frames"] == 3
+            assert case["speedup_p95"] > 0 and case["cpu_ratio_p50"] > 0
+        else:
+            assert "baseline" not in case and got["baseline"].startswith("skipped")
     with pytest.raises(ValueError, match="frames must be a positive count, got 0"):
         bench_stream(frames=0)
+    with pytest.raises(ValueError, match="baseline must be one of"):
+        bench_stream(frames=1, baseline="fast")
 
