@@ -159,6 +159,11 @@ static void fix_large(int64_t nd, double rg, double r, double k, float small, co
     }
 }
 
+// Horner steps of a lattice row per pass over the directions (the paper frame's
+// projection, 8 chirps, one thread: 1.41 CPU ms with 4 against 2.88 with 1; 6 and 8
+// were no faster).
+constexpr int ROW_STEPS = 4;
+
 // Largest slot size with a fused (compile-time) Horner loop.
 constexpr int64_t FUSED_MAX = 8;
 
@@ -424,7 +429,28 @@ static void project(const rt::Params& P) {
                                 const float* xrow = xg + 2 * G * n1 * i2;
                                 const float xr = xrow[2 * G * (n1 - 1)], xi = xrow[2 * G * (n1 - 1) + 1];
                                 for (int64_t j = 0; j < nd; ++j) { tr[j] = xr; ti[j] = xi; }
-                                for (int64_t i1 = n1 - 2; i1 >= 0; --i1) {
+                                // ROW_STEPS Horner steps per pass over the directions: the
+                                // row's partial sums stay in registers between them
+                                int64_t i1 = n1 - 2;
+                                for (; i1 >= ROW_STEPS - 1; i1 -= ROW_STEPS) {
+                                    float yr[ROW_STEPS], yi[ROW_STEPS];
+                                    for (int u = 0; u < ROW_STEPS; ++u) {
+                                        yr[u] = xrow[2 * G * (i1 - u)];
+                                        yi[u] = xrow[2 * G * (i1 - u) + 1];
+                                    }
+                                    for (int64_t j = 0; j < nd; ++j) {
+                                        float ar = tr[j], ai = ti[j];
+                                        const float cr = zr[j], cj = zi[j];
+                                        for (int u = 0; u < ROW_STEPS; ++u) {
+                                            const float nr = ar * cr - ai * cj + yr[u];
+                                            ai = ar * cj + ai * cr + yi[u];
+                                            ar = nr;
+                                        }
+                                        tr[j] = ar;
+                                        ti[j] = ai;
+                                    }
+                                }
+                                for (; i1 >= 0; --i1) {
                                     const float yr = xrow[2 * G * i1], yi = xrow[2 * G * i1 + 1];
                                     for (int64_t j = 0; j < nd; ++j) {
                                         const float ar = tr[j], ai = ti[j];
