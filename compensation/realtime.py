@@ -165,6 +165,13 @@ class RealtimeProjector:
     engine : str
         One of :data:`ENGINES`; ``"compiled"``, ``"avx2"`` and ``"portable"``
         need the extension ``compensation._native._ext``.
+    factorised : bool
+        Sum the channels of a slot on a line (both engines) or on a lattice
+        (rows of equally spaced channels, ``p0 + i1 a + i2 b`` in row-major
+        order; compiled kernel) by Horner's rule in the steering of the steps,
+        with 2 or 3 steering phases per chirp and direction. False: one
+        steering phase per channel for every slot (the general form; slower,
+        the same beams within float32 rounding), e.g. as a baseline.
 
     Examples
     --------
@@ -181,7 +188,7 @@ class RealtimeProjector:
     def __init__(self, element_positions, *, wavelength: float, range_axis, azimuth, elevation,
                  range_gates, channel_slot=None, weights=None, gate_block: int = 8,
                  chirp_block: int = 8, threads: int | None = None,
-                 engine: str = "auto") -> None:
+                 engine: str = "auto", factorised: bool = True) -> None:
         p = finite_array("element_positions", element_positions, ndim=2)
         if p.shape[1] != 3 or p.shape[0] < 1:
             raise ValueError(f"element_positions must have shape [channel, 3], got {p.shape}")
@@ -216,9 +223,10 @@ class RealtimeProjector:
         for s in range(self.num_slots):
             sel = np.flatnonzero(slot == s)
             if sel.size:
-                line = _line(p[sel])
+                line = _line(p[sel]) if factorised else None
+                lattice = _lattice(p[sel]) if factorised and line is None else 0
                 self.slots.append(_Slot(s, sel, p[sel], (w[sel] / w.sum()).astype(np.float32),
-                                        line, 0 if line is not None else _lattice(p[sel])))
+                                        line, lattice))
         self.u = grid_directions(self.azimuth, self.elevation).reshape(-1, 3)   # [D, 3]
         gb = max(1, int(gate_block))
         self.gate_blocks = [np.arange(i, min(i + gb, gates.size))

@@ -182,9 +182,17 @@ def test_lattice_and_general_layouts_equal_direct_engine(rows, cols, jitter, eng
     assert _lattice(p) == (0 if jitter else cols)
     n, r = 4, 24
     motion = _motion(rng, n, disp_m=0.08, angle_rad=0.2)
-    _compare(_cube(rng, n, m, r), p, motion, wavelength=LAM, range_axis=np.linspace(1.0, 3.0, r),
-             azimuth=np.deg2rad(np.linspace(-40, 40, 9)), elevation=np.deg2rad([-10.0, 5.0, 20.0]),
-             range_gates=np.arange(8, 16), gate_block=8, engine=engine)
+    rc = _cube(rng, n, m, r)
+    kw = dict(wavelength=LAM, range_axis=np.linspace(1.0, 3.0, r),
+              azimuth=np.deg2rad(np.linspace(-40, 40, 9)), elevation=np.deg2rad([-10.0, 5.0, 20.0]),
+              range_gates=np.arange(8, 16), gate_block=8, engine=engine)
+    _compare(rc, p, motion, **kw)
+    # factorised=False: every channel with its own steering phase, the same beams
+    general = RealtimeProjector(p, factorised=False, **kw)
+    assert all(sl.line is None and sl.lattice == 0 for sl in general.slots)
+    a = RealtimeProjector(p, **kw).project(rc, motion).data
+    b = general.project(rc, motion).data
+    assert np.abs(a - b).max() < RT_TOL * np.abs(b).max()
 
 
 def test_lattice_detection():
