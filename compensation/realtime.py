@@ -20,7 +20,10 @@ frames with the same geometry:
   cancellation-free form ``rho = -q + e / (L + R - q)``, ``e = |d|^2 - q^2``)
   and the channel sum, by Horner's rule in ``z = exp(j k v . a)`` for a slot on
   a line (one ``cos``/``sin`` pair per chirp, slot and direction instead of one
-  per channel) or by a float32 matrix product for any other layout;
+  per channel), in the compiled kernel by Horner's rule along and across the
+  rows of a slot on a lattice (``p0 + i1 a + i2 b``, row-major: three pairs per
+  chirp and direction, e.g. the 20 x 20 paper array), or by a float32 matrix
+  product for any other layout (``factorised=False``: for every slot);
 * chirp blocks run on ``threads`` worker threads (NumPy releases the GIL in
   its array loops).
 
@@ -28,13 +31,16 @@ Two engines compute this: the compiled kernel ``compensation._native._ext``
 (``engine="compiled"``, the default where it is built: one fused pass per
 chirp, slot and direction chunk, OpenMP threads over those items, ``exp(j .)`` by a
 float32 polynomial after reduction to a quarter turn in float64, AVX-512 or
-AVX2+FMA copy chosen at run time) and the NumPy engine (``engine="numpy"``, the fallback
-where the extension is not built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow
-the steps above and give the same beams within float32 rounding.
+AVX2+FMA copy chosen at run time, ``engine="avx2"`` for the latter) and the
+NumPy engine (``engine="numpy"``, the fallback where the extension is not
+built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow the steps above and give the
+same beams within float32 rounding.
 
 Cost per frame: ``chirp * slot * direction * (2 sincos + ~40 flops) + chirp *
 slot * gate * direction * (2 sincos + ~20 flops)``; a gate block whose gates
-all lie at its focal range (a block of one gate) has no per-gate phase.
+all lie at its focal range (a block of one gate) has no per-gate phase. A
+slot of ``m`` channels off a line adds ``m`` sincos per chirp and direction
+(3 on a lattice in the compiled kernel) and ``m`` complex products per gate.
 
 For a stream of frames: :meth:`RealtimeProjector.gated_range_transform` gives
 the range transform of the IF samples at the gated bins only (a DFT of those
