@@ -29,7 +29,8 @@ frames with the same geometry:
 
 Two engines compute this: the compiled kernel ``compensation._native._ext``
 (``engine="compiled"``, the default where it is built: one fused pass per
-chirp, slot and direction chunk, OpenMP threads over those items, ``exp(j .)`` by a
+chirp, slot and direction chunk, ``threads`` threads started per call taking
+those items in turn, ``exp(j .)`` by a
 float32 polynomial after reduction to a quarter turn in float64, AVX-512 or
 AVX2+FMA copy chosen at run time, ``engine="avx2"`` for the latter) and the
 NumPy engine (``engine="numpy"``, the fallback where the extension is not

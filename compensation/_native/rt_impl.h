@@ -1,10 +1,10 @@
 // Real-time exact rigid-body projection kernel (the model of
 // compensation.realtime.RealtimeProjector, whose NumPy engine is the reference).
 // Included once per instruction set with RT_NS defined (see rt_*.cpp); each copy
-// is compiled for its own target (portable x86-64-v2, or AVX2+FMA) and
+// is compiled for its own target (portable x86-64-v2, AVX2+FMA or AVX-512) and
 // dispatched at run time.
 //
-// One work item = (chirp n, chunk of CH directions); OpenMP threads take items.
+// One work item = (chirp n, chunk of CH directions); threads take items in turn.
 // For each TDM slot s (pose R_n,s, displacement d_n,s) and gate block (focal
 // range r), per direction u (float64):
 //   q = u . d, e = max(|d|^2 - q^2, 0), t = r - q, L = sqrt(t^2 + e) = |r u - d|
@@ -22,8 +22,10 @@
 //   steering x data for any other layout;
 //   accumulated over slots into out[n, g, direction].
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <thread>
 #include <vector>
 #include "rt_params.h"
 
@@ -216,14 +218,35 @@ __attribute__((noinline)) static void focal_phases(
     }
 }
 
+// Runs work() on `threads` threads (the calling one and threads - 1 started for this
+// call, joined before the return). Threads started per call rather than an OpenMP
+// team: a team's threads spin after the parallel region (libgomp's default wait
+// policy, milliseconds per frame), taking the cores the caller's next steps need on
+// a loaded machine; starting a thread costs tens of microseconds per frame.
+template <class F>
+static void run_threads(int64_t threads, F& work) {
+    std::vector<std::thread> pool;
+    for (int64_t t = 1; t < threads; ++t) {
+        try {
+            pool.emplace_back([&work] { work(); });
+        } catch (...) {   // no more threads to be had: the running ones take every item
+            break;
+        }
+    }
+    work();
+    for (auto& th : pool) th.join();
+}
+
 static void project(const rt::Params& P) {
     const int64_t nchunk = (P.D + CH - 1) / CH;
     const int64_t items = P.N * nchunk;
-    const double k = P.k;
-    const float small = (float)P.small;
-    const int64_t G = P.G, D = P.D, Mm = std::max<int64_t>(P.M_max, 1);
-#pragma omp parallel num_threads((int)P.threads)
-    {
+    std::atomic<int64_t> next{0};   // the next work item
+    auto work = [&]() {
+        // the scalars as locals of the thread: captured by reference, a double such as k
+        // could alias the stores into the double buffers, and the loops would not vectorise
+        const double k = P.k;
+        const float small = (float)P.small;
+        const int64_t G = P.G, D = P.D, Mm = std::max<int64_t>(P.M_max, 1);
         std::vector<double> dbuf(4 * CH);
         std::vector<float> fbuf(16 * CH + 2 * Mm * CH);
         std::vector<int32_t> qbuf((2 + Mm) * CH);   // quarter turns of reduce
@@ -254,8 +277,8 @@ static void project(const rt::Params& P) {
         int32_t* qb = qa + CH;
         int32_t* qm = qb + CH;      // [m][CH] per-channel quarter turns
         const Focus F{dq, de, fq, fe, ft, fL, fA};
-#pragma omp for schedule(dynamic, 1)
-        for (int64_t it = 0; it < items; ++it) {
+        for (int64_t it = next.fetch_add(1, std::memory_order_relaxed); it < items;
+             it = next.fetch_add(1, std::memory_order_relaxed)) {
             const int64_t n = it / nchunk;
             const int64_t j0 = (it % nchunk) * CH;
             const int64_t nd = std::min(CH, D - j0);
@@ -499,38 +522,44 @@ static void project(const rt::Params& P) {
                 for (int64_t j = 0; j < nd; ++j) { o[2 * j] = gr[j]; o[2 * j + 1] = gi[j]; }
             }
         }
-    }
+    };
+    run_threads(std::min(P.threads, items), work);
 }
 
 // Gated range transform: out[r, g] = sum_k x[r, k] W[g, k] for rows r of complex
 // samples x [R, K] (complex64, interleaved) and the window-weighted DFT rows
 // W [G, K] given planar (wr, wi, float32). Each thread de-interleaves one row
-// into (xr, xi) so that the G dot products run at full vector width.
+// into (xr, xi) so that the G dot products run at full vector width. Threads take
+// blocks of DFT_ROWS rows in turn.
+constexpr int64_t DFT_ROWS = 64;
+
 static void gated_dft(const float* x, const float* wr, const float* wi, float* out, int64_t R,
                       int64_t K, int64_t G, int64_t threads) {
-#pragma omp parallel num_threads((int)threads)
-    {
+    std::atomic<int64_t> next{0};   // first row of the next block
+    auto work = [&]() {
         std::vector<float> buf(2 * K);
         float* xr = buf.data();
         float* xi = xr + K;
-#pragma omp for schedule(static)
-        for (int64_t r = 0; r < R; ++r) {
-            const float* row = x + 2 * r * K;
-            for (int64_t k = 0; k < K; ++k) { xr[k] = row[2 * k]; xi[k] = row[2 * k + 1]; }
-            for (int64_t g = 0; g < G; ++g) {
-                const float* a = wr + g * K;
-                const float* b = wi + g * K;
-                float sr = 0.0f, si = 0.0f;
+        for (int64_t r0 = next.fetch_add(DFT_ROWS); r0 < R; r0 = next.fetch_add(DFT_ROWS)) {
+            for (int64_t r = r0; r < std::min(R, r0 + DFT_ROWS); ++r) {
+                const float* row = x + 2 * r * K;
+                for (int64_t k = 0; k < K; ++k) { xr[k] = row[2 * k]; xi[k] = row[2 * k + 1]; }
+                for (int64_t g = 0; g < G; ++g) {
+                    const float* a = wr + g * K;
+                    const float* b = wi + g * K;
+                    float sr = 0.0f, si = 0.0f;
 #pragma omp simd reduction(+ : sr, si)
-                for (int64_t k = 0; k < K; ++k) {
-                    sr += xr[k] * a[k] - xi[k] * b[k];
-                    si += xr[k] * b[k] + xi[k] * a[k];
+                    for (int64_t k = 0; k < K; ++k) {
+                        sr += xr[k] * a[k] - xi[k] * b[k];
+                        si += xr[k] * b[k] + xi[k] * a[k];
+                    }
+                    out[2 * (r * G + g)] = sr;
+                    out[2 * (r * G + g) + 1] = si;
                 }
-                out[2 * (r * G + g)] = sr;
-                out[2 * (r * G + g) + 1] = si;
             }
         }
-    }
+    };
+    run_threads(std::min(threads, (R + DFT_ROWS - 1) / DFT_ROWS), work);
 }
 
 }  // namespace RT_NS

@@ -427,6 +427,8 @@ def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
         "clock": "wall (time.perf_counter), every frame (no best-of)",
         "cpu_count": os.cpu_count(), "cpus_of_process": cpus, "compiled_kernel": compiled_isa(),
         "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "default"),
+        "threading": "the compiled kernel starts its threads per call and joins them (no "
+                     "OpenMP team: nothing spins between frames, whatever OMP_WAIT_POLICY)",
         "included": ["Hann range transform of the raw complex64 IF frame at the gated bins "
                      "(DFT of those bins, compiled, one thread)",
                      "strapdown of the frame's IMU samples to its 384 slot poses",
@@ -615,12 +617,7 @@ def _table(result: dict) -> str:
 
 
 def main(argv=None) -> int:
-    """``python -m raysim.bench.realtime``: :func:`bench_stream`, a table, JSON with ``--out``.
-
-    Unless ``OMP_WAIT_POLICY`` is set it sets ``passive`` before the kernel
-    loads (a waiting OpenMP thread then sleeps instead of spinning on a core
-    the calling thread needs, as a deployment on shared cores should run).
-    """
+    """``python -m raysim.bench.realtime``: :func:`bench_stream`, a table, JSON with ``--out``."""
     import argparse
     import json
 
@@ -646,7 +643,6 @@ def main(argv=None) -> int:
         ap.error(f"--gates must be comma-separated integers, got {args.gates!r}")
     if min(gates) < 1 or args.frames < 1 or (args.threads is not None and args.threads < 1):
         ap.error("--gates, --frames and --threads must be positive")
-    os.environ.setdefault("OMP_WAIT_POLICY", "passive")
     result = bench_stream(frames=args.frames, gate_counts=gates, threads=args.threads,
                           paper=not args.no_paper,
                           baseline=None if args.baseline == "none" else args.baseline)
