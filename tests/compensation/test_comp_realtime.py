@@ -318,6 +318,23 @@ def test_gated_range_transform_is_the_range_fft_at_the_gates(engine, real):
 
 
 @pytest.mark.skipif(not BUILT, reason="extension compensation._native._ext not built")
+def test_kernel_beams_do_not_depend_on_the_thread_count():
+    """Each (chirp, direction chunk) item is computed whole by one thread: 1, 2 and 5
+    threads (more than the items of a chirp) give the same beams, bit for bit."""
+    rng = np.random.default_rng(13)
+    p, slot = _ti_positions()
+    n, r = 5, 20
+    motion = _motion(rng, 3 * n)
+    rc = _cube(rng, n, 12, r)
+    kw = dict(channel_slot=slot, wavelength=LAM, range_axis=np.linspace(2.0, 4.0, r),
+              azimuth=np.deg2rad(np.linspace(-50, 50, 23)), elevation=np.deg2rad([0.0, 9.0]),
+              range_gates=[3, 4, 5])
+    beams = [RealtimeProjector(p, threads=t, **kw).project(rc, motion).data for t in (1, 2, 5)]
+    np.testing.assert_array_equal(beams[0], beams[1])
+    np.testing.assert_array_equal(beams[0], beams[2])
+
+
+@pytest.mark.skipif(not BUILT, reason="extension compensation._native._ext not built")
 def test_gated_range_transform_on_threads_equals_one_thread(monkeypatch):
     """Above DFT_THREADED_MACS the compiled DFT runs on the projector's threads: each row is
     the same sum, so the result is the one-thread result, bit for bit."""
