@@ -155,8 +155,8 @@ class FrameTiming:
     the end of the previous frame if that was later) to its beams (both wall
     clock, ``time.perf_counter``). ``cpu`` is the CPU time of the process, all
     threads (``time.process_time``), over the same span: the frame's cost to
-    the cores, which other processes on them do not change as they change the
-    wall times.
+    the cores, which other processes on them change far less than the wall
+    times.
     """
 
     index: int
