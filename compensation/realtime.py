@@ -315,6 +315,13 @@ class RealtimeProjector:
         ndarray, shape ``[chirp, channel, gate]``, complex64
             Input of :meth:`project` with ``gated=True`` (``out`` if given).
         """
+        return self._range_job(samples, window, out, start=False)()
+
+    def _range_job(self, samples, window, out, *, start: bool):
+        """:meth:`gated_range_transform` as a job: a callable with no argument returning
+        its result. With ``start`` and the compiled kernel on complex samples the DFT
+        runs on a thread of its own meanwhile (the callable waits for it); else it is
+        done before the return."""
         x = np.asarray(samples)
         real = not np.iscomplexobj(x)
         bins = x.shape[-1] // 2 if real and x.ndim == 3 else (x.shape[-1] if x.ndim == 3 else 0)
@@ -339,7 +346,7 @@ class RealtimeProjector:
         if real or self._engine == "numpy":
             x = x.astype(np.float32 if real else np.complex64, copy=False)
             np.matmul(x.reshape(-1, x.shape[-1]), self._dft, out=out.reshape(-1, n_gate))
-            return out
+            return lambda: out
         # compiled, no BLAS call; one thread below DFT_THREADED_MACS (a thread barrier
         # busy-waits, which costs several times a small product's CPU time on a loaded
         # machine), the projector's threads above (the paper frame: 61 million)
@@ -347,10 +354,17 @@ class RealtimeProjector:
         wr, wi = self._dft_planar
         rows = x.shape[0] * x.shape[1]
         threads = self.threads if rows * x.shape[2] * n_gate > DFT_THREADED_MACS else 1
-        _ext.gated_dft(x.ctypes.data, wr.ctypes.data, wi.ctypes.data, out.ctypes.data,
-                       rows, x.shape[2], n_gate, threads,
-                       _ISA_REQUEST[self._engine])
-        return out
+        args = (x.ctypes.data, wr.ctypes.data, wi.ctypes.data, out.ctypes.data, rows,
+                x.shape[2], n_gate, threads, _ISA_REQUEST[self._engine])
+        if not start:
+            _ext.gated_dft(*args)
+            return lambda: out
+        job = _ext.gated_dft_start(*args)
+
+        def result(arrays=(x, wr, wi, out)):   # the arrays stay alive until the join
+            _ext.join(job)
+            return arrays[-1]
+        return result
 
     def project(self, rc, motion: PlatformMotion, *, gated: bool = False,
                 out: np.ndarray | None = None, chirp_weights=None) -> BeamCube:

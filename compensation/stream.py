@@ -9,7 +9,9 @@ e.g. the strapdown of the frame's IMU samples). Per frame it
 1. takes the range transform at the gated bins only
    (:meth:`RealtimeProjector.gated_range_transform`: a DFT of those bins,
    ``sample * gate`` complex products per chirp and channel instead of a whole
-   FFT), into a buffer kept across frames;
+   FFT), into a buffer kept across frames; when ``motion`` is a callable (the
+   strapdown of the frame's IMU samples), the compiled kernel runs this DFT on
+   a thread of its own while the callable runs;
 2. projects those bins onto the global grid
    (:meth:`RealtimeProjector.project` with ``gated=True``), into a beam buffer
    kept across frames.
@@ -107,8 +109,8 @@ class RealtimeStream:
             Raw IF samples of the frame.
         motion : PlatformMotion or callable
             Pose of every transmit slot (``chirp * slots`` poses, chirp major),
-            or a callable with no argument returning it (called once, after the
-            range transform).
+            or a callable with no argument returning it (called once, while the
+            compiled kernel takes the range transform on a thread of its own).
 
         Returns
         -------
@@ -121,9 +123,15 @@ class RealtimeStream:
             raise ValueError(f"samples must be an IF frame [chirp, channel, sample], got an "
                              f"array of shape {x.shape}")
         gated, beams = self._buffers(x.shape[0])
-        self.projector.gated_range_transform(x, window=self.window, out=gated)
         if callable(motion) and not isinstance(motion, PlatformMotion):
-            motion = motion()
+            # the range transform on a thread of the kernel while Python integrates the poses
+            job = self.projector._range_job(x, self.window, gated, start=True)
+            try:
+                motion = motion()
+            finally:
+                job()
+        else:
+            self.projector.gated_range_transform(x, window=self.window, out=gated)
         out = self.projector.project(gated, motion, gated=True,
                                      out=None if self.copy else beams,
                                      chirp_weights=self.chirp_weights)

@@ -6,10 +6,13 @@
 // them and keeps the arrays alive. isa: 0 = best available, 1 = portable,
 // 2 = at most AVX2 (the best copy without AVX-512).
 // gated_dft(...): the range transform at the gated bins (see rt_impl.h).
-// Releases the GIL.
+// gated_dft_start(...) / join(handle): the same on a thread of its own, so that
+// the caller runs Python (e.g. the strapdown of the frame) meanwhile; the
+// caller keeps the arrays alive until join. Release the GIL.
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <cstdint>
+#include <thread>
 #include "rt_params.h"
 
 namespace rt {
@@ -112,6 +115,60 @@ static PyObject* py_gated_dft(PyObject*, PyObject* args) {
     Py_RETURN_NONE;
 }
 
+// A started range transform: its thread, joined by join() or when the handle goes.
+static const char* const JOB = "compensation._native._ext.job";
+
+static void job_free(PyObject* capsule) {
+    auto* t = static_cast<std::thread*>(PyCapsule_GetPointer(capsule, JOB));
+    if (t == nullptr) { PyErr_Clear(); return; }
+    if (t->joinable()) t->join();
+    delete t;
+}
+
+// gated_dft_start(x, wr, wi, out, rows, K, G, threads, isa) -> handle for join()
+static PyObject* py_gated_dft_start(PyObject*, PyObject* args) {
+    unsigned long long px, pr, pi, po;
+    long long rows, K, G, threads;
+    int isa;
+    if (!PyArg_ParseTuple(args, "KKKKLLLLi", &px, &pr, &pi, &po, &rows, &K, &G, &threads, &isa))
+        return nullptr;
+    const float* x = reinterpret_cast<const float*>(px);
+    const float* wr = reinterpret_cast<const float*>(pr);
+    const float* wi = reinterpret_cast<const float*>(pi);
+    float* out = reinterpret_cast<float*>(po);
+    const Isa use = pick(isa);
+    std::thread* t = nullptr;
+    try {
+        t = new std::thread([=] {
+            if (use == AVX512) rt::gated_dft_avx512(x, wr, wi, out, rows, K, G, threads);
+            else if (use == AVX2) rt::gated_dft_avx2(x, wr, wi, out, rows, K, G, threads);
+            else rt::gated_dft_portable(x, wr, wi, out, rows, K, G, threads);
+        });
+    } catch (...) {
+        return PyErr_Format(PyExc_RuntimeError, "could not start a thread for the range transform");
+    }
+    PyObject* capsule = PyCapsule_New(t, JOB, job_free);
+    if (capsule == nullptr) {
+        t->join();
+        delete t;
+    }
+    return capsule;
+}
+
+// join(handle): waits for a started range transform (once; later calls return at once).
+static PyObject* py_join(PyObject*, PyObject* args) {
+    PyObject* capsule;
+    if (!PyArg_ParseTuple(args, "O", &capsule)) return nullptr;
+    auto* t = static_cast<std::thread*>(PyCapsule_GetPointer(capsule, JOB));
+    if (t == nullptr) return nullptr;
+    if (t->joinable()) {
+        Py_BEGIN_ALLOW_THREADS
+        t->join();
+        Py_END_ALLOW_THREADS
+    }
+    Py_RETURN_NONE;
+}
+
 // isa([request]): the instruction set the copy for that request (default 0, best) uses here.
 static PyObject* py_isa(PyObject*, PyObject* args) {
     int request = 0;
@@ -123,6 +180,9 @@ static PyObject* py_isa(PyObject*, PyObject* args) {
 static PyMethodDef methods[] = {
     {"project", py_project, METH_VARARGS, "Exact beams of one frame (see realtime.py)."},
     {"gated_dft", py_gated_dft, METH_VARARGS, "Range transform at the gated bins."},
+    {"gated_dft_start", py_gated_dft_start, METH_VARARGS,
+     "Range transform at the gated bins on a thread of its own; join(handle) waits."},
+    {"join", py_join, METH_VARARGS, "Wait for a range transform started by gated_dft_start."},
     {"isa", py_isa, METH_VARARGS, "Instruction set the kernel uses on this CPU."},
     {nullptr, nullptr, 0, nullptr}};
 

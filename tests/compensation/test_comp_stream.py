@@ -74,6 +74,26 @@ def test_stream_equals_direct_engine_on_the_range_fft_of_each_frame(engine, real
     assert stream.frames == 3
 
 
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_callable_motion_overlapping_the_range_transform_gives_the_same_beams(engine):
+    """A callable motion runs while the kernel's thread takes the range transform: the
+    beams are those of the same motion given as a PlatformMotion, bit for bit; a callable
+    that raises leaves the stream usable."""
+    rng = np.random.default_rng(25)
+    proj, _, _ = _projector(engine)
+    x, m = _if_frame(rng, 6), _motion(rng, 18)
+    direct = RealtimeStream(proj, copy=True).process(x, m).data
+    stream = RealtimeStream(proj, copy=True)
+    np.testing.assert_array_equal(stream.process(x, lambda: m).data, direct)
+
+    def broken():
+        raise RuntimeError("IMU record ends early")
+
+    with pytest.raises(RuntimeError, match="IMU record ends early"):
+        stream.process(x, broken)
+    np.testing.assert_array_equal(stream.process(x, lambda: m).data, direct)
+
+
 def test_static_tone_at_a_gate_gives_unit_beams_closed_form():
     """Static platform, one unit tone at bin 6 on every channel, no window: beam 1 at broadside.
 
