@@ -3,9 +3,9 @@ real-time projection (``compensation._native._ext``).
 
 Everything else is in pyproject.toml. The extension is plain C++ on the Python
 C API (no binding library), compiled with OpenMP for the x86-64-v2 baseline
-plus an AVX2+FMA copy chosen at run time. If it cannot be built (no compiler),
-set ``RAYSIM_NO_KERNEL=1``: raysim then falls back to FINUFFT and
-``compensation.realtime`` to its NumPy engine.
+plus an AVX2+FMA copy (and, for the real-time kernel, an AVX-512 copy) chosen at
+run time. If it cannot be built (no compiler), set ``RAYSIM_NO_KERNEL=1``: raysim then
+falls back to FINUFFT and ``compensation.realtime`` to its NumPy engine.
 """
 
 import os
@@ -19,11 +19,12 @@ if x86:
     flags.append("-march=x86-64-v2")
 
 
-def _extension(name: str, folder: str, stem: str) -> Extension:
-    """One kernel: its module, portable and AVX2 copies, and their shared headers."""
+def _extension(name: str, folder: str, stem: str, isas=("avx2",)) -> Extension:
+    """One kernel: its module, portable and per-ISA copies, and their shared headers."""
     return Extension(
         name,
-        sources=[folder + f for f in ("module.cpp", f"{stem}_portable.cpp", f"{stem}_avx2.cpp")],
+        sources=[folder + f for f in ("module.cpp", f"{stem}_portable.cpp",
+                                      *(f"{stem}_{isa}.cpp" for isa in isas))],
         depends=[folder + f"{stem}_impl.h", folder + f"{stem}_params.h"],
         extra_compile_args=flags,
         extra_link_args=["-fopenmp"],
@@ -32,5 +33,6 @@ def _extension(name: str, folder: str, stem: str) -> Extension:
 
 
 ext = _extension("raysim.synthesis._kernel._ext", "raysim/synthesis/_kernel/", "kernel")
-rt_ext = _extension("compensation._native._ext", "compensation/_native/", "rt")
+rt_ext = _extension("compensation._native._ext", "compensation/_native/", "rt",
+                    ("avx2", "avx512"))
 setup(ext_modules=[] if os.environ.get("RAYSIM_NO_KERNEL") else [ext, rt_ext])

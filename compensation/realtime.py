@@ -20,21 +20,28 @@ frames with the same geometry:
   cancellation-free form ``rho = -q + e / (L + R - q)``, ``e = |d|^2 - q^2``)
   and the channel sum, by Horner's rule in ``z = exp(j k v . a)`` for a slot on
   a line (one ``cos``/``sin`` pair per chirp, slot and direction instead of one
-  per channel) or by a float32 matrix product for any other layout;
+  per channel), in the compiled kernel by Horner's rule along and across the
+  rows of a slot on a lattice (``p0 + i1 a + i2 b``, row-major: three pairs per
+  chirp and direction, e.g. the 20 x 20 paper array), or by a float32 matrix
+  product for any other layout (``factorised=False``: for every slot);
 * chirp blocks run on ``threads`` worker threads (NumPy releases the GIL in
   its array loops).
 
 Two engines compute this: the compiled kernel ``compensation._native._ext``
 (``engine="compiled"``, the default where it is built: one fused pass per
-chirp, slot and direction chunk, OpenMP threads over those items, ``exp(j .)`` by a
-float32 polynomial after reduction to a quarter turn in float64, AVX2+FMA copy
-chosen at run time) and the NumPy engine (``engine="numpy"``, the fallback
-where the extension is not built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow
-the steps above and give the same beams within float32 rounding.
+chirp, slot and direction chunk, ``threads`` threads started per call taking
+those items in turn, ``exp(j .)`` by a
+float32 polynomial after reduction to a quarter turn in float64, AVX-512 or
+AVX2+FMA copy chosen at run time, ``engine="avx2"`` for the latter) and the
+NumPy engine (``engine="numpy"``, the fallback where the extension is not
+built, e.g. ``RAYSIM_NO_KERNEL=1``). Both follow the steps above and give the
+same beams within float32 rounding.
 
 Cost per frame: ``chirp * slot * direction * (2 sincos + ~40 flops) + chirp *
 slot * gate * direction * (2 sincos + ~20 flops)``; a gate block whose gates
-all lie at its focal range (a block of one gate) has no per-gate phase.
+all lie at its focal range (a block of one gate) has no per-gate phase. A
+slot of ``m`` channels off a line adds ``m`` sincos per chirp and direction
+(3 on a lattice in the compiled kernel) and ``m`` complex products per gate.
 
 For a stream of frames: :meth:`RealtimeProjector.gated_range_transform` gives
 the range transform of the IF samples at the gated bins only (a DFT of those
@@ -66,13 +73,24 @@ except ImportError:  # pragma: no cover - depends on the build
 LINE_TOL = 1e-9
 _TWO_PI = 2.0 * np.pi
 #: Engines of :class:`RealtimeProjector`: ``"auto"`` (compiled where built, else
-#: NumPy), ``"compiled"`` (best instruction set), ``"portable"`` (compiled,
-#: x86-64-v2 copy), ``"numpy"``.
-ENGINES = ("auto", "compiled", "portable", "numpy")
+#: NumPy), ``"compiled"`` (best instruction set: AVX-512, else AVX2+FMA, else
+#: x86-64-v2), ``"avx2"`` (compiled, at most AVX2+FMA: the copy without AVX-512,
+#: the benchmark's baseline), ``"portable"`` (compiled, x86-64-v2 copy), ``"numpy"``.
+ENGINES = ("auto", "compiled", "avx2", "portable", "numpy")
+#: Complex products of a gated range transform (rows * samples * gates) above which
+#: the compiled DFT runs on the projector's threads (the TI frame at 8 gates: 3.1 million,
+#: one thread).
+DFT_THREADED_MACS = 8_000_000
+#: Request of each compiled engine to the kernel's dispatch (0 best, 1 portable, 2 <= AVX2).
+_ISA_REQUEST = {"compiled": 0, "portable": 1, "avx2": 2}
 
 
 def compiled_isa() -> str:
-    """Instruction set of the compiled kernel here: ``"avx2"``, ``"portable"`` or ``"missing"``."""
+    """Instruction set of the compiled kernel here.
+
+    ``"avx512"``, ``"avx2"``, ``"portable"`` (x86-64-v2), or ``"missing"`` where
+    the extension is not built.
+    """
     return "missing" if _ext is None else _ext.isa()
 
 
@@ -85,6 +103,27 @@ def _line(p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     return (p[0], a) if np.abs(model - p).max() <= LINE_TOL else None
 
 
+def _lattice(p: np.ndarray) -> int:
+    """Row length ``n1 >= 2`` when ``p[i1 + n1 i2] = p0 + i1 a + i2 b`` (positions ``[m, 3]``
+    [m], rows of ``n1`` channels, at least two rows), else 0."""
+    m = p.shape[0]
+    if m < 4:
+        return 0
+    a = p[1] - p[0]
+    if not np.any(np.abs(a) > LINE_TOL):
+        return 0
+    # the row length: the first channel off the line p0 + i a
+    steps = np.arange(m)[:, None] * a
+    off = np.flatnonzero(np.abs(p - p[0] - steps).max(axis=1) > LINE_TOL)
+    n1 = int(off[0]) if off.size else 0
+    if n1 < 2 or m % n1:
+        return 0
+    b = p[n1] - p[0]
+    i = np.arange(m)
+    model = p[0] + (i % n1)[:, None] * a + (i // n1)[:, None] * b
+    return n1 if np.abs(model - p).max() <= LINE_TOL else 0
+
+
 @dataclass(frozen=True)
 class _Slot:
     index: int                  # TDM slot number
@@ -92,6 +131,7 @@ class _Slot:
     positions: np.ndarray       # [m, 3] virtual positions [m]
     weight: np.ndarray          # [m] w_m / sum(w) (float32)
     line: tuple | None          # (p0, a) or None
+    lattice: int = 0            # row length n1 of a lattice p0 + i1 a + i2 b (kernel), else 0
 
 
 def _default_threads() -> int:
@@ -130,8 +170,15 @@ class RealtimeProjector:
     threads : int, optional
         Worker threads (default: the CPUs this process may use, at most 8).
     engine : str
-        One of :data:`ENGINES`; ``"compiled"`` and ``"portable"`` need the
-        extension ``compensation._native._ext``.
+        One of :data:`ENGINES`; ``"compiled"``, ``"avx2"`` and ``"portable"``
+        need the extension ``compensation._native._ext``.
+    factorised : bool
+        Sum the channels of a slot on a line (both engines) or on a lattice
+        (rows of equally spaced channels, ``p0 + i1 a + i2 b`` in row-major
+        order; compiled kernel) by Horner's rule in the steering of the steps,
+        with 2 or 3 steering phases per chirp and direction. False: one
+        steering phase per channel for every slot (the general form; slower,
+        the same beams within float32 rounding), e.g. as a baseline.
 
     Examples
     --------
@@ -148,7 +195,7 @@ class RealtimeProjector:
     def __init__(self, element_positions, *, wavelength: float, range_axis, azimuth, elevation,
                  range_gates, channel_slot=None, weights=None, gate_block: int = 8,
                  chirp_block: int = 8, threads: int | None = None,
-                 engine: str = "auto") -> None:
+                 engine: str = "auto", factorised: bool = True) -> None:
         p = finite_array("element_positions", element_positions, ndim=2)
         if p.shape[1] != 3 or p.shape[0] < 1:
             raise ValueError(f"element_positions must have shape [channel, 3], got {p.shape}")
@@ -183,8 +230,10 @@ class RealtimeProjector:
         for s in range(self.num_slots):
             sel = np.flatnonzero(slot == s)
             if sel.size:
+                line = _line(p[sel]) if factorised else None
+                lattice = _lattice(p[sel]) if factorised and line is None else 0
                 self.slots.append(_Slot(s, sel, p[sel], (w[sel] / w.sum()).astype(np.float32),
-                                        _line(p[sel])))
+                                        line, lattice))
         self.u = grid_directions(self.azimuth, self.elevation).reshape(-1, 3)   # [D, 3]
         gb = max(1, int(gate_block))
         self.gate_blocks = [np.arange(i, min(i + gb, gates.size))
@@ -193,7 +242,7 @@ class RealtimeProjector:
         self.threads = _default_threads() if threads is None else max(1, int(threads))
         if engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
-        if engine in ("compiled", "portable") and _ext is None:
+        if engine in _ISA_REQUEST and _ext is None:
             raise ValueError(f"engine={engine!r} needs the compiled extension "
                              "compensation._native._ext, which is not built here (run `python "
                              "setup.py build_ext --inplace`), or use engine='numpy'")
@@ -206,10 +255,11 @@ class RealtimeProjector:
 
     @property
     def engine(self) -> str:
-        """Engine in use: ``"avx2"`` or ``"portable"`` (compiled kernel), or ``"numpy"``."""
-        if self._engine == "compiled":
-            return _ext.isa()
-        return self._engine
+        """Engine in use: ``"avx512"``, ``"avx2"`` or ``"portable"`` (the compiled
+        kernel's copy that runs on this CPU), or ``"numpy"``."""
+        if self._engine == "numpy":
+            return "numpy"
+        return _ext.isa(_ISA_REQUEST[self._engine])
 
     def _compiled_tables(self, p: np.ndarray, w: np.ndarray) -> dict:
         """Geometry of the compiled kernel: channels ordered slot after slot (see rt_params.h)."""
@@ -224,7 +274,9 @@ class RealtimeProjector:
                              dtype=np.int64),
             "slot_index": np.array([sl.index for sl in self.slots], dtype=np.int64),
             "slot_off": np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
-            "slot_line": np.array([sl.line is not None for sl in self.slots], dtype=np.int64),
+            # 1: line (Horner), n1 >= 2: lattice with rows of n1 (two-step Horner), 0: general
+            "slot_line": np.array([1 if sl.line is not None else sl.lattice
+                                   for sl in self.slots], dtype=np.int64),
             "block_start": np.array(blocks, dtype=np.int64),
             "pos": np.ascontiguousarray(p[order], dtype=np.float64),
             "u": [np.ascontiguousarray(self.u[:, i]) for i in range(3)],
@@ -263,6 +315,13 @@ class RealtimeProjector:
         ndarray, shape ``[chirp, channel, gate]``, complex64
             Input of :meth:`project` with ``gated=True`` (``out`` if given).
         """
+        return self._range_job(samples, window, out, start=False)()
+
+    def _range_job(self, samples, window, out, *, start: bool):
+        """:meth:`gated_range_transform` as a job: a callable with no argument returning
+        its result. With ``start`` and the compiled kernel on complex samples the DFT
+        runs on a thread of its own meanwhile (the callable waits for it); else it is
+        done before the return."""
         x = np.asarray(samples)
         real = not np.iscomplexobj(x)
         bins = x.shape[-1] // 2 if real and x.ndim == 3 else (x.shape[-1] if x.ndim == 3 else 0)
@@ -287,16 +346,25 @@ class RealtimeProjector:
         if real or self._engine == "numpy":
             x = x.astype(np.float32 if real else np.complex64, copy=False)
             np.matmul(x.reshape(-1, x.shape[-1]), self._dft, out=out.reshape(-1, n_gate))
-            return out
-        # compiled, one thread: no BLAS call and no thread barrier (thread pools busy-wait
-        # at their barriers, which costs several times this small product's CPU time on a
-        # loaded machine)
+            return lambda: out
+        # compiled, no BLAS call; one thread below DFT_THREADED_MACS (a thread barrier
+        # busy-waits, which costs several times a small product's CPU time on a loaded
+        # machine), the projector's threads above (the paper frame: 61 million)
         x = np.ascontiguousarray(x, dtype=np.complex64)
         wr, wi = self._dft_planar
-        _ext.gated_dft(x.ctypes.data, wr.ctypes.data, wi.ctypes.data, out.ctypes.data,
-                       x.shape[0] * x.shape[1], x.shape[2], n_gate, 1,
-                       int(self._engine == "portable"))
-        return out
+        rows = x.shape[0] * x.shape[1]
+        threads = self.threads if rows * x.shape[2] * n_gate > DFT_THREADED_MACS else 1
+        args = (x.ctypes.data, wr.ctypes.data, wi.ctypes.data, out.ctypes.data, rows,
+                x.shape[2], n_gate, threads, _ISA_REQUEST[self._engine])
+        if not start:
+            _ext.gated_dft(*args)
+            return lambda: out
+        job = _ext.gated_dft_start(*args)
+
+        def result(arrays=(x, wr, wi, out)):   # the arrays stay alive until the join
+            _ext.join(job)
+            return arrays[-1]
+        return result
 
     def project(self, rc, motion: PlatformMotion, *, gated: bool = False,
                 out: np.ndarray | None = None, chirp_weights=None) -> BeamCube:
@@ -378,7 +446,7 @@ class RealtimeProjector:
         ptrs = np.array([a.ctypes.data for a in arrays], dtype=np.uint64)
         # the arrays above stay referenced until the call returns
         _ext.project(ints.ctypes.data, ptrs.ctypes.data, tb["dbls"].ctypes.data,
-                     int(self._engine == "portable"))
+                     _ISA_REQUEST[self._engine])
 
     def _numpy(self, xg: np.ndarray, rot: np.ndarray, disp: np.ndarray,
                out: np.ndarray) -> None:

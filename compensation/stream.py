@@ -9,7 +9,9 @@ e.g. the strapdown of the frame's IMU samples). Per frame it
 1. takes the range transform at the gated bins only
    (:meth:`RealtimeProjector.gated_range_transform`: a DFT of those bins,
    ``sample * gate`` complex products per chirp and channel instead of a whole
-   FFT), into a buffer kept across frames;
+   FFT), into a buffer kept across frames; when ``motion`` is a callable (the
+   strapdown of the frame's IMU samples), the compiled kernel runs this DFT on
+   a thread of its own while the callable runs;
 2. projects those bins onto the global grid
    (:meth:`RealtimeProjector.project` with ``gated=True``), into a beam buffer
    kept across frames.
@@ -107,8 +109,8 @@ class RealtimeStream:
             Raw IF samples of the frame.
         motion : PlatformMotion or callable
             Pose of every transmit slot (``chirp * slots`` poses, chirp major),
-            or a callable with no argument returning it (called once, after the
-            range transform).
+            or a callable with no argument returning it (called once, while the
+            compiled kernel takes the range transform on a thread of its own).
 
         Returns
         -------
@@ -121,9 +123,15 @@ class RealtimeStream:
             raise ValueError(f"samples must be an IF frame [chirp, channel, sample], got an "
                              f"array of shape {x.shape}")
         gated, beams = self._buffers(x.shape[0])
-        self.projector.gated_range_transform(x, window=self.window, out=gated)
         if callable(motion) and not isinstance(motion, PlatformMotion):
-            motion = motion()
+            # the range transform on a thread of the kernel while Python integrates the poses
+            job = self.projector._range_job(x, self.window, gated, start=True)
+            try:
+                motion = motion()
+            finally:
+                job()
+        else:
+            self.projector.gated_range_transform(x, window=self.window, out=gated)
         out = self.projector.project(gated, motion, gated=True,
                                      out=None if self.copy else beams,
                                      chirp_weights=self.chirp_weights)
@@ -148,21 +156,28 @@ def _pair(item) -> tuple:
 
 @dataclass(frozen=True)
 class FrameTiming:
-    """Timing of one replayed frame [s] (wall clock, ``time.perf_counter``).
+    """Timing of one replayed frame [s].
 
     ``latency`` runs from the frame's arrival (``start + index * period``) to
     its beams; ``service`` from the start of its processing (its arrival, or
-    the end of the previous frame if that was later) to its beams.
+    the end of the previous frame if that was later) to its beams (both wall
+    clock, ``time.perf_counter``). ``cpu`` is the CPU time of the process, all
+    threads (``time.process_time``), over the same span: the frame's cost to
+    the cores, which other processes on them change far less than the wall
+    times.
     """
 
     index: int
     latency: float
     service: float
+    cpu: float
 
 
 def replay(stream: RealtimeStream, frames: Iterable, *, frame_period: float,
            clock: Callable[[], float] = time.perf_counter,
-           sleep: Callable[[float], None] = time.sleep) -> Iterator[tuple[BeamCube, FrameTiming]]:
+           sleep: Callable[[float], None] = time.sleep,
+           cpu_clock: Callable[[], float] = time.process_time
+           ) -> Iterator[tuple[BeamCube, FrameTiming]]:
     """Play ``(samples, motion)`` frames at their frame rate through ``stream``.
 
     Frame ``i`` arrives at ``start + i * frame_period`` (``start`` = the first
@@ -178,8 +193,9 @@ def replay(stream: RealtimeStream, frames: Iterable, *, frame_period: float,
         As :meth:`RealtimeStream.process` takes them.
     frame_period : float
         Time between frames [s] (> 0).
-    clock, sleep : callable
-        Wall clock [s] and sleep (replaceable in tests).
+    clock, sleep, cpu_clock : callable
+        Wall clock [s], sleep and CPU clock of the process [s] (replaceable in
+        tests).
     """
     if not isinstance(stream, RealtimeStream):
         raise ValueError(f"stream must be a compensation.RealtimeStream, got {type(stream)!r}")
@@ -195,9 +211,10 @@ def replay(stream: RealtimeStream, frames: Iterable, *, frame_period: float,
         if now < arrival:
             sleep(arrival - now)
             now = clock()
+        cpu0 = cpu_clock()
         beams = stream.process(samples, motion)
         done = clock()
-        yield beams, FrameTiming(i, done - arrival, done - now)
+        yield beams, FrameTiming(i, done - arrival, done - now, cpu_clock() - cpu0)
 
 
 def latency_summary(seconds, *, budget: float | None = None) -> dict:

@@ -3,22 +3,30 @@
 // project(ints, ptrs, dbls, isa): three addresses of contiguous NumPy arrays
 // (int64 sizes, uint64 array addresses, float64 scalars) laid out as
 // rt::Params; the Python wrapper (compensation/realtime.py) builds and checks
-// them and keeps the arrays alive. isa: 0 = best available, 1 = portable.
+// them and keeps the arrays alive. isa: 0 = best available, 1 = portable,
+// 2 = at most AVX2 (the best copy without AVX-512).
 // gated_dft(...): the range transform at the gated bins (see rt_impl.h).
-// Releases the GIL.
+// gated_dft_start(...) / join(handle): the same on a thread of its own, so that
+// the caller runs Python (e.g. the strapdown of the frame) meanwhile; the
+// caller keeps the arrays alive until join. Release the GIL.
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <cstdint>
+#include <thread>
 #include "rt_params.h"
 
 namespace rt {
 void project_portable(const Params& P);
 void project_avx2(const Params& P);
+void project_avx512(const Params& P);
 bool avx2_compiled();
+bool avx512_compiled();
 void gated_dft_portable(const float*, const float*, const float*, float*, int64_t, int64_t,
                         int64_t, int64_t);
 void gated_dft_avx2(const float*, const float*, const float*, float*, int64_t, int64_t, int64_t,
                     int64_t);
+void gated_dft_avx512(const float*, const float*, const float*, float*, int64_t, int64_t,
+                      int64_t, int64_t);
 }
 
 static bool have_avx2() {
@@ -29,6 +37,27 @@ static bool have_avx2() {
 #else
     return false;
 #endif
+}
+
+// AVX-512 F, VL, DQ and BW with the OS saving their registers (libgcc's check reads XCR0).
+static bool have_avx512() {
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+    __builtin_cpu_init();
+    return rt::avx512_compiled() && have_avx2() && __builtin_cpu_supports("avx512f") &&
+           __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq") &&
+           __builtin_cpu_supports("avx512bw");
+#else
+    return false;
+#endif
+}
+
+enum Isa { PORTABLE, AVX2, AVX512 };
+
+// The copy to run for the caller's request (0 best, 1 portable, 2 at most AVX2).
+static Isa pick(int request) {
+    if (request == 1) return PORTABLE;
+    if (request == 0 && have_avx512()) return AVX512;
+    return have_avx2() ? AVX2 : PORTABLE;
 }
 
 static PyObject* py_project(PyObject*, PyObject* args) {
@@ -56,9 +85,11 @@ static PyObject* py_project(PyObject*, PyObject* args) {
     P.x = reinterpret_cast<const float*>(A[12]);
     P.out = reinterpret_cast<float*>(A[13]);
     P.k = F[0]; P.small = F[1];
-    const bool avx2 = isa == 0 && have_avx2();
+    const Isa use = pick(isa);
     Py_BEGIN_ALLOW_THREADS
-    if (avx2) rt::project_avx2(P); else rt::project_portable(P);
+    if (use == AVX512) rt::project_avx512(P);
+    else if (use == AVX2) rt::project_avx2(P);
+    else rt::project_portable(P);
     Py_END_ALLOW_THREADS
     Py_RETURN_NONE;
 }
@@ -75,22 +106,84 @@ static PyObject* py_gated_dft(PyObject*, PyObject* args) {
     const float* wr = reinterpret_cast<const float*>(pr);
     const float* wi = reinterpret_cast<const float*>(pi);
     float* out = reinterpret_cast<float*>(po);
-    const bool avx2 = isa == 0 && have_avx2();
+    const Isa use = pick(isa);
     Py_BEGIN_ALLOW_THREADS
-    if (avx2) rt::gated_dft_avx2(x, wr, wi, out, rows, K, G, threads);
+    if (use == AVX512) rt::gated_dft_avx512(x, wr, wi, out, rows, K, G, threads);
+    else if (use == AVX2) rt::gated_dft_avx2(x, wr, wi, out, rows, K, G, threads);
     else rt::gated_dft_portable(x, wr, wi, out, rows, K, G, threads);
     Py_END_ALLOW_THREADS
     Py_RETURN_NONE;
 }
 
-static PyObject* py_isa(PyObject*, PyObject*) {
-    return PyUnicode_FromString(have_avx2() ? "avx2" : "portable");
+// A started range transform: its thread, joined by join() or when the handle goes.
+static const char* const JOB = "compensation._native._ext.job";
+
+static void job_free(PyObject* capsule) {
+    auto* t = static_cast<std::thread*>(PyCapsule_GetPointer(capsule, JOB));
+    if (t == nullptr) { PyErr_Clear(); return; }
+    if (t->joinable()) t->join();
+    delete t;
+}
+
+// gated_dft_start(x, wr, wi, out, rows, K, G, threads, isa) -> handle for join()
+static PyObject* py_gated_dft_start(PyObject*, PyObject* args) {
+    unsigned long long px, pr, pi, po;
+    long long rows, K, G, threads;
+    int isa;
+    if (!PyArg_ParseTuple(args, "KKKKLLLLi", &px, &pr, &pi, &po, &rows, &K, &G, &threads, &isa))
+        return nullptr;
+    const float* x = reinterpret_cast<const float*>(px);
+    const float* wr = reinterpret_cast<const float*>(pr);
+    const float* wi = reinterpret_cast<const float*>(pi);
+    float* out = reinterpret_cast<float*>(po);
+    const Isa use = pick(isa);
+    std::thread* t = nullptr;
+    try {
+        t = new std::thread([=] {
+            if (use == AVX512) rt::gated_dft_avx512(x, wr, wi, out, rows, K, G, threads);
+            else if (use == AVX2) rt::gated_dft_avx2(x, wr, wi, out, rows, K, G, threads);
+            else rt::gated_dft_portable(x, wr, wi, out, rows, K, G, threads);
+        });
+    } catch (...) {
+        return PyErr_Format(PyExc_RuntimeError, "could not start a thread for the range transform");
+    }
+    PyObject* capsule = PyCapsule_New(t, JOB, job_free);
+    if (capsule == nullptr) {
+        t->join();
+        delete t;
+    }
+    return capsule;
+}
+
+// join(handle): waits for a started range transform (once; later calls return at once).
+static PyObject* py_join(PyObject*, PyObject* args) {
+    PyObject* capsule;
+    if (!PyArg_ParseTuple(args, "O", &capsule)) return nullptr;
+    auto* t = static_cast<std::thread*>(PyCapsule_GetPointer(capsule, JOB));
+    if (t == nullptr) return nullptr;
+    if (t->joinable()) {
+        Py_BEGIN_ALLOW_THREADS
+        t->join();
+        Py_END_ALLOW_THREADS
+    }
+    Py_RETURN_NONE;
+}
+
+// isa([request]): the instruction set the copy for that request (default 0, best) uses here.
+static PyObject* py_isa(PyObject*, PyObject* args) {
+    int request = 0;
+    if (!PyArg_ParseTuple(args, "|i", &request)) return nullptr;
+    static const char* names[] = {"portable", "avx2", "avx512"};
+    return PyUnicode_FromString(names[pick(request)]);
 }
 
 static PyMethodDef methods[] = {
     {"project", py_project, METH_VARARGS, "Exact beams of one frame (see realtime.py)."},
     {"gated_dft", py_gated_dft, METH_VARARGS, "Range transform at the gated bins."},
-    {"isa", py_isa, METH_NOARGS, "Instruction set the kernel uses on this CPU."},
+    {"gated_dft_start", py_gated_dft_start, METH_VARARGS,
+     "Range transform at the gated bins on a thread of its own; join(handle) waits."},
+    {"join", py_join, METH_VARARGS, "Wait for a range transform started by gated_dft_start."},
+    {"isa", py_isa, METH_VARARGS, "Instruction set the kernel uses on this CPU."},
     {nullptr, nullptr, 0, nullptr}};
 
 static PyModuleDef moddef = {PyModuleDef_HEAD_INIT, "_ext",

@@ -2,8 +2,10 @@
 // The standard headers come before the target pragma: their inline functions keep the
 // baseline target, so the AVX2 code may inline them (GCC 13 refuses the reverse).
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <thread>
 #include <vector>
 #include "rt_params.h"
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))

@@ -1,10 +1,10 @@
 // Real-time exact rigid-body projection kernel (the model of
 // compensation.realtime.RealtimeProjector, whose NumPy engine is the reference).
 // Included once per instruction set with RT_NS defined (see rt_*.cpp); each copy
-// is compiled for its own target (portable x86-64-v2, or AVX2+FMA) and
+// is compiled for its own target (portable x86-64-v2, AVX2+FMA or AVX-512) and
 // dispatched at run time.
 //
-// One work item = (chirp n, chunk of CH directions); OpenMP threads take items.
+// One work item = (chirp n, chunk of CH directions); threads take items in turn.
 // For each TDM slot s (pose R_n,s, displacement d_n,s) and gate block (focal
 // range r), per direction u (float64):
 //   q = u . d, e = max(|d|^2 - q^2, 0), t = r - q, L = sqrt(t^2 + e) = |r u - d|
@@ -16,11 +16,16 @@
 //   -2 k (rho_g - rho_mid) = a (r - R_g) (1 + (t + t_g) / (L + L_g)) / (L_g + t_g),
 //   a = -2 k e / (L + t), t_g = R_g - q, L_g = sqrt(t_g^2 + e)   (no cancellation),
 //   exp(j .) by its Taylor series while |phase| <= small, else in float64 by expj;
-//   channel sum by Horner's rule in z (line) or a sum of steering x data;
+//   channel sum by Horner's rule in z (line), by Horner's rule in two steps
+//   (z_a = exp(j k v . a) along rows of n1 channels, z_b = exp(j k v . b) across
+//   them) for a slot on a lattice p_(i1 + n1 i2) = p_0 + i1 a + i2 b, or a sum of
+//   steering x data for any other layout;
 //   accumulated over slots into out[n, g, direction].
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <thread>
 #include <vector>
 #include "rt_params.h"
 
@@ -156,10 +161,18 @@ static void fix_large(int64_t nd, double rg, double r, double k, float small, co
     }
 }
 
+// Horner steps of a lattice row per pass over the directions (the paper frame's
+// projection, 8 chirps, one thread: 1.41 CPU ms with 4 against 2.88 with 1; 6 and 8
+// were no faster).
+constexpr int ROW_STEPS = 4;
+
 // Largest slot size with a fused (compile-time) Horner loop.
 constexpr int64_t FUSED_MAX = 8;
 
-static int gate_line_fused(int64_t m, int64_t nd, float rgf, float drf, float small,
+// Inlined into project() whatever the rest of it: there the vectoriser sees that the
+// arrays are disjoint parts of the thread's buffers; out of line it needs a run-time
+// alias check per array, gives up and runs the pass scalar (5x slower, measured).
+__attribute__((always_inline)) static inline int gate_line_fused(int64_t m, int64_t nd, float rgf, float drf, float small,
                            const Focus& F, const float* br, const float* bi, const float* zr,
                            const float* zi, const float* xg, int64_t xstride, float* gr,
                            float* gi) {
@@ -205,14 +218,35 @@ __attribute__((noinline)) static void focal_phases(
     }
 }
 
+// Runs work() on `threads` threads (the calling one and threads - 1 started for this
+// call, joined before the return). Threads started per call rather than an OpenMP
+// team: a team's threads spin after the parallel region (libgomp's default wait
+// policy, milliseconds per frame), taking the cores the caller's next steps need on
+// a loaded machine; starting and joining one costs about 40 us per call.
+template <class F>
+static void run_threads(int64_t threads, F& work) {
+    std::vector<std::thread> pool;
+    for (int64_t t = 1; t < threads; ++t) {
+        try {
+            pool.emplace_back([&work] { work(); });
+        } catch (...) {   // no more threads to be had: the running ones take every item
+            break;
+        }
+    }
+    work();
+    for (auto& th : pool) th.join();
+}
+
 static void project(const rt::Params& P) {
     const int64_t nchunk = (P.D + CH - 1) / CH;
     const int64_t items = P.N * nchunk;
-    const double k = P.k;
-    const float small = (float)P.small;
-    const int64_t G = P.G, D = P.D, Mm = std::max<int64_t>(P.M_max, 1);
-#pragma omp parallel num_threads((int)P.threads)
-    {
+    std::atomic<int64_t> next{0};   // the next work item
+    auto work = [&]() {
+        // the scalars as locals of the thread: captured by reference, a double such as k
+        // could alias the stores into the double buffers, and the loops would not vectorise
+        const double k = P.k;
+        const float small = (float)P.small;
+        const int64_t G = P.G, D = P.D, Mm = std::max<int64_t>(P.M_max, 1);
         std::vector<double> dbuf(4 * CH);
         std::vector<float> fbuf(16 * CH + 2 * Mm * CH);
         std::vector<int32_t> qbuf((2 + Mm) * CH);   // quarter turns of reduce
@@ -243,8 +277,8 @@ static void project(const rt::Params& P) {
         int32_t* qb = qa + CH;
         int32_t* qm = qb + CH;      // [m][CH] per-channel quarter turns
         const Focus F{dq, de, fq, fe, ft, fL, fA};
-#pragma omp for schedule(dynamic, 1)
-        for (int64_t it = 0; it < items; ++it) {
+        for (int64_t it = next.fetch_add(1, std::memory_order_relaxed); it < items;
+             it = next.fetch_add(1, std::memory_order_relaxed)) {
             const int64_t n = it / nchunk;
             const int64_t j0 = (it % nchunk) * CH;
             const int64_t nd = std::min(CH, D - j0);
@@ -257,17 +291,22 @@ static void project(const rt::Params& P) {
                 const double* R = P.rot + 9 * pose;
                 const double* d = P.disp + 3 * pose;
                 const int64_t m0 = P.slot_off[s], m = P.slot_off[s + 1] - m0;
-                const bool line = P.slot_line[s] != 0;
+                const bool line = P.slot_line[s] == 1;
+                const int64_t n1 = P.slot_line[s] >= 2 ? P.slot_line[s] : 0;   // lattice rows
+                const bool grid = n1 >= 2;
                 const double dx = d[0], dy = d[1], dz = d[2];
                 const double dd = dx * dx + dy * dy + dz * dz;
                 // rotated positions R p and d . R p: (p_0, a) on a line, else every channel
-                const int64_t nv = line ? 2 : m;
+                // p_0 and the step a (line), p_0, a and b (lattice), else every channel
+                const int64_t nv = line ? 2 : (grid ? 3 : m);
                 for (int64_t i = 0; i < nv; ++i) {
                     double v[3];
                     const double* p = P.pos + 3 * (m0 + i);
                     for (int c = 0; c < 3; ++c)
                         v[c] = (line && i == 1) ? (m > 1 ? P.pos[3 * (m0 + 1) + c] - P.pos[3 * m0 + c]
                                                          : 0.0)
+                             : (grid && i == 1) ? P.pos[3 * (m0 + 1) + c] - P.pos[3 * m0 + c]
+                             : (grid && i == 2) ? P.pos[3 * (m0 + n1) + c] - P.pos[3 * m0 + c]
                                                 : p[c];
                     for (int c = 0; c < 3; ++c)
                         rp[3 * i + c] = R[3 * c] * v[0] + R[3 * c + 1] * v[1] + R[3 * c + 2] * v[2];
@@ -313,6 +352,27 @@ static void project(const rt::Params& P) {
                         for (int64_t j = 0; j < nd; ++j) {
                             rotate(xa[j], qa[j], br[j], bi[j]);
                             rotate(xb[j], qb[j], zr[j], zi[j]);
+                        }
+                    } else if (grid) {
+                        // phases of p_0 (with the range phase), a and b; z_b into (sr, si)
+                        const double cx = rp[6], cy = rp[7], cz = rp[8], c0 = dp[2];
+                        int32_t* qc = qm;
+                        for (int64_t j = 0; j < nd; ++j) {
+                            RT_GEOMETRY
+                            const double phi0 = (r * (ux[j] * ax + uy[j] * ay + uz[j] * az) - a0)
+                                                * inv + 2.0 * k * (q - h);
+                            const double alpha = (r * (ux[j] * bx + uy[j] * by + uz[j] * bz) - b0)
+                                                 * inv;
+                            const double beta = (r * (ux[j] * cx + uy[j] * cy + uz[j] * cz) - c0)
+                                                * inv;
+                            reduce(phi0, xa[j], qa[j]);
+                            reduce(alpha, xb[j], qb[j]);
+                            reduce(beta, sr[j], qc[j]);
+                        }
+                        for (int64_t j = 0; j < nd; ++j) {
+                            rotate(xa[j], qa[j], br[j], bi[j]);
+                            rotate(xb[j], qb[j], zr[j], zi[j]);
+                            rotate(sr[j], qc[j], sr[j], si[j]);
                         }
                     } else {
                         for (int64_t j = 0; j < nd; ++j) {
@@ -380,6 +440,62 @@ static void project(const rt::Params& P) {
                                 const float ai = accr[j] * bi[j] + acci[j] * br[j];
                                 accr[j] = ar; acci[j] = ai;
                             }
+                        } else if (grid) {
+                            // rows by Horner's rule in z_a, then across rows in z_b, times
+                            // exp(j phi(p_0)); (tr, ti) holds the row being summed
+                            const float* wr = sr;
+                            const float* wi = si;
+                            float* tr = sr + CH;
+                            float* ti = si + CH;
+                            const int64_t n2 = m / n1;
+                            for (int64_t i2 = n2 - 1; i2 >= 0; --i2) {
+                                const float* xrow = xg + 2 * G * n1 * i2;
+                                const float xr = xrow[2 * G * (n1 - 1)], xi = xrow[2 * G * (n1 - 1) + 1];
+                                for (int64_t j = 0; j < nd; ++j) { tr[j] = xr; ti[j] = xi; }
+                                // ROW_STEPS Horner steps per pass over the directions: the
+                                // row's partial sums stay in registers between them
+                                int64_t i1 = n1 - 2;
+                                for (; i1 >= ROW_STEPS - 1; i1 -= ROW_STEPS) {
+                                    float yr[ROW_STEPS], yi[ROW_STEPS];
+                                    for (int u = 0; u < ROW_STEPS; ++u) {
+                                        yr[u] = xrow[2 * G * (i1 - u)];
+                                        yi[u] = xrow[2 * G * (i1 - u) + 1];
+                                    }
+                                    for (int64_t j = 0; j < nd; ++j) {
+                                        float ar = tr[j], ai = ti[j];
+                                        const float cr = zr[j], cj = zi[j];
+                                        for (int u = 0; u < ROW_STEPS; ++u) {
+                                            const float nr = ar * cr - ai * cj + yr[u];
+                                            ai = ar * cj + ai * cr + yi[u];
+                                            ar = nr;
+                                        }
+                                        tr[j] = ar;
+                                        ti[j] = ai;
+                                    }
+                                }
+                                for (; i1 >= 0; --i1) {
+                                    const float yr = xrow[2 * G * i1], yi = xrow[2 * G * i1 + 1];
+                                    for (int64_t j = 0; j < nd; ++j) {
+                                        const float ar = tr[j], ai = ti[j];
+                                        tr[j] = ar * zr[j] - ai * zi[j] + yr;
+                                        ti[j] = ar * zi[j] + ai * zr[j] + yi;
+                                    }
+                                }
+                                if (i2 == n2 - 1) {
+                                    for (int64_t j = 0; j < nd; ++j) { accr[j] = tr[j]; acci[j] = ti[j]; }
+                                } else {
+                                    for (int64_t j = 0; j < nd; ++j) {
+                                        const float ar = accr[j], ai = acci[j];
+                                        accr[j] = ar * wr[j] - ai * wi[j] + tr[j];
+                                        acci[j] = ar * wi[j] + ai * wr[j] + ti[j];
+                                    }
+                                }
+                            }
+                            for (int64_t j = 0; j < nd; ++j) {
+                                const float ar = accr[j] * br[j] - acci[j] * bi[j];
+                                const float ai = accr[j] * bi[j] + acci[j] * br[j];
+                                accr[j] = ar; acci[j] = ai;
+                            }
                         } else {      // sum_i steer_i x_i
                             for (int64_t j = 0; j < nd; ++j) { accr[j] = 0.0f; acci[j] = 0.0f; }
                             for (int64_t i = 0; i < m; ++i) {
@@ -406,38 +522,44 @@ static void project(const rt::Params& P) {
                 for (int64_t j = 0; j < nd; ++j) { o[2 * j] = gr[j]; o[2 * j + 1] = gi[j]; }
             }
         }
-    }
+    };
+    run_threads(std::min(P.threads, items), work);
 }
 
 // Gated range transform: out[r, g] = sum_k x[r, k] W[g, k] for rows r of complex
 // samples x [R, K] (complex64, interleaved) and the window-weighted DFT rows
 // W [G, K] given planar (wr, wi, float32). Each thread de-interleaves one row
-// into (xr, xi) so that the G dot products run at full vector width.
+// into (xr, xi) so that the G dot products run at full vector width. Threads take
+// blocks of DFT_ROWS rows in turn.
+constexpr int64_t DFT_ROWS = 64;
+
 static void gated_dft(const float* x, const float* wr, const float* wi, float* out, int64_t R,
                       int64_t K, int64_t G, int64_t threads) {
-#pragma omp parallel num_threads((int)threads)
-    {
+    std::atomic<int64_t> next{0};   // first row of the next block
+    auto work = [&]() {
         std::vector<float> buf(2 * K);
         float* xr = buf.data();
         float* xi = xr + K;
-#pragma omp for schedule(static)
-        for (int64_t r = 0; r < R; ++r) {
-            const float* row = x + 2 * r * K;
-            for (int64_t k = 0; k < K; ++k) { xr[k] = row[2 * k]; xi[k] = row[2 * k + 1]; }
-            for (int64_t g = 0; g < G; ++g) {
-                const float* a = wr + g * K;
-                const float* b = wi + g * K;
-                float sr = 0.0f, si = 0.0f;
+        for (int64_t r0 = next.fetch_add(DFT_ROWS); r0 < R; r0 = next.fetch_add(DFT_ROWS)) {
+            for (int64_t r = r0; r < std::min(R, r0 + DFT_ROWS); ++r) {
+                const float* row = x + 2 * r * K;
+                for (int64_t k = 0; k < K; ++k) { xr[k] = row[2 * k]; xi[k] = row[2 * k + 1]; }
+                for (int64_t g = 0; g < G; ++g) {
+                    const float* a = wr + g * K;
+                    const float* b = wi + g * K;
+                    float sr = 0.0f, si = 0.0f;
 #pragma omp simd reduction(+ : sr, si)
-                for (int64_t k = 0; k < K; ++k) {
-                    sr += xr[k] * a[k] - xi[k] * b[k];
-                    si += xr[k] * b[k] + xi[k] * a[k];
+                    for (int64_t k = 0; k < K; ++k) {
+                        sr += xr[k] * a[k] - xi[k] * b[k];
+                        si += xr[k] * b[k] + xi[k] * a[k];
+                    }
+                    out[2 * (r * G + g)] = sr;
+                    out[2 * (r * G + g) + 1] = si;
                 }
-                out[2 * (r * G + g)] = sr;
-                out[2 * (r * G + g) + 1] = si;
             }
         }
-    }
+    };
+    run_threads(std::min(threads, (R + DFT_ROWS - 1) / DFT_ROWS), work);
 }
 
 }  // namespace RT_NS

@@ -19,7 +19,8 @@ struct Params {
     // arrays
     const int64_t* slot_index;   // [S] TDM slot of each entry (pose index)
     const int64_t* slot_off;     // [S + 1] first channel of each slot in x / pos
-    const int64_t* slot_line;    // [S] 1: p_i = p_0 + i a (Horner form), 0: general
+    const int64_t* slot_line;    // [S] 1: p_i = p_0 + i a (Horner form); n1 >= 2: lattice
+                                 // p_(i1 + n1 i2) = p_0 + i1 a + i2 b (two-step Horner); 0: general
     const int64_t* block_start;  // [NB + 1] first gate of each block
     const double* pos;           // [M, 3] virtual positions [m]
     const double* rot;           // [N, n_tdm, 3, 3] attitude (radar frame -> world)

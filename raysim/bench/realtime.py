@@ -318,9 +318,17 @@ def bench_realtime(*, quick: bool = True, gate_counts=GATE_COUNTS, threads: int 
 
 #: Consecutive frames replayed per gate count by :func:`bench_stream`.
 STREAM_FRAMES = 200
+#: Frames of one stream replayed before the other (engine and baseline alternate) by
+#: :func:`bench_stream`.
+STREAM_BLOCK = 25
+#: Engine of :func:`bench_stream`'s baseline stream: the compiled kernel without its
+#: AVX-512 copy (the best copy before it).
+BASELINE_ENGINE = "avx2"
 #: Chirps of the paper frame projected by :func:`bench_stream` (its cost per chirp is
-#: constant, so the whole 256-chirp frame is this times 256 / PAPER_CHIRPS).
-PAPER_CHIRPS = 8
+#: constant, so the whole 256-chirp frame is this times 256 / PAPER_CHIRPS; enough that
+#: the gated range transform runs on the projector's threads, as for the whole frame:
+#: 40 * 400 rows * 600 samples > ``compensation.realtime.DFT_THREADED_MACS``).
+PAPER_CHIRPS = 40
 
 
 def _percentiles(seconds, budget: float) -> dict:
@@ -329,8 +337,16 @@ def _percentiles(seconds, budget: float) -> dict:
     return latency_summary(seconds, budget=budget)
 
 
+def _cpu(seconds) -> dict:
+    """Percentiles of per-frame CPU seconds (process, all threads), as :func:`_percentiles`."""
+    from compensation.stream import latency_summary
+
+    return latency_summary(seconds)
+
+
 def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
-                 threads: int | None = None, paper: bool = True) -> dict:
+                 threads: int | None = None, paper: bool = True,
+                 baseline: str | None = BASELINE_ENGINE) -> dict:
     """Per-frame latency of the TI-size stream replayed at its frame rate.
 
     A capture of ``frames`` consecutive raw IF frames ``[128 chirps, 12
@@ -343,10 +359,16 @@ def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
     poses, and the exact projection onto the 61 x 61 grid into the stream's
     beam buffer. Wall clock (``time.perf_counter``).
 
+    With a ``baseline`` engine the same frames also go through a second stream
+    on that engine; the two streams alternate in blocks of
+    :data:`STREAM_BLOCK` frames (each block replayed at the frame rate), so
+    that both see the same load, and each case gives the ratio of their p50
+    and p95 service times.
+
     Parameters
     ----------
     frames : int
-        Frames replayed per gate count (>= 1; the bench uses 200).
+        Frames replayed per gate count and stream (>= 1; the bench uses 200).
     gate_counts : sequence of int
         Gated range cells (consecutive, centred on the target).
     threads : int, optional
@@ -355,6 +377,13 @@ def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
         Also project :data:`PAPER_CHIRPS` chirps of the paper frame (256 x 400
         x 600, one slot, 20 x 20 array, one gate, same grid) and scale to its
         256 chirps: what the paper frame needs against its 15.36 ms.
+    baseline : str or None
+        Engine of the baseline stream (one of ``compensation.realtime.ENGINES``;
+        default ``"avx2"``, the compiled kernel without its AVX-512 copy), or
+        None for none. Where it runs the same copy as the default engine (a CPU
+        without AVX-512) it is skipped and the result says so. The paper frame's
+        baseline is that engine with ``factorised=False`` (one steering phase per
+        channel).
 
     Returns
     -------
@@ -365,16 +394,23 @@ def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
         time), ``over_budget`` and ``p95_within_budget``; ``stages`` (p50 and
         p95 of each stage over a second, back-to-back pass of the same frames,
         the Doppler FFT and power of the beams, which the stream leaves to its
-        user, included there) and ``realtime_factor_p95`` (frame time / p95
-        service time). ``load_average`` before and after.
+        user, included there), ``realtime_factor_p95`` (frame time / p95
+        service time), ``cpu`` (percentiles of each frame's CPU seconds, all
+        threads: its cost, robust to other processes on the cores) and, with a
+        baseline, ``baseline`` (its engine, latency, service and cpu),
+        ``speedup_p50`` / ``speedup_p95`` (baseline service time / this one's)
+        and ``cpu_ratio_p50`` (baseline CPU p50 / this one's).
+        ``load_average`` before and after.
     """
     import compensation
-    from compensation.realtime import RealtimeProjector, compiled_isa
+    from compensation.realtime import ENGINES, RealtimeProjector, compiled_isa
     from compensation.stream import RealtimeStream, replay
 
     n_frames = int(frames)
     if n_frames < 1:
         raise ValueError(f"frames must be a positive count, got {frames!r}")
+    if baseline is not None and baseline not in ENGINES:
+        raise ValueError(f"baseline must be one of {ENGINES} or None, got {baseline!r}")
     s = ti_setup()
     cfg, arr = s["config"], s["array"]
     cube = s["cube"].astype(np.complex64)
@@ -386,12 +422,15 @@ def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
                                           initial_velocity=s["initial_velocity"],
                                           vibration_hz=MOTION_BAND_HZ)
 
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     out = {
         "frames": n_frames, "frame_shape": list(cube.shape), "tdm_slots": cfg.num_tx_slots,
         "frame_duration_s": budget, "grid": [int(s["azimuth"].size), int(s["elevation"].size)],
         "clock": "wall (time.perf_counter), every frame (no best-of)",
-        "cpu_count": os.cpu_count(), "compiled_kernel": compiled_isa(),
+        "cpu_count": os.cpu_count(), "cpus_of_process": cpus, "compiled_kernel": compiled_isa(),
         "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "default"),
+        "threading": "the compiled kernel starts its threads per call and joins them (no "
+                     "OpenMP team: nothing spins between frames, whatever OMP_WAIT_POLICY)",
         "included": ["Hann range transform of the raw complex64 IF frame at the gated bins "
                      "(DFT of those bins, compiled, one thread)",
                      "strapdown of the frame's IMU samples to its 384 slot poses",
@@ -403,19 +442,39 @@ def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
                   "arrival (a late frame waits for the one before it)",
         "load_average": {"before": list(os.getloadavg())}, "cases": [],
     }
+
+    def projector(gates, engine):
+        return RealtimeProjector(arr.virtual_positions, channel_slot=arr.tx_slot,
+                                 threads=threads, wavelength=cfg.center_wavelength,
+                                 range_axis=cfg.range_axis(), range_gates=gates,
+                                 azimuth=s["azimuth"], elevation=s["elevation"], engine=engine)
+
     for n_gate in gate_counts:
         g0 = s["target_gate"] - n_gate // 2
         gates = np.arange(g0, g0 + n_gate)
-        proj = RealtimeProjector(arr.virtual_positions, channel_slot=arr.tx_slot,
-                                 threads=threads, wavelength=cfg.center_wavelength,
-                                 range_axis=cfg.range_axis(), range_gates=gates,
-                                 azimuth=s["azimuth"], elevation=s["elevation"])
-        stream = RealtimeStream(proj)
-        for _ in range(3):                                           # warm-up
-            stream.process(cube, strapdown)
-        timing = [t for _, t in replay(stream, ((cube, strapdown) for _ in range(n_frames)),
-                                       frame_period=budget)]
-        service = [t.service for t in timing]
+        proj = projector(gates, "auto")
+        runs = {"engine": RealtimeStream(proj)}
+        base_proj = None
+        if baseline is not None and compiled_isa() == "missing" and baseline != "numpy":
+            out["baseline"] = f"skipped: engine {baseline!r} needs the compiled kernel, " \
+                              "not built here"
+        elif baseline is not None:
+            base_proj = projector(gates, baseline)
+            if base_proj.engine == proj.engine:
+                out["baseline"] = f"skipped: engine {baseline!r} runs the same copy " \
+                                  f"({proj.engine}) as the default engine here"
+                base_proj = None
+        if base_proj is not None:
+            runs["baseline"] = RealtimeStream(base_proj)
+        timing = {k: [] for k in runs}
+        for stream in runs.values():
+            for _ in range(3):                                       # warm-up
+                stream.process(cube, strapdown)
+        for first in range(0, n_frames, STREAM_BLOCK):
+            block = min(STREAM_BLOCK, n_frames - first)
+            for key, stream in runs.items():
+                timing[key] += [t for _, t in replay(
+                    stream, ((cube, strapdown) for _ in range(block)), frame_period=budget)]
         # the stages apart, back to back (clock read between them)
         shape = (cube.shape[0], n_gate, *out["grid"])
         dop = DopplerPower(shape, threads=proj.threads)
@@ -435,23 +494,38 @@ def bench_stream(*, frames: int = STREAM_FRAMES, gate_counts=GATE_COUNTS,
             t4 = time.perf_counter()
             for key, dt in zip(split, (t1 - t0, t2 - t1, t3 - t2, t4 - t3), strict=True):
                 split[key].append(dt)
-        svc = _percentiles(service, budget)
-        out["cases"].append({
+        svc = _percentiles([t.service for t in timing["engine"]], budget)
+        case = {
             "gates": int(n_gate), "threads": proj.threads, "engine": proj.engine,
-            "latency": _percentiles([t.latency for t in timing], budget), "service": svc,
-            "realtime_factor_p95": budget / svc["p95_s"],
+            "latency": _percentiles([t.latency for t in timing["engine"]], budget),
+            "service": svc, "realtime_factor_p95": budget / svc["p95_s"],
+            "cpu": _cpu([t.cpu for t in timing["engine"]]),
             "stages": {k: {"p50_s": float(np.percentile(v, 50)),
                            "p95_s": float(np.percentile(v, 95))} for k, v in split.items()},
-        })
+        }
+        if "baseline" in timing:
+            b_svc = _percentiles([t.service for t in timing["baseline"]], budget)
+            case["baseline"] = {
+                "engine": base_proj.engine, "service": b_svc,
+                "latency": _percentiles([t.latency for t in timing["baseline"]], budget),
+                "cpu": _cpu([t.cpu for t in timing["baseline"]])}
+            case["speedup_p50"] = b_svc["p50_s"] / svc["p50_s"]
+            case["speedup_p95"] = b_svc["p95_s"] / svc["p95_s"]
+            case["cpu_ratio_p50"] = case["baseline"]["cpu"]["p50_s"] / case["cpu"]["p50_s"]
+        out["cases"].append(case)
     if paper:
-        out["paper_frame"] = _paper_frame_need(threads)
+        out["paper_frame"] = _paper_frame_need(threads, baseline)
     out["load_average"]["after"] = list(os.getloadavg())
     return out
 
 
-def _paper_frame_need(threads: int | None) -> dict:
-    """Wall time of the paper frame's stream (1 gate, 61 x 61 grid) against its frame time."""
-    from compensation.realtime import RealtimeProjector
+def _paper_frame_need(threads: int | None, baseline: str | None = None) -> dict:
+    """Wall time of the paper frame's stream (1 gate, 61 x 61 grid) against its frame time.
+
+    With a ``baseline`` engine also that engine with ``factorised=False`` (one
+    steering phase per channel, the form before the lattice one) and the ratio.
+    """
+    from compensation.realtime import RealtimeProjector, compiled_isa
     from compensation.strapdown import static_motion
     from compensation.stream import RealtimeStream
     from raysim.scenario import scenario_from_case
@@ -461,27 +535,125 @@ def _paper_frame_need(threads: int | None) -> dict:
     n = PAPER_CHIRPS
     off = np.deg2rad(np.linspace(-30.0, 30.0, 61))
     gate = cfg.num_samples // 4
-    proj = RealtimeProjector(arr.virtual_positions, wavelength=cfg.center_wavelength,
-                             range_axis=cfg.range_axis(), range_gates=[gate], azimuth=off,
-                             elevation=off.copy(), threads=threads)
-    stream = RealtimeStream(proj)
     k = np.arange(cfg.num_samples)
-    frame = np.broadcast_to(np.exp(2j * np.pi * gate * k / cfg.num_samples),
-                            (n, arr.num_channels, cfg.num_samples)).astype(np.complex64)
+    # a contiguous frame, as an ADC delivers it (a broadcast view would be copied per frame)
+    frame = np.ascontiguousarray(np.broadcast_to(
+        np.exp(2j * np.pi * gate * k / cfg.num_samples),
+        (n, arr.num_channels, cfg.num_samples)), dtype=np.complex64)
     motion = static_motion(np.arange(n) * cfg.chirp_duration)
-    stream.process(frame, motion)                                    # warm-up
-    walls = []
-    for _ in range(3):
-        t0 = time.perf_counter()
-        stream.process(frame, motion)
-        walls.append(time.perf_counter() - t0)
-    wall = float(np.median(walls)) * cfg.num_chirps / n
-    return {"frame_shape": [cfg.num_chirps, arr.num_channels, cfg.num_samples],
-            "gates": 1, "grid": [61, 61], "threads": proj.threads, "engine": proj.engine,
-            "measured_chirps": n, "wall_s": wall, "frame_duration_s": cfg.frame_duration,
-            "speedup_needed": wall / cfg.frame_duration,
-            "clock": f"wall, median of 3 frames of {n} chirps, scaled by "
-                     f"{cfg.num_chirps}/{n} (constant cost per chirp)",
-            "layout": "400 channels in one slot on a 20 x 20 grid: not on a line, so the "
-                      "channel sum is a product with 400 steering phases per chirp and "
-                      "direction"}
+
+    def wall(engine, factorised=True):
+        proj = RealtimeProjector(arr.virtual_positions, wavelength=cfg.center_wavelength,
+                                 range_axis=cfg.range_axis(), range_gates=[gate], azimuth=off,
+                                 elevation=off.copy(), threads=threads, engine=engine,
+                                 factorised=factorised)
+        stream = RealtimeStream(proj)
+        stream.process(frame, motion)                                # warm-up
+        walls = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            stream.process(frame, motion)
+            walls.append(time.perf_counter() - t0)
+        return float(np.median(walls)) * cfg.num_chirps / n, proj
+
+    seconds, proj = wall("auto")
+    out = {"frame_shape": [cfg.num_chirps, arr.num_channels, cfg.num_samples],
+           "gates": 1, "grid": [61, 61], "threads": proj.threads, "engine": proj.engine,
+           "measured_chirps": n, "wall_s": seconds, "frame_duration_s": cfg.frame_duration,
+           "speedup_needed": seconds / cfg.frame_duration,
+           "clock": f"wall, median of 3 frames of {n} chirps, scaled by "
+                    f"{cfg.num_chirps}/{n} (constant cost per chirp)",
+           "layout": "400 channels in one slot on a 20 x 20 lattice: the compiled kernel "
+                     "sums them by Horner's rule along rows and across rows (3 steering "
+                     "phases per chirp and direction, 400 complex products per gate); the "
+                     "NumPy engine by a product with 400 steering phases"}
+    if baseline is not None and (baseline == "numpy" or compiled_isa() != "missing"):
+        # the baseline engine with one steering phase per channel (the general form)
+        b_seconds, b_proj = wall(baseline, factorised=False)
+        out["baseline"] = {"engine": b_proj.engine, "factorised": False, "wall_s": b_seconds,
+                           "speedup": b_seconds / seconds}
+    return out
+
+
+def _table(result: dict) -> str:
+    """Short text table of :func:`bench_stream`'s result (milliseconds)."""
+    ms = 1e3
+    lines = [f"TI frame {result['frame_shape']}, {result['tdm_slots']} TDM slots, grid "
+             f"{result['grid'][0]} x {result['grid'][1]}, frame time "
+             f"{result['frame_duration_s'] * ms:.2f} ms; {result['frames']} frames per stream; "
+             f"clock {result['clock']}",
+             f"kernel {result['compiled_kernel']}, CPUs of the process "
+             f"{result['cpus_of_process']} (of {result['cpu_count']}), OMP_WAIT_POLICY "
+             f"{result['omp_wait_policy']}, load average before "
+             f"{result['load_average']['before'][0]:.2f} after "
+             f"{result['load_average']['after'][0]:.2f}",
+             "gates  engine    threads  service p50 / p95 / p99 ms   over frame  "
+             "latency p95  CPU p50 ms | baseline  service p50 / p95  CPU p50 ms  "
+             "speedup p50 / p95  CPU ratio"]
+    for c in result["cases"]:
+        sv = c["service"]
+        row = (f"{c['gates']:>5}  {c['engine']:<8}  {c['threads']:>7}  "
+               f"{sv['p50_s'] * ms:7.2f} / {sv['p95_s'] * ms:6.2f} / {sv['p99_s'] * ms:6.2f}"
+               f"   {sv['over_budget']:9.1%}  {c['latency']['p95_s'] * ms:11.2f}"
+               f"  {c['cpu']['p50_s'] * ms:10.2f} |")
+        if "baseline" in c:
+            b = c["baseline"]["service"]
+            row += (f" {c['baseline']['engine']:<8}  {b['p50_s'] * ms:6.2f} / "
+                    f"{b['p95_s'] * ms:6.2f}  {c['baseline']['cpu']['p50_s'] * ms:10.2f}  "
+                    f"{c['speedup_p50']:7.2f} / {c['speedup_p95']:5.2f}  "
+                    f"{c['cpu_ratio_p50']:9.2f}")
+        lines.append(row)
+    if isinstance(result.get("baseline"), str):
+        lines.append(f"baseline {result['baseline']}")
+    pf = result.get("paper_frame")
+    if pf:
+        line = (f"paper frame {pf['frame_shape']}, 1 gate, {pf['engine']}: "
+                f"{pf['wall_s'] * ms:.0f} ms per frame against {pf['frame_duration_s'] * ms:.2f}"
+                f" ms, {pf['speedup_needed']:.1f}x short of real time")
+        if "baseline" in pf:
+            b = pf["baseline"]
+            line += (f" (baseline {b['engine']}, one steering phase per channel: "
+                     f"{b['wall_s'] * ms:.0f} ms)")
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    """``python -m raysim.bench.realtime``: :func:`bench_stream`, a table, JSON with ``--out``."""
+    import argparse
+    import json
+
+    ap = argparse.ArgumentParser(
+        prog="python -m raysim.bench.realtime",
+        description="Real-time stream benchmark: TI frames replayed at the frame rate through "
+                    "compensation.RealtimeStream, p50/p95/p99 service and latency per gated-"
+                    "cell count, against a baseline engine in the same run.")
+    ap.add_argument("--frames", type=int, default=STREAM_FRAMES,
+                    help=f"frames per stream and gate count (default {STREAM_FRAMES})")
+    ap.add_argument("--gates", default=",".join(map(str, GATE_COUNTS)),
+                    help="gated-cell counts, comma separated (default 1,3,8)")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="projector threads (default: the CPUs of this process, at most 8)")
+    ap.add_argument("--baseline", default=BASELINE_ENGINE,
+                    help=f"engine of the baseline stream, or 'none' (default {BASELINE_ENGINE})")
+    ap.add_argument("--no-paper", action="store_true", help="skip the paper frame")
+    ap.add_argument("--out", metavar="FILE.json", help="also write the results as JSON")
+    args = ap.parse_args(argv)
+    try:
+        gates = [int(g) for g in args.gates.split(",")]
+    except ValueError:
+        ap.error(f"--gates must be comma-separated integers, got {args.gates!r}")
+    if min(gates) < 1 or args.frames < 1 or (args.threads is not None and args.threads < 1):
+        ap.error("--gates, --frames and --threads must be positive")
+    result = bench_stream(frames=args.frames, gate_counts=gates, threads=args.threads,
+                          paper=not args.no_paper,
+                          baseline=None if args.baseline == "none" else args.baseline)
+    print(_table(result))
+    if args.out:
+        with open(args.out, "w", encoding="utf-8") as f:
+            json.dump(result, f, indent=2)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

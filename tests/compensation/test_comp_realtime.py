@@ -38,11 +38,21 @@ def _cube(rng, n, m, r):
         np.complex64)
 
 
-#: The compiled kernel's copies where the extension is built; the NumPy engine always.
+#: The compiled kernel's copies where the extension is built (``"compiled"`` is the
+#: AVX-512 copy on a CPU with AVX-512, ``"avx2"`` the copy without it); the NumPy engine
+#: always.
 BUILT = compiled_isa() != "missing"
 ENGINE_CASES = ["numpy"] + [pytest.param(e, marks=pytest.mark.skipif(
     not BUILT, reason="extension compensation._native._ext not built")) for e in ("compiled",
+                                                                               "avx2",
                                                                                "portable")]
+
+
+def _expected_engine(engine: str) -> str:
+    """The copy an engine runs here: the kernel's dispatch for its request."""
+    from compensation.realtime import _ISA_REQUEST, _ext
+
+    return engine if engine == "numpy" else _ext.isa(_ISA_REQUEST[engine])
 
 
 def _compare(rc, p, motion, *, slot=None, weights=None, gate_block=8, threads=2,
@@ -51,7 +61,7 @@ def _compare(rc, p, motion, *, slot=None, weights=None, gate_block=8, threads=2,
                                 weights=weights, gate_block=gate_block, **kw)
     proj = RealtimeProjector(p, channel_slot=slot, weights=weights, gate_block=gate_block,
                              chirp_block=5, threads=threads, engine=engine, **kw)
-    assert proj.engine == (compiled_isa() if engine == "compiled" else engine)
+    assert proj.engine == _expected_engine(engine)
     out = proj.project(rc, motion)
     assert out.data.shape == ref.data.shape and out.data.dtype == np.complex64
     np.testing.assert_allclose(out.chirp_time, ref.chirp_time)
@@ -84,8 +94,9 @@ def test_tdm_ti_layout_equals_direct_engine(threads, gate_block, engine):
 
 @pytest.mark.parametrize("engine", ENGINE_CASES)
 def test_grid_layout_with_taper_and_large_motion_equals_direct_engine(engine):
-    """8 x 8 UPA in one slot (matrix-product form), taper, 10 cm displacements at 1-3 m
-    (per-gate phases beyond the Taylor range, so the sin/cos path is used too)."""
+    """8 x 8 UPA in one slot (the kernel's lattice form, the NumPy engine's matrix product),
+    taper, 10 cm displacements at 1-3 m (per-gate phases beyond the Taylor range, so the
+    sin/cos path is used too)."""
     rng = np.random.default_rng(5)
     ix, iy = np.divmod(np.arange(64), 8)
     p = np.stack([ix * LAM / 2, iy * LAM / 2, np.zeros(64)], axis=1)
@@ -155,6 +166,50 @@ def test_bad_frame_is_refused():
 
 
 @pytest.mark.parametrize("engine", ENGINE_CASES)
+@pytest.mark.parametrize("rows, cols, jitter", [(20, 20, 0.0), (5, 6, 0.0), (6, 6, 2e-4)])
+def test_lattice_and_general_layouts_equal_direct_engine(rows, cols, jitter, engine):
+    """A 20 x 20 lattice (the paper array: 19 + 19 Horner steps in float32) and a 5 x 6 one
+    (rows of 6) take the kernel's lattice form; the same 6 x 6 layout with its positions
+    moved by up to 0.2 mm is no lattice and takes the general form (one steering phase per
+    channel). 8 cm displacements at 1-3 m, 8 gates in one block."""
+    from compensation.realtime import _lattice
+
+    rng = np.random.default_rng(11)
+    m = rows * cols
+    i2, i1 = np.divmod(np.arange(m), cols)
+    p = np.stack([i2 * 0.6 * LAM, i1 * LAM / 2, np.zeros(m)], axis=1)
+    p += rng.uniform(-jitter, jitter, p.shape)
+    assert _lattice(p) == (0 if jitter else cols)
+    n, r = 4, 24
+    motion = _motion(rng, n, disp_m=0.08, angle_rad=0.2)
+    rc = _cube(rng, n, m, r)
+    kw = dict(wavelength=LAM, range_axis=np.linspace(1.0, 3.0, r),
+              azimuth=np.deg2rad(np.linspace(-40, 40, 9)), elevation=np.deg2rad([-10.0, 5.0, 20.0]),
+              range_gates=np.arange(8, 16), gate_block=8, engine=engine)
+    _compare(rc, p, motion, **kw)
+    # factorised=False: every channel with its own steering phase, the same beams
+    general = RealtimeProjector(p, factorised=False, **kw)
+    assert all(sl.line is None and sl.lattice == 0 for sl in general.slots)
+    a = RealtimeProjector(p, **kw).project(rc, motion).data
+    b = general.project(rc, motion).data
+    assert np.abs(a - b).max() < RT_TOL * np.abs(b).max()
+
+
+def test_lattice_detection():
+    """Row-major lattices only: a line, a ragged count, a missing row, a shear are not."""
+    from compensation.realtime import _lattice
+
+    i2, i1 = np.divmod(np.arange(12), 4)
+    grid = np.stack([i1 * 1e-3, i2 * 2e-3, np.zeros(12)], axis=1)
+    assert _lattice(grid) == 4
+    sheared = grid + np.stack([i2 * 0.5e-3, np.zeros(12), (i1 * i2) * 1e-4], axis=1)
+    assert _lattice(sheared) == 0                          # not p0 + i1 a + i2 b
+    assert _lattice(grid[:10]) == 0                        # 10 channels in rows of 4
+    assert _lattice(grid[:4]) == 0                         # one row: a line, not a lattice
+    assert _lattice(np.zeros((6, 3))) == 0                 # no step
+
+
+@pytest.mark.parametrize("engine", ENGINE_CASES)
 def test_grid_across_direction_chunks_equals_direct_engine(engine):
     """17 x 19 = 323 directions (more than the kernel's chunk of 256), TDM slots, 8 cm
     displacements at 1.2-2 m (per-gate phases beyond the Taylor range in part of the grid)."""
@@ -178,10 +233,10 @@ def test_without_extension_auto_is_the_numpy_engine(monkeypatch):
     monkeypatch.setattr(rt, "_ext", None)
     assert rt.compiled_isa() == "missing"
     assert RealtimeProjector(p, **kw).engine == "numpy"
-    for engine in ("compiled", "portable"):
+    for engine in ("compiled", "avx2", "portable"):
         with pytest.raises(ValueError, match=f"engine='{engine}' needs the compiled extension"):
             RealtimeProjector(p, engine=engine, **kw)
-    assert set(ENGINES) == {"auto", "compiled", "portable", "numpy"}
+    assert set(ENGINES) == {"auto", "compiled", "avx2", "portable", "numpy"}
 
 
 def test_bench_doppler_power_is_the_power_of_the_beams_doppler_spectrum():
@@ -260,6 +315,39 @@ def test_gated_range_transform_is_the_range_fft_at_the_gates(engine, real):
         proj.project(got, motion, gated=True, out=np.empty(full.shape, np.complex128))
     with pytest.raises(ValueError, match="not a scipy.signal window name"):
         proj.gated_range_transform(x, window="no-such-window")
+
+
+@pytest.mark.skipif(not BUILT, reason="extension compensation._native._ext not built")
+def test_kernel_beams_do_not_depend_on_the_thread_count():
+    """Each (chirp, direction chunk) item is computed whole by one thread: 1, 2 and 5
+    threads (more than the items of a chirp) give the same beams, bit for bit."""
+    rng = np.random.default_rng(13)
+    p, slot = _ti_positions()
+    n, r = 5, 20
+    motion = _motion(rng, 3 * n)
+    rc = _cube(rng, n, 12, r)
+    kw = dict(channel_slot=slot, wavelength=LAM, range_axis=np.linspace(2.0, 4.0, r),
+              azimuth=np.deg2rad(np.linspace(-50, 50, 23)), elevation=np.deg2rad([0.0, 9.0]),
+              range_gates=[3, 4, 5])
+    beams = [RealtimeProjector(p, threads=t, **kw).project(rc, motion).data for t in (1, 2, 5)]
+    np.testing.assert_array_equal(beams[0], beams[1])
+    np.testing.assert_array_equal(beams[0], beams[2])
+
+
+@pytest.mark.skipif(not BUILT, reason="extension compensation._native._ext not built")
+def test_gated_range_transform_on_threads_equals_one_thread(monkeypatch):
+    """Above DFT_THREADED_MACS the compiled DFT runs on the projector's threads: each row is
+    the same sum, so the result is the one-thread result, bit for bit."""
+    import compensation.realtime as rt
+
+    rng = np.random.default_rng(12)
+    p, slot = _ti_positions()
+    x = _cube(rng, 9, 12, 96)
+    proj = RealtimeProjector(p, channel_slot=slot, wavelength=LAM, range_axis=np.arange(96.0),
+                             azimuth=[0.0], elevation=[0.0], range_gates=[3, 4, 50], threads=2)
+    one = proj.gated_range_transform(x).copy()
+    monkeypatch.setattr(rt, "DFT_THREADED_MACS", 0)
+    np.testing.assert_array_equal(proj.gated_range_transform(x), one)
 
 
 def test_bench_doppler_power_buffers_follow_each_frame():

@@ -74,6 +74,26 @@ def test_stream_equals_direct_engine_on_the_range_fft_of_each_frame(engine, real
     assert stream.frames == 3
 
 
+@pytest.mark.parametrize("engine", ENGINE_CASES)
+def test_callable_motion_overlapping_the_range_transform_gives_the_same_beams(engine):
+    """A callable motion runs while the kernel's thread takes the range transform: the
+    beams are those of the same motion given as a PlatformMotion, bit for bit; a callable
+    that raises leaves the stream usable."""
+    rng = np.random.default_rng(25)
+    proj, _, _ = _projector(engine)
+    x, m = _if_frame(rng, 6), _motion(rng, 18)
+    direct = RealtimeStream(proj, copy=True).process(x, m).data
+    stream = RealtimeStream(proj, copy=True)
+    np.testing.assert_array_equal(stream.process(x, lambda: m).data, direct)
+
+    def broken():
+        raise RuntimeError("IMU record ends early")
+
+    with pytest.raises(RuntimeError, match="IMU record ends early"):
+        stream.process(x, broken)
+    np.testing.assert_array_equal(stream.process(x, lambda: m).data, direct)
+
+
 def test_static_tone_at_a_gate_gives_unit_beams_closed_form():
     """Static platform, one unit tone at bin 6 on every channel, no window: beam 1 at broadside.
 
@@ -127,7 +147,9 @@ def test_replay_paces_frames_and_measures_latency_from_arrival():
             return super().process(samples, motion)
 
     x, m = _if_frame(rng, 6), _motion(rng, 18)
-    out = list(replay(Slow(proj), [(x, m)] * 4, frame_period=0.010, clock=clock, sleep=sleep))
+    cpu = iter(np.arange(8) * 0.003)                      # 3 ms of CPU per frame
+    out = list(replay(Slow(proj), [(x, m)] * 4, frame_period=0.010, clock=clock, sleep=sleep,
+                      cpu_clock=lambda: next(cpu)))
     timing = [t for _, t in out]
     assert all(isinstance(t, FrameTiming) for t in timing)
     # frame 0 at 100.000 done 100.004; frame 1 at 100.010 done 100.035; frame 2 arrived at
@@ -136,6 +158,7 @@ def test_replay_paces_frames_and_measures_latency_from_arrival():
                                atol=1e-12)
     np.testing.assert_allclose([t.service for t in timing], [0.004, 0.025, 0.004, 0.004],
                                atol=1e-12)
+    np.testing.assert_allclose([t.cpu for t in timing], [0.003] * 4, atol=1e-12)
     np.testing.assert_allclose(slept, [0.006])
     s = latency_summary([t.latency for t in timing], budget=0.010)
     assert s["frames"] == 4 and s["p50_s"] == pytest.approx(0.016)
@@ -188,6 +211,16 @@ def test_bench_stream_json_has_the_percentiles_per_gate_count():
         assert case["realtime_factor_p95"] > 0 and case["threads"] == 1
         assert set(case["stages"]) == {"gated_range_transform", "strapdown", "projection",
                                        "doppler_and_power"}
+        assert case["cpu"]["frames"] == 3 and case["cpu"]["p50_s"] > 0
+        # the baseline stream (engine "avx2") where it runs another copy than the default
+        if case["engine"] in ("avx512",):
+            assert case["baseline"]["engine"] == "avx2"
+            assert case["baseline"]["service"]["frames"] == 3
+            assert case["speedup_p95"] > 0 and case["cpu_ratio_p50"] > 0
+        else:
+            assert "baseline" not in case and got["baseline"].startswith("skipped")
     with pytest.raises(ValueError, match="frames must be a positive count, got 0"):
         bench_stream(frames=0)
+    with pytest.raises(ValueError, match="baseline must be one of"):
+        bench_stream(frames=1, baseline="fast")
 
