@@ -48,7 +48,9 @@ What it cannot observe
   at the beams' directions, not at the scatterer's.
 * TDM: the beams sum every slot, so the estimate is stamped with the mean slot
   time of each chirp (the spread over one chirp's slots, ``2 k |d'| dT``, is
-  not corrected), as in :mod:`compensation.autofocus`.
+  not corrected in the beams), as in :mod:`compensation.autofocus`; a
+  per-channel cube is corrected at each slot's own time in one direction
+  (:meth:`DisplacementFocus.phase_at`).
 
 Uncertainty: the posterior covariance ``C`` scaled by the reduced chi-square
 of the fit when above 1 (model error: a cell's beam not exactly at its
@@ -160,11 +162,29 @@ class DisplacementFocus:
 
     def phase(self, u) -> np.ndarray:
         """Phase ``4 pi / lambda d_n . u`` [rad] at directions ``u [..., 3]``: ``[chirp, ...]``."""
+        u = np.asarray(u, float)
         if self.common is not None:
-            u = np.asarray(u, float)
             return np.broadcast_to(self.common.phase.reshape((-1,) + (1,) * (u.ndim - 1)),
                                    (self.time.size,) + u.shape[:-1])
         return 4 * np.pi / self.wavelength * np.tensordot(self.displacement, u, axes=([1], [-1]))
+
+    def displacement_at(self, times) -> np.ndarray:
+        """``d`` at ``times`` [s] of any shape (cubic spline through :attr:`displacement`):
+        ``[*times.shape, 3]`` [m], e.g. each TDM slot's time ``[chirp, slot]``."""
+        from scipy.interpolate import CubicSpline
+
+        t = finite_array("times", times)
+        return CubicSpline(self.time, self.displacement, axis=0, extrapolate=True)(t)
+
+    def phase_at(self, times, u) -> np.ndarray:
+        """Phase [rad] at ``times`` [s] (any shape, e.g. ``[chirp, slot]``) in one
+        direction ``u [3]``: a per-channel TDM cube is corrected at each slot's own time."""
+        u = np.asarray(u, float)
+        if u.shape != (3,):
+            raise ValueError(f"u must be one unit vector of shape (3,), got {u.shape}")
+        if self.common is not None:
+            return self.common.phase_at(times)
+        return 4 * np.pi / self.wavelength * (self.displacement_at(times) @ u)
 
     def report(self) -> dict:
         """Plain-number summary (SI units) for output attributes and JSON."""

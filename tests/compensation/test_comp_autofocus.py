@@ -571,3 +571,22 @@ def test_displacement_velocity_of_stationary_cells():
     assert rep["velocity_mps"] == pytest.approx(list(est.velocity))
     for r, az, el, _ in URA_TARGETS:
         assert _leakage_db(_slow_time(focused, r, az, el)) <= LEAKAGE_DB, (az, el)
+
+
+def test_displacement_at_tdm_slot_times():
+    """Stamped at the mean slot time; evaluated at every slot's own time (cubic spline,
+    exact for tones well below half the chirp rate), in one direction."""
+    from compensation.autofocus_displacement import estimate_displacement
+
+    t = np.arange(128) * 100e-6
+    beams, _ = _ura_beams(_vector_vibration(t))
+    slots = t[:, None] + np.array([0.0, 30e-6, 60e-6])[None, :]
+    est = estimate_displacement(beams, slot_times=slots)
+    assert np.allclose(est.time, t + 30e-6)
+    assert np.allclose(est.displacement_at(est.time), est.displacement)
+    u = direction(np.deg2rad(16.0), np.deg2rad(-10.0))
+    ph = est.phase_at(slots, u)                                        # [chirp, slot]
+    assert ph.shape == slots.shape
+    assert np.allclose(ph[:, 1], est.phase(u))           # the middle slot: the stamp
+    with pytest.raises(ValueError, match="unit vector"):
+        est.phase_at(slots, np.ones((2, 3)))
