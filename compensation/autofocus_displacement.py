@@ -226,6 +226,8 @@ def _cell_phases(g: np.ndarray, q: np.ndarray) -> np.ndarray:
 def _main_lobes(x: np.ndarray, sel: np.ndarray, cell_shape: tuple) -> np.ndarray:
     """The selected cells less those :data:`SIDELOBE_DB` or more below the strongest of their
     range gate: a sidelobe carries its scatterer's phase at another beam's direction."""
+    if sel.size == 0:
+        return sel
     p = np.mean(np.abs(x[:, sel]) ** 2, axis=0)
     gate = np.unravel_index(sel, cell_shape)[0]
     top = np.zeros(int(gate.max()) + 1)
@@ -234,13 +236,13 @@ def _main_lobes(x: np.ndarray, sel: np.ndarray, cell_shape: tuple) -> np.ndarray
 
 
 def _fallback(beams, slot_times, options, text, lam, t, cells, it, ev, axes, prior):
-    _warnings.warn(text, CompensationWarning, stacklevel=3)
-    with _warnings.catch_warnings():
-        _warnings.simplefilter("ignore", CompensationWarning)   # its own, carried below
-        _, common = autofocus_beams(beams, slot_times=slot_times, **options)
+    if cells:                       # none: the common estimate's own warning says so
+        _warnings.warn(text, CompensationWarning, stacklevel=3)
+    _, common = autofocus_beams(beams, slot_times=slot_times, **options)
     n = t.size
     return DisplacementFocus(np.zeros((n, 3)), np.full((n, 3), np.nan), t, lam, cells, it,
-                             ev, axes, (), prior, common, (text, *common.warnings))
+                             ev, axes, (), prior, common,
+                             (text, *common.warnings) if cells else common.warnings)
 
 
 def estimate_displacement(beams: BeamCube, *, slot_times=None, max_cells: int = 32,

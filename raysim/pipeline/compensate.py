@@ -68,12 +68,14 @@ The warnings are the chains' and the integration's assumption warnings
 (:mod:`compensation.guards`), in the output and in
 :attr:`CompensateResult.warnings`.
 
-Autofocus (``autofocus``, ``--autofocus [phase|stationary|displacement]``): after the
-IMU-driven chain, the residual per-chirp phase common to the stationary
+Autofocus (``autofocus``, ``--autofocus [phase|stationary|displacement]``): after
+the IMU-driven chain, the residual per-chirp phase common to the stationary
 scatterers (vibration the IMU log cannot see) is estimated from each frame's
 beams and removed (:func:`compensation.autofocus.autofocus_beams`; TDM: stamped
-at each chirp's mean slot time); its report (rms phase, band, sigma, cells) is
-:attr:`CompensateResult.autofocus`.
+at each chirp's mean slot time); ``displacement``: the residual displacement
+vector, every beam corrected at its own direction
+(:func:`compensation.autofocus_displacement.autofocus_displacement`); its report
+(rms phase, band, sigma, cells) is :attr:`CompensateResult.autofocus`.
 
 Errors name the parameter by its ``raysim compensate`` option (``--frames``,
 ``--range-m`` ...): parameter ``x_y`` is option ``--x-y``.
@@ -140,7 +142,9 @@ class CompensateResult:
         debris of an interrupted writer removed).
     autofocus : list of dict or None
         Per frame, :meth:`compensation.autofocus.Autofocus.report` (rms phase
-        [rad], sigma [rad], band [Hz], cells); None without ``autofocus``.
+        [rad], sigma [rad], band [Hz], cells), or with ``"displacement"``
+        :meth:`compensation.autofocus_displacement.DisplacementFocus.report`;
+        None without ``autofocus``.
     """
 
     out: Path

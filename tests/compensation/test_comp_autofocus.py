@@ -333,7 +333,8 @@ def test_no_vibration_no_harm(tmp_path):
         assert np.all(focused <= imu_only + HARM_DB), mode
 
 
-def test_stage_warns_when_nothing_to_focus_on(tmp_path):
+@pytest.mark.parametrize("mode", [True, "displacement"])
+def test_stage_warns_when_nothing_to_focus_on(tmp_path, mode):
     """Noise only, a platform at rest: the compensate stage leaves the beams as the chain
     made them and says so in its warnings (printed by the command)."""
     from raysim.pipeline.compensate import compensate
@@ -350,7 +351,7 @@ def test_stage_warns_when_nothing_to_focus_on(tmp_path):
     table = np.column_stack([t, np.zeros((t.size, 5)), np.full(t.size, -9.80665)])
     kw = dict(range_m=(5, 10), azimuth_deg=np.arange(-30, 31, 3.0), elevation_deg=[0.0])
     with pytest.warns(CompensationWarning, match="autofocus: no stationary scatterer"):
-        res = compensate(tmp_path / "n.npz", table, out=tmp_path / "f.npz", autofocus=True,
+        res = compensate(tmp_path / "n.npz", table, out=tmp_path / "f.npz", autofocus=mode,
                          **kw)
     plain = compensate(tmp_path / "n.npz", table, out=tmp_path / "p.npz", **kw)
     assert any(w.startswith("autofocus: no stationary scatterer") for w in res.warnings)
