@@ -11,7 +11,10 @@ direction ``u0``. :func:`estimate_displacement` estimates the vector ``d_n``:
 
 1. cells are selected as in :func:`compensation.autofocus.estimate_phase_error`
    (stationary local maxima ``min_snr_db`` above the noise, the ``max_cells``
-   strongest), each with the direction ``u_c`` of its beam;
+   strongest), each with the direction ``u_c`` of its beam; cells
+   :data:`SIDELOBE_DB` or more below the strongest of their range gate are
+   dropped (a sidelobe carries its scatterer's phase at another beam's
+   direction; a weaker scatterer in the same gate goes with them);
 2. each cell's Doppler peak is shifted to zero and its unwrapped phase
    history ``psi_c(n)`` is taken relative to its own constant and linear trend
    (a cell's constant is its position, its linear phase a velocity: the

@@ -123,9 +123,9 @@ GAPS = {
     "1k_no_attitude": "level assumed without the log's attitude: angle 0.741 deg (the "
                       "seed's 0.65 deg pitch), 0.032 bin, -40.3 dB, offset +0.010 ms",
     "250hz_boxcar_log_attitude": "the 250 Hz boxcar folds the rotor band: angle 0.302 deg, "
-                                 "0.068 bin, -28.1 dB, offset +0.225 ms (autofocus on)",
+                                 "0.068 bin, -28.1 dB, offset +0.225 ms (--autofocus stationary)",
     "250hz_boxcar_no_attitude": "250 Hz boxcar and level assumed: angle 0.440 deg, 0.067 "
-                                "bin, -28.0 dB, offset +0.219 ms (autofocus on)",
+                                "bin, -28.0 dB, offset +0.219 ms (--autofocus stationary)",
 }
 
 
