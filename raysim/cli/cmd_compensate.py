@@ -184,12 +184,14 @@ def register(subparsers) -> None:
                    help="target direction for the paper chain's slow-time correction [deg]; "
                    "needed by --chain paper, not used by the others")
     p.add_argument("--autofocus", nargs="?", const="phase", default=None,
-                   choices=("phase", "stationary"),
+                   choices=("phase", "stationary", "displacement"),
                    help="after the IMU-driven chain, estimate the residual per-chirp phase "
                    "common to the stationary scatterers from the beams and remove it (rotor "
                    "vibration a low-rate IMU log cannot see); 'phase' (alone: --autofocus) "
                    "leaves the linear phase (Doppler) as it is, 'stationary' also removes "
-                   "those scatterers' common Doppler (a velocity error along the line of sight)")
+                   "those scatterers' common Doppler (a velocity error along the line of sight), "
+                   "'displacement' estimates the residual displacement vector per chirp and "
+                   "corrects every beam at its own direction")
     p.set_defaults(func=run)
 
 

@@ -68,12 +68,14 @@ The warnings are the chains' and the integration's assumption warnings
 (:mod:`compensation.guards`), in the output and in
 :attr:`CompensateResult.warnings`.
 
-Autofocus (``autofocus``, ``--autofocus [phase|stationary]``): after the
-IMU-driven chain, the residual per-chirp phase common to the stationary
+Autofocus (``autofocus``, ``--autofocus [phase|stationary|displacement]``): after
+the IMU-driven chain, the residual per-chirp phase common to the stationary
 scatterers (vibration the IMU log cannot see) is estimated from each frame's
 beams and removed (:func:`compensation.autofocus.autofocus_beams`; TDM: stamped
-at each chirp's mean slot time); its report (rms phase, band, sigma, cells) is
-:attr:`CompensateResult.autofocus`.
+at each chirp's mean slot time); ``displacement``: the residual displacement
+vector, every beam corrected at its own direction
+(:func:`compensation.autofocus_displacement.autofocus_displacement`); its report
+(rms phase, band, sigma, cells) is :attr:`CompensateResult.autofocus`.
 
 Errors name the parameter by its ``raysim compensate`` option (``--frames``,
 ``--range-m`` ...): parameter ``x_y`` is option ``--x-y``.
@@ -140,7 +142,9 @@ class CompensateResult:
         debris of an interrupted writer removed).
     autofocus : list of dict or None
         Per frame, :meth:`compensation.autofocus.Autofocus.report` (rms phase
-        [rad], sigma [rad], band [Hz], cells); None without ``autofocus``.
+        [rad], sigma [rad], band [Hz], cells), or with ``"displacement"``
+        :meth:`compensation.autofocus_displacement.DisplacementFocus.report`;
+        None without ``autofocus``.
     """
 
     out: Path
@@ -474,12 +478,15 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         clock offset and ``velocity`` hover or given.
     progress : bool
         A progress bar on stderr for records of several frames.
-    autofocus : bool or {"phase", "stationary"}
+    autofocus : bool or {"phase", "stationary", "displacement"}
         After the chain, estimate and remove the residual per-chirp phase
         common to the stationary scatterers (:func:`compensation.autofocus.autofocus_beams`):
         ``True`` or ``"phase"`` leaves the linear phase (Doppler) as it is,
         ``"stationary"`` also removes the common Doppler of those scatterers (a
-        platform velocity error along the line of sight). Not with the chain ``none``.
+        platform velocity error along the line of sight), ``"displacement"``
+        estimates the residual displacement vector per chirp and corrects every
+        beam at its own direction (:mod:`compensation.autofocus_displacement`).
+        Not with the chain ``none``.
 
     Returns
     -------
@@ -495,9 +502,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         disk available (the size and the settings to reduce).
     """
     spec = parse_chain(chain)
-    if autofocus not in (False, None, True, "phase", "stationary"):
-        raise ValueError(f"--autofocus: got {autofocus!r}, expected 'phase' or 'stationary'")
-    doppler = "stationary" if autofocus == "stationary" else "keep"
+    if autofocus not in (False, None, True, "phase", "stationary", "displacement"):
+        raise ValueError(f"--autofocus: got {autofocus!r}, expected 'phase', 'stationary' "
+                         f"or 'displacement'")
+    doppler = "stationary" if autofocus in ("stationary", "displacement") else "keep"
     if autofocus and not spec.compensated:
         raise ValueError(f"--autofocus: follows the IMU-driven chain; the chain {spec.key!r} "
                          f"compensates nothing")
@@ -603,8 +611,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 beams = replace(beams, warnings=(price, *beams.warnings))
             if focus is not None:   # vibration the IMU log cannot see, from the beams
                 from compensation.autofocus import autofocus_beams
+                from compensation.autofocus_displacement import autofocus_displacement
 
-                beams, est = autofocus_beams(beams, slot_times=inp.slot_times[k], doppler=doppler)
+                beams, est = (autofocus_displacement(beams, slot_times=inp.slot_times[k],
+                                                     doppler=doppler)
+                              if autofocus == "displacement" else autofocus_beams(
+                                  beams, slot_times=inp.slot_times[k], doppler=doppler))
                 focus.append(est.report())
             found.extend(w for w in beams.warnings if w not in found)
             results.append(beams)
