@@ -101,7 +101,7 @@ def mount_pattern(pattern, value):
     from raysim.radar.pattern import MountedPattern
 
     return MountedPattern(f"{pattern.name}, mounted {mounting_deg(value)} deg", pattern,
-                          mounting_matrix(value))
+                          tuple(map(tuple, mounting_matrix(value))))
 
 
 def mount_motion(motion, value):
