@@ -373,7 +373,8 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
         (:class:`Reference` or None); ``"seconds"`` (trace and synthesis wall
         times [s]). Traced scenes also: ``"paths"``
         (:class:`raysim.echoes.rt.trace.PathSet`), ``"path_kinds"`` (path count
-        per kind: ``specular``, ``diffuse``, ``target``, ``other_specular``),
+        per kind: ``specular``, ``diffuse``, ``target``, ``po_centre``,
+        ``other_specular``; :func:`path_kinds`),
         ``"tracks"``, ``"movers"`` (the MovingObject of every extra mover),
         ``"scene"`` (the loaded scene), ``"clutter"`` (the field's report,
         empty without it).
