@@ -360,7 +360,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
                                       t0=start, pattern=mount_pattern(cfg.pattern, mount)).data
         if clutter:
             data = data + simulate_point_targets(cfg, mounted, clutter, traj, lever_arm=lever,
-                                                 frame=f, t0=start, pattern=cfg.pattern).data
+                                                 frame=f, t0=start,
+                                                 pattern=mount_pattern(cfg.pattern, mount)).data
         return data
 
     cube = np.stack([frame(f) for f in ks])
