@@ -229,7 +229,8 @@ def test_paper_case_scenarios_and_examples(name):
     s = scenario_from_case(name)
     case = get_case(name)
     assert s.name == name and s.description == case["description"]
-    assert s.radar_config() == RadarConfig(num_chirps=chirps, num_frames=frames)
+    assert s.radar_config() == RadarConfig(num_chirps=chirps, num_frames=frames,
+                                           element_pattern="constant")
     assert s.frames == frames and s.virtual_array().grid_shape == (20, 20)
     np.testing.assert_array_equal(s.lever_arm, DEFAULT_LEVER_ARM)
     want = PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=DEFAULT_LEVER_ARM)

@@ -94,13 +94,13 @@ def test_gate_equals_range_fft_of_synthesised_if():
                          np.rad2deg(0.3), np.rad2deg(-0.2))
     gate, k, r_k = point_gate(scn)
     frame = simulate_point_targets(cfg, arr, [scn.target], scn.trajectory,
-                                   lever_arm=scn.lever_arm_m)
+                                   lever_arm=scn.lever_arm_m, pattern=cfg.pattern)
     ref = range_compress(frame.data)[:, :, k]
     assert k == int(np.argmin(np.abs(cfg.range_axis() - 15.3)))
     assert r_k == cfg.range_axis()[k]
     assert np.max(np.abs(gate - ref)) < GATE_RTOL * np.max(np.abs(ref))
     direct = gated_cube(cfg, arr, scn.trajectory, [scn.target], range_bin=k,
-                        lever_arm=scn.lever_arm_m)
+                        lever_arm=scn.lever_arm_m, pattern=cfg.pattern)
     assert np.array_equal(direct, gate)
     with pytest.raises(ValueError, match="range_bin"):
         gated_cube(cfg, arr, scn.trajectory, [scn.target], range_bin=cfg.num_samples)
@@ -149,7 +149,8 @@ def test_paper_chains_match_compensation_package(chain, phase):
     motion = _truth_pose(scn)
     mine = compensated_slow_time(scn, chain, motion)
     rc = range_compress(simulate_point_targets(cfg, arr, [scn.target], traj,
-                                               lever_arm=scn.lever_arm_m).data)
+                                               lever_arm=scn.lever_arm_m,
+                                               pattern=cfg.pattern).data)
     beams = comp.paper_chain(rc, arr.virtual_positions, motion,
                              wavelength=cfg.center_wavelength, direction=scn.direction,
                              range_axis=cfg.range_axis(), azimuth=[scn.target_az],
@@ -171,7 +172,8 @@ def test_exact_chain_matches_rigid_body_projection():
     motion = _truth_pose(scn)
     mine = compensated_slow_time(scn, "exact", motion)
     rc = range_compress(simulate_point_targets(cfg, arr, [scn.target], traj,
-                                               lever_arm=scn.lever_arm_m).data)
+                                               lever_arm=scn.lever_arm_m,
+                                               pattern=cfg.pattern).data)
     beams = comp.rigid_body_projection(rc, arr.virtual_positions, motion,
                                        wavelength=cfg.center_wavelength,
                                        range_axis=cfg.range_axis(), azimuth=[scn.target_az],

@@ -36,7 +36,7 @@ def nearest_range_bin(config: RadarConfig, range_m: float) -> int:
 
 def gated_cube(config: RadarConfig, array: VirtualArray, trajectory, targets, *, range_bin: int,
                lever_arm=(0.0, 0.0, 0.0), t0: float = 0.0,
-               window_name: str = "hann") -> np.ndarray:
+               window_name: str = "hann", pattern=None) -> np.ndarray:
     """Range-compressed samples of one range gate of static or moving point targets.
 
     Parameters
@@ -56,6 +56,10 @@ def gated_cube(config: RadarConfig, array: VirtualArray, trajectory, targets, *,
     window_name : {"hann"}
         Fast-time window of the range FFT, normalised by its sum as in
         :func:`raysim.processing.maps.range_compress`.
+    pattern : raysim.radar.pattern.ElementPattern, optional
+        Element pattern (e.g. ``config.pattern``), applied at each chirp's pose
+        as in :func:`raysim.echoes.oracle.point_target_delays`; default the
+        constant gain ``config.antenna_gain_dbi``.
 
     Returns
     -------
@@ -78,7 +82,8 @@ def gated_cube(config: RadarConfig, array: VirtualArray, trajectory, targets, *,
     k = config.num_samples
     if not isinstance(range_bin, (int, np.integer)) or not 0 <= range_bin < k:
         raise ValueError(f"range_bin: got {range_bin!r}, expected an integer in [0, {k})")
-    tau, amp = point_target_delays(config, array, trajectory, targets, lever_arm=lever_arm, t0=t0)
+    tau, amp = point_target_delays(config, array, trajectory, targets, lever_arm=lever_arm, t0=t0,
+                                   pattern=pattern)
     fb = config.chirp_rate * tau                                  # [target, chirp, channel]
     phi0 = 2 * np.pi * (config.carrier_frequency * tau - 0.5 * config.chirp_rate * tau * tau)
     nu = fb / config.sample_rate - range_bin / k

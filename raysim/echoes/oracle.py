@@ -18,7 +18,10 @@ Approximations, all documented and all small for a hovering drone:
   :class:`raysim.radar.pattern.ElementPattern`, e.g. ``config.pattern``) replaces
   the constant ``G_t G_r`` by the pattern's gains towards the target from each
   transmit and receive element, in frame A at each instant, as the ray-traced
-  echoes get them;
+  echoes get them. Every pipeline source passes ``config.pattern`` (the
+  scenario's ``[radar] element_pattern``); a ``"constant"`` pattern at
+  ``config.antenna_gain_dbi`` takes the constant-gain branch, so such a
+  scenario renders bit-identically to ``pattern=None``;
 * free space, no multipath (that is the ray tracer's job).
 """
 
@@ -130,7 +133,9 @@ def point_target_delays(config: RadarConfig, array: VirtualArray, trajectory: Tr
 
     ``pattern`` (:class:`raysim.radar.pattern.ElementPattern`, optional) gives
     each transmit and receive element its gain towards the target in frame A;
-    ``None`` keeps the constant gain ``config.antenna_gain_dbi``.
+    ``None``, or a :class:`~raysim.radar.pattern.ConstantGain` at
+    ``config.antenna_gain_dbi``, keeps the constant gain (computed without a
+    pattern factor, so the two are bit-identical).
 
     Returns
     -------
@@ -138,10 +143,12 @@ def point_target_delays(config: RadarConfig, array: VirtualArray, trajectory: Tr
         With ``intra_chirp`` a trailing ``sample`` axis is added.
     amplitude : ndarray, same shape as ``tau`` [sqrt(W)]
     """
-    from raysim.radar.pattern import ElementPattern
+    from raysim.radar.pattern import ConstantGain, ElementPattern
 
     if pattern is not None and not isinstance(pattern, ElementPattern):
         raise ValueError(f"pattern must be an ElementPattern or None, got {type(pattern)}")
+    if isinstance(pattern, ConstantGain) and pattern.gain_dbi == config.antenna_gain_dbi:
+        pattern = None               # the radar equation's constant gain, exactly
     targets = list(targets)
     if not targets:
         raise ValueError("targets is empty: give at least one PointTarget")
@@ -263,10 +270,11 @@ def simulate_point_targets(config: RadarConfig, array: VirtualArray, targets,
 
 
 def point_target_source(config: RadarConfig, array, targets, trajectory=None, *,
-                        lever_arm=(0.0, 0.0, 0.0), t0: float = 0.0):
+                        lever_arm=(0.0, 0.0, 0.0), t0: float = 0.0, pattern=None):
     """Source of the oracle's exact point-target delays for a frame stream.
 
-    For :func:`raysim.synthesis.streaming.render_stream`.
+    For :func:`raysim.synthesis.streaming.render_stream`; ``pattern`` as in
+    :func:`point_target_delays`.
 
     Returns
     -------
@@ -279,6 +287,6 @@ def point_target_source(config: RadarConfig, array, targets, trajectory=None, *,
 
     def source(frame: int):
         return point_target_delays(config, array, trajectory, targets, lever_arm=lever_arm,
-                                   frame=frame, t0=t0)
+                                   frame=frame, t0=t0, pattern=pattern)
 
     return source

@@ -298,7 +298,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     from raysim.io.ti_dca1000 import Dca1000Format, write_dca1000
     from raysim.pipeline.flight_log import flight_log
     from raysim.platform.motion import hover_jitter
-    from raysim.platform.mounting import mount_array, nominal_target_position
+    from raysim.platform.mounting import mount_array, mount_pattern, nominal_target_position
     from raysim.platform.mounting import mounting_deg as mount_ypr
     from raysim.radar.arrays import tdm_mimo
     from raysim.radar.config import RadarConfig
@@ -357,10 +357,11 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         ks = tqdm(ks, unit="frame", desc="flight", file=sys.stderr)
     def frame(f: int) -> np.ndarray:
         data = simulate_point_targets(cfg, mounted, points, traj, lever_arm=lever, frame=f,
-                                      t0=start).data
+                                      t0=start, pattern=mount_pattern(cfg.pattern, mount)).data
         if clutter:
             data = data + simulate_point_targets(cfg, mounted, clutter, traj, lever_arm=lever,
-                                                 frame=f, t0=start, pattern=cfg.pattern).data
+                                                 frame=f, t0=start,
+                                                 pattern=mount_pattern(cfg.pattern, mount)).data
         return data
 
     cube = np.stack([frame(f) for f in ks])

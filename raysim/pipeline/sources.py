@@ -183,7 +183,8 @@ def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFr
         def source(f: int) -> RadarFrame:
             return simulate_point_targets(cfg, arr, targets, traj, lever_arm=lever, frame=f,
                                           intra_chirp=scenario.intra_chirp,
-                                          noise=scenario.noise, seed=scenario.seed + f)
+                                          noise=scenario.noise, seed=scenario.seed + f,
+                                          pattern=cfg.pattern)
 
         source.reference = reference_target(scenario)
         return source
@@ -372,7 +373,8 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
         (:class:`Reference` or None); ``"seconds"`` (trace and synthesis wall
         times [s]). Traced scenes also: ``"paths"``
         (:class:`raysim.echoes.rt.trace.PathSet`), ``"path_kinds"`` (path count
-        per kind: ``specular``, ``diffuse``, ``target``, ``other_specular``),
+        per kind: ``specular``, ``diffuse``, ``target``, ``po_centre``,
+        ``other_specular``; :func:`path_kinds`),
         ``"tracks"``, ``"movers"`` (the MovingObject of every extra mover),
         ``"scene"`` (the loaded scene), ``"clutter"`` (the field's report,
         empty without it).
@@ -473,7 +475,8 @@ def gated_source(config, array, trajectory, targets, *, range_m: float,
 
     The fast source of studies that need one range gate only
     (:func:`raysim.echoes.gated.gated_cube`: equal to the point oracle's
-    Hann range compression at that bin).
+    Hann range compression at that bin), with the element pattern of ``config``
+    (``config.pattern``) as every point source.
 
     Parameters
     ----------
@@ -501,5 +504,5 @@ def gated_source(config, array, trajectory, targets, *, range_m: float,
 
     m = nearest_range_bin(config, range_m)
     gate = gated_cube(config, array, trajectory, list(targets), range_bin=m,
-                      lever_arm=lever_arm, t0=t0)
+                      lever_arm=lever_arm, t0=t0, pattern=config.pattern)
     return gate, m, float(config.range_axis(config.num_samples)[m])

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 __all__ = ["MOUNTING_PRESETS", "mounting_matrix", "mounting_deg", "is_default_mounting",
-           "mount_array", "mount_motion", "nominal_target_position"]
+           "mount_array", "mount_motion", "mount_pattern", "nominal_target_position"]
 
 #: Named mountings: Z-Y-X Euler angles (yaw, pitch, roll) of ``R_BA`` [deg].
 MOUNTING_PRESETS = {"down": (0.0, 0.0, 0.0), "forward": (90.0, 0.0, 90.0),
@@ -86,6 +86,22 @@ def mount_array(array, value):
     return replace(array, tx_positions=array.tx_positions @ m.T,
                    rx_positions=array.rx_positions @ m.T,
                    name=f"{array.name}, mounted {mounting_deg(value)} deg")
+
+
+def mount_pattern(pattern, value):
+    """An element pattern (:class:`raysim.radar.pattern.ElementPattern`) seen in B axes.
+
+    The oracle evaluates a pattern towards directions in the body's axes (the
+    attitude of the trajectory); a mounted radar's element looks along
+    ``u_A = R_BA^T u_B``, so the returned pattern's gain towards ``u_B`` is
+    ``pattern``'s towards ``R_BA^T u_B``. The default mounting returns ``pattern`` itself.
+    """
+    if is_default_mounting(value):
+        return pattern
+    from raysim.radar.pattern import MountedPattern
+
+    return MountedPattern(f"{pattern.name}, mounted {mounting_deg(value)} deg", pattern,
+                          tuple(map(tuple, mounting_matrix(value))))
 
 
 def mount_motion(motion, value):

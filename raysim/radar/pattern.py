@@ -336,6 +336,28 @@ _COS_RE = re.compile(r"^cos\^\s*([0-9.eE+-]+)$")
 
 
 @functools.lru_cache(maxsize=32)
+@dataclass(frozen=True)
+class MountedPattern(ElementPattern):
+    """``base`` turned by a mounting ``R_BA`` (``rotation``, 3 rows of 3): gains towards B
+    directions."""
+
+    base: ElementPattern
+    rotation: tuple
+
+    def gain_direction(self, u) -> np.ndarray:
+        # u_A = R_BA^T u_B, i.e. the row vector u_B @ R_BA
+        return self.base.gain_direction(np.asarray(u, dtype=float) @ np.asarray(self.rotation))
+
+    def gain(self, theta, phi) -> np.ndarray:
+        u = np.stack(np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi),
+                                         np.cos(theta)), axis=-1)
+        return self.gain_direction(u)
+
+    @property
+    def peak_gain(self) -> float:
+        return self.base.peak_gain
+
+
 def _cached(spec: str, gain_dbi: float, stamp: float) -> ElementPattern:
     if spec == "tr38901":
         return Tr38901Pattern("tr38901")

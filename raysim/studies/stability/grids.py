@@ -1,7 +1,8 @@
 """The stability maps: which point parameters each map sweeps and how a point is built.
 
 Every point is one static target seen by the paper's radar (256 chirps unless
-the map varies it) and 20 x 20 half-wavelength virtual UPA, lever arm
+the map varies it, the paper's constant-gain elements as in its cases:
+:data:`ELEMENT_PATTERN`) and 20 x 20 half-wavelength virtual UPA, lever arm
 ``(0, 0, 0.10)`` m, target at 15 m (:class:`StabilityPoint` defaults). The
 ``dpca_displacement`` map varies the array and adds a second scatterer inside
 the target's beam (clutter in a beam), comparing ``dpca`` with ``exact``.
@@ -26,6 +27,10 @@ __all__ = ["MapSpec", "MAPS", "IMU_TERMS", "INT_AXES", "DPCA_CHAINS", "tick_labe
 IMU_TERMS = ("noise", "bias", "bias_instability", "scale_factor", "misalignment")
 #: Axes whose values are integers (passed to the builders as int).
 INT_AXES = ("num_chirps", "term_index", "error_axis_index", "init_index", "array_size")
+#: Element pattern of the maps' radar: the paper names none, and its cases
+#: (``raysim/scenario/cases/_paper.toml``) take the same gain in every direction, so
+#: a map point and the same paper case in ``raysim simulate`` measure alike.
+ELEMENT_PATTERN = "constant"
 #: Chains of the ``dpca_displacement`` map.
 DPCA_CHAINS = ("none", "exact", "dpca")
 
@@ -71,7 +76,7 @@ def tick_labels(axis: str, values) -> list[str]:
 
 
 def _radar(num_chirps: int = 256) -> RadarConfig:
-    return RadarConfig(num_chirps=int(num_chirps))
+    return RadarConfig(num_chirps=int(num_chirps), element_pattern=ELEMENT_PATTERN)
 
 
 def _array(cfg: RadarConfig) -> VirtualArray:
