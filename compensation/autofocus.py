@@ -337,6 +337,22 @@ def _cells_of(data) -> tuple[np.ndarray, tuple, np.ndarray | None, float | None]
     return x.reshape(x.shape[0], -1), x.shape[1:], None, None
 
 
+def check_selection(max_cells, iterations, min_snr_db, stationary_bins) -> tuple[float, float]:
+    """Checked cell-selection options of an autofocus: ``(min_snr_db, stationary_bins)``.
+
+    Raises ValueError naming the option when ``max_cells`` or ``iterations`` is not a
+    positive integer, ``min_snr_db`` not finite or ``stationary_bins`` not positive.
+    """
+    if not (isinstance(max_cells, (int, np.integer)) and max_cells >= 1):
+        raise ValueError(f"max_cells must be a positive integer, got {max_cells!r}")
+    if not (isinstance(iterations, (int, np.integer)) and iterations >= 1):
+        raise ValueError(f"iterations must be a positive integer, got {iterations!r}")
+    snr = float(min_snr_db)
+    if not np.isfinite(snr):
+        raise ValueError(f"min_snr_db must be a finite number of dB, got {min_snr_db!r}")
+    return snr, positive("stationary_bins", stationary_bins)
+
+
 def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
                          wavelength: float | None = None, max_cells: int = 32,
                          min_snr_db: float = 20.0, stationary_bins: float = 2.0,
@@ -418,14 +434,7 @@ def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
         raise ValueError("chirp_time must be strictly increasing")
     if wavelength is not None:
         lam = positive("wavelength", wavelength)
-    if not (isinstance(max_cells, (int, np.integer)) and max_cells >= 1):
-        raise ValueError(f"max_cells must be a positive integer, got {max_cells!r}")
-    if not (isinstance(iterations, (int, np.integer)) and iterations >= 1):
-        raise ValueError(f"iterations must be a positive integer, got {iterations!r}")
-    snr = float(min_snr_db)
-    if not np.isfinite(snr):
-        raise ValueError(f"min_snr_db must be a finite number of dB, got {min_snr_db!r}")
-    stationary_bins = positive("stationary_bins", stationary_bins)
+    snr, stationary_bins = check_selection(max_cells, iterations, min_snr_db, stationary_bins)
     if doppler not in ("keep", "stationary"):
         raise ValueError(f"doppler must be 'keep' or 'stationary', got {doppler!r}")
 

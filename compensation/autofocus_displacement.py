@@ -80,6 +80,7 @@ from .autofocus import (
     _noise_per_bin,
     _propagate,
     autofocus_beams,
+    check_selection,
 )
 from .geometry import direction, grid_directions
 from .guards import CompensationWarning
@@ -302,14 +303,7 @@ def estimate_displacement(beams: BeamCube, *, slot_times=None, max_cells: int = 
         if st.shape[0] != n:
             raise ValueError(f"slot_times must have shape [chirp={n}, slot], got {st.shape}")
         t = st.mean(axis=1)
-    if not (isinstance(max_cells, (int, np.integer)) and max_cells >= 1):
-        raise ValueError(f"max_cells must be a positive integer, got {max_cells!r}")
-    if not (isinstance(iterations, (int, np.integer)) and iterations >= 1):
-        raise ValueError(f"iterations must be a positive integer, got {iterations!r}")
-    snr = float(min_snr_db)
-    if not np.isfinite(snr):
-        raise ValueError(f"min_snr_db must be a finite number of dB, got {min_snr_db!r}")
-    stationary_bins = positive("stationary_bins", stationary_bins)
+    snr, stationary_bins = check_selection(max_cells, iterations, min_snr_db, stationary_bins)
     prior = positive("prior_m", prior_m)
     prior_v = positive("prior_mps", prior_mps)
     if doppler not in ("keep", "stationary"):
