@@ -24,7 +24,7 @@ from raysim.scenario import validate_scenario
 #: Patch vs constant power of the oracle against ``cos^{2q} theta`` per chirp [dB]
 #: (the elements sit mm from the phase centre: their directions differ by ~1e-4 rad).
 CLOSED_FORM_TOL_DB = 0.01
-#: Point source vs the same target rendered as a traced path [dB] (the brief's bound).
+#: Point source against the same target rendered as a traced path: largest difference [dB].
 TRACED_TOL_DB = 0.2
 #: Target of the tests: range [m], azimuth [deg] (40 deg off boresight), RCS [dBsm].
 RANGE_M, AZ_DEG, RCS_DBSM = 15.0, 40.0, 10.0
