@@ -94,23 +94,44 @@ static PyObject* py_project(PyObject*, PyObject* args) {
     Py_RETURN_NONE;
 }
 
-// gated_dft(x, wr, wi, out, rows, K, G, threads, isa): addresses of contiguous
-// arrays x [rows, K] complex64, wr / wi [G, K] float32, out [rows, G] complex64.
-static PyObject* py_gated_dft(PyObject*, PyObject* args) {
-    unsigned long long px, pr, pi, po;
+// One gated range transform: addresses of contiguous arrays x [rows, K] complex64,
+// wr / wi [G, K] float32, out [rows, G] complex64, and the copy that runs it.
+struct GatedDft {
+    const float* x;
+    const float* wr;
+    const float* wi;
+    float* out;
     long long rows, K, G, threads;
-    int isa;
-    if (!PyArg_ParseTuple(args, "KKKKLLLLi", &px, &pr, &pi, &po, &rows, &K, &G, &threads, &isa))
-        return nullptr;
-    const float* x = reinterpret_cast<const float*>(px);
-    const float* wr = reinterpret_cast<const float*>(pr);
-    const float* wi = reinterpret_cast<const float*>(pi);
-    float* out = reinterpret_cast<float*>(po);
-    const Isa use = pick(isa);
+    Isa use;
+
+    // Parses (x, wr, wi, out, rows, K, G, threads, isa); false with a Python error set.
+    bool parse(PyObject* args) {
+        unsigned long long px, pr, pi, po;
+        int isa;
+        if (!PyArg_ParseTuple(args, "KKKKLLLLi", &px, &pr, &pi, &po, &rows, &K, &G, &threads,
+                              &isa))
+            return false;
+        x = reinterpret_cast<const float*>(px);
+        wr = reinterpret_cast<const float*>(pr);
+        wi = reinterpret_cast<const float*>(pi);
+        out = reinterpret_cast<float*>(po);
+        use = pick(isa);
+        return true;
+    }
+
+    void run() const {
+        if (use == AVX512) rt::gated_dft_avx512(x, wr, wi, out, rows, K, G, threads);
+        else if (use == AVX2) rt::gated_dft_avx2(x, wr, wi, out, rows, K, G, threads);
+        else rt::gated_dft_portable(x, wr, wi, out, rows, K, G, threads);
+    }
+};
+
+// gated_dft(x, wr, wi, out, rows, K, G, threads, isa): the transform, on this thread.
+static PyObject* py_gated_dft(PyObject*, PyObject* args) {
+    GatedDft job;
+    if (!job.parse(args)) return nullptr;
     Py_BEGIN_ALLOW_THREADS
-    if (use == AVX512) rt::gated_dft_avx512(x, wr, wi, out, rows, K, G, threads);
-    else if (use == AVX2) rt::gated_dft_avx2(x, wr, wi, out, rows, K, G, threads);
-    else rt::gated_dft_portable(x, wr, wi, out, rows, K, G, threads);
+    job.run();
     Py_END_ALLOW_THREADS
     Py_RETURN_NONE;
 }
@@ -127,23 +148,11 @@ static void job_free(PyObject* capsule) {
 
 // gated_dft_start(x, wr, wi, out, rows, K, G, threads, isa) -> handle for join()
 static PyObject* py_gated_dft_start(PyObject*, PyObject* args) {
-    unsigned long long px, pr, pi, po;
-    long long rows, K, G, threads;
-    int isa;
-    if (!PyArg_ParseTuple(args, "KKKKLLLLi", &px, &pr, &pi, &po, &rows, &K, &G, &threads, &isa))
-        return nullptr;
-    const float* x = reinterpret_cast<const float*>(px);
-    const float* wr = reinterpret_cast<const float*>(pr);
-    const float* wi = reinterpret_cast<const float*>(pi);
-    float* out = reinterpret_cast<float*>(po);
-    const Isa use = pick(isa);
+    GatedDft job;
+    if (!job.parse(args)) return nullptr;
     std::thread* t = nullptr;
     try {
-        t = new std::thread([=] {
-            if (use == AVX512) rt::gated_dft_avx512(x, wr, wi, out, rows, K, G, threads);
-            else if (use == AVX2) rt::gated_dft_avx2(x, wr, wi, out, rows, K, G, threads);
-            else rt::gated_dft_portable(x, wr, wi, out, rows, K, G, threads);
-        });
+        t = new std::thread([job] { job.run(); });
     } catch (...) {
         return PyErr_Format(PyExc_RuntimeError, "could not start a thread for the range transform");
     }
