@@ -166,3 +166,41 @@ def test_bad_fidelity_settings_are_refused(rt_backend):
     with pytest.raises(ValueError, match="fidelity must be one of"):
         resolve_fidelity("coarse", array)
     assert resolve_fidelity("mesh", array) is None
+
+
+def test_scenario_key_takes_the_ladder_modes():
+    """``[scene] fidelity`` accepts exactly the ladder's modes; a bad value names the key."""
+    import typing
+
+    from raysim.echoes.po.fidelity import DEFAULT_FIDELITY_TOLERANCE, FIDELITY_MODES
+    from raysim.scenario.model import SceneSection
+
+    field = SceneSection.model_fields["fidelity"]
+    assert set(typing.get_args(field.annotation)) == set(FIDELITY_MODES)
+    assert field.default == "mesh"
+    assert SceneSection.model_fields["fidelity_tolerance"].default == DEFAULT_FIDELITY_TOLERANCE
+    with pytest.raises(ValueError, match="fidelity"):
+        SceneSection(name="parking_lot", fidelity="fine")
+
+
+def test_scene_report_lists_the_choice_per_object(tmp_path, warm_kernels):
+    """``fidelity = "auto"``: the report's JSON and report.md give each reflector's level,
+    its predicted and measured errors (within the tolerance) and its times."""
+    import json
+
+    from raysim.studies import scene_report as sr
+
+    tiny = sr.QUICK.with_values(num_chirps=16, array_size=4, samples_per_src=2000,
+                                grid_step_deg=12.0, range_window=(14.0, 20.0),
+                                fidelity="auto", fidelity_tolerance=TOLERANCE)
+    sr.write_scene_report(tmp_path, scenes=["flat_reflectors"], settings=tiny, progress=False)
+    data = json.loads((tmp_path / "summary.json").read_text())["flat_reflectors"]
+    assert data["settings"]["fidelity"] == "auto"
+    assert len(data["fidelity"]) == 4
+    for c in data["fidelity"]:
+        assert c["level"] in ("point", "centres", "mesh")
+        assert c["measured_error"][c["level"]] <= TOLERANCE
+        assert c["trace_seconds"] > 0 and c["choice_seconds"] > 0
+    text = (tmp_path / "report.md").read_text()
+    assert "Echo model per geometry target" in text
+    assert all(c["name"] in text for c in data["fidelity"])
