@@ -204,3 +204,21 @@ def test_scene_report_lists_the_choice_per_object(tmp_path, warm_kernels):
     text = (tmp_path / "report.md").read_text()
     assert "Echo model per geometry target" in text
     assert all(c["name"] in text for c in data["fidelity"])
+
+
+def test_speed_chart_panel_of_the_ladder(warm_kernels):
+    """The chart's fidelity panel on a small frame of ``flat_reflectors``: four settings, the
+    mesh the reference, no reduced setting with more paths, and "auto" within the
+    tolerance on the whole targets' cube (each object's echo is, and the reflectors'
+    echoes, apart in range and angle, are nearly orthogonal)."""
+    from raysim.bench.fidelity_ladder import fidelity_ladder_points
+
+    rows = fidelity_ladder_points(quick=True, scene="flat_reflectors", num_chirps=4,
+                                  array_size=4, tolerance=TOLERANCE)
+    by = {r["setting"]: r for r in rows}
+    assert list(by) == ["point", "centres", "auto", "mesh"]
+    assert by["mesh"]["reference"] and by["mesh"]["rel_error"] == 0.0
+    assert by["auto"]["rel_error"] <= TOLERANCE
+    assert by["point"]["paths"] <= by["centres"]["paths"] <= by["mesh"]["paths"]
+    assert sum(by["auto"]["levels"].values()) == 4
+    assert all(r["s_per_frame"] > 0 and r["first_s"] > 0 for r in rows)
