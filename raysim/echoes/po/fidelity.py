@@ -446,8 +446,10 @@ def choose_level(name: str, centre, amplitude, radar_w, r_wb, config: RadarConfi
 class FidelityLadder:
     """Per-object echo model of the geometry targets, chosen once per object and aspect.
 
-    Pass one instance to every trace (``MonostaticTracer(fidelity=...)``,
-    ``render_scene(fidelity=...)``) so that reduced models are re-used.
+    Pass one instance to every trace of one scene (``MonostaticTracer(fidelity=...)``,
+    ``render_scene(fidelity=...)``) so that reduced models are re-used; models
+    are kept by object name and radar position (not attitude: a yaw turns the
+    polarisation, which a re-used model does not follow).
 
     Parameters
     ----------
