@@ -98,7 +98,12 @@ def _rt_scene(scenario: Scenario):
     except Exception as exc:  # backend failures (no LLVM, no GPU) are not bad input
         raise FeatureUnavailable(f"cannot load scene {target!r} with Sionna RT: "
                                  f"{type(exc).__name__}: {exc}") from None
-    tracer = MonostaticTracer(max_depth=max(1, scenario.scene.max_depth), seed=scenario.seed)
+    from raysim.echoes.po.fidelity import resolve_fidelity
+
+    ladder = resolve_fidelity(scenario.scene.fidelity, scenario.virtual_array(),
+                              scenario.scene.fidelity_tolerance)
+    tracer = MonostaticTracer(max_depth=max(1, scenario.scene.max_depth), seed=scenario.seed,
+                              fidelity=ladder)
     return scene, tracer, render_scene
 
 
@@ -377,7 +382,9 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
         ``other_specular``; :func:`path_kinds`),
         ``"tracks"``, ``"movers"`` (the MovingObject of every extra mover),
         ``"scene"`` (the loaded scene), ``"clutter"`` (the field's report,
-        empty without it).
+        empty without it), ``"fidelity"`` (the echo model chosen per geometry
+        target, :class:`raysim.echoes.po.fidelity.FidelityChoice` as dicts;
+        empty for ``[scene] fidelity = "mesh"``).
 
     Raises
     ------
@@ -449,6 +456,7 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     synth = functools.partial(synthesize, eps=nufft_eps)
     out = {"paths": paths, "path_kinds": path_kinds(paths), "tracks": tracks, "scene": scene,
            "movers": objects, "clutter": model.summary() if model is not None else {},
+           "fidelity": [] if tracer.fidelity is None else tracer.fidelity.report(),
            "reference": reference_target(scenario, scene)}
     for name, motion in (("stationary", rest), ("hover", trajectory)):
         t = time.perf_counter()

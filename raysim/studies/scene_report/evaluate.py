@@ -105,6 +105,12 @@ class SceneResult:
         each (:func:`raysim.studies.scene_report.meshes.mesh_summary`: ``name``,
         ``num_paths``, ``power_w``, ``power_dbw``, ``detections``); they are
         also in ``targets`` (``"mesh": True``) as named markers. Empty otherwise.
+    fidelity : list of dict
+        Echo model chosen per geometry target (``[scene] fidelity``,
+        :class:`raysim.echoes.po.fidelity.FidelityChoice`: ``name``, ``level``,
+        ``predicted_level``, ``paths``, ``predicted_error`` and
+        ``measured_error`` per level, ``trace_seconds``, ``choice_seconds``).
+        Empty for ``"mesh"``.
     point : dict
         Point metrics of the scenario's reference target
         (:func:`raysim.pipeline.sources.reference_target`): ``reference``
@@ -128,6 +134,7 @@ class SceneResult:
     point: dict = field(default_factory=dict)
     same_aperture: dict = field(default_factory=dict)
     meshes: list = field(default_factory=list)
+    fidelity: list = field(default_factory=list)
 
     def margin_reference(self, key: str) -> ChainResult:
         """The reference chain ``key``'s margin is judged against.
@@ -222,6 +229,7 @@ class SceneResult:
                                            for k, v in self.point["metrics"].items()}}
                               if self.point else {}),
             "meshes": self.meshes,
+            "fidelity": self.fidelity,
             "seconds": self.seconds,
         }
 
@@ -536,4 +544,4 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
     return SceneResult(label, settings, reference, results, targets,
                        0 if paths is None else paths.num_paths, sim.get("path_kinds", {}),
                        motion_rms, seconds, movers, sim.get("clutter", {}), point, same,
-                       meshes)
+                       meshes, sim.get("fidelity", []))
