@@ -52,3 +52,23 @@ def test_oblique_radar_traces_the_ground_ahead(warm_kernels):
     ref = out["reference"]
     assert abs(ref.el_deg - 45.0) < EXACT_DEG and abs(ref.az_deg) < EXACT_DEG
     assert np.array_equal(out["hover"].lever_arm, s.lever_arm)   # the frame keeps r_IR in B
+
+
+def test_scene_report_of_an_oblique_scenario(tmp_path, capsys, warm_kernels):
+    """`scene-report --scenario` with an oblique mounting: the reflector under the radar is
+    listed at 45 deg elevation of N and found where it is (detections placed along
+    ``R_BA u`` in W)."""
+    import json
+
+    from raysim.cli import main
+
+    (tmp_path / "s.toml").write_text(OBLIQUE, encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["scene-report", "--scenario", str(tmp_path / "s.toml"), "--quick",
+                 "--chains", "none,exact", "--out", str(out), "--no-progress",
+                 "--threads", "2"]) == 0
+    capsys.readouterr()
+    data = json.loads((out / "oblique.json").read_text())
+    nadir = next(t for t in data["targets"] if t["name"] == "cr-nadir")
+    assert abs(nadir["el_deg"] - 45.0) < EXACT_DEG and abs(nadir["az_deg"]) < EXACT_DEG
+    assert nadir["match"]["exact"]["detected"] and nadir["match"]["none"]["detected"]
