@@ -228,15 +228,15 @@ class SceneResult:
 
 def _targets(scene, settings: ReportSettings) -> list:
     """Known reflectors of a traced scene, or the point targets of a point scenario."""
-    from raysim.echoes.oracle import az_el
-    from raysim.platform.mounting import nominal_direction, nominal_target_position
+    from raysim.echoes.oracle import az_el, direction
+    from raysim.platform.mounting import mounting_matrix, nominal_direction
 
     lever = np.asarray(settings.lever_arm, dtype=float)
     mount = settings.scenario.radar.mounting_deg          # directions in N, positions in W
+    turn = mounting_matrix(mount)                         # the identity for the default
     if scene is None:
-        return [{"name": f"target {i}", "position_m": nominal_target_position(
-                     t.range_m, math.radians(t.az_deg), math.radians(t.el_deg), lever,
-                     mount).tolist(),
+        return [{"name": f"target {i}", "position_m": (lever + t.range_m * (turn @ direction(
+                     math.radians(t.az_deg), math.radians(t.el_deg)))).tolist(),
                  "range_m": float(t.range_m), "az_deg": float(t.az_deg),
                  "el_deg": float(t.el_deg), "rcs_dbsm": float(t.rcs_dbsm)}
                 for i, t in enumerate(settings.scenario.scene.targets)]
