@@ -172,3 +172,15 @@ def test_rendered_store_is_compensated_with_its_mounting(tmp_path, capsys):
         stillness[name] = np.abs(slow.mean()) / np.abs(slow).mean()
     capsys.readouterr()
     assert stillness["store"] >= COHERENT and stillness["down"] <= SMEARED
+
+
+def test_coverage_spans_are_in_the_mounted_radar_frame():
+    """The reflector under the radar: straight down is 45 deg elevation for ``oblique``."""
+    from raysim.studies.scene_report.coverage import object_spans
+
+    for mount, el in (("down", 0.0), ("oblique", 45.0)):
+        s = loads_scenario(f'[radar]\nmounting_deg = "{mount}"\n'
+                           f'[scene]\nname = "flat_reflectors"\n')
+        nadir = next(o for o in object_spans(s) if o["name"] == "cr-nadir")
+        assert np.allclose(nadir["el_deg"], el, atol=1e-9)
+        assert np.allclose(nadir["az_deg"], 0.0, atol=1e-9)
