@@ -198,7 +198,7 @@ def radar_scale(config: RadarConfig) -> float:
 
 def _subdivide(tris: np.ndarray, idx: np.ndarray, max_edge: float):
     """Split triangles into four until no edge exceeds ``max_edge``; keeps the parent index."""
-    out_t, out_i = [], []
+    out_t, out_i = [tris[:0]], [idx[:0]]                     # none in range: no facet
     while len(tris):
         e = np.max(np.linalg.norm(tris - np.roll(tris, 1, axis=1), axis=-1), axis=1)
         small = e <= max_edge
