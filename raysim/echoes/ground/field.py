@@ -1,6 +1,6 @@
-r"""A persistent clutter field: seeded point scatterers fixed on the ground in W.
+r"""A persistent clutter field: seeded point scatterers fixed on the ground and walls in W.
 
-Each scatterer ``i`` stands for a ground patch of area ``dA_i`` and is one
+Each scatterer ``i`` stands for a surface patch of area ``dA_i`` and is one
 frozen path (``kind = DIFFUSE``) whose complex amplitude is
 
 .. math::
