@@ -139,8 +139,9 @@ def _clutter_words(settings: ReportSettings) -> str:
         return "Sionna's own diffuse paths and ground mirror"
     if settings.clutter == "none":
         return "none (specular paths of the scene only)"
-    return (f"persistent clutter field, {settings.clutter_per_cell:g} scatterers per range x "
-            "angle cell, rough-surface mirror, target-ground ghosts")
+    return (f"persistent clutter field on the ground and walls, {settings.clutter_per_cell:g} "
+            "scatterers per range x angle cell at every incidence, rough-surface mirror, "
+            "target-ground ghosts")
 
 
 def _is_report_scene(st: ReportSettings, settings: ReportSettings) -> bool:
@@ -378,12 +379,13 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
     lines += _point_lines(results, cols)
     fields = {s: r.clutter for s, r in results.items() if r.clutter.get("num_scatterers")}
     if fields:
-        lines += ["", "Clutter field: scatterers drawn, expected count, density scale (1 "
-                  "unless `max_scatterers` capped it), build time (wall)", "",
-                  "| scene | scatterers | expected | density scale | build_s |",
-                  "|---|---|---|---|---|"]
-        lines += [f"| {s} | {c['num_scatterers']} | {c['expected']:.0f} | "
-                  f"{c['density_scale']:.3g} | {c['build_s']:.2f} |" for s, c in fields.items()]
+        lines += ["", "Clutter field: scatterers drawn (of them on walls), expected count, "
+                  "density scale (1 unless `max_scatterers` capped it), build time (wall)", "",
+                  "| scene | scatterers | on walls | expected | density scale | build_s |",
+                  "|---|---|---|---|---|---|"]
+        lines += [f"| {s} | {c['num_scatterers']} | {c.get('wall_scatterers', 0)} | "
+                  f"{c['expected']:.0f} | {c['density_scale']:.3g} | {c['build_s']:.2f} |"
+                  for s, c in fields.items()]
     lines += _mesh_lines(results)
     lines += _fidelity_lines(results)
     lines += ["", "Known reflectors: position error of the nearest detection [m] "
