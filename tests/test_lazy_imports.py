@@ -47,3 +47,27 @@ def test_io_package_names_load_on_first_use():
     assert set(io_pkg.__all__) <= set(dir(io_pkg))
     with pytest.raises(AttributeError, match="has no attribute 'no_such_reader'"):
         io_pkg.no_such_reader  # noqa: B018
+
+
+def test_ray_tracer_defers_sionna_preview_until_used():
+    """``backend.configure`` imports Sionna RT without its Jupyter preview (IPython,
+    ipywidgets, pythreejs); the first preview loads the real module."""
+    pytest.importorskip("sionna.rt")
+    probe = """
+import json, sys
+from raysim.echoes.rt import backend
+backend.configure()
+import sionna.rt
+before = sorted(m for m in ("IPython", "ipywidgets", "pythreejs") if m in sys.modules)
+real = backend._real_preview()
+print(json.dumps({"before": before, "loaded": "IPython" in sys.modules,
+                  "scene": sys.modules["sionna.rt.scene"].Previewer is real.Previewer,
+                  "package": sionna.rt.Previewer is real.Previewer}))
+"""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
+    run = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         cwd=ROOT, env=env, timeout=300)
+    assert run.returncode == 0, run.stderr
+    got = json.loads(run.stdout.strip().splitlines()[-1])
+    assert got == {"before": [], "loaded": True, "scene": True, "package": True}

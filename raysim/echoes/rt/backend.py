@@ -162,10 +162,58 @@ def configure(variant: str | None = None, *, threads: int | None = None,
             raise BackendError(f"cannot activate Mitsuba variant {name!r}{hint}: {err}") from err
     if threads is not None and name.startswith("llvm"):
         dr.set_thread_count(int(threads))
+    _defer_preview()
     importlib.import_module("sionna.rt")
     cache = os.environ.get("DRJIT_CACHE_DIR", str(Path.home() / ".drjit"))
     _INFO = BackendInfo(name, llvm, int(dr.thread_count()), cache)
     return _INFO
+
+
+#: Sionna RT's interactive scene preview (Jupyter widgets: IPython, ipywidgets, pythreejs,
+#: about half of ``import sionna.rt``), loaded on the first preview instead of at import.
+PREVIEW_MODULE = "sionna.rt.preview"
+
+
+def _defer_preview() -> None:
+    """Before ``sionna.rt`` is first imported, stand in for its preview module.
+
+    ``sionna.rt`` imports ``Previewer`` at import time, but only
+    ``Scene.preview()`` uses it (raysim never does). The stand-in's
+    ``Previewer(...)`` imports the real module and returns the real previewer, so a
+    notebook's preview works as before. Inside IPython, where the widgets' stack is
+    loaded anyway, nothing is deferred.
+    """
+    if "sionna.rt" in sys.modules or PREVIEW_MODULE in sys.modules or "IPython" in sys.modules:
+        return
+    import types
+
+    stand_in = types.ModuleType(PREVIEW_MODULE, "raysim: Sionna RT's preview, loaded on use")
+
+    class Previewer:
+        """Stand-in for ``sionna.rt.preview.Previewer``: imports it on first use."""
+
+        def __new__(cls, *args, **kwargs):
+            return _real_preview().Previewer(*args, **kwargs)
+
+    stand_in.Previewer = Previewer
+    stand_in.__raysim_deferred__ = True
+    sys.modules[PREVIEW_MODULE] = stand_in
+
+
+def _real_preview():
+    """The real ``sionna.rt.preview`` module (imported now if only the stand-in is loaded)."""
+    mod = sys.modules.get(PREVIEW_MODULE)
+    if mod is None or getattr(mod, "__raysim_deferred__", False):
+        sys.modules.pop(PREVIEW_MODULE, None)
+        mod = importlib.import_module(PREVIEW_MODULE)
+        rt = sys.modules.get("sionna.rt")
+        if rt is not None:
+            rt.preview = mod
+            rt.Previewer = mod.Previewer
+            scene = sys.modules.get("sionna.rt.scene")
+            if scene is not None:
+                scene.Previewer = mod.Previewer
+    return mod
 
 
 def info() -> BackendInfo | None:
