@@ -381,7 +381,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         from raysim.synthesis.frame import adc_samples
         from raysim.synthesis.select import synthesize, tones_error
 
-        check_frame_memory(cfg, mounted, len(pts))
+        # the delays and amplitudes twice: the path groups of the decimation copy theirs
+        check_frame_memory(cfg, mounted, 2 * len(pts))
         tau, amp = point_target_delays(cfg, mounted, traj, pts, lever_arm=lever, frame=f,
                                        t0=start, pattern=mount_pattern(cfg.pattern, mount))
         eps = max(FLIGHT_SYNTHESIS_EPS, tones_error(len(pts)))
