@@ -525,7 +525,7 @@ def _plan_band(n_local: int, doppler: float, eps: float, decimate) -> Decimation
             break
     if not ok:
         return _refuse(n_local, doppler, f"Doppler band {doppler:.3g} cycles/chirp too wide for "
-                       f"factor {factors[0]} at eps={eps:g}")
+                       f"factor {factors[0]} at tolerance {eps:g}")
     # the cheapest factor, not the largest: edge chirps may have to be exact
     factor = min(ok, key=lambda d: (ok[d][0].size, -d))
     exact, missing, w, err = ok[factor]
