@@ -64,6 +64,26 @@ def test_point_targets_decimated_within_tolerance(trajectory):
     assert l2 <= bound + tones_error(n) and row <= bound + tones_error(n)
 
 
+@pytest.mark.parametrize("method", ["tones", "nufft"])
+def test_chirp_range_into_out(method):
+    """A sub-range of chirps added into ``out``, with the tone sum's or FINUFFT's rows."""
+    cfg = RadarConfig(num_chirps=160)
+    arr = upa(2, 2, wavelength=cfg.wavelength)
+    n = 12
+    tau, amp = point_target_delays(cfg, arr, hover_jitter(3), _targets(n, seed=5))
+    run = range(16, 144)
+    ref = synthesize_if(tau[:, 16:144], amp[:, 16:144], cfg)
+    out = ref.copy()                                   # something of the same scale to add to
+    report = []
+    synthesize(tau, amp, cfg, method=method, eps=10 * TOL, decimate="auto",
+               decimate_tolerance=TOL, chirps=run, out=out, decimation_report=report)
+    assert report and all(g["factor"] > 1 for g in report), report
+    l2, row = _rel(out - ref, ref)
+    rows_error = MAX_GAIN * (tones_error(n) if method == "tones" else 0.9 * 10 * TOL)
+    bound = TOL + rows_error + 2 * tones_error(n)      # the reference's rounding, twice
+    assert l2 <= bound and row <= bound + 0.9 * 10 * TOL, (l2, row, report)
+
+
 def test_band_read_from_the_delays():
     """A single target under a pure vertical sinusoid: the bound covers the instantaneous
     frequency ``2 (2 pi A f_m T) / lambda`` and the Bessel sidebands of the fast part."""
