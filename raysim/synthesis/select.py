@@ -43,8 +43,10 @@ chirps only (every D-th one, plus a few near the edges) and interpolates the
 others along slow time (:mod:`raysim.synthesis.decimate`); with ``"auto"`` the
 paths are split by their own Doppler bound (static scatterers, whose band is
 set by the platform's motion alone, get a much larger factor than moving
-clutter). It applies to ``"kernel"`` and ``"nufft"`` and is refused (every
-chirp exact) where its assumptions fail.
+clutter). It applies to ``"kernel"`` and ``"nufft"``, and to ``"tones"`` for arrays
+of delays (whose band is read from the delays themselves:
+:mod:`raysim.synthesis.dense_decimation`), and is refused (every chirp exact) where
+its assumptions fail.
 """
 
 from __future__ import annotations
@@ -254,7 +256,8 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     threads : int, optional
         Threads for the NUFFT and the kernel (default: usable CPUs).
     decimate : "auto", "off" or int, default 1
-        Slow-time decimation factor for ``"kernel"`` and ``"nufft"``
+        Slow-time decimation factor for ``"kernel"`` and ``"nufft"`` (and ``"tones"``
+        for arrays of delays)
         (:func:`raysim.synthesis.decimate.plan_groups`; the row method gets
         ``(1 - DECIMATION_EPS_SHARE) eps``). ``1`` or ``"off"`` renders every
         chirp exactly; refused (every chirp exact) where its assumptions fail.
