@@ -75,3 +75,16 @@ print(json.dumps({"before": before, "loaded": "IPython" in sys.modules,
     assert run.returncode == 0, run.stderr
     got = json.loads(run.stdout.strip().splitlines()[-1])
     assert got == {"before": [], "loaded": True, "scene": True, "package": True, "rcs": True}
+
+
+def test_startup_bench_loads_fewer_modules_deferred():
+    """``raysim.bench.startup``: the job's start-up with Sionna RT's viewers deferred loads
+    fewer modules than its eager baseline (none of IPython's stack)."""
+    pytest.importorskip("sionna.rt")
+    from raysim.bench.startup import WAYS, measure
+
+    got = measure(1)
+    assert set(WAYS) <= set(got)
+    assert got["deferred"]["modules"][0] < got["eager"]["modules"][0]
+    with pytest.raises(ValueError, match="runs"):
+        measure(0)
