@@ -159,7 +159,8 @@ def _clutter(scenario: Scenario):
     return SceneClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
                                        max_scatterers=c.max_scatterers, seed=scenario.seed,
                                        polarisation=scenario.radar.polarisation,
-                                       wind_mps=c.wind_mps, vegetation=c.vegetation),
+                                       wind_mps=c.wind_mps, vegetation=c.vegetation,
+                                       walls=c.walls is not False),
                          ghosts=c.ghosts,
                          movers=[*(_car(m, seed=scenario.seed + i)
                                    for i, m in enumerate(scenario.scene.movers)),

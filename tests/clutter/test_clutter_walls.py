@@ -115,3 +115,17 @@ def test_parking_lot_facade_scatters_by_default():
     with pytest.raises(ValueError, match="go together"):
         GroundSurface(ground.triangles, ground.normals, ground.material,
                       wall_triangles=ground.wall_triangles)
+
+
+def test_scenario_key_walls_reaches_the_field():
+    """``[scene.clutter] walls`` turns the field's walls off; left out, walls stay on and
+    the scenario's canonical JSON (its store key) does not name it."""
+    from raysim.data import example_path
+    from raysim.pipeline.sources import _clutter
+    from raysim.scenario.reader import load_scenario
+
+    s = load_scenario(example_path("scene_parking_lot.toml"))
+    assert "walls" not in s.to_json()
+    assert _clutter(s).settings.walls is True
+    off = s.with_values({"scene.clutter.walls": False})
+    assert _clutter(off).settings.walls is False
