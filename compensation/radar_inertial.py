@@ -409,7 +409,8 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
                             time_offset: float = 0.0, gyro_bias=(0.0, 0.0, 0.0),
                             prior_sigma=None, gyro_bias_cov=None,
                             clock_offset_sigma: float | None = None,
-                            attitude_given: bool = True, reference_time: float | None = None,
+                            tilt_covariance=None, attitude_given: bool = True,
+                            reference_time: float | None = None,
                             iterations: int = ITERATIONS, gravity: float = STANDARD_GRAVITY,
                             warn: bool = True, **options) -> RadarInertialResult:
     """Velocity, attitude, IMU biases and clock of a record from its IMU log and radar.
@@ -442,6 +443,10 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         Covariance of ``gyro_bias`` when it was estimated (replaces the IMU's).
     clock_offset_sigma : float, optional
         Spread of ``time_offset`` when it was estimated [s].
+    tilt_covariance : array_like ``[2, 2]``, optional
+        Covariance of ``initial_attitude``'s roll and pitch (``tilt_n, tilt_e``)
+        when they were measured, e.g. from the ground plane
+        (:mod:`compensation.ground_plane`) [rad^2]; replaces the prior's.
     attitude_given : bool
         Whether ``initial_attitude`` is a real estimate (a flight controller's,
         levelled) rather than the nominal hover attitude: sets the default tilt
@@ -481,9 +486,15 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     sig0 = prior_sigmas(imu_errors, tilt=GIVEN_TILT_SIGMA if attitude_given
                         else DEFAULT_TILT_SIGMA) if prior_sigma is None else finite_array(
         "prior_sigma", prior_sigma, shape=(14,))
+    if tilt_covariance is not None:
+        tc = finite_array("tilt_covariance", tilt_covariance, shape=(2, 2))
+        sig0 = sig0.copy()
+        sig0[3:5] = np.sqrt(np.diag(tc))
     if np.any(sig0 <= 0):
         raise ValueError(f"prior_sigma must be > 0, got {sig0.tolist()}")
     p0 = np.diag(sig0 ** 2)
+    if tilt_covariance is not None:
+        p0[3:5, 3:5] = tc
     if gyro_bias_cov is not None:
         p0[GYRO_BIAS, GYRO_BIAS] = finite_array("gyro_bias_cov", gyro_bias_cov, shape=(3, 3))
     if clock_offset_sigma is not None and np.isfinite(clock_offset_sigma):

@@ -234,6 +234,12 @@ def _calibration_text(report: dict) -> str:
         lines.append(f"  Doppler measurements used: {ri['measurements']} "
                      f"({ri['rejected']} rejected), chi2 {ri['chi2']:.2f}")
     lines.append(f"  scatterers used: {report['scatterers']}")
+    gp = report.get("ground_plane")
+    if gp:
+        tilt = ", ".join(f"{a:.3f} +- {b:.3f}" for a, b in zip(
+            gp["tilt_deg"], gp["tilt_sigma_deg"], strict=True))
+        lines.append(f"  ground plane tilt [deg] (N, E) {tilt} ({gp['role']}; "
+                     f"{gp['inliers']} of {gp['points']} points; assumes {gp['assumption']})")
     return "\n".join(lines)
 
 

@@ -287,7 +287,8 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
     if att is None:
         notes.append("initial attitude: the IMU log holds no attitude; the platform is "
                       "assumed level, heading 0, at the first ramp (--initial-attitude-deg "
-                      "0,0,0)")
+                      "0,0,0); --velocity radar measures roll and pitch from the ground "
+                      "beyond the range window when in view")
         return None                   # the nominal attitude, no estimate (_attitude)
     shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
     t = float(np.min(inp.slot_times)) + shift             # the first ramp on the log's clock
@@ -325,19 +326,62 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
         ("velocity",) if velocity == "radar" else ())
     if len(inp.frames) > 1:
         estimate += ("gyro_bias",)
-    if inp.num_slots > 1:
-        options["channel_slot"] = inp.tx_slot
     rcs.extend(range_compress(np.asarray(inp.read(k)))[..., : r_axis.size]
                for k in range(len(inp.frames)))
+    given = initial_attitude_deg is not None
+    ground = _ground(inp, imu, rcs, time_t, r_axis, gates, 0.0 if auto else time_offset,
+                     options) if velocity == "radar" else None
+    tilt_cov = None
+    if ground is not None and not given and ground.usable:   # roll and pitch from the ground
+        from scipy.spatial.transform import Rotation
+
+        options["initial_attitude"] = (Rotation.from_rotvec([*ground.tilt, 0.0]).as_matrix()
+                                       @ options["initial_attitude"])
+        tilt_cov, given = ground.tilt_covariance, True
+    if inp.num_slots > 1:
+        options["channel_slot"] = inp.tx_slot
     cal = calibrate_record(rcs, time_t, inp.element_positions, imu[:, 0], imu[:, 1:4],
                            imu[:, 4:7], wavelength=inp.config.center_wavelength,
                            range_axis=r_axis, estimate=estimate,
                            time_offset=0.0 if auto else time_offset,
                            grid_shape=inp.grid_shape, detect_gates=gates,
-                           attitude_given=initial_attitude_deg is not None, **options)
+                           attitude_given=given, tilt_covariance=tilt_cov, **options)
     report = cal.report
+    if ground is not None:
+        from compensation.ground_plane import ground_check
+
+        report["ground_plane"] = {**ground.report(), "role": (
+            "initial roll and pitch" if tilt_cov is not None else "check of the given attitude"
+            if initial_attitude_deg is not None else "not used")}
+        report["warnings"] = [*report.get("warnings", ()), *ground.warnings, *(
+            ground_check(ground) if tilt_cov is None and initial_attitude_deg is not None
+            else ())]
     return list(cal.result.motions), report, float(report["time_offset_s"] if auto
                                                    else time_offset)
+
+
+def _ground(inp, imu: np.ndarray, rcs: list, time_t: list, r_axis, gates, time_offset: float,
+            options: dict):
+    """Roll and pitch of the first ramp from the ground clutter beyond the compensated cells
+    (:func:`compensation.ground_plane.ground_tilt`): the ground is the farthest surface a
+    down-looking radar sees."""
+    from compensation.ground_plane import ground_tilt
+    from raysim.pipeline.self_calibration import imu_errors
+
+    motions = estimate_record(imu[:, 0], imu[:, 1:4], imu[:, 4:7], time_t,
+                              time_offset=time_offset, **options)
+    grade = options.get("imu_grade")
+    if grade is None:
+        from compensation.calibration import DEFAULT_IMU_ERRORS as errors
+    else:
+        errors = imu_errors(grade)
+    proj = dict(channel_slot=inp.tx_slot if inp.num_slots > 1 else None,
+                grid_shape=inp.grid_shape,
+                method="lattice" if inp.grid_shape is not None else "direct")
+    return ground_tilt(rcs, inp.element_positions, motions,
+                       wavelength=inp.config.center_wavelength, range_axis=r_axis,
+                       gates=np.arange(int(gates[-1]) + 1, r_axis.size),
+                       gyro_bias_sigma=errors.gyro_bias_sigma, **proj)
 
 
 def _size_job(inp, out: Path, range_m, beams: int, calibrating: bool, notes: list
