@@ -63,6 +63,21 @@ GROUND_DYNAMIC_RANGE_DB = 45.0
 #: Azimuth axis of the ground search [rad] (-70..70 deg in 2 deg steps: the ground
 #: fills the beam).
 GROUND_AZIMUTH = np.deg2rad(np.arange(-70.0, 70.5, 2.0))
+#: Most passes of fitting and re-selecting the points on the plane.
+RESELECT_PASSES = 5
+#: Least fraction of the points on the plane (within :data:`INLIER_SIGMAS` of their
+#: stated spreads): the fit assumes most ground points follow their spreads and takes the
+#: rest for outliers (wrong elevations of cells shared by several scatterers); with
+#: fewer, the ground is rough, not flat, or not the main return, and errors beyond the
+#: spreads are no longer rare, which a fit of the few cannot tell (a breakdown point of
+#: one half, as least median of squares: Rousseeuw, JASA 1984).
+MIN_INLIER_FRACTION = 0.5
+#: Spread of a ground clutter point's azimuth and elevation [rad]: several scatterers
+#: share a range cell and beam, which turns the measured directions (the flights'
+#: ``parking_lot`` clutter, every point matched to its scatterer: median error 1.6 deg in
+#: azimuth and 2.1 deg in elevation, a Gaussian spread of 2.4 and 3.2 deg; the tails
+#: beyond are the outliers).
+GROUND_ANGLE_SIGMA = float(np.deg2rad(3.0))
 #: Gauss-Newton passes of the weighted fit (each re-linearises at the current tilt).
 FIT_PASSES = 6
 
@@ -112,6 +127,7 @@ class GroundPlane:
     def usable(self) -> bool:
         """Whether the fit gives a tilt (enough points on the plane, not a bad fit)."""
         return bool(np.all(np.isfinite(self.tilt)) and self.inliers >= MIN_GROUND_POINTS
+                    and self.inliers >= MIN_INLIER_FRACTION * self.points
                     and self.chi2 <= MAX_CHI2)
 
     @property
@@ -241,7 +257,7 @@ def fit_ground_plane(points, covariance, *, seed: int = 0, warn: bool = True) ->
         x = np.zeros(3)
         c3 = np.full((3, 3), np.nan)
         chi2 = rms = float("nan")
-        for _ in range(2):              # fit the RANSAC set, re-select once at the fit
+        for _ in range(RESELECT_PASSES):    # fit, re-select at the fit, until it settles
             if inl.sum() < MIN_GROUND_POINTS:
                 break
             x, c3, z = _weighted_fit(p[inl], cov[inl], x[:2])
@@ -250,7 +266,10 @@ def fit_ground_plane(points, covariance, *, seed: int = 0, warn: bool = True) ->
             z_all = ((p @ rot.T)[:, 2] - x[2]) / np.sqrt(var_all)
             chi2 = float(np.sum(z ** 2) / max(inl.sum() - 3, 1))
             rms = float(np.sqrt(np.mean((z * np.sqrt(var_all[inl])) ** 2)))
-            inl = np.abs(z_all) <= INLIER_SIGMAS * max(1.0, np.sqrt(chi2))
+            new = np.abs(z_all) <= INLIER_SIGMAS * max(1.0, np.sqrt(chi2))
+            if np.array_equal(new, inl):
+                break
+            inl = new
         n_in = int(inl.sum())
         if n_in < MIN_GROUND_POINTS or not np.isfinite(chi2):
             notes.append(f"ground plane: {n_in} of {p.shape[0]} points on one plane, at least "
@@ -258,7 +277,11 @@ def fit_ground_plane(points, covariance, *, seed: int = 0, warn: bool = True) ->
             x[:2], c3 = np.nan, np.full((3, 3), np.nan)
         else:
             c3 = c3 * max(chi2, 1.0)
-            if chi2 > MAX_CHI2:
+            if n_in < MIN_INLIER_FRACTION * p.shape[0]:
+                notes.append(f"ground plane: bad fit, {n_in} of {p.shape[0]} points on the "
+                             f"plane (fewer than {MIN_INLIER_FRACTION:.0%}): the ground is "
+                             f"rough, not flat or not the main return; no tilt from the ground")
+            elif chi2 > MAX_CHI2:
                 notes.append(f"ground plane: bad fit, residual rms {rms:.3f} m (reduced "
                              f"chi-square {chi2:.1f} > {MAX_CHI2:g}): the ground is not flat "
                              f"or not the main return; no tilt from the ground")
@@ -317,10 +340,10 @@ def ground_points(rc, element_positions, motion: PlatformMotion, *, wavelength: 
     az = np.array([s.azimuth for s in found])
     el = np.array([s.elevation for s in found])
     se = np.array([UNRESOLVED_DIRECTION_SIGMA if s.elevation_sigma is None
-                   else s.elevation_sigma for s in found])
+                   else max(s.elevation_sigma, GROUND_ANGLE_SIGMA) for s in found])
     bin_m = float(np.median(np.diff(r_axis))) if r_axis.size > 1 else 0.0
     return r[:, None] * direction(az, el), point_covariance(
-        r, az, el, bin_m / np.sqrt(12.0), DIRECTION_SIGMA, se)
+        r, az, el, bin_m / np.sqrt(12.0), max(DIRECTION_SIGMA, GROUND_ANGLE_SIGMA), se)
 
 
 def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axis, gates,
