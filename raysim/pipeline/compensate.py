@@ -98,7 +98,7 @@ from raysim.io.compensate_io import (
 from raysim.io.store_guard import remove_debris, writer_lock
 from raysim.pipeline.chains import project
 from raysim.pipeline.compensate_size import gated_range_compress, output_bytes
-from raysim.pipeline.estimate import estimate_record
+from raysim.pipeline.estimate import estimate_record, ground_tilt_of_record
 from raysim.pipeline.self_calibration import calibrate_record
 from raysim.processing.maps import range_compress
 from raysim.vocabulary import parse_chain
@@ -276,9 +276,11 @@ def _attitude(value):
 
 def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
     """``initial_attitude_deg``: as given, else the IMU log's attitude at the first ramp
-    (:mod:`raysim.io.flight_logs.attitude`), else level (0, 0, 0); the choice in ``notes``."""
+    (:mod:`raysim.io.flight_logs.attitude`), else level (0, 0, 0); the choice in ``notes``.
+    With it the log's attitude, times [s, IMU clock] and ``R_WB`` ``[sample, 3, 3]`` (None
+    when the attitude is given or the log holds none)."""
     if value is not None:
-        return value
+        return value, None
     att = None
     if isinstance(imu, (str, os.PathLike)):
         from raysim.io.flight_logs.attitude import read_attitude_log
@@ -289,7 +291,7 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
                       "assumed level, heading 0, at the first ramp (--initial-attitude-deg "
                       "0,0,0); --velocity radar measures roll and pitch from the ground "
                       "beyond the range window when in view")
-        return None                   # the nominal attitude, no estimate (_attitude)
+        return None, None             # the nominal attitude, no estimate (_attitude)
     shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
     t = float(np.min(inp.slot_times)) + shift             # the first ramp on the log's clock
     ypr = att.euler_deg(t)
@@ -297,11 +299,11 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
                  f"{ypr[2]:.3f} deg from {att.source} at {t:.6f} s (the first ramp on the "
                  f"log's clock{', offset 0 taken' if isinstance(time_offset, str) else ''}); "
                  f"--initial-attitude-deg overrides")
-    return ypr
+    return ypr, (att.time, att.rotation.as_matrix())
 
 
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
-             velocity, initial_velocity, initial_attitude_deg, imu_grade):
+             velocity, initial_velocity, initial_attitude_deg, imu_grade, attitude_track=None):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
 
     ``rcs`` receives the range-compressed frames when they are computed for the
@@ -329,8 +331,8 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
     rcs.extend(range_compress(np.asarray(inp.read(k)))[..., : r_axis.size]
                for k in range(len(inp.frames)))
     given = initial_attitude_deg is not None
-    ground = _ground(inp, imu, rcs, time_t, r_axis, gates, 0.0 if auto else time_offset,
-                     options) if velocity == "radar" else None
+    ground = ground_tilt_of_record(inp, imu, rcs, time_t, r_axis, gates, 0.0 if auto
+                                   else time_offset, options) if velocity == "radar" else None
     tilt_cov = None
     if ground is not None and not given and ground.usable:   # roll and pitch from the ground
         from scipy.spatial.transform import Rotation
@@ -345,7 +347,8 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            range_axis=r_axis, estimate=estimate,
                            time_offset=0.0 if auto else time_offset,
                            grid_shape=inp.grid_shape, detect_gates=gates,
-                           attitude_given=given, tilt_covariance=tilt_cov, **options)
+                           attitude_given=given, tilt_covariance=tilt_cov,
+                           attitude_track=attitude_track, **options)
     report = cal.report
     if ground is not None:
         from compensation.ground_plane import ground_check
@@ -358,30 +361,6 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
             else ())]
     return list(cal.result.motions), report, float(report["time_offset_s"] if auto
                                                    else time_offset)
-
-
-def _ground(inp, imu: np.ndarray, rcs: list, time_t: list, r_axis, gates, time_offset: float,
-            options: dict):
-    """Roll and pitch of the first ramp from the ground clutter beyond the compensated cells
-    (:func:`compensation.ground_plane.ground_tilt`): the ground is the farthest surface a
-    down-looking radar sees."""
-    from compensation.ground_plane import ground_tilt
-    from raysim.pipeline.self_calibration import imu_errors
-
-    motions = estimate_record(imu[:, 0], imu[:, 1:4], imu[:, 4:7], time_t,
-                              time_offset=time_offset, **options)
-    grade = options.get("imu_grade")
-    if grade is None:
-        from compensation.calibration import DEFAULT_IMU_ERRORS as errors
-    else:
-        errors = imu_errors(grade)
-    proj = dict(channel_slot=inp.tx_slot if inp.num_slots > 1 else None,
-                grid_shape=inp.grid_shape,
-                method="lattice" if inp.grid_shape is not None else "direct")
-    return ground_tilt(rcs, inp.element_positions, motions,
-                       wavelength=inp.config.center_wavelength, range_axis=r_axis,
-                       gates=np.arange(int(gates[-1]) + 1, r_axis.size),
-                       gyro_bias_sigma=errors.gyro_bias_sigma, **proj)
 
 
 def _size_job(inp, out: Path, range_m, beams: int, calibrating: bool, notes: list
@@ -611,12 +590,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                     warnings.warn(text, CompensationWarning, stacklevel=2)
             lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
                      else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
-            attitude = _log_attitude(initial_attitude_deg, imu, inp, time_offset, imu_topic,
-                                     notes)
+            attitude, track = _log_attitude(initial_attitude_deg, imu, inp, time_offset,
+                                            imu_topic, notes)
             motions, calibration, offset = _motions(
                 inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
-                initial_attitude_deg=attitude, imu_grade=imu_grade)
+                initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None

@@ -118,6 +118,32 @@ def test_clock_offset_and_scatterers_of_every_flight(tmp, case):
     assert json.loads(ds.attrs["self_calibration"])["scatterers"] == len(DEFAULT5_TARGETS)
 
 
+#: Stated spreads within which the ground plane's roll and pitch must lie of the truth.
+GROUND_SIGMAS = 3.0
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_ground_plane_tilt_within_its_stated_spread(tmp, case):
+    """The roll and pitch the ground clutter gives (compensation.ground_plane): the
+    initial tilt where the log has no attitude, a check of the log's where it has; within
+    GROUND_SIGMAS stated spreads of the truth at the first ramp, its assumption printed."""
+    from scipy.spatial.transform import Rotation
+
+    flight, ds, out = _run(tmp, case, **CASES[case])
+    gp = json.loads(ds.attrs["self_calibration"])["ground_plane"]
+    assert gp["used"] and gp["role"] == ("check of the given attitude" if CASES[case][
+        "attitude"] else "initial roll and pitch")
+    # the correction of the attitude the points were formed with: the log's (the truth
+    # here) or level, heading 0
+    truth = np.zeros(2) if CASES[case]["attitude"] else np.rad2deg(Rotation.from_euler(
+        "ZYX", np.deg2rad(flight.initial_attitude_deg[0])).as_rotvec()[:2])
+    err = np.asarray(gp["tilt_deg"]) - truth
+    print(case, "ground tilt error [deg]", np.round(err, 3), "sigma", np.round(
+        gp["tilt_sigma_deg"], 3), f"{gp['inliers']} of {gp['points']} points")
+    assert np.all(np.abs(err) <= GROUND_SIGMAS * np.asarray(gp["tilt_sigma_deg"])), err
+    assert "ground plane tilt" in out and "assumes level flat ground" in out
+
+
 #: Cases that miss the bounds, with the figures measured (worst target and frame).
 GAPS = {
     "1k_no_attitude": "level assumed without the log's attitude: angle 0.741 deg (the "
