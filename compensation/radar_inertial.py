@@ -515,6 +515,11 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         track = Slerp(t_track, Rotation.from_matrix(finite_array(
             "attitude_track", attitude_track[1], shape=(t_track.size, 3, 3))))
         n2 = 2 * len(frames)                      # (tilt_n, tilt_e) per frame
+        first = np.array([f[0] for f in frames]) + tau0
+        if first.min() < t_track[0] or first.max() > t_track[-1]:
+            raise ValueError(f"attitude_track spans {t_track[0]:.6f} .. {t_track[-1]:.6f} s "
+                             f"(IMU clock); the frames' first times on it span "
+                             f"{first.min():.6f} .. {first.max():.6f} s")
         c_track = (TRACK_COMMON_SIGMA ** 2 * np.kron(np.ones((len(frames),) * 2), np.eye(2))
                    + TRACK_FRAME_SIGMA ** 2 * np.eye(n2))
     p0 = np.diag(sig0 ** 2)
