@@ -51,7 +51,8 @@ MAX_CHI2 = 9.0
 #: RANSAC draws of three points (seeded): with half the points outliers, 200 draws miss
 #: an all-inlier triple with probability 0.875^200, about 3e-12.
 RANSAC_DRAWS = 200
-#: A point is on the plane within this many of its spreads along the normal.
+#: A point is on the plane within this many of its spreads along the normal (RANSAC), and
+#: then of the spreads the fit's residuals show (its reduced chi-square when above one).
 INLIER_SIGMAS = 3.0
 #: Largest angle between a candidate plane's normal and the assumed down [rad]: a
 #: steeper plane is a wall or a roof edge, not the ground below.
@@ -65,12 +66,12 @@ GROUND_DYNAMIC_RANGE_DB = 45.0
 GROUND_AZIMUTH = np.deg2rad(np.arange(-70.0, 70.5, 2.0))
 #: Most passes of fitting and re-selecting the points on the plane.
 RESELECT_PASSES = 5
-#: Least fraction of the points on the plane (within :data:`INLIER_SIGMAS` of their
-#: stated spreads): the fit assumes most ground points follow their spreads and takes the
-#: rest for outliers (wrong elevations of cells shared by several scatterers); with
-#: fewer, the ground is rough, not flat, or not the main return, and errors beyond the
-#: spreads are no longer rare, which a fit of the few cannot tell (a breakdown point of
-#: one half, as least median of squares: Rousseeuw, JASA 1984).
+#: Least fraction of the points on the plane: the fit assumes most ground points follow
+#: their spreads and takes the rest for outliers (wrong directions of cells shared by
+#: several scatterers); with fewer, the ground is rough, not flat, or not the main
+#: return, and errors beyond the spreads are no longer rare, which a fit of the few
+#: cannot tell (a breakdown point of one half, as least median of squares: Rousseeuw,
+#: JASA 1984).
 MIN_INLIER_FRACTION = 0.5
 #: Spread of a ground clutter point's azimuth and elevation [rad]: several scatterers
 #: share a range cell and beam, which turns the measured directions (the flights'
@@ -197,14 +198,15 @@ def _weighted_fit(p: np.ndarray, cov: np.ndarray, tilt: np.ndarray):
     """Gauss-Newton of ``e_z . exp([phi]x) p_i = h`` over ``(tilt_n, tilt_e, h)``: the tilt,
     height, the covariance ``[3, 3]`` of the three and the normalised residuals."""
     x = np.array([tilt[0], tilt[1], 0.0])
+    rot = Rotation.from_rotvec([x[0], x[1], 0.0]).as_matrix()
+    w = 1.0 / np.einsum("j,njk,k->n", rot[2], cov, rot[2])
+    x[2] = float(np.sum(w * (p @ rot[2])) / np.sum(w))          # the weighted mean height
     for _ in range(FIT_PASSES):
         rot = Rotation.from_rotvec([x[0], x[1], 0.0]).as_matrix()
         q = p @ rot.T                                   # the points levelled
         w = 1.0 / np.einsum("j,njk,k->n", rot[2], cov, rot[2])   # spread along the normal
         # d(e_z . exp([d]x) q)/d(d) = (q_y, -q_x) for a small turn d; d/dh = -1
         jac = np.column_stack([q[:, 1], -q[:, 0], -np.ones(p.shape[0])])
-        if not np.any(x[2]):
-            x[2] = float(np.sum(w * q[:, 2]) / np.sum(w))
         res = q[:, 2] - x[2]
         info = jac.T @ (w[:, None] * jac)
         step = -np.linalg.solve(info, jac.T @ (w * res))

@@ -332,7 +332,8 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                for k in range(len(inp.frames)))
     given = initial_attitude_deg is not None
     ground = ground_tilt_of_record(inp, imu, rcs, time_t, r_axis, gates, 0.0 if auto
-                                   else time_offset, options) if velocity == "radar" else None
+                                   else time_offset, options, warn=False) if (
+        velocity == "radar") else None
     tilt_cov = None
     if ground is not None and not given and ground.usable:   # roll and pitch from the ground
         from scipy.spatial.transform import Rotation
@@ -350,15 +351,18 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            attitude_given=given, tilt_covariance=tilt_cov,
                            attitude_track=attitude_track, **options)
     report = cal.report
-    if ground is not None:
-        from compensation.ground_plane import ground_check
+    if ground is not None:   # without an attitude its failures, with one a disagreement
+        import warnings
+
+        from compensation.ground_plane import GroundPlaneWarning, ground_check
 
         report["ground_plane"] = {**ground.report(), "role": (
             "initial roll and pitch" if tilt_cov is not None else "check of the given attitude"
             if initial_attitude_deg is not None else "not used")}
-        report["warnings"] = [*report.get("warnings", ()), *ground.warnings, *(
-            ground_check(ground) if tilt_cov is None and initial_attitude_deg is not None
-            else ())]
+        found = ground_check(ground) if initial_attitude_deg is not None else ground.warnings
+        for text in found:
+            warnings.warn(text, GroundPlaneWarning, stacklevel=3)
+        report["warnings"] = [*report.get("warnings", ()), *found]
     return list(cal.result.motions), report, float(report["time_offset_s"] if auto
                                                    else time_offset)
 

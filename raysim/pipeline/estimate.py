@@ -184,7 +184,7 @@ def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory
 
 
 def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_axis, gates,
-                          time_offset: float, options: dict):
+                          time_offset: float, options: dict, warn: bool = True):
     """Roll and pitch of the first ramp from the ground clutter beyond the compensated cells.
 
     :func:`compensation.ground_plane.ground_tilt` over every frame, each formed with
@@ -211,6 +211,8 @@ def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_
     options : dict
         For :func:`estimate_record` (``lever_arm``, ``initial_attitude``, ``imu_grade``,
         ``velocity`` ...).
+    warn : bool
+        Issue the fit's warnings (:class:`compensation.ground_plane.GroundPlaneWarning`).
 
     Returns
     -------
@@ -229,7 +231,7 @@ def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_
     return ground_tilt(rcs, inp.element_positions, motions,
                        wavelength=inp.config.center_wavelength, range_axis=r_axis,
                        gates=np.arange(int(gates[-1]) + 1, r_axis.size),
-                       gyro_bias_sigma=errors.gyro_bias_sigma,
+                       gyro_bias_sigma=errors.gyro_bias_sigma, warn=warn,
                        channel_slot=inp.tx_slot if inp.num_slots > 1 else None,
                        grid_shape=inp.grid_shape,
                        method="lattice" if inp.grid_shape is not None else "direct")
