@@ -129,6 +129,7 @@ class GroundPlane:
         """Whether the fit gives a tilt (enough points on the plane, not a bad fit)."""
         return bool(np.all(np.isfinite(self.tilt)) and self.inliers >= MIN_GROUND_POINTS
                     and self.inliers >= MIN_INLIER_FRACTION * self.points
+                    and bool(np.hypot(*self.tilt) <= MAX_NORMAL_ANGLE)
                     and self.chi2 <= MAX_CHI2)
 
     @property
@@ -283,6 +284,11 @@ def fit_ground_plane(points, covariance, *, seed: int = 0, warn: bool = True) ->
                 notes.append(f"ground plane: bad fit, {n_in} of {p.shape[0]} points on the "
                              f"plane (fewer than {MIN_INLIER_FRACTION:.0%}): the ground is "
                              f"rough, not flat or not the main return; no tilt from the ground")
+            elif not np.hypot(*x[:2]) <= MAX_NORMAL_ANGLE:
+                notes.append(f"ground plane: the plane fitted is tilted by "
+                             f"{np.rad2deg(np.hypot(*x[:2])):.1f} deg, more than "
+                             f"{np.rad2deg(MAX_NORMAL_ANGLE):.0f}: not the ground below; no "
+                             f"tilt from the ground")
             elif chi2 > MAX_CHI2:
                 notes.append(f"ground plane: bad fit, residual rms {rms:.3f} m (reduced "
                              f"chi-square {chi2:.1f} > {MAX_CHI2:g}): the ground is not flat "

@@ -94,6 +94,8 @@ def test_compensate_takes_the_log_attitude_by_default(tmp_path, capsys):
              "--no-progress")
     given = f.command(tmp_path / "given.zarr", *cells)
     i = given.index("--initial-attitude-deg")
+    # the flight controller's attitude (the truth turned by its error) given as numbers
+    given[i + 1] = ",".join(repr(float(x)) for x in f.log_attitude_deg[0])
     assert main(given) == 0
     capsys.readouterr()
     from_log = given[:i] + given[i + 2:]

@@ -137,6 +137,18 @@ def test_too_few_points_and_bad_fit_warn():
     assert not fit.usable
 
 
+def test_a_steep_plane_is_no_ground():
+    """Points on a wall-like plane (30 deg from level, beyond the 20 deg a ground may lean
+    in the attitude's error): no tilt, a warning."""
+    rng = np.random.default_rng(5)
+    p = _seen(_ground(rng, 30), tilt=np.deg2rad([30.0, 0.0]))
+    r = np.linalg.norm(p, axis=1)
+    cov = point_covariance(r, *az_el(p / r[:, None]), RANGE_SIGMA, AZ_SIGMA, EL_SIGMA)
+    with pytest.warns(GroundPlaneWarning):
+        fit = fit_ground_plane(p, cov)
+    assert not fit.usable
+
+
 def test_no_ground_in_the_window_warns():
     t = np.arange(8) * 1e-4
     rc = np.zeros((8, 4, 16), complex)
