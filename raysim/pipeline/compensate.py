@@ -468,8 +468,13 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         heading 0); default the IMU log's attitude at the first ramp on its
         clock (:mod:`raysim.io.flight_logs.attitude`; the offset ``"auto"``
         takes 0), else level (0, 0, 0), which is no estimate:
-        ``velocity="radar"`` then keeps the tilt at its prior and warns that it
-        is unobservable; a note says which.
+        ``velocity="radar"`` then measures roll and pitch from the ground clutter
+        in the cells beyond ``range_m`` (:mod:`compensation.ground_plane`, level
+        flat ground assumed; the calibration report's ``ground_plane``), else
+        keeps the tilt at its prior and warns that it is unobservable; a note
+        says which. With ``velocity="radar"`` the log's attitude is also a
+        measurement of roll and pitch at every frame, and the ground plane a
+        check of it (a warning when they disagree).
     imu_grade : {"ideal", "tactical", "consumer_mems"}, optional
         Sets the hover window of ``velocity`` hover / radar and of ``"level"``,
         and the IMU figures (noise, bias spreads) of ``velocity="radar"``;
