@@ -79,7 +79,8 @@ def register(subparsers) -> None:
                    "down (default), forward, oblique")
     p.add_argument("--clutter-scene", default=None, metavar="SCENE",
                    help="add the ground clutter field of a bundled scene (flat_reflectors, "
-                   "parking_lot, rough_terrain), rendered by the same oracle; down mounting")
+                   "parking_lot, rough_terrain) where the mounted radar points, rendered by "
+                   "the same oracle")
     p.add_argument("--clutter-altitude", type=float, default=None, metavar="METRES",
                    help="hover height above the clutter scene's ground [m] (default: the "
                    "scene's)")

@@ -282,8 +282,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         Write the flight controller's attitude as ``vehicle_attitude``.
     clutter_scene : str, optional
         Add the ground clutter field of this bundled scene
-        (:mod:`raysim.pipeline.flight_clutter`), rendered by the same oracle with the
-        element pattern; ``down`` mounting only.
+        (:mod:`raysim.pipeline.flight_clutter`) where the mounted radar points,
+        rendered by the same oracle with the element pattern.
     clutter_altitude : float, optional
         Hover height above that ground [m]; default the scene's.
     clutter_max_scatterers : int
@@ -343,12 +343,10 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     if clutter_scene is not None:
         from raysim.pipeline.flight_clutter import clutter_points
 
-        if mounted is not array:
-            raise ValueError("--clutter-scene needs the down mounting (the oracle's element "
-                             f"pattern is in body axes); got --mounting-deg {mount}")
         clutter, summary = clutter_points(clutter_scene, cfg, array, lever,
                                           altitude=clutter_altitude, seed=seed,
-                                          max_scatterers=clutter_max_scatterers)
+                                          max_scatterers=clutter_max_scatterers,
+                                          mounting_deg=mount)
         if progress:
             import sys
 

@@ -9,9 +9,10 @@ realised accelerometer bias reaches :data:`MIN_ACCEL_BIAS_MG` (checked), logged 
 1 kHz or as a flight controller's 250 Hz boxcar, with :data:`LOG_GAPS` logger gaps of
 50-160 ms, with and without the flight controller's attitude (``vehicle_attitude``, the
 truth turned by the controller's roll and pitch error,
-:func:`raysim.pipeline.flight_log.controller_tilt_error`), the IMU clock :data:`TIME_OFFSET_S` ahead with a :data:`DRIFT_PPM` drift, and
-:data:`FRAMES` frames. The command gets only what a user has (the capture, its cfg,
-the ULog, the IMU grade and the lever arm) and estimates the velocity and the clock
+:func:`raysim.pipeline.flight_log.controller_tilt_error`), the IMU clock
+:data:`TIME_OFFSET_S` ahead with a :data:`DRIFT_PPM` drift, and :data:`FRAMES` frames.
+The command gets only what a user has (the capture, its cfg, the ULog, the IMU grade
+and the lever arm) and estimates the velocity and the clock
 from the radar (``--velocity radar --time-offset auto``; the 250 Hz log adds
 ``--autofocus stationary``, and again ``--autofocus displacement``). Every target in
 every frame is measured from the store (:func:`raysim.pipeline.flight.measure_targets`).

@@ -272,6 +272,28 @@ def _mesh_lines(results: dict) -> list[str]:
     return lines
 
 
+def _fidelity_lines(results: dict) -> list[str]:
+    """Echo model per geometry target (``[scene] fidelity`` other than ``"mesh"``)."""
+    rows = [(s, c) for s, r in results.items() for c in r.fidelity]
+    if not rows:
+        return []
+    lines = ["", "Echo model per geometry target (`[scene] fidelity`): level used and "
+             "predicted, paths, relative l2 error of the object's echo against its mesh "
+             "(predicted / measured; point, centres), PO + SBR trace and choice time (wall)",
+             "", "| scene | object | range_m | level (predicted) | paths point/centres/mesh | "
+             "point error | centres error | trace_s | choice_s |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for s, c in rows:
+        p, m = c["predicted_error"], c["measured_error"]
+        lines.append(
+            f"| {s} | {c['name']} | {c['range_m']:.1f} | {c['level']} ({c['predicted_level']})"
+            f"{' re-used' if c['reused'] else ''} | {c['paths']['point']}/"
+            f"{c['paths']['centres']}/{c['paths']['mesh']} | {p['point']:.3g} / "
+            f"{m['point']:.3g} | {p['centres']:.3g} / {m['centres']:.3g} | "
+            f"{c['trace_seconds']:.2f} | {c['choice_seconds']:.2f} |")
+    return lines
+
+
 def report_markdown(results: dict, settings: ReportSettings) -> str:
     """The report's markdown: entropy, ridge leakage and reflector tables, figure links.
 
@@ -363,6 +385,7 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
         lines += [f"| {s} | {c['num_scatterers']} | {c['expected']:.0f} | "
                   f"{c['density_scale']:.3g} | {c['build_s']:.2f} |" for s, c in fields.items()]
     lines += _mesh_lines(results)
+    lines += _fidelity_lines(results)
     lines += ["", "Known reflectors: position error of the nearest detection [m] "
               "(* = outside the match radius), the SNR of the reflector's cell over the "
               f"CFAR's noise estimate (threshold {CFAR_THRESHOLD_DB:g} dB over the mean of "
