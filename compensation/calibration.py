@@ -529,7 +529,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
                    offset_search: float = OFFSET_SEARCH_HALF_WIDTH,
                    detect_grid=None, detect_gates=None, imu_errors: ImuErrors | None = None,
                    attitude_given: bool = True, blocks: int = DOPPLER_BLOCKS,
-                   **options) -> CalibrationResult:
+                   tilt_covariance=None, attitude_track=None, **options) -> CalibrationResult:
     """Estimate the clock offset, gyro bias and velocity of a record from its radar data.
 
     Parameters
@@ -577,6 +577,10 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         (:func:`compensation.radar_inertial.estimate_radar_inertial`).
     blocks : int
         Doppler blocks per frame (:func:`doppler_measurements`).
+    tilt_covariance, attitude_track : array_like, optional
+        Covariance of the initial roll and pitch when measured [rad^2]; a flight
+        controller's attitude at every frame's first time ``[frame, 3, 3]``
+        (:func:`compensation.radar_inertial.estimate_radar_inertial`).
     **options
         For :func:`compensation.integrate_imu` (``lever_arm``,
         ``initial_attitude``, ``initial_position``, ``velocity``,
@@ -673,7 +677,9 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             initial_position=motions[0].position[0], time_offset=tau, gyro_bias=bias,
             gyro_bias_cov=None if gb is None else gb.covariance,
             clock_offset_sigma=None if clock is None else clock.offset_sigma,
-            attitude_given=attitude_given, reference_time=frames[0][0],
+            tilt_covariance=tilt_covariance, attitude_track=attitude_track,
+            attitude_given=attitude_given,
+            reference_time=frames[0][0],
             **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
         motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias
         cov0 = ri.initial_velocity_covariance

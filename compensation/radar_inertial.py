@@ -98,6 +98,12 @@ GIVEN_TILT_SIGMA = float(np.deg2rad(1.0))
 #: Default prior spread of roll and pitch when it is not given [rad] (the nominal hover
 #: attitude, about 5 deg off).
 DEFAULT_TILT_SIGMA = float(np.deg2rad(5.0))
+#: Spread of a flight controller's roll and pitch error common to the frames of a record
+#: [rad]: over a record of a second its error hardly changes (the accelerometer's
+#: horizontal bias left after the level calibration: 2 mg is 0.11 deg).
+TRACK_COMMON_SIGMA = float(np.deg2rad(0.1))
+#: Spread of its error independent from frame to frame [rad] (the filter's wander).
+TRACK_FRAME_SIGMA = float(np.deg2rad(0.03))
 #: Default prior spread of the heading [rad].
 HEADING_PRIOR_SIGMA = float(np.deg2rad(10.0))
 #: Default prior spread of the clock offset when nothing estimated it [s].
@@ -409,7 +415,9 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
                             time_offset: float = 0.0, gyro_bias=(0.0, 0.0, 0.0),
                             prior_sigma=None, gyro_bias_cov=None,
                             clock_offset_sigma: float | None = None,
-                            attitude_given: bool = True, reference_time: float | None = None,
+                            tilt_covariance=None, attitude_track=None,
+                            attitude_given: bool = True,
+                            reference_time: float | None = None,
                             iterations: int = ITERATIONS, gravity: float = STANDARD_GRAVITY,
                             warn: bool = True, **options) -> RadarInertialResult:
     """Velocity, attitude, IMU biases and clock of a record from its IMU log and radar.
@@ -442,6 +450,18 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         Covariance of ``gyro_bias`` when it was estimated (replaces the IMU's).
     clock_offset_sigma : float, optional
         Spread of ``time_offset`` when it was estimated [s].
+    tilt_covariance : array_like ``[2, 2]``, optional
+        Covariance of ``initial_attitude``'s roll and pitch (``tilt_n, tilt_e``)
+        when they were measured, e.g. from the ground plane
+        (:mod:`compensation.ground_plane`) [rad^2]; replaces the prior's.
+    attitude_track : (array_like, array_like), optional
+        A flight controller's attitude: times ``[sample]`` [s, IMU clock] and ``R_WB``
+        ``[sample, 3, 3]``, spanning the record; its roll and pitch at the first time
+        of every frame (on the IMU clock of the state) measure the integrated
+        attitude's there (errors
+        :data:`TRACK_COMMON_SIGMA` common to the frames and
+        :data:`TRACK_FRAME_SIGMA` per frame), which keeps a gyro's drift out of
+        the tilt over the record.
     attitude_given : bool
         Whether ``initial_attitude`` is a real estimate (a flight controller's,
         levelled) rather than the nominal hover attitude: sets the default tilt
@@ -481,9 +501,30 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     sig0 = prior_sigmas(imu_errors, tilt=GIVEN_TILT_SIGMA if attitude_given
                         else DEFAULT_TILT_SIGMA) if prior_sigma is None else finite_array(
         "prior_sigma", prior_sigma, shape=(14,))
+    if tilt_covariance is not None:
+        tc = finite_array("tilt_covariance", tilt_covariance, shape=(2, 2))
+        sig0 = sig0.copy()
+        sig0[3:5] = np.sqrt(np.diag(tc))
     if np.any(sig0 <= 0):
         raise ValueError(f"prior_sigma must be > 0, got {sig0.tolist()}")
+    track = None
+    if attitude_track is not None:
+        from scipy.spatial.transform import Slerp
+
+        t_track = finite_array("attitude_track times", attitude_track[0], ndim=1)
+        track = Slerp(t_track, Rotation.from_matrix(finite_array(
+            "attitude_track", attitude_track[1], shape=(t_track.size, 3, 3))))
+        n2 = 2 * len(frames)                      # (tilt_n, tilt_e) per frame
+        first = np.array([f[0] for f in frames]) + tau0
+        if first.min() < t_track[0] or first.max() > t_track[-1]:
+            raise ValueError(f"attitude_track spans {t_track[0]:.6f} .. {t_track[-1]:.6f} s "
+                             f"(IMU clock); the frames' first times on it span "
+                             f"{first.min():.6f} .. {first.max():.6f} s")
+        c_track = (TRACK_COMMON_SIGMA ** 2 * np.kron(np.ones((len(frames),) * 2), np.eye(2))
+                   + TRACK_FRAME_SIGMA ** 2 * np.eye(n2))
     p0 = np.diag(sig0 ** 2)
+    if tilt_covariance is not None:
+        p0[3:5, 3:5] = tc
     if gyro_bias_cov is not None:
         p0[GYRO_BIAS, GYRO_BIAS] = finite_array("gyro_bias_cov", gyro_bias_cov, shape=(3, 3))
     if clock_offset_sigma is not None and np.isfinite(clock_offset_sigma):
@@ -502,21 +543,35 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
                                     initial_velocity=v0 + x[VELOCITY], initial_attitude=att,
                                     reference_time=t_ref, **options)
 
-    def velocity_jacobian(x: np.ndarray, meas: DopplerMeasurements) -> np.ndarray:
-        """``d(block radar velocity)/dx`` ``[measurement, 3, 14]`` by central differences."""
+    def track_tilt(ms, x: np.ndarray) -> np.ndarray:
+        """Roll and pitch of the track against the motions' attitude at every frame's first
+        time, ``[2 frame]`` [rad] (``R_track = exp([d]x) R``, ``d`` in W), the track read
+        at those times on the IMU clock of ``x``."""
+        t = np.array([m.time[0] for m in ms])
+        t_imu = t_ref + tau0 + x[CLOCK_OFFSET] + (t - t_ref) * (1.0 + x[CLOCK_DRIFT])
+        r_track = track(t_imu).as_matrix()
+        return np.concatenate([Rotation.from_matrix(r_track[k] @ m.attitude[0].T).as_rotvec()[
+            :2] for k, m in enumerate(ms)])
+
+    def jacobians(x: np.ndarray, meas: DopplerMeasurements):
+        """``d(block radar velocity)/dx`` ``[measurement, 3, 14]`` and, with a track,
+        ``d(track tilt)/dx`` ``[2 frame, 14]``, by central differences."""
         out = np.empty((meas.frame.size, 3, 14))
+        att = None if track is None else np.empty((2 * len(frames), 14))
         for i, step in enumerate(JACOBIAN_STEPS):
             e = np.zeros(14)
             e[i] = step
-            out[:, :, i] = (_block_velocity(integrate(x + e), meas)
-                            - _block_velocity(integrate(x - e), meas)) / (2 * step)
-        return out
+            hi, lo = integrate(x + e), integrate(x - e)
+            out[:, :, i] = (_block_velocity(hi, meas) - _block_velocity(lo, meas)) / (2 * step)
+            if att is not None:
+                att[:, i] = (track_tilt(hi, x + e) - track_tilt(lo, x - e)) / (2 * step)
+        return out, att
 
     x = np.zeros(14)
     cov = p0
     motions = integrate(x)
     chi2, kept, rejected, fisher = 1.0, 0, 0, np.zeros((14, 14))
-    keep = held = dvdx = None
+    keep = held = dvdx = h_track = None
     for _ in range(int(iterations)):
         meas = measure(motions)
         if meas.frame.size > MAX_MEASUREMENTS:
@@ -535,7 +590,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         u = meas.directions @ Rotation.from_rotvec(x[ATTITUDE]).as_matrix().T
         v_radar = _block_velocity(motions, meas)
         if dvdx is None:     # the same blocks each pass: one linearisation (chord method)
-            dvdx = velocity_jacobian(x, meas)
+            dvdx, h_track = jacobians(x, meas)
         # the radar velocity's change, and for the attitude also the direction's turn (u
         # was measured through the attitude: the two cancel but for gravity and the
         # velocity given in W)
@@ -546,9 +601,12 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
                        cov[VELOCITY, VELOCITY])
         # the beams looked along the measured directions, the model along the turned ones
         r = meas.range_rate - np.einsum("mi,mi->m", meas.directions - u, v_radar)
+        if track is not None:        # the flight controller's roll and pitch per frame
+            h, r = np.vstack([h, h_track]), np.concatenate([r, -track_tilt(motions, x)])
+            c = np.block([[c, np.zeros((kept, n2))], [np.zeros((n2, kept)), c_track]])
         if held is None:            # the attitude, gyro and clock the scene leaves alone
             held = held_mask(p0, h.T @ np.linalg.solve(c, h))
-        wts = np.ones(kept)
+        wts = np.ones(r.size)
         for _ in range(HUBER_PASSES):             # iteratively reweighted (Huber)
             cw = c / np.sqrt(np.outer(wts, wts))
             x_new, cov = solve_batch(h, r, cw, p0, x, held)
@@ -557,10 +615,13 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         res = r - h @ (x_new - x)
         fisher = h.T @ np.linalg.solve(cw, h)
         hat = np.trace(np.linalg.solve(np.linalg.inv(p0) + fisher, fisher))
-        chi2 = float(res @ np.linalg.solve(cw, res)) / max(kept - hat, 1.0)
+        # the Doppler's reduced chi-square (the track's spreads are the controller's own)
+        chi2 = float(res[:kept] @ np.linalg.solve(cw[:kept, :kept], res[:kept])) / max(
+            kept - hat, 1.0)
         if chi2 > 1.0:           # spreads understated (model error): scale the radar's
-            x_new, cov = solve_batch(h, r, cw * chi2, p0, x, held)
-            fisher = fisher / chi2
+            cw[:kept, :kept] *= chi2
+            x_new, cov = solve_batch(h, r, cw, p0, x, held)
+            fisher = h.T @ np.linalg.solve(cw, h)
         x = x_new
         motions = integrate(x)
     cov = _tilt_leak(cov, r0, g)

@@ -23,7 +23,7 @@ from raysim.pipeline.flight import (
     measure_targets,
     write_flight,
 )
-from raysim.pipeline.flight_log import ATTITUDE_RATE, GAP_LENGTH_S
+from raysim.pipeline.flight_log import ATTITUDE_RATE, CONTROLLER_TILT_SIGMA_DEG, GAP_LENGTH_S
 
 #: Attitude read back against the truth [deg]: float32 quaternions (about 1e-5 deg)
 #: and the spherical interpolation between 200 Hz stamps of a slow hover wander.
@@ -53,7 +53,9 @@ def test_flight_log_holds_the_attitude_and_leaves_it_out_when_asked(tmp_path):
     q = att.rotation.as_quat()
     assert np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-6)
     got = np.array(att.euler_deg(f.start + f.time_offset))        # the first ramp, IMU clock
-    assert np.all(np.abs(got - f.initial_attitude_deg[0]) < ATT_TOL_DEG)
+    assert np.all(np.abs(got - f.log_attitude_deg[0]) < ATT_TOL_DEG)
+    # the controller's estimate: the truth turned by its roll and pitch error
+    assert 0 < np.abs(got - f.initial_attitude_deg[0]).max() < 5 * CONTROLLER_TILT_SIGMA_DEG
     n = write_flight(tmp_path / "n", frames=1, attitude=False)
     assert read_attitude_log(n.imu_log) is None
     # the attitude is added beside the IMU: capture, cfg and IMU samples unchanged
@@ -92,6 +94,8 @@ def test_compensate_takes_the_log_attitude_by_default(tmp_path, capsys):
              "--no-progress")
     given = f.command(tmp_path / "given.zarr", *cells)
     i = given.index("--initial-attitude-deg")
+    # the flight controller's attitude (the truth turned by its error) given as numbers
+    given[i + 1] = ",".join(repr(float(x)) for x in f.log_attitude_deg[0])
     assert main(given) == 0
     capsys.readouterr()
     from_log = given[:i] + given[i + 2:]

@@ -168,7 +168,10 @@ def register(subparsers) -> None:
                    "(roll/pitch from accelerometer levelling over the IMU record, heading 0); "
                    "left out: the IMU log's attitude at the first ramp (PX4 vehicle_attitude, "
                    "ArduPilot ATT/AHRS2, ROS orientation), else level 0,0,0 (a note says which; "
-                   "--velocity radar then treats the tilt as unknown, with a warning)")
+                   "--velocity radar then takes roll and pitch from the ground clutter beyond "
+                   "--range-m, assuming level flat ground, else treats the tilt as unknown, "
+                   "with a warning); with --velocity radar the log's attitude also measures "
+                   "roll and pitch at every frame")
     p.add_argument("--mounting-deg", default=None, metavar="YAW,PITCH,ROLL|NAME",
                    help="radar mounting on the body, Z-Y-X Euler angles of R_BA [deg], or "
                    "down (default: parallel to the body, looking down), forward, oblique; "
@@ -234,6 +237,12 @@ def _calibration_text(report: dict) -> str:
         lines.append(f"  Doppler measurements used: {ri['measurements']} "
                      f"({ri['rejected']} rejected), chi2 {ri['chi2']:.2f}")
     lines.append(f"  scatterers used: {report['scatterers']}")
+    gp = report.get("ground_plane")
+    if gp:
+        tilt = ", ".join(f"{a:.3f} +- {b:.3f}" for a, b in zip(
+            gp["tilt_deg"], gp["tilt_sigma_deg"], strict=True))
+        lines.append(f"  ground plane tilt [deg] (N, E) {tilt} ({gp['role']}; "
+                     f"{gp['inliers']} of {gp['points']} points; assumes {gp['assumption']})")
     return "\n".join(lines)
 
 

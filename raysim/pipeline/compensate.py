@@ -98,7 +98,7 @@ from raysim.io.compensate_io import (
 from raysim.io.store_guard import remove_debris, writer_lock
 from raysim.pipeline.chains import project
 from raysim.pipeline.compensate_size import gated_range_compress, output_bytes
-from raysim.pipeline.estimate import estimate_record
+from raysim.pipeline.estimate import estimate_record, ground_tilt_of_record
 from raysim.pipeline.self_calibration import calibrate_record
 from raysim.processing.maps import range_compress
 from raysim.vocabulary import parse_chain
@@ -276,9 +276,11 @@ def _attitude(value):
 
 def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
     """``initial_attitude_deg``: as given, else the IMU log's attitude at the first ramp
-    (:mod:`raysim.io.flight_logs.attitude`), else level (0, 0, 0); the choice in ``notes``."""
+    (:mod:`raysim.io.flight_logs.attitude`), else level (0, 0, 0); the choice in ``notes``.
+    With it the log's attitude, times [s, IMU clock] and ``R_WB`` ``[sample, 3, 3]`` (None
+    when the attitude is given or the log holds none)."""
     if value is not None:
-        return value
+        return value, None
     att = None
     if isinstance(imu, (str, os.PathLike)):
         from raysim.io.flight_logs.attitude import read_attitude_log
@@ -287,8 +289,9 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
     if att is None:
         notes.append("initial attitude: the IMU log holds no attitude; the platform is "
                       "assumed level, heading 0, at the first ramp (--initial-attitude-deg "
-                      "0,0,0)")
-        return None                   # the nominal attitude, no estimate (_attitude)
+                      "0,0,0); --velocity radar measures roll and pitch from the ground "
+                      "beyond the range window when in view")
+        return None, None             # the nominal attitude, no estimate (_attitude)
     shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
     t = float(np.min(inp.slot_times)) + shift             # the first ramp on the log's clock
     ypr = att.euler_deg(t)
@@ -296,11 +299,11 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
                  f"{ypr[2]:.3f} deg from {att.source} at {t:.6f} s (the first ramp on the "
                  f"log's clock{', offset 0 taken' if isinstance(time_offset, str) else ''}); "
                  f"--initial-attitude-deg overrides")
-    return ypr
+    return ypr, (att.time, att.rotation.as_matrix())
 
 
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
-             velocity, initial_velocity, initial_attitude_deg, imu_grade):
+             velocity, initial_velocity, initial_attitude_deg, imu_grade, attitude_track=None):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
 
     ``rcs`` receives the range-compressed frames when they are computed for the
@@ -325,17 +328,41 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
         ("velocity",) if velocity == "radar" else ())
     if len(inp.frames) > 1:
         estimate += ("gyro_bias",)
-    if inp.num_slots > 1:
-        options["channel_slot"] = inp.tx_slot
     rcs.extend(range_compress(np.asarray(inp.read(k)))[..., : r_axis.size]
                for k in range(len(inp.frames)))
+    given = initial_attitude_deg is not None
+    ground = ground_tilt_of_record(inp, imu, rcs, time_t, r_axis, gates, 0.0 if auto
+                                   else time_offset, options, warn=False) if (
+        velocity == "radar") else None
+    tilt_cov = None
+    if ground is not None and not given and ground.usable:   # roll and pitch from the ground
+        from scipy.spatial.transform import Rotation
+
+        options["initial_attitude"] = (Rotation.from_rotvec([*ground.tilt, 0.0]).as_matrix()
+                                       @ options["initial_attitude"])
+        tilt_cov, given = ground.tilt_covariance, True
+    if inp.num_slots > 1:
+        options["channel_slot"] = inp.tx_slot
     cal = calibrate_record(rcs, time_t, inp.element_positions, imu[:, 0], imu[:, 1:4],
                            imu[:, 4:7], wavelength=inp.config.center_wavelength,
                            range_axis=r_axis, estimate=estimate,
                            time_offset=0.0 if auto else time_offset,
                            grid_shape=inp.grid_shape, detect_gates=gates,
-                           attitude_given=initial_attitude_deg is not None, **options)
+                           attitude_given=given, tilt_covariance=tilt_cov,
+                           attitude_track=attitude_track, **options)
     report = cal.report
+    if ground is not None:   # without an attitude its failures, with one a disagreement
+        import warnings
+
+        from compensation.ground_plane import GroundPlaneWarning, ground_check
+
+        report["ground_plane"] = {**ground.report(), "role": (
+            "initial roll and pitch" if tilt_cov is not None else "check of the given attitude"
+            if initial_attitude_deg is not None else "not used")}
+        found = ground_check(ground) if initial_attitude_deg is not None else ground.warnings
+        for text in found:
+            warnings.warn(text, GroundPlaneWarning, stacklevel=3)
+        report["warnings"] = [*report.get("warnings", ()), *found]
     return list(cal.result.motions), report, float(report["time_offset_s"] if auto
                                                    else time_offset)
 
@@ -441,8 +468,13 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         heading 0); default the IMU log's attitude at the first ramp on its
         clock (:mod:`raysim.io.flight_logs.attitude`; the offset ``"auto"``
         takes 0), else level (0, 0, 0), which is no estimate:
-        ``velocity="radar"`` then keeps the tilt at its prior and warns that it
-        is unobservable; a note says which.
+        ``velocity="radar"`` then measures roll and pitch from the ground clutter
+        in the cells beyond ``range_m`` (:mod:`compensation.ground_plane`, level
+        flat ground assumed; the calibration report's ``ground_plane``), else
+        keeps the tilt at its prior and warns that it is unobservable; a note
+        says which. With ``velocity="radar"`` the log's attitude is also a
+        measurement of roll and pitch at every frame, and the ground plane a
+        check of it (a warning when they disagree).
     imu_grade : {"ideal", "tactical", "consumer_mems"}, optional
         Sets the hover window of ``velocity`` hover / radar and of ``"level"``,
         and the IMU figures (noise, bias spreads) of ``velocity="radar"``;
@@ -576,12 +608,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                     warnings.warn(text, CompensationWarning, stacklevel=2)
             lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
                      else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
-            attitude = _log_attitude(initial_attitude_deg, imu, inp, time_offset, imu_topic,
-                                     notes)
+            attitude, track = _log_attitude(initial_attitude_deg, imu, inp, time_offset,
+                                            imu_topic, notes)
             motions, calibration, offset = _motions(
                 inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
-                initial_attitude_deg=attitude, imu_grade=imu_grade)
+                initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None

@@ -10,8 +10,8 @@ import numpy as np
 
 from raysim.scenario import Scenario
 
-__all__ = ["VELOCITY_MODES", "estimate_motion", "estimate_record", "scenario_motion",
-           "split_frames"]
+__all__ = ["VELOCITY_MODES", "estimate_motion", "estimate_record", "ground_tilt_of_record",
+           "scenario_motion", "split_frames"]
 
 #: An interval above this multiple of the median chirp interval starts a new frame.
 FRAME_GAP_FACTOR = 1.5
@@ -189,3 +189,57 @@ def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory
                                         time_offset=scenario.imu.time_offset_s,
                                         velocity=velocity),
                         scenario.radar.mounting_deg)
+
+
+def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_axis, gates,
+                          time_offset: float, options: dict, warn: bool = True):
+    """Roll and pitch of the first ramp from the ground clutter beyond the compensated cells.
+
+    :func:`compensation.ground_plane.ground_tilt` over every frame, each formed with
+    the one integration of ``options`` (the attitude it corrects: ``initial_attitude``);
+    the ground is the farthest surface a down-looking radar sees, so its cells are
+    those beyond the last of ``gates``.
+
+    Parameters
+    ----------
+    inp : raysim.io.compensate_io.CompensateInput
+        The input (array, slots, configuration).
+    imu : ndarray, shape ``[sample, 7]``
+        IMU table (time [s, IMU clock], gyro [rad/s], accel [m/s^2]).
+    rcs : list of ndarray, each shape ``[chirp, channel, range]``
+        Range-compressed frames.
+    frame_times : list of ndarray
+        Slot times of every frame [s, radar clock].
+    r_axis : ndarray, shape ``[range]``
+        Range of every cell [m].
+    gates : ndarray of int
+        The compensated cells.
+    time_offset : float
+        IMU clock minus radar clock [s].
+    options : dict
+        For :func:`estimate_record` (``lever_arm``, ``initial_attitude``, ``imu_grade``,
+        ``velocity`` ...).
+    warn : bool
+        Issue the fit's warnings (:class:`compensation.ground_plane.GroundPlaneWarning`).
+
+    Returns
+    -------
+    compensation.ground_plane.GroundPlane
+    """
+    from compensation.ground_plane import ground_tilt
+    from raysim.pipeline.self_calibration import imu_errors
+
+    motions = estimate_record(imu[:, 0], imu[:, 1:4], imu[:, 4:7], frame_times,
+                              time_offset=time_offset, **options)
+    grade = options.get("imu_grade")
+    if grade is None:
+        from compensation.calibration import DEFAULT_IMU_ERRORS as errors
+    else:
+        errors = imu_errors(grade)
+    return ground_tilt(rcs, inp.element_positions, motions,
+                       wavelength=inp.config.center_wavelength, range_axis=r_axis,
+                       gates=np.arange(int(gates[-1]) + 1, r_axis.size),
+                       gyro_bias_sigma=errors.gyro_bias_sigma, warn=warn,
+                       channel_slot=inp.tx_slot if inp.num_slots > 1 else None,
+                       grid_shape=inp.grid_shape,
+                       method="lattice" if inp.grid_shape is not None else "direct")

@@ -91,6 +91,10 @@ class FlightFiles:
         Logger gaps ``(start, length)`` [s, IMU clock].
     attitude : bool
         Whether the log holds the flight controller's attitude.
+    log_attitude_deg : ndarray, shape ``[frame, 3]``, optional
+        That attitude at each frame's first ramp, (yaw, pitch, roll) [deg]: the
+        truth turned by the controller's roll and pitch error
+        (:func:`raysim.pipeline.flight_log.controller_tilt_error`); None without it.
     clock_drift_ppm : float
         IMU clock rate error [ppm].
     """
@@ -115,6 +119,7 @@ class FlightFiles:
     gaps: tuple = ()
     attitude: bool = True
     clock_drift_ppm: float = 0.0
+    log_attitude_deg: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not self.targets:
@@ -418,7 +423,9 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
                        np.asarray(traj.position(starts), dtype=float), lever, tgts[0],
                        imu, tuple(tgts), layout.name, tuple(float(x) for x in mount),
                        float(imu_rate), bool(imu_boxcar), tuple(gaps), bool(attitude),
-                       float(clock_drift_ppm))
+                       float(clock_drift_ppm), None if att is None else np.array(
+                           [att.euler_deg(time_offset + (1 + 1e-6 * clock_drift_ppm) * t)
+                            for t in starts]))
 
 
 def _targets(value, cfg) -> list:

@@ -15,7 +15,9 @@ controller logs it:
   places the first one inside it (:func:`raysim.platform.imu_output.drop_gaps`;
   the attitude loses the same stretches);
 * the flight controller's attitude ``R_WB`` at :data:`ATTITUDE_RATE` on the IMU
-  clock (the truth: the estimator's own error is not modelled).
+  clock: the truth turned by the estimator's roll and pitch error
+  (:func:`controller_tilt_error`: a constant of :data:`CONTROLLER_TILT_SIGMA_DEG`
+  per axis, seeded, and a slow wander of :data:`CONTROLLER_WANDER_DEG`).
 
 Clock: ``t_imu = time_offset + (1 + 1e-6 clock_drift_ppm) t`` for truth time
 ``t`` (:class:`raysim.platform.imu.Imu`).
@@ -25,10 +27,19 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["flight_log", "place_gaps", "ATTITUDE_RATE", "GAP_LENGTH_S"]
+__all__ = ["flight_log", "place_gaps", "controller_tilt_error", "ATTITUDE_RATE",
+           "CONTROLLER_TILT_SIGMA_DEG", "CONTROLLER_WANDER_DEG", "GAP_LENGTH_S"]
 
 #: Rate of the written attitude [Hz] (PX4 logs ``vehicle_attitude`` at about 200 Hz).
 ATTITUDE_RATE = 200.0
+#: Spread of the flight controller's roll and pitch error, constant over a flight, per
+#: axis [deg]: a hovering controller cannot tell a tilt from the accelerometer's
+#: horizontal bias; what its level calibration leaves of that bias (a couple of mg of
+#: thermal drift: 2 mg is 0.11 deg) tilts its attitude by as much.
+CONTROLLER_TILT_SIGMA_DEG = 0.1
+#: Amplitude of the slow wander of that error about its constant [deg] and its period
+#: [s] (the estimator's filter following the accelerometer's low frequencies).
+CONTROLLER_WANDER_DEG, CONTROLLER_WANDER_PERIOD_S = 0.03, 5.0
 #: Shortest and longest logger gap [s] (real logs: tens to a couple of hundred ms).
 GAP_LENGTH_S = (0.05, 0.16)
 #: Tries to place the gaps apart from each other before giving up.
@@ -86,6 +97,21 @@ def place_gaps(count: int, record: tuple, capture: tuple, *, inside=None,
     return sorted(gaps)
 
 
+def controller_tilt_error(t, seed: int) -> np.ndarray:
+    """The flight controller's roll and pitch error at truth times ``t [time]`` [s]:
+    rotation vectors about W north and east, ``[time, 3]`` [rad] (the logged attitude is
+    ``exp([e]x) R_WB``): a seeded constant of :data:`CONTROLLER_TILT_SIGMA_DEG` per axis
+    plus a sine of amplitude :data:`CONTROLLER_WANDER_DEG`, period
+    :data:`CONTROLLER_WANDER_PERIOD_S` and seeded phase."""
+    rng = np.random.default_rng([int(seed), 0xA77])
+    const = rng.normal(0.0, CONTROLLER_TILT_SIGMA_DEG, 2)
+    phase = rng.uniform(0.0, 2 * np.pi, 2)
+    t = np.asarray(t, dtype=float)
+    wander = CONTROLLER_WANDER_DEG * np.sin(2 * np.pi * t[:, None] / CONTROLLER_WANDER_PERIOD_S
+                                            + phase)
+    return np.column_stack([np.deg2rad(const + wander), np.zeros(t.size)])
+
+
 def flight_log(trajectory, imu: str, *, rate: float, times, seed: int, time_offset: float,
                clock_drift_ppm: float = 0.0, boxcar: bool = False, fast_rate: float = 2000.0,
                gaps: int = 0, gaps_in_capture: bool = False, attitude: bool = True,
@@ -114,7 +140,8 @@ def flight_log(trajectory, imu: str, *, rate: float, times, seed: int, time_offs
     gaps_in_capture : bool
         The first gap inside the capture window.
     attitude : bool
-        Also return the attitude at :data:`ATTITUDE_RATE`.
+        Also return the flight controller's attitude at :data:`ATTITUDE_RATE` (its
+        error: :func:`controller_tilt_error` of ``seed``).
     capture : (float, float), optional
         Truth times of the first and last ramp [s]; default ``times``.
 
@@ -145,8 +172,12 @@ def flight_log(trajectory, imu: str, *, rate: float, times, seed: int, time_offs
     att = None
     if attitude:
         t_true = np.arange(0.0, clock.to_true_time(samples.time[-1]), 1.0 / ATTITUDE_RATE)
-        att = AttitudeLog(clock.to_imu_time(t_true), trajectory.attitude(t_true),
-                          "simulated flight controller attitude")
+        from scipy.spatial.transform import Rotation
+
+        est = Rotation.from_rotvec(controller_tilt_error(t_true, seed)) * trajectory.attitude(
+            t_true)
+        att = AttitudeLog(clock.to_imu_time(t_true), est, "simulated flight controller "
+                          "attitude")
     c0, c1 = (float(v) for v in (times if capture is None else capture))
     chirps = (float(clock.to_imu_time(c0)), float(clock.to_imu_time(c1)))
     placed = place_gaps(gaps, (float(samples.time[0]), float(samples.time[-1])),

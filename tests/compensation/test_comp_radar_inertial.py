@@ -23,6 +23,8 @@ from compensation.multiframe import integrate_record
 from compensation.observability import STATE_NAMES, ObservabilityWarning, observability
 from compensation.radar_inertial import (
     MAX_MEASUREMENTS,
+    TRACK_COMMON_SIGMA,
+    TRACK_FRAME_SIGMA,
     DopplerMeasurements,
     ImuErrors,
     estimate_radar_inertial,
@@ -60,8 +62,11 @@ GEOMETRIES = {
 }
 
 
-def _record(seed: int, geometry: str, *, attitude_given: bool = True):
-    """(IMU log with errors, measure callable, first guess, truth state, prior spreads)."""
+def _record(seed: int, geometry: str, *, attitude_given: bool = True, track: bool = False):
+    """(IMU log with errors, measure callable, first guess, truth state, prior spreads);
+    ``track``: the guess carries a flight controller's attitude at every frame's first
+    chirp, the truth turned by an error common to the frames (TRACK_COMMON_SIGMA) and one
+    per frame (TRACK_FRAME_SIGMA)."""
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, 0.35, 1.0 / IMU_RATE)
     w_true = np.column_stack([0.05 * np.sin(2 * np.pi * 3 * t), 0.04 * np.cos(2 * np.pi * 2 * t),
@@ -106,13 +111,25 @@ def _record(seed: int, geometry: str, *, attitude_given: bool = True):
                                    np.array(k), np.array(win))
 
     guess = dict(initial_velocity=v0, initial_attitude=r0, time_offset=tau0)
+    if track:         # on the IMU clock, over every frame (held 10 ms beyond its ends)
+        common = rng.normal(0.0, TRACK_COMMON_SIGMA, 2)
+        t_fc, r_fc = [], []
+        for m in true_motion:
+            err = Rotation.from_rotvec([*(common + rng.normal(0.0, TRACK_FRAME_SIGMA, 2)), 0.0])
+            t_fc.append(t_ref_imu + (m.time - T_REF) * (1 + truth[13]))
+            r_fc.append(err.as_matrix() @ m.attitude)
+        t_fc, r_fc = np.concatenate(t_fc), np.concatenate(r_fc)
+        guess["attitude_track"] = (np.concatenate([[t_fc[0] - 0.01], t_fc, [t_fc[-1] + 0.01]]),
+                                   np.concatenate([r_fc[:1], r_fc, r_fc[-1:]]))
     sig[:3] = 1.0
     return (t, gyro, accel), measure, guess, truth, sig
 
 
-def _estimate(seed: int, geometry: str, *, attitude_given: bool = True, warn: bool = False):
+def _estimate(seed: int, geometry: str, *, attitude_given: bool = True, warn: bool = False,
+              track: bool = False):
     (t, gyro, accel), measure, guess, truth, sig = _record(seed, geometry,
-                                                          attitude_given=attitude_given)
+                                                          attitude_given=attitude_given,
+                                                          track=track)
     res = estimate_radar_inertial(t, gyro, accel, FRAMES, measure, imu_errors=IMU,
                                   prior_sigma=sig, attitude_given=attitude_given,
                                   iterations=2, lever_arm=LEVER, warn=warn, **guess)
@@ -141,6 +158,19 @@ def test_normalised_errors_within_three_sigma_over_seeds(attitude_given):
         _estimate(100 * s + i, g, attitude_given=attitude_given))
         for s in seeds for i, g in enumerate(GEOMETRIES)])
     assert np.mean(np.abs(z) <= Z_BOUND) >= COVERAGE
+
+
+def test_flight_controller_attitude_track_constrains_tilt_and_gyro_drift():
+    """A flight controller's roll and pitch at every frame: the tilt within 3 stated sigma
+    (its spread about the track's common error), the horizontal gyro bias (the drift over
+    the frames) constrained, over seeds."""
+    z = []
+    for seed in range(3):
+        res, truth = _estimate(500 + seed, "spread", track=True)
+        assert not {"tilt_n", "tilt_e", "gyro_bias_x", "gyro_bias_y"} & set(res.unconstrained)
+        assert np.all(res.sigma[3:5] <= 2 * TRACK_COMMON_SIGMA)
+        z.extend((res.state[3:5] - truth[3:5]) / res.sigma[3:5])
+    assert np.all(np.abs(z) <= Z_BOUND), z
 
 
 @pytest.mark.parametrize(("geometry", "across"), [("elevation 0", ("velocity_e",)),
