@@ -27,7 +27,7 @@ OFFSET_TOL_S = 0.5e-3
 #: The estimated initial velocity lies within this many of its stated sigmas of the truth.
 VELOCITY_SIGMAS = 3.0
 #: Every target in every frame: beam angle error [deg] and residual pseudo-velocity
-#: [Doppler bins] (measured: forward 0.11 deg, 0.02 bin; oblique 0.04 deg, 0.01 bin).
+#: [Doppler bins] (measured: forward 0.11 deg, 0.020 bin; oblique 0.02 deg, 0.035 bin).
 ANGLE_TOL_DEG = 0.2
 PSEUDO_VELOCITY_BINS = 0.05
 #: The ground plane's tilt correction of the given (true) attitude lies within this many
