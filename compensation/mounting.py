@@ -64,8 +64,9 @@ def radar_frame_motion(motion: PlatformMotion, mounting) -> PlatformMotion:
 
 
 def world_directions(u_n, mounting, covariance=None):
-    """Directions ``[..., 3]`` of N turned into W, ``R_BA u_N``; with ``covariance``
-    ``[..., 3, 3]`` also it, ``R_BA C R_BA^T``. ``mounting`` None returns them unchanged."""
+    """Directions (or points from the radar) ``[..., 3]`` of N turned into W, ``R_BA u_N``;
+    with ``covariance`` ``[..., 3, 3]`` also it, ``R_BA C R_BA^T``. ``mounting`` None
+    returns them unchanged."""
     m = mounting_rotation(mounting)
     u = np.asarray(u_n, dtype=float)
     if m is not None:
