@@ -38,7 +38,8 @@ Modules
     uncertainty (:class:`Autofocus`).
 ``multiframe``
     Records of many frames: :func:`integrate_record` (one integration, split
-    per frame), :func:`project_record`, :func:`accumulate`.
+    per frame), :func:`project_record`, :func:`accumulate`,
+    :func:`~compensation.multiframe.apply_velocity`.
 ``ego_velocity``, ``clock_offset``, ``gyro_bias``
     Estimators from the radar, each with its uncertainty: platform velocity
     (:func:`fit_ego_velocity`), IMU-radar clock offset and drift
@@ -50,6 +51,10 @@ Modules
     scene leaves unconstrained (:class:`~compensation.observability.ObservabilityWarning`).
 ``calibration``
     :func:`self_calibrate`: the estimators run over a record and an IMU log.
+``mounting``
+    A mounted radar (``R_BA``): the motion seen from its nominal frame N
+    (:func:`~compensation.mounting.radar_frame_motion`), directions measured
+    there turned into W (:func:`~compensation.mounting.world_directions`).
 ``ingestion``
     IMU timing (gaps, jitter, rate against vibration), chirp times per
     frame, hover window by IMU grade.

@@ -35,7 +35,8 @@ from .exact import rigid_body_projection
 from .geometry import direction
 from .gyro_bias import GyroBias, fit_gyro_bias
 from .ingestion import check_frame_times
-from .multiframe import integrate_record
+from .mounting import mounting_rotation, radar_frame_motion, world_directions
+from .multiframe import apply_velocity, integrate_record
 from .radar_inertial import (
     MAX_MEASUREMENTS,
     DopplerMeasurements,
@@ -97,14 +98,15 @@ DEFAULT_IMU_ERRORS = ImuErrors(160e-6 * 9.80665, float(np.deg2rad(0.014)),
 
 @dataclass(frozen=True)
 class Scatterer:
-    """A stationary scatterer used for calibration: range gate and global direction.
+    """A stationary scatterer used for calibration: range gate and direction.
 
     Attributes
     ----------
     gate : int
         Range bin of the range-compressed cube.
     azimuth, elevation : float
-        Direction in W [rad].
+        Direction [rad] in W, or for a mounted radar in its nominal frame N
+        (:mod:`compensation.mounting`).
     elevation_sigma : float or None
         Spread of ``elevation`` [rad] where it was measured by phase comparison
         across a vertical baseline too short to resolve it as a beam
@@ -118,7 +120,7 @@ class Scatterer:
 
     @property
     def direction(self) -> np.ndarray:
-        """Unit vector in W, shape ``[3]``."""
+        """Unit vector (W, or N of a mounted radar), shape ``[3]``."""
         return direction(self.azimuth, self.elevation)
 
 
@@ -199,45 +201,6 @@ class CalibrationResult:
             out["unconstrained"] = list(ri.unconstrained)
             out["warnings"] = list(ri.warnings)
         return out
-
-
-def apply_velocity(motions: Sequence[PlatformMotion], times, corrections,
-                   reference_time: float) -> list[PlatformMotion]:
-    """Motions with a velocity correction interpolated between frames, integrated to position.
-
-    Parameters
-    ----------
-    motions : sequence of PlatformMotion
-        Per-frame motions of one integration.
-    times : array_like, shape ``[frame]``
-        Times of the corrections (frame centres) [s], increasing.
-    corrections : array_like, shape ``[frame, 3]``
-        Velocity to add at those times [m/s] (W).
-    reference_time : float
-        Time at which the position is known (no position change) [s].
-
-    Returns
-    -------
-    list of PlatformMotion
-        Velocity plus ``c(t)``, piecewise linear through the corrections
-        (linear beyond the ends, constant for one frame); position plus
-        ``int_{t_ref}^t c``, so the displacement within and between frames
-        follows the corrected velocity.
-    """
-    from scipy.interpolate import make_interp_spline
-
-    tm = finite_array("times", times, ndim=1)
-    dv = finite_array("corrections", corrections, shape=(tm.size, 3))
-    spline = make_interp_spline(tm, dv, k=min(1, tm.size - 1), axis=0)
-    integral = spline.antiderivative()
-    t_ref = float(reference_time)
-    out = []
-    for m in motions:
-        out.append(PlatformMotion(m.time, m.attitude,
-                                  m.position + integral(m.time) - integral(t_ref),
-                                  m.velocity + spline(m.time), m.angular_rate, m.lever_arm,
-                                  m.warnings))
-    return out
 
 
 def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
@@ -449,7 +412,7 @@ _INTEGRATION_KEYS = ("lever_arm", "gravity", "max_gap", "vibration_hz")
 
 
 def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavelength: float,
-                         blocks: int = DOPPLER_BLOCKS) -> DopplerMeasurements:
+                         blocks: int = DOPPLER_BLOCKS, mounting=None) -> DopplerMeasurements:
     """Residual range rate of every scatterer in every block of chirps of every frame.
 
     Parameters
@@ -468,23 +431,29 @@ def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavele
         Blocks per frame (fewer when a block would hold under
         :data:`MIN_BLOCK_CHIRPS` chirp loops, or the record would give more
         than :data:`compensation.radar_inertial.MAX_MEASUREMENTS`).
+    mounting : array_like, shape ``[3, 3]``, optional
+        ``R_BA`` of a mounted radar: the scatterers' directions are in its nominal
+        frame N, the beams formed there (:mod:`compensation.mounting`); default
+        down-looking (N is W).
 
     Returns
     -------
     DopplerMeasurements
         One per scatterer, block and frame: the slow-time slope of its beam
         (:func:`compensation.ego_velocity.slow_time_velocity`), its spread
-        (at least :data:`MIN_RANGE_RATE_SIGMA`) and the block's first and last
-        chirp time.
+        (at least :data:`MIN_RANGE_RATE_SIGMA`), the block's first and last
+        chirp time, and the direction and its covariance turned into W.
     """
     if int(blocks) != blocks or blocks < 1:
         raise ValueError(f"blocks: got {blocks!r}, expected a whole number of chirp blocks "
                          f"per frame, at least 1")
-    y = _beams(rcs, positions, motions, scatterers, options)       # [frame, scatterer, chirp]
+    y = _beams(rcs, positions, [radar_frame_motion(m, mounting) for m in motions], scatterers,
+               options)                                             # [frame, scatterer, chirp]
     nb = max(1, min(int(blocks), y.shape[2] // MIN_BLOCK_CHIRPS,
                     MAX_MEASUREMENTS // max(y.shape[0] * y.shape[1], 1)))
     u = np.stack([sc.direction for sc in scatterers])
     dcov = np.stack([_direction_cov(sc, positions, wavelength) for sc in scatterers])
+    u, dcov = world_directions(u, mounting, dcov)     # the Doppler model's frame
     d, r, s, fr, win = [], [], [], [], []
     for k, m in enumerate(motions):
         t = _loop_motion(m, y.shape[2]).time
@@ -529,7 +498,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
                    offset_search: float = OFFSET_SEARCH_HALF_WIDTH,
                    detect_grid=None, detect_gates=None, imu_errors: ImuErrors | None = None,
                    attitude_given: bool = True, blocks: int = DOPPLER_BLOCKS,
-                   tilt_covariance=None, attitude_track=None, **options) -> CalibrationResult:
+                   tilt_covariance=None, attitude_track=None, mounting=None,
+                   **options) -> CalibrationResult:
     """Estimate the clock offset, gyro bias and velocity of a record from its radar data.
 
     Parameters
@@ -581,6 +551,12 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         Covariance of the initial roll and pitch when measured [rad^2]; a flight
         controller's attitude at every frame's first time ``[frame, 3, 3]``
         (:func:`compensation.radar_inertial.estimate_radar_inertial`).
+    mounting : array_like, shape ``[3, 3]``, optional
+        ``R_BA`` of a mounted radar (A vectors to B vectors): the scatterers are
+        detected and their beams formed in its nominal frame N (their directions,
+        and ``scatterers``' and ``detect_grid``'s, are N's), each direction turned
+        into W for the velocity, gyro-bias and Doppler models
+        (:mod:`compensation.mounting`); default down-looking (N is W).
     **options
         For :func:`compensation.integrate_imu` (``lever_arm``,
         ``initial_attitude``, ``initial_position``, ``velocity``,
@@ -607,6 +583,11 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     # a few directions: a NUFFT plan per chirp costs more than the lattice sums
     proj.setdefault("method", "lattice" if proj.get("grid_shape") is not None else "direct")
     gyro = finite_array("gyro", gyro, ndim=2)
+    mounting = mounting_rotation(mounting)
+
+    def seen(ms):        # the motions as the beams see them: in N (mounting)
+        return [radar_frame_motion(m, mounting) for m in ms]
+
     tau = float(finite_array("time_offset", time_offset, shape=()))
     bias = np.zeros(3)
     clock = gb = None
@@ -618,19 +599,19 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     motions = integrate()
     if scatterers is None:
         grid = detect_grid if detect_grid is not None else (DETECT_AXIS, DETECT_AXIS)
-        scatterers = detect_scatterers(rcs[0], positions, motions[0], azimuth=grid[0],
+        scatterers = detect_scatterers(rcs[0], positions, seen(motions)[0], azimuth=grid[0],
                                        elevation=grid[1], range_gates=detect_gates, **proj)
     scatterers = tuple(scatterers)
     if not scatterers:
         raise ValueError("scatterers: none given and none detected; nothing to calibrate on")
     mids = np.array([0.5 * (f[0] + f[-1]) for f in frames])
     t_ref = float(options.get("reference_time", frames[0][0]))
-    u = np.stack([sc.direction for sc in scatterers])
+    u = world_directions(np.stack([sc.direction for sc in scatterers]), mounting)    # W
     corrections: list[EgoVelocity] = []
 
     def radar_velocity(ms):
         """Per-frame ego-velocity fits and the motions corrected with them."""
-        y = _beams(rcs, positions, ms, scatterers, proj)
+        y = _beams(rcs, positions, seen(ms), scatterers, proj)
         fits = []
         for k, m in enumerate(ms):
             t = _loop_motion(m, y.shape[2]).time
@@ -648,20 +629,22 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         for cand in grid:
             ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand,
                                   **options)
-            y = _beams(rcs[few], positions, ms, scatterers, proj)
-            cost.append(phase_misfit(_clock_tracks(y, ms, scatterers, lam)))
+            y = _beams(rcs[few], positions, seen(ms), scatterers, proj)
+            cost.append(phase_misfit(_clock_tracks(y, seen(ms), scatterers, lam)))
         tau = float(grid[int(np.argmin(cost))])
         motions = integrate()
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):
         if "time_offset" in estimate:
-            y = _beams(rcs, positions, motions, scatterers, proj)
-            clock = fit_time_shift(_clock_tracks(y, motions, scatterers, lam), drift=drift)
+            y = _beams(rcs, positions, seen(motions), scatterers, proj)
+            clock = fit_time_shift(_clock_tracks(y, seen(motions), scatterers, lam),
+                                   drift=drift)
             tau += clock.offset
             motions = integrate()
         if "gyro_bias" in estimate and len(frames) >= 2 and all(_apertures(positions, lam)):
             if "velocity" in estimate:     # parallax of a translation error is no rotation
                 motions, _ = radar_velocity(motions)
-            dirs = _directions(rcs, positions, motions, scatterers, proj)
+            dirs = world_directions(_directions(rcs, positions, seen(motions), scatterers,
+                                                proj), mounting)
             att = np.stack([m.attitude[m.num_chirps // 2] for m in motions])
             gb = fit_gyro_bias(mids, dirs, att)
             bias = bias + gb.bias
@@ -671,7 +654,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         ri = estimate_radar_inertial(
             imu_time, gyro, accel, frames,
             lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
-                                            wavelength=lam, blocks=blocks),
+                                            wavelength=lam, blocks=blocks,
+                                            mounting=mounting),
             imu_errors=DEFAULT_IMU_ERRORS if imu_errors is None else imu_errors,
             initial_velocity=motions[0].velocity[0], initial_attitude=motions[0].attitude[0],
             initial_position=motions[0].position[0], time_offset=tau, gyro_bias=bias,

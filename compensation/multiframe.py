@@ -19,7 +19,8 @@ from .ingestion import check_frame_times
 from .projection import BeamCube
 from .strapdown import PlatformMotion, integrate_imu
 
-__all__ = ["accumulate", "integrate_record", "project_record", "split_motion"]
+__all__ = ["accumulate", "apply_velocity", "integrate_record", "project_record",
+           "split_motion"]
 
 
 def split_motion(motion: PlatformMotion, sizes: Sequence[int]) -> list[PlatformMotion]:
@@ -121,4 +122,43 @@ def accumulate(beams: Sequence[BeamCube], *, window: str | None = "hann",
             raise ValueError(f"beams[{k}] has the grid {b.data.shape[1:]}, expected {shape} "
                              f"like beams[0]")
         out += wk * b.coherent_power(window=window)
+    return out
+
+
+def apply_velocity(motions: Sequence[PlatformMotion], times, corrections,
+                   reference_time: float) -> list[PlatformMotion]:
+    """Motions with a velocity correction interpolated between frames, integrated to position.
+
+    Parameters
+    ----------
+    motions : sequence of PlatformMotion
+        Per-frame motions of one integration.
+    times : array_like, shape ``[frame]``
+        Times of the corrections (frame centres) [s], increasing.
+    corrections : array_like, shape ``[frame, 3]``
+        Velocity to add at those times [m/s] (W).
+    reference_time : float
+        Time at which the position is known (no position change) [s].
+
+    Returns
+    -------
+    list of PlatformMotion
+        Velocity plus ``c(t)``, piecewise linear through the corrections
+        (linear beyond the ends, constant for one frame); position plus
+        ``int_{t_ref}^t c``, so the displacement within and between frames
+        follows the corrected velocity.
+    """
+    from scipy.interpolate import make_interp_spline
+
+    tm = finite_array("times", times, ndim=1)
+    dv = finite_array("corrections", corrections, shape=(tm.size, 3))
+    spline = make_interp_spline(tm, dv, k=min(1, tm.size - 1), axis=0)
+    integral = spline.antiderivative()
+    t_ref = float(reference_time)
+    out = []
+    for m in motions:
+        out.append(PlatformMotion(m.time, m.attitude,
+                                  m.position + integral(m.time) - integral(t_ref),
+                                  m.velocity + spline(m.time), m.angular_rate, m.lever_arm,
+                                  m.warnings))
     return out

@@ -175,7 +175,9 @@ def register(subparsers) -> None:
     p.add_argument("--mounting-deg", default=None, metavar="YAW,PITCH,ROLL|NAME",
                    help="radar mounting on the body, Z-Y-X Euler angles of R_BA [deg], or "
                    "down (default: parallel to the body, looking down), forward, oblique; "
-                   "beams are then in the radar frame at the nominal pose")
+                   "beams are then in the radar frame at the nominal pose; --velocity radar "
+                   "and --time-offset auto find the scatterers and the ground there and turn "
+                   "their directions into the body frame")
     p.add_argument("--imu-grade", choices=("ideal", "tactical", "consumer_mems"),
                    default=None,
                    help="IMU grade: sets the hover window of --velocity hover/radar and of "

@@ -303,11 +303,14 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
 
 
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
-             velocity, initial_velocity, initial_attitude_deg, imu_grade, attitude_track=None):
+             velocity, initial_velocity, initial_attitude_deg, imu_grade, attitude_track=None,
+             mounting_deg=None):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
 
     ``rcs`` receives the range-compressed frames when they are computed for the
-    self-calibration (the projection then reuses them).
+    self-calibration (the projection then reuses them). The motions are the body's
+    (W); a mounted radar's (``mounting_deg``) scatterers and ground are found in its
+    nominal frame and turned into W for the estimates.
     """
     options = dict(lever_arm=lever_arm, initial_attitude=_attitude(initial_attitude_deg),
                    imu_grade=imu_grade, velocity="hover" if velocity == "radar" else velocity)
@@ -315,6 +318,8 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
         if initial_velocity is None:
             raise ValueError("--velocity given needs --initial-velocity VN,VE,VD")
         options["initial_velocity"] = _vector(initial_velocity, 3, "--initial-velocity")
+    from raysim.platform.mounting import is_default_mounting, mounting_matrix
+
     auto = isinstance(time_offset, str)
     time_t = [inp.slot_times[k].ravel() for k in range(len(inp.frames))]
     if not (auto or velocity == "radar"):
@@ -332,8 +337,8 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                for k in range(len(inp.frames)))
     given = initial_attitude_deg is not None
     ground = ground_tilt_of_record(inp, imu, rcs, time_t, r_axis, gates, 0.0 if auto
-                                   else time_offset, options, warn=False) if (
-        velocity == "radar") else None
+                                   else time_offset, options, warn=False,
+                                   mounting=mounting_deg) if velocity == "radar" else None
     tilt_cov = None
     if ground is not None and not given and ground.usable:   # roll and pitch from the ground
         from scipy.spatial.transform import Rotation
@@ -349,7 +354,9 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            time_offset=0.0 if auto else time_offset,
                            grid_shape=inp.grid_shape, detect_gates=gates,
                            attitude_given=given, tilt_covariance=tilt_cov,
-                           attitude_track=attitude_track, **options)
+                           attitude_track=attitude_track, mounting=None
+                           if is_default_mounting(mounting_deg)
+                           else mounting_matrix(mounting_deg), **options)
     report = cal.report
     if ground is not None:   # without an attitude its failures, with one a disagreement
         import warnings
@@ -507,8 +514,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         :data:`raysim.platform.mounting.MOUNTING_PRESETS`; default ``down``
         (A parallel to B), or the mounting a rendered store was simulated
         with. Other mountings give beams in the nominal radar
-        frame (:func:`raysim.platform.mounting.mount_motion`); they need a given
-        clock offset and ``velocity`` hover or given.
+        frame (:func:`raysim.platform.mounting.mount_motion`); the self-calibration
+        (``velocity="radar"``, ``time_offset="auto"``) finds the scatterers and the
+        ground there and turns their directions into the body's frame by ``R_BA``
+        (:mod:`compensation.mounting`).
     progress : bool
         A progress bar on stderr for records of several frames.
     autofocus : bool or {"phase", "stationary", "displacement"}
@@ -551,17 +560,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     else:
         time_offset = float(_vector(time_offset, 1, "--time-offset")[0])
     from raysim.platform.mounting import is_default_mounting, mount_motion
+    from raysim.platform.mounting import mounting_deg as ypr
 
-    def check_mounting(mounting_deg) -> bool:
-        mounted = not is_default_mounting(mounting_deg)
-        if mounted and (velocity == "radar" or isinstance(time_offset, str)):
-            raise ValueError(f"--mounting-deg {mounting_deg!r}: the self-calibration "
-                             f"(--velocity radar, --time-offset auto) assumes the down-looking "
-                             f"mounting; give --time-offset SECONDS and --velocity hover or "
-                             f"given")
-        return mounted
-
-    mounted = check_mounting(mounting_deg)
+    mounted = not is_default_mounting(mounting_deg)     # a bad mounting named here
     out = Path(out)
     as_npz = check_compensated_output(out, "--out", inputs=[("CUBE", source), ("--imu", imu),
                                                             ("--radar-config", radar_config)])
@@ -576,7 +577,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                          antenna_positions=antenna_positions)
         if mounting_deg is None and inp.mounting_deg is not None:   # a store's own
             mounting_deg = inp.mounting_deg
-            mounted = check_mounting(mounting_deg)
+            mounted = not is_default_mounting(mounting_deg)
         if as_npz and len(inp.frames) != 1:
             raise ValueError(f"--out {str(out)!r}: an .npz holds one frame, the selection has "
                              f"{len(inp.frames)}; give a store path (no .npz) or --frames K")
@@ -613,7 +614,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             motions, calibration, offset = _motions(
                 inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
-                initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track)
+                initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track,
+                mounting_deg=mounting_deg)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None
@@ -677,9 +679,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             if offset is not None:     # the offset applied: given, or estimated ('auto')
                 attrs["time_offset_s"] = offset
             if mounted:
-                from raysim.platform.mounting import mounting_deg as _ypr
-
-                attrs["mounting_deg"] = list(_ypr(mounting_deg))
+                attrs["mounting_deg"] = list(ypr(mounting_deg))
             if focus is not None:
                 attrs["autofocus"] = json.dumps(focus)
             write_compensated_store(os.fspath(out), inp, results, chain=spec.key,

@@ -192,13 +192,16 @@ def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory
 
 
 def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_axis, gates,
-                          time_offset: float, options: dict, warn: bool = True):
+                          time_offset: float, options: dict, warn: bool = True,
+                          mounting=None):
     """Roll and pitch of the first ramp from the ground clutter beyond the compensated cells.
 
     :func:`compensation.ground_plane.ground_tilt` over every frame, each formed with
     the one integration of ``options`` (the attitude it corrects: ``initial_attitude``);
     the ground is the farthest surface a down-looking radar sees, so its cells are
-    those beyond the last of ``gates``.
+    those beyond the last of ``gates``. A mounted radar's ground points are found in
+    its nominal frame N and turned into W by ``R_BA`` (:func:`_mounted_ground_tilt`),
+    so the plane is fitted in W, where the ground is level.
 
     Parameters
     ----------
@@ -221,6 +224,9 @@ def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_
         ``velocity`` ...).
     warn : bool
         Issue the fit's warnings (:class:`compensation.ground_plane.GroundPlaneWarning`).
+    mounting : str or (float, float, float), optional
+        The radar's mounting (:func:`raysim.platform.mounting.mounting_deg`);
+        default ``down``.
 
     Returns
     -------
@@ -236,10 +242,53 @@ def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_
         from compensation.calibration import DEFAULT_IMU_ERRORS as errors
     else:
         errors = imu_errors(grade)
-    return ground_tilt(rcs, inp.element_positions, motions,
-                       wavelength=inp.config.center_wavelength, range_axis=r_axis,
-                       gates=np.arange(int(gates[-1]) + 1, r_axis.size),
-                       gyro_bias_sigma=errors.gyro_bias_sigma, warn=warn,
-                       channel_slot=inp.tx_slot if inp.num_slots > 1 else None,
-                       grid_shape=inp.grid_shape,
-                       method="lattice" if inp.grid_shape is not None else "direct")
+    kw = dict(wavelength=inp.config.center_wavelength, range_axis=r_axis,
+              gates=np.arange(int(gates[-1]) + 1, r_axis.size),
+              gyro_bias_sigma=errors.gyro_bias_sigma, warn=warn,
+              channel_slot=inp.tx_slot if inp.num_slots > 1 else None,
+              grid_shape=inp.grid_shape,
+              method="lattice" if inp.grid_shape is not None else "direct")
+    from raysim.platform.mounting import is_default_mounting, mounting_matrix
+
+    if is_default_mounting(mounting):
+        return ground_tilt(rcs, inp.element_positions, motions, **kw)
+    return _mounted_ground_tilt(rcs, inp.element_positions, motions, mounting_matrix(mounting),
+                                **kw)
+
+
+def _mounted_ground_tilt(rcs, positions, motions, rotation, *, gates, range_axis,
+                         gyro_bias_sigma, warn, **options):
+    """:func:`compensation.ground_plane.ground_tilt` of a mounted radar (``R_BA`` [3, 3]).
+
+    Every frame's ground points are found with the motion seen from the nominal
+    radar frame N (:func:`compensation.mounting.radar_frame_motion`: the search grid
+    and the array's axes are the radar's), then turned into W (``R_BA p``,
+    ``R_BA C R_BA^T``) and fitted there, where the ground is level and its normal
+    down; the same warnings and gyro-bias spread as ``ground_tilt``.
+    """
+    import warnings
+    from dataclasses import replace
+
+    from compensation.ground_plane import GroundPlaneWarning, fit_ground_plane, ground_points
+    from compensation.mounting import radar_frame_motion, world_directions
+
+    found = []
+    for rc, m in zip(rcs, motions, strict=True):
+        p, c = ground_points(rc, positions, radar_frame_motion(m, rotation),
+                             range_axis=range_axis, gates=gates, **options)
+        found.append(world_directions(p, rotation, c))      # points and covariances in W
+    fit = fit_ground_plane(np.concatenate([p for p, _ in found]),
+                           np.concatenate([c for _, c in found]), warn=False)
+    r_axis = np.asarray(range_axis, dtype=float)
+    if fit.points == 0:
+        where = (f"{r_axis[gates].min():.2f}-{r_axis[gates].max():.2f} m" if gates.size
+                 else "(no cell)")
+        fit = replace(fit, warnings=(f"ground plane: no ground return in the range window "
+                                     f"{where}; no tilt from the ground",))
+    span = float(np.mean([np.mean(m.time) for m in motions]) - motions[0].time[0])
+    fit = replace(fit, tilt_covariance=fit.tilt_covariance
+                  + np.eye(2) * (float(gyro_bias_sigma) * span) ** 2)
+    if warn:
+        for text in fit.warnings:
+            warnings.warn(text, GroundPlaneWarning, stacklevel=3)
+    return fit

@@ -117,7 +117,8 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
         Without it the tilt stays at the prior, with a warning.
     **options
         For :func:`compensation.calibration.self_calibrate` (``lever_arm``,
-        ``channel_slot``, ``grid_shape``, ``detect_gates``, ``velocity``,
+        ``channel_slot``, ``grid_shape``, ``detect_gates``, ``mounting`` (``R_BA``
+        of a mounted radar), ``velocity``,
         ``initial_attitude``, ``imu_grade``, ``hover_window`` ...); ``imu_grade``
         also gives the radar-inertial estimate its IMU figures
         (:func:`imu_errors`) unless ``imu_errors`` is given.
