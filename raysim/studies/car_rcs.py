@@ -303,7 +303,7 @@ def table_markdown(results: dict, aspects=tuple(MEASURED_DBSM)) -> str:
 def summary_markdown(results: dict) -> str:
     """Per model and elevation: median, 10-90 % range and largest 10 deg swing [dB]."""
     lines = ["| model | elevation [deg] | median PO + SBR (PTD) [dBsm] | 10-90 % [dBsm] | "
-             "swing in 10 deg, 1 deg samples / averaged [dB] |", "|---|---|---|---|---|"]
+             "swing in 10 deg, samples / averaged [dB] |", "|---|---|---|---|---|"]
     for name, r in results.items():
         avg = aspect_average(r.diffraction_m2, r.azimuth_deg)
         po_avg = aspect_average(r.po_m2, r.azimuth_deg)
