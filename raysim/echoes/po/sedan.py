@@ -17,7 +17,7 @@ points, each section (left half, mirrored) running from the floor's centre line
   **roof** (or the hood and the boot lid, where the greenhouse collapses),
   crowned across with ``ROOF_RADIUS``.
 
-Ends: elliptic in plan view (nose radius about 1.8 m, tail about 1.4 m) and
+Ends: elliptic in plan view (nose radius about 1.6 m, tail about 2.0 m) and
 set back above and below the bumper line (vertical radius ``NOSE_RADIUS``), so
 no flat panel faces the front or the rear. The roof line (hood, raked
 windscreen, roof, rear window, boot) and the belt line are monotone cubic
@@ -25,7 +25,7 @@ windscreen, roof, rear window, boot) and the belt line are monotone cubic
 designed ones (arch edges, shoulder, roof rail).
 
 Materials: ``body`` metal (painted steel), ``glass`` (windscreen, side and rear
-windows; ITU-R P.2040 glass, a dielectric: ``|Gamma| = -7.5 dB`` at normal
+windows; ITU-R P.2040 glass, a dielectric: ``|Gamma| = -7.3 dB`` at normal
 incidence), ``tyres`` rubber, ``rims`` metal (a dish recessed 7 cm into the
 tyre: a ring-shaped cavity), ``bumpers`` metal (a rub strip round each end,
 standing 3 cm proud: the bumper beam that a plastic fascia hides is what
