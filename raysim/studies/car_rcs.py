@@ -347,26 +347,40 @@ def main(argv=None) -> int:
     p.add_argument("--out", required=True, help="markdown file: its generated block (between "
                    "the markers) is replaced, or the whole file written")
     p.add_argument("--npz", default=None, help="also save the sweep (NPZ)")
+    p.add_argument("--load", default=None, metavar="NPZ[,NPZ]",
+                   help="read the sweep from these NPZ files (written by --npz) instead of "
+                   "tracing it; the scattering centres are traced again")
     args = p.parse_args(argv)
-    az = np.arange(0.0, 180.0 + 1e-9, args.az_step)
-    el = np.array([float(x) for x in args.elevations.split(",")])
-    results, centres = {}, {}
-    for name in args.models.split(","):
+    models = args.models.split(",")
+    if args.load:
+        results = _load(args.load.split(","), models)
+        az, el = results[models[0]].azimuth_deg, results[models[0]].elevation_deg
+    else:
+        az = np.arange(0.0, 180.0 + 1e-9, args.az_step)
+        el = np.array([float(x) for x in args.elevations.split(",")])
+        results = {}
+    centres = {}
+    for name in models:
         parts = car_model(name)
-        results[name] = car_rcs(parts, az, el, range_m=args.range_m, diffraction=True,
-                                progress=True)
+        if name not in results:
+            results[name] = car_rcs(parts, az, el, range_m=args.range_m, diffraction=True,
+                                    progress=True)
+            print(f"{name}: {az.size * el.size} directions in {results[name].seconds:.0f} s "
+                  f"(wall clock)", file=sys.stderr)
         centres[name] = {(a, e): scattering_centres(parts, a, e, range_m=args.range_m)
                          for a in (30, 60, 90, 150) for e in (0, 45)}
-        print(f"{name}: {az.size * el.size} directions in {results[name].seconds:.0f} s "
-              f"(wall clock)", file=sys.stderr)
     text = ["## RCS versus aspect (+-2.5 deg power average)\n", table_markdown(results),
             "\n## Over all aspects 0-180 deg\n", summary_markdown(results),
             "\n## Scattering centres (0.25 m cells, VV)\n",
-            "| model | aspect [deg] | elevation [deg] | centres | carrying 90 % | strongest "
-            "(part, share) |", "|---|---|---|---|---|---|"]
+            "The strongest centres: part, share of the power, position (x forward, y left, "
+            "z up from the ground under the car's centre) [m].\n",
+            "| model | aspect [deg] | elevation [deg] | centres | carrying 90 % | strongest |",
+            "|---|---|---|---|---|---|"]
     for name, cs in centres.items():
         for (a, e), c in cs.items():
-            top = ", ".join(f"{x['part']} {100 * x['share']:.0f} %" for x in c["centres"][:4])
+            top = "; ".join(f"{x['part']} {100 * x['share']:.0f} % at "
+                            f"({x['xyz'][0]:.2f}, {x['xyz'][1]:.2f}, {x['xyz'][2]:.2f})"
+                            for x in c["centres"][:3])
             text.append(f"| {name} | {a} | {e} | {c['count']} | {c['n90']} | {top} |")
     _write_block(args.out, "\n".join(text) + "\n")
     if args.npz:
@@ -374,6 +388,21 @@ def main(argv=None) -> int:
                  **{f"{n}_po_m2": r.po_m2 for n, r in results.items()},
                  **{f"{n}_diffraction_m2": r.diffraction_m2 for n, r in results.items()})
     return 0
+
+
+def _load(paths, models) -> dict:
+    """Sweeps of ``models`` read from NPZ files written by ``--npz``."""
+    out = {}
+    for path in paths:
+        with np.load(path) as d:
+            for name in models:
+                if f"{name}_po_m2" in d:
+                    out[name] = CarRcs(d["azimuth_deg"], d["elevation_deg"], d[f"{name}_po_m2"],
+                                       d[f"{name}_diffraction_m2"], float("nan"))
+    missing = [m for m in models if m not in out]
+    if missing:
+        raise ValueError(f"--load: no sweep of {missing} in {paths}")
+    return out
 
 
 if __name__ == "__main__":
