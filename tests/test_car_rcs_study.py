@@ -42,3 +42,16 @@ def test_unknown_model():
         car_model("truck")
     with pytest.raises(ValueError, match="facet"):
         car_model("simple", 0.1)
+
+
+def test_cli_car_job_sized_and_checked(capsys):
+    """``raysim rcs car:...``: unknown model, near range and a huge job refused (exit 2)."""
+    from raysim.cli import main
+
+    assert main(["rcs", "car:truck", "--az-deg", "0", "--el-deg", "0"]) == 2
+    assert "car model" in capsys.readouterr().err
+    assert main(["rcs", "car:sedan", "--az-deg", "0", "--el-deg", "0", "--range-m", "5"]) == 2
+    assert "--range-m" in capsys.readouterr().err
+    assert main(["rcs", "car:sedan", "--az-deg", "0:360:0.01", "--el-deg", "-90:90:0.01"]) == 2
+    err = capsys.readouterr().err
+    assert "directions" in err and "--az-deg / --el-deg" in err

@@ -147,18 +147,25 @@ def car_rcs(parts, azimuth_deg, elevation_deg, *, range_m: float = 50.0,
     Returns
     -------
     CarRcs
+
+    Raises
+    ------
+    ValueError
+        Unknown polarisation, a range of 10 m or less, or a job too large
+        (:func:`raysim.echoes.po.rcs.rcs_job_size`: directions x (facets + tubes)).
     """
     from tqdm.auto import tqdm
 
     from raysim.echoes.po.edges import edge_terms_near, sharp_edges
     from raysim.echoes.po.mesh import TriangleMesh, po_material
     from raysim.echoes.po.paths import (
+        MAX_TUBES,
         PATHS_FRESNEL_FRACTION,
         TUBES_PER_WAVELENGTH,
         scattering_terms,
     )
     from raysim.echoes.po.rays import RayScene
-    from raysim.echoes.po.rcs import EDGE_SEGMENT_WAVELENGTHS
+    from raysim.echoes.po.rcs import EDGE_SEGMENT_WAVELENGTHS, rcs_job_size
     from raysim.radar.config import SPEED_OF_LIGHT
 
     pol = str(polarisation).upper()
@@ -175,6 +182,12 @@ def car_rcs(parts, azimuth_deg, elevation_deg, *, range_m: float = 50.0,
     wavelength = SPEED_OF_LIGHT / frequency
     k = 2 * math.pi / wavelength
     ref = np.array([0.0, 0.0, CAR_REFERENCE_Z])
+    whole = TriangleMesh(np.concatenate([m.vertices for m in meshes]), np.concatenate(
+        [m.faces + o for m, o in zip(meshes, np.cumsum([0] + [len(m.vertices) for m in meshes]),
+                                     strict=False)]))
+    # sized before anything is traced: the tracer's tubes are capped at MAX_TUBES per direction
+    rcs_job_size(whole, az.size * el.size, max(wavelength / tpw, 2 * whole.radius
+                                               / math.sqrt(MAX_TUBES)), int(max_bounces))
     segments = scene = None
     if diffraction:
         local = [TriangleMesh(m.vertices - ref, m.faces) for m in meshes]
