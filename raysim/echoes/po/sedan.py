@@ -84,10 +84,9 @@ def _pchip(xp, yp):
     return PchipInterpolator(np.asarray(xp, float), np.asarray(yp, float))
 
 
-def _segment(p0, p1, n: int, include_end: bool = False) -> np.ndarray:
-    """``n`` points ``[n, 2]`` from ``p0`` towards ``p1`` (``p1`` only if ``include_end``)."""
-    t = np.linspace(0.0, 1.0, n + 1)
-    t = t if include_end else t[:-1]
+def _segment(p0, p1, n: int) -> np.ndarray:
+    """``n`` points ``[n, 2]`` from ``p0`` towards ``p1``, ``p1`` left out (the next segment's)."""
+    t = np.linspace(0.0, 1.0, n + 1)[:-1]
     return np.asarray(p0)[None] + t[:, None] * (np.asarray(p1) - np.asarray(p0))[None]
 
 
@@ -167,7 +166,7 @@ class _Design:
         zf, za = float(self.floor(x)), float(self.arch(x))
         zb = float(self.belt(x))
         zt = float(self.top(x))
-        zt_floor = float(self.floor(x)) + float(self.tunnel(x))
+        z_tunnel = float(self.floor(x)) + float(self.tunnel(x))
 
         def side_y(z):
             return w2 - (z - 0.55) ** 2 / (2 * SIDE_RADIUS)
@@ -180,8 +179,8 @@ class _Design:
             pts.append(np.atleast_2d(p))
             labels.extend([label] * len(np.atleast_2d(p)))
 
-        add(_segment((0.0, zt_floor), (y_tun, zt_floor), counts["tunnel"]), "floor")
-        add(_segment((y_tun, zt_floor), (y_tun + 0.04, zf), 1), "floor")
+        add(_segment((0.0, z_tunnel), (y_tun, z_tunnel), counts["tunnel"]), "floor")
+        add(_segment((y_tun, z_tunnel), (y_tun + 0.04, zf), 1), "floor")
         add(_segment((y_tun + 0.04, zf), (y_in, zf), counts["floor"]), "floor")
         add(_segment((y_in, zf), (y_in, za), counts["house"]), "house")
         add(_segment((y_in, za), (side_y(za), za), 2), "house")
@@ -220,7 +219,7 @@ def _outward(v: np.ndarray, f: np.ndarray) -> np.ndarray:
 def _body(design: _Design) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Lofted body: vertices, faces and each face's material (``"metal"``/``"glass"``)."""
     f = design.facet
-    w, hgt = design.width, design.height
+    w = design.width
     counts = {"tunnel": max(2, math.ceil(TUNNEL_HALF_WIDTH / f)),
               "floor": max(2, math.ceil((w / 2 - WHEEL_HOUSE_DEPTH - TUNNEL_HALF_WIDTH) / f)),
               "house": max(2, math.ceil(0.5 / f)),
@@ -272,7 +271,6 @@ def _body(design: _Design) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rail_y[i], rail_y[i + 1]) - 0.08)                              # A/C pillars 8 cm
     material = np.full(len(faces), "metal", dtype=object)
     material[:n_loft][glass_side | screen] = "glass"
-    del hgt
     return v, faces, material
 
 
