@@ -107,6 +107,38 @@ def test_refusal_renders_exactly_and_says_why_once(frame, monkeypatch):
         _render(short, eps=EPS)                                 # said once
 
 
+def test_command_line_states_a_refusal_in_one_line(frame, monkeypatch, capsys):
+    """A command whose render refuses decimation says so on one line of stderr (the
+    command, what was refused and why, that every chirp was rendered exactly), not as a
+    Python warning with its file, line and source; other warnings keep their form."""
+    import argparse
+
+    import raysim.cli as cli
+
+    cfg, arr, traj, paths = frame
+    short = (cfg.with_(num_chirps=16), arr, traj, paths)
+    monkeypatch.setattr(select, "_SAID", set())
+
+    def job(_args):
+        _render(short, eps=EPS)
+        warnings.warn("something else", UserWarning, stacklevel=1)
+        return 0
+
+    def parser():
+        p = argparse.ArgumentParser(prog="raysim")
+        p.add_subparsers(dest="command").add_parser("render").set_defaults(func=job)
+        return p
+
+    monkeypatch.setattr(cli, "build_parser", parser)
+    with warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        assert cli.main(["render"]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "raysim render: note: slow-time decimation refused, every chirp rendered exactly: "
+        "too few chirps (16 < 64)"]
+    assert [str(w.message) for w in shown] == ["something else"]      # the usual way
+
+
 def test_bad_decimation_input(frame):
     cfg, arr, traj, paths = frame
     for bad in ({"decimate": "on"}, {"decimate": 0}, {"decimate_tolerance": 0.5},

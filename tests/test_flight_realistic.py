@@ -329,6 +329,3 @@ def test_flight_with_a_scene_ground_clutter(tmp_path):
         <= TARGET_CHANGE_DB
     with pytest.raises(ValueError, match="--clutter-scene"):
         clutter_points("moon", None, None, (0, 0, 0))
-    with pytest.raises(ValueError, match="down mounting"):
-        write_flight(tmp_path / "m", clutter_scene="flat_reflectors",
-                     mounting_deg="forward", **kw)

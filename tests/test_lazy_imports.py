@@ -47,3 +47,44 @@ def test_io_package_names_load_on_first_use():
     assert set(io_pkg.__all__) <= set(dir(io_pkg))
     with pytest.raises(AttributeError, match="has no attribute 'no_such_reader'"):
         io_pkg.no_such_reader  # noqa: B018
+
+
+def test_ray_tracer_defers_sionna_viewers_until_used():
+    """``backend.configure`` imports Sionna RT (and its RCS module) without its Jupyter
+    viewers (IPython, ipywidgets, pythreejs); the first use loads the real module."""
+    pytest.importorskip("sionna.rt")
+    probe = """
+import json, sys
+from raysim.echoes.rt import backend
+backend.configure()
+import sionna.rt, sionna.rt.rcs
+before = sorted(m for m in ("IPython", "ipywidgets", "pythreejs") if m in sys.modules)
+real = backend._real_viewer("sionna.rt.preview")
+viewer = backend._real_viewer("sionna.rt.rcs.scattering_model_viewer")
+st = sys.modules["sionna.rt.rcs.sensing_target"]
+print(json.dumps({"before": before, "loaded": "IPython" in sys.modules,
+                  "scene": sys.modules["sionna.rt.scene"].Previewer is real.Previewer,
+                  "package": sionna.rt.Previewer is real.Previewer,
+                  "rcs": sionna.rt.rcs.ScatteringModelViewer is viewer.ScatteringModelViewer
+                         is st.ScatteringModelViewer}))
+"""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
+    run = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         cwd=ROOT, env=env, timeout=300)
+    assert run.returncode == 0, run.stderr
+    got = json.loads(run.stdout.strip().splitlines()[-1])
+    assert got == {"before": [], "loaded": True, "scene": True, "package": True, "rcs": True}
+
+
+def test_startup_bench_loads_fewer_modules_deferred():
+    """``raysim.bench.startup``: the job's start-up with Sionna RT's viewers deferred loads
+    fewer modules than its eager baseline (none of IPython's stack)."""
+    pytest.importorskip("sionna.rt")
+    from raysim.bench.startup import WAYS, measure
+
+    got = measure(1)
+    assert set(WAYS) <= set(got)
+    assert got["deferred"]["modules"][0] < got["eager"]["modules"][0]
+    with pytest.raises(ValueError, match="runs"):
+        measure(0)

@@ -15,6 +15,7 @@ from raysim.platform.mounting import (
     MOUNTING_PRESETS,
     mount_array,
     mount_motion,
+    mount_trajectory,
     mounting_deg,
     mounting_matrix,
 )
@@ -61,3 +62,28 @@ def test_mounted_motion_places_the_elements_as_the_simulation_does():
     assert np.max(np.abs(in_n - world @ m)) < EXACT_M          # M^T x_W
     assert np.allclose(mount_array(arr, mount).tx_positions, arr.tx_positions @ m.T)
     assert mount_motion(motion, "down") is motion and mount_array(arr, None) is arr
+
+
+def test_radar_frame_trajectory_places_the_elements_as_the_mounted_array():
+    """The radar frame's own pose (attitude ``R_WB R_BA``, lever arm ``R_BA^T r_IR``) puts
+    every element where ``T + R_WB (r_IR + R_BA p)`` does, and turns the rates into A."""
+    from raysim.platform.kinematics import element_world_positions
+    from raysim.platform.motion import hover_jitter
+
+    body, lever = hover_jitter(1), np.array([0.1, -0.02, 0.05])
+    mount = (30.0, -20.0, 70.0)
+    m = mounting_matrix(mount)
+    arr = ti_3tx4rx(3.9e-3)
+    radar, lever_a = mount_trajectory(body, lever, mount)
+    t = np.linspace(0.0, 0.1, 7)[:, None] * np.ones((1, arr.num_channels))
+    p = arr.virtual_positions / 2
+    got = element_world_positions(radar, t, p, lever_a)
+    want = element_world_positions(body, t, p @ m.T, lever)
+    assert np.max(np.abs(got - want)) < EXACT_M
+    tt = t[:, 0]
+    assert np.allclose(radar.attitude(tt).as_matrix(), body.attitude(tt).as_matrix() @ m,
+                       atol=EXACT_M)
+    assert np.allclose(radar.angular_rate(tt), body.angular_rate(tt) @ m, atol=EXACT_M)
+    assert np.array_equal(radar.position(tt), body.position(tt))      # the body origin's
+    same, same_lever = mount_trajectory(body, lever, "down")
+    assert same is body and same_lever is lever

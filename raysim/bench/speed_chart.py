@@ -520,6 +520,17 @@ def measure_tube_density(*, quick: bool) -> dict:
                  time_label="CPU s per trace of the reflector")
 
 
+def measure_fidelity(*, quick: bool) -> dict:
+    """The parking lot's geometry targets per level (:mod:`raysim.bench.fidelity_ladder`)."""
+    from raysim.bench.fidelity_ladder import LADDER_SCENE, fidelity_ladder_points
+
+    return _knob("fidelity", f"echo model of geometry targets ({LADDER_SCENE})",
+                 fidelity_ladder_points(quick=quick),
+                 "steady state: reduced models re-used from the frame before; reference: "
+                 "every object's mesh; first_s: the first frame's trace and choice",
+                 default="mesh", time_label="CPU s per frame of the targets' paths")
+
+
 def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print,
                   rt: bool = True) -> dict:
     """Measure every knob; returns ``{"knobs": [...], "not_measured": {...}}``.
@@ -547,6 +558,7 @@ def measure_knobs(*, quick: bool = False, log: Callable[[str], None] = print,
         try:
             knobs.extend(measure_rt_knobs(quick=quick, log=log))
             knobs.append(measure_tube_density(quick=quick))
+            knobs.append(measure_fidelity(quick=quick))
         except BackendError as err:
             not_measured["rt_samples_depth_retrace"] = (
                 f"Sionna RT unavailable, ray-tracing and tube-density panels skipped: {err}")

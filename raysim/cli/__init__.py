@@ -18,6 +18,7 @@ import pkgutil
 import signal
 import sys
 import threading
+import warnings
 
 from raysim import __version__
 from raysim.cli.options import Parser
@@ -50,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        with _sigterm_as_interrupt():
+        with _sigterm_as_interrupt(), _notes_as_lines(args.command):
             return int(args.func(args) or 0)
     except ValueError as exc:
         print(f"raysim {args.command}: error: {exc}", file=sys.stderr)
@@ -62,6 +63,37 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"raysim {args.command}: interrupted; finished outputs were kept", file=sys.stderr)
         return 130
+
+
+#: Warnings the command line states as one line of its own (class names): they report a
+#: choice the program made, not a fault of the user's input or of the code.
+NOTE_WARNINGS = ("DecimationRefused",)
+
+
+def note_line(command: str, message) -> str:
+    """The one line that states a :data:`NOTE_WARNINGS` warning (no file, line or source)."""
+    text = " ".join(str(message).split())
+    return f"raysim {command}: note: {text}"
+
+
+@contextlib.contextmanager
+def _notes_as_lines(command: str):
+    """While the block runs, :data:`NOTE_WARNINGS` go to stderr as one line each, through
+    ``tqdm.write`` so that a progress bar is redrawn below them; other warnings as before."""
+    shown = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if category.__name__ not in NOTE_WARNINGS:
+            return shown(message, category, filename, lineno, file, line)
+        from tqdm import tqdm
+
+        tqdm.write(note_line(command, message), file=sys.stderr)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = shown
 
 
 @contextlib.contextmanager

@@ -27,6 +27,7 @@ examples:
   raysim flight flight_dir --mounting-deg forward --target 7,10,0 --no-attitude
   raysim flight flight_dir --targets default5 --clutter-scene parking_lot \\
       --clutter-altitude 8                          # ground 8 m below, in range
+  raysim flight flight_dir --decimate off           # every chirp exact (oracle)
 
 exit status: 0 written, 2 invalid input (the message names the option and the value).
 """
@@ -34,6 +35,7 @@ exit status: 0 written, 2 invalid input (the message names the option and the va
 
 def register(subparsers) -> None:
     """Add the ``flight`` subcommand."""
+    from raysim.cli.options import add_decimation_options
     from raysim.io.ti_boards import board_names
     from raysim.pipeline.flight import DEFAULT_BOARD
 
@@ -79,7 +81,8 @@ def register(subparsers) -> None:
                    "down (default), forward, oblique")
     p.add_argument("--clutter-scene", default=None, metavar="SCENE",
                    help="add the ground clutter field of a bundled scene (flat_reflectors, "
-                   "parking_lot, rough_terrain), rendered by the same oracle; down mounting")
+                   "parking_lot, rough_terrain) where the mounted radar points, rendered by "
+                   "the same oracle")
     p.add_argument("--clutter-altitude", type=float, default=None, metavar="METRES",
                    help="hover height above the clutter scene's ground [m] (default: the "
                    "scene's)")
@@ -91,6 +94,7 @@ def register(subparsers) -> None:
                    help="initial attitude in the printed command: the log's vehicle_attitude "
                    "(read by compensate; level when the log has none), the flight controller's "
                    "estimate at the first ramp as numbers, or accelerometer levelling")
+    add_decimation_options(p, scenario=False)
     p.add_argument("--no-progress", action="store_true",
                    help="no progress bar and no size announcement")
     p.set_defaults(func=run)
@@ -134,6 +138,8 @@ def run(args) -> int:
                      clock_drift_ppm=args.clock_drift_ppm, attitude=not args.no_attitude,
                      clutter_scene=args.clutter_scene, clutter_altitude=args.clutter_altitude,
                      clutter_max_scatterers=args.clutter_max_scatterers,
+                     decimate=args.decimate or "auto",
+                     decimate_tolerance=args.decimate_tolerance,
                      progress=not args.no_progress)
     out = f"{args.folder.rstrip('/')}/compensated.zarr"
     print(f"wrote {f.imu_log}, {f.capture}, {f.radar_config}")

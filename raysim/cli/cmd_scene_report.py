@@ -108,7 +108,8 @@ def register(subparsers) -> None:
                    "calibrated sigma0, Rayleigh cells, rough-surface specular, target-ground "
                    "ghosts) or Sionna's own diffuse paths and mirror")
     p.add_argument("--clutter-per-cell", type=float, default=None, metavar="N",
-                   help="scatterers of the clutter field per range x angle cell (default: 10, "
+                   help="scatterers of the clutter field per range x angle cell, at every "
+                   "incidence, on the ground and on walls of clutter materials (default: 10, "
                    "which gives Rayleigh cells)")
     add_decimation_options(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bars")

@@ -130,18 +130,21 @@ def span_grid(text: str, name: str) -> np.ndarray:
     return lo + step * np.arange(count)
 
 
-def add_decimation_options(parser: argparse.ArgumentParser) -> None:
+def add_decimation_options(parser: argparse.ArgumentParser, scenario: bool = True) -> None:
     """``--decimate {auto,off}`` and ``--decimate-tolerance TOL``: the scenario's
-    ``synthesis.decimate`` and ``synthesis.decimate_tolerance`` (left out: the scenario's)."""
+    ``synthesis.decimate`` and ``synthesis.decimate_tolerance`` (left out: the scenario's;
+    ``scenario=False``: a command without a scenario, left out: ``auto`` and 0.1 x eps)."""
     from raysim.scenario.synthesis import DECIMATE_MODES
 
+    mode = ("synthesis.decimate of the scenario, 'auto' unless set" if scenario else "'auto'")
+    tol = ("synthesis.decimate_tolerance, else 0.1 x the synthesis eps" if scenario
+           else "0.1 x the synthesis eps")
     parser.add_argument("--decimate", choices=DECIMATE_MODES, default=None,
                         help="slow-time decimation of the synthesis: 'auto' interpolates "
                         "chirps within the tolerance where the motion allows it (checked on "
                         "a few channels; refused with the reason otherwise), 'off' renders "
-                        "every chirp exactly (left out: synthesis.decimate of the scenario, "
-                        "'auto' unless set)")
+                        f"every chirp exactly (left out: {mode})")
     parser.add_argument("--decimate-tolerance", type=float, default=None, metavar="TOL",
                         help="relative error (l2 and worst chirp row) allowed to that "
-                        "interpolation against the undecimated render, in (0, 0.1] (left "
-                        "out: synthesis.decimate_tolerance, else 0.1 x the synthesis eps)")
+                        f"interpolation against the undecimated render, in (0, 0.1] (left "
+                        f"out: {tol})")

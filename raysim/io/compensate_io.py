@@ -68,6 +68,9 @@ class CompensateInput:
         ``r_IR`` in B [m] if the source knows it.
     imu : ndarray, shape ``[sample, 7]``, or None
         IMU log held by a store: time, gyro, accel.
+    mounting_deg : tuple of float or None
+        Radar mounting ``R_BA`` (yaw, pitch, roll) [deg] a rendered store was
+        simulated with (its ``mounting_deg`` attribute); None: not known (down).
     units : str
         Unit of the samples (``"V"`` for simulated stores, ``"ADC counts"``).
     source : dict
@@ -85,6 +88,7 @@ class CompensateInput:
     imu: np.ndarray | None = None
     units: str = "V"
     source: dict = field(default_factory=dict)
+    mounting_deg: tuple | None = None
 
     @property
     def num_slots(self) -> int:
@@ -192,8 +196,9 @@ def _load_store(path: str, frames: str | None, frame: int) -> CompensateInput:
     return CompensateInput(sel, lambda k: ds["if_data"].isel(frame=sel[k]),
                            slot_times(times, arr.num_slots, cfg.slot_interval),
                            cfg, arr.virtual_positions, arr.tx_slot, arr.grid_shape,
-                           lever, imu,
-                           source={"store": os.path.abspath(path)})
+                           lever, imu, source={"store": os.path.abspath(path)},
+                           mounting_deg=(tuple(float(v) for v in ds.attrs["mounting_deg"])
+                                         if "mounting_deg" in ds.attrs else None))
 
 
 def _load_npz(path: str) -> CompensateInput:

@@ -468,7 +468,7 @@ def explain_detection(result: SceneMeasurement, range_m: float, az_deg: float, e
 def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.ndarray,
                   elevation: np.ndarray, range_window: tuple[float, float], lever_arm,
                   gate_block: int = 16, spatial_window: str | None = None,
-                  subaperture=None) -> SceneMeasurement:
+                  subaperture=None, mounting_deg=None) -> SceneMeasurement:
     """Beams, maps, entropies, ridge leakage and detections of one chain (or the reference).
 
     Parameters
@@ -504,6 +504,11 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
         ``dpca``: elements per axis of its sub-aperture, or the lattice indices
         ``[sub, 2]`` of its elements (``DPCAPlan.reference_index``); default the
         largest the motion leaves; fix it to compare frames.
+
+    mounting_deg : str or (float, float, float), optional
+        Radar mounting (:mod:`raysim.platform.mounting`): the grid's directions
+        are in the nominal radar frame N, detections are placed in W along
+        ``R_BA u``; default ``down`` (N is W).
 
     Returns
     -------
@@ -564,9 +569,11 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
     detections = []
     lever = np.asarray(lever_arm, dtype=float)
     from compensation.geometry import direction
+    from raysim.platform.mounting import is_default_mounting, mounting_matrix
 
+    turn = None if is_default_mounting(mounting_deg) else mounting_matrix(mounting_deg)
     for gi, ai, ei in cfar_detect(cube)[:MAX_DETECTIONS]:
-        u = direction(az[ai], el[ei])
+        u = direction(az[ai], el[ei]) if turn is None else turn @ direction(az[ai], el[ei])
         d = int(np.argmax(rd[gi]))
         detections.append({
             "range_m": float(rng[gi]), "az_deg": float(np.rad2deg(az[ai])),

@@ -473,7 +473,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     mounting_deg : str or (float, float, float), optional
         Radar mounting ``R_BA``: (yaw, pitch, roll) [deg] or a name of
         :data:`raysim.platform.mounting.MOUNTING_PRESETS`; default ``down``
-        (A parallel to B). Other mountings give beams in the nominal radar
+        (A parallel to B), or the mounting a rendered store was simulated
+        with. Other mountings give beams in the nominal radar
         frame (:func:`raysim.platform.mounting.mount_motion`); they need a given
         clock offset and ``velocity`` hover or given.
     progress : bool
@@ -519,11 +520,16 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         time_offset = float(_vector(time_offset, 1, "--time-offset")[0])
     from raysim.platform.mounting import is_default_mounting, mount_motion
 
-    mounted = not is_default_mounting(mounting_deg)
-    if mounted and (velocity == "radar" or isinstance(time_offset, str)):
-        raise ValueError(f"--mounting-deg {mounting_deg!r}: the self-calibration (--velocity "
-                         f"radar, --time-offset auto) assumes the down-looking mounting; give "
-                         f"--time-offset SECONDS and --velocity hover or given")
+    def check_mounting(mounting_deg) -> bool:
+        mounted = not is_default_mounting(mounting_deg)
+        if mounted and (velocity == "radar" or isinstance(time_offset, str)):
+            raise ValueError(f"--mounting-deg {mounting_deg!r}: the self-calibration "
+                             f"(--velocity radar, --time-offset auto) assumes the down-looking "
+                             f"mounting; give --time-offset SECONDS and --velocity hover or "
+                             f"given")
+        return mounted
+
+    mounted = check_mounting(mounting_deg)
     out = Path(out)
     as_npz = check_compensated_output(out, "--out", inputs=[("CUBE", source), ("--imu", imu),
                                                             ("--radar-config", radar_config)])
@@ -536,6 +542,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                          else os.fspath(radar_config), frames=_frames_text(frames), frame=frame,
                          layout=layout, capture_t0=capture_t0, board=board,
                          antenna_positions=antenna_positions)
+        if mounting_deg is None and inp.mounting_deg is not None:   # a store's own
+            mounting_deg = inp.mounting_deg
+            mounted = check_mounting(mounting_deg)
         if as_npz and len(inp.frames) != 1:
             raise ValueError(f"--out {str(out)!r}: an .npz holds one frame, the selection has "
                              f"{len(inp.frames)}; give a store path (no .npz) or --frames K")

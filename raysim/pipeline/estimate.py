@@ -175,9 +175,17 @@ def scenario_motion(scenario: Scenario, imu, chirp_times: np.ndarray, trajectory
     Returns
     -------
     compensation.PlatformMotion
+        In the nominal radar frame N of ``radar.mounting_deg``
+        (:func:`raysim.platform.mounting.mount_motion`), so the beams look along
+        the directions the scenario's targets are given in; W itself for the
+        default ``down`` mounting.
     """
+    from raysim.platform.mounting import mount_motion
+
     traj = scenario.trajectory() if trajectory is None else trajectory
-    return estimate_motion(imu["imu_time"].values, imu["imu_gyro"].values,
-                           imu["imu_accel"].values, chirp_times, lever_arm=scenario.lever_arm,
-                           trajectory=traj, time_offset=scenario.imu.time_offset_s,
-                           velocity=velocity)
+    return mount_motion(estimate_motion(imu["imu_time"].values, imu["imu_gyro"].values,
+                                        imu["imu_accel"].values, chirp_times,
+                                        lever_arm=scenario.lever_arm, trajectory=traj,
+                                        time_offset=scenario.imu.time_offset_s,
+                                        velocity=velocity),
+                        scenario.radar.mounting_deg)

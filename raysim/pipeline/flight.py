@@ -31,6 +31,10 @@ __all__ = ["FlightFiles", "write_flight", "FLIGHT_RADAR", "measure_store",
 
 #: Waveform of the flight: TI 3 Tx x 4 Rx TDM (TX0, TX2, TX1), 64 loops, 150 samples.
 FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_period=0.05)
+#: Relative l2 error of the flight's synthesis with slow-time decimation: the exact rows
+#: are the oracle's tone sum, the interpolation gets ``DECIMATION_EPS_SHARE`` of it (1e-6)
+#: unless ``decimate_tolerance`` says otherwise.
+FLIGHT_SYNTHESIS_EPS = 1e-5
 #: The files :func:`write_flight` writes in its folder.
 FLIGHT_FILES = ("adc_data.bin", "radar.cfg", "flight.ulg")
 #: Largest ADC value of the written capture (the IF cube is scaled to it) [counts].
@@ -226,7 +230,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
                  log_gaps: int = 0, gaps_in_capture: bool = False,
                  clock_drift_ppm: float = 0.0, attitude: bool = True,
                  clutter_scene: str | None = None, clutter_altitude: float | None = None,
-                 clutter_max_scatterers: int = 200_000,
+                 clutter_max_scatterers: int = 200_000, decimate="auto",
+                 decimate_tolerance: float | None = None,
                  progress: bool = False) -> FlightFiles:
     """Simulate a flight and write its ULog, DCA1000 capture and SDK ``.cfg``.
 
@@ -277,12 +282,21 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         Write the flight controller's attitude as ``vehicle_attitude``.
     clutter_scene : str, optional
         Add the ground clutter field of this bundled scene
-        (:mod:`raysim.pipeline.flight_clutter`), rendered by the same oracle with the
-        element pattern; ``down`` mounting only.
+        (:mod:`raysim.pipeline.flight_clutter`) where the mounted radar points,
+        rendered by the same oracle with the element pattern.
     clutter_altitude : float, optional
         Hover height above that ground [m]; default the scene's.
     clutter_max_scatterers : int
         Bound on the clutter field's scatterers (cost).
+    decimate : "auto" or "off"
+        Slow-time decimation of the targets' and the clutter's synthesis
+        (:func:`raysim.synthesis.select.synthesize` on the oracle's delays, tone
+        sum rows, band read from the delays, checked on a channel at every chirp;
+        refused with the reason where it cannot hold the tolerance). ``"off"``:
+        the oracle's own render, every chirp exact.
+    decimate_tolerance : float, optional
+        Relative error (l2 and worst chirp row) of the interpolation against the
+        undecimated render; default ``0.1 x FLIGHT_SYNTHESIS_EPS``.
     progress : bool
         A progress bar over the frames on stderr and the sizes announced.
 
@@ -308,6 +322,10 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     if not (np.isfinite(start) and start > 0):
         raise ValueError(f"start must be a positive time [s] (the IMU starts at 0), got "
                          f"{start!r}")
+    from raysim.synthesis.select import check_decimate, check_decimate_tolerance
+
+    decimate = check_decimate(decimate)
+    tolerance = check_decimate_tolerance(decimate_tolerance, FLIGHT_SYNTHESIS_EPS)
     folder = check_output(folder, "dir", "folder", names=FLIGHT_FILES)
     layout = resolve_board(board, tx_order=(0,), rx_enabled=(0,), start_freq_hz=77e9
                            if BOARDS.get(board) is None or BOARDS[board].band_ghz[0] > 70
@@ -338,12 +356,10 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     if clutter_scene is not None:
         from raysim.pipeline.flight_clutter import clutter_points
 
-        if mounted is not array:
-            raise ValueError("--clutter-scene needs the down mounting (the oracle's element "
-                             f"pattern is in body axes); got --mounting-deg {mount}")
         clutter, summary = clutter_points(clutter_scene, cfg, array, lever,
                                           altitude=clutter_altitude, seed=seed,
-                                          max_scatterers=clutter_max_scatterers)
+                                          max_scatterers=clutter_max_scatterers,
+                                          mounting_deg=mount)
         if progress:
             import sys
 
@@ -355,13 +371,26 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         from tqdm import tqdm
 
         ks = tqdm(ks, unit="frame", desc="flight", file=sys.stderr)
+    def render(pts, f: int) -> np.ndarray:
+        if decimate == 1:                  # the oracle's own render, every chirp exact
+            return simulate_point_targets(cfg, mounted, pts, traj, lever_arm=lever, frame=f,
+                                          t0=start, pattern=mount_pattern(cfg.pattern, mount)).data
+        from raysim.echoes.oracle import check_frame_memory, point_target_delays
+        from raysim.synthesis.frame import adc_samples
+        from raysim.synthesis.select import synthesize, tones_error
+
+        # the delays and amplitudes twice: the path groups of the decimation copy theirs
+        check_frame_memory(cfg, mounted, 2 * len(pts))
+        tau, amp = point_target_delays(cfg, mounted, traj, pts, lever_arm=lever, frame=f,
+                                       t0=start, pattern=mount_pattern(cfg.pattern, mount))
+        eps = max(FLIGHT_SYNTHESIS_EPS, tones_error(len(pts)))
+        return adc_samples(synthesize(tau, amp, cfg, method="tones", eps=eps,
+                                      decimate=decimate, decimate_tolerance=tolerance), cfg)
+
     def frame(f: int) -> np.ndarray:
-        data = simulate_point_targets(cfg, mounted, points, traj, lever_arm=lever, frame=f,
-                                      t0=start, pattern=mount_pattern(cfg.pattern, mount)).data
+        data = render(points, f)
         if clutter:
-            data = data + simulate_point_targets(cfg, mounted, clutter, traj, lever_arm=lever,
-                                                 frame=f, t0=start,
-                                                 pattern=mount_pattern(cfg.pattern, mount)).data
+            data = data + render(clutter, f)
         return data
 
     cube = np.stack([frame(f) for f in ks])

@@ -78,6 +78,10 @@ def _store_attrs(scenario: Scenario, reference: Reference | None) -> dict:
              "frames_planned": int(scenario.frames), "motion_name": scenario.trajectory().name}
     if scenario.time_epoch_utc is not None:
         attrs["time_epoch_utc"] = scenario.time_epoch_utc
+    from raysim.platform.mounting import is_default_mounting, mounting_deg
+
+    if not is_default_mounting(scenario.radar.mounting_deg):    # compensate reads it back
+        attrs["mounting_deg"] = list(mounting_deg(scenario.radar.mounting_deg))
     if reference is not None:
         attrs.update({"reference_range_m": reference.range_m,
                       "reference_az_deg": reference.az_deg,

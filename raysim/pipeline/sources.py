@@ -16,7 +16,7 @@ import numpy as np
 from raysim.scenario import Scenario
 from raysim.synthesis.frame import RadarFrame
 
-__all__ = ["FeatureUnavailable", "Reference", "frame_source", "point_targets",
+__all__ = ["FeatureUnavailable", "Reference", "frame_source", "point_targets", "radar_pose",
            "reference_target", "LazyFrames", "render_frames", "nominal_at", "path_kinds",
            "hover_twin", "gated_source", "decimation"]
 
@@ -34,7 +34,8 @@ class Reference:
     range_m : float
         Range [m].
     az_deg, el_deg : float
-        Direction in frame A at the nominal attitude [deg].
+        Direction in frame A at the nominal attitude [deg] (the nominal radar
+        frame N of a mounted radar, :mod:`raysim.platform.mounting`).
     """
 
     range_m: float
@@ -56,7 +57,8 @@ def point_targets(scenario: Scenario) -> list:
 
     Each target is placed from the nominal radar phase centre (the lever arm,
     body frame B [m]) at ``range_m`` [m] and ``az_deg`` / ``el_deg`` [deg]
-    (docs/conventions.md), with its world velocity [m/s] and RCS [dBsm].
+    (docs/conventions.md; directions in the nominal radar frame N of the
+    scenario's ``radar.mounting_deg``), with its world velocity [m/s] and RCS [dBsm].
 
     Returns
     -------
@@ -64,11 +66,50 @@ def point_targets(scenario: Scenario) -> list:
         One per target, in file order (a scene of kind ``points`` has targets).
     """
     from raysim.echoes.oracle import PointTarget
+    from raysim.platform.mounting import is_default_mounting, nominal_target_position
 
+    mount = scenario.radar.mounting_deg
+    if not is_default_mounting(mount):
+        return [PointTarget(nominal_target_position(t.range_m, math.radians(t.az_deg),
+                                                    math.radians(t.el_deg), scenario.lever_arm,
+                                                    mount),
+                            np.asarray(t.velocity_mps, dtype=float), t.rcs_dbsm)
+                for t in scenario.scene.targets]
     return [PointTarget.at(t.range_m, math.radians(t.az_deg), math.radians(t.el_deg),
                            velocity=t.velocity_mps, rcs_dbsm=t.rcs_dbsm,
                            radar_origin=scenario.lever_arm)
             for t in scenario.scene.targets]
+
+
+def radar_pose(scenario: Scenario, trajectory) -> tuple:
+    """The trajectory and lever arm that place the scenario's radar frame A.
+
+    :func:`raysim.platform.mounting.mount_trajectory` of the body ``trajectory``
+    with ``scenario.lever_arm`` and ``scenario.radar.mounting_deg``: every echo
+    source (oracle, tracer, clutter field, re-projection) takes the radar's
+    position, orientation, element positions and pattern boresight from them.
+    The default (``down``) mounting returns ``trajectory`` and the lever arm
+    themselves.
+
+    Returns
+    -------
+    (raysim.platform.motion.Trajectory, ndarray)
+        Radar-frame trajectory and lever arm [m], shape ``[3]``.
+    """
+    from raysim.platform.mounting import mount_trajectory
+
+    return mount_trajectory(trajectory, scenario.lever_arm, scenario.radar.mounting_deg)
+
+
+def _body_lever(frame: RadarFrame, scenario: Scenario) -> RadarFrame:
+    """``frame`` with the scenario's own lever arm (in B) where a mounting turned it."""
+    from dataclasses import replace
+
+    from raysim.platform.mounting import is_default_mounting
+
+    if is_default_mounting(scenario.radar.mounting_deg):
+        return frame
+    return replace(frame, lever_arm=scenario.lever_arm)
 
 
 def _rt_scene(scenario: Scenario):
@@ -98,7 +139,12 @@ def _rt_scene(scenario: Scenario):
     except Exception as exc:  # backend failures (no LLVM, no GPU) are not bad input
         raise FeatureUnavailable(f"cannot load scene {target!r} with Sionna RT: "
                                  f"{type(exc).__name__}: {exc}") from None
-    tracer = MonostaticTracer(max_depth=max(1, scenario.scene.max_depth), seed=scenario.seed)
+    from raysim.echoes.po.fidelity import resolve_fidelity
+
+    ladder = resolve_fidelity(scenario.scene.fidelity, scenario.virtual_array(),
+                              scenario.scene.fidelity_tolerance)
+    tracer = MonostaticTracer(max_depth=max(1, scenario.scene.max_depth), seed=scenario.seed,
+                              fidelity=ladder)
     return scene, tracer, render_scene
 
 
@@ -113,7 +159,8 @@ def _clutter(scenario: Scenario):
     return SceneClutter(FieldSettings(scatterers_per_cell=c.per_cell, reuse_distance=c.reuse_m,
                                        max_scatterers=c.max_scatterers, seed=scenario.seed,
                                        polarisation=scenario.radar.polarisation,
-                                       wind_mps=c.wind_mps, vegetation=c.vegetation),
+                                       wind_mps=c.wind_mps, vegetation=c.vegetation,
+                                       walls=c.walls is not False),
                          ghosts=c.ghosts,
                          movers=[*(_car(m, seed=scenario.seed + i)
                                    for i, m in enumerate(scenario.scene.movers)),
@@ -176,15 +223,15 @@ def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFr
     arr = scenario.virtual_array()
     check_frame_memory(cfg, arr, len(scenario.scene.targets), intra_chirp=scenario.intra_chirp)
     traj = scenario.trajectory() if trajectory is None else trajectory
-    lever = scenario.lever_arm
+    traj, lever = radar_pose(scenario, traj)
     if scenario.scene.kind == "points":
         targets = point_targets(scenario)
 
         def source(f: int) -> RadarFrame:
-            return simulate_point_targets(cfg, arr, targets, traj, lever_arm=lever, frame=f,
-                                          intra_chirp=scenario.intra_chirp,
-                                          noise=scenario.noise, seed=scenario.seed + f,
-                                          pattern=cfg.pattern)
+            return _body_lever(simulate_point_targets(
+                cfg, arr, targets, traj, lever_arm=lever, frame=f,
+                intra_chirp=scenario.intra_chirp, noise=scenario.noise, seed=scenario.seed + f,
+                pattern=cfg.pattern), scenario)
 
         source.reference = reference_target(scenario)
         return source
@@ -193,9 +240,9 @@ def frame_source(scenario: Scenario, trajectory=None) -> Callable[[int], RadarFr
     clutter = _clutter(scenario)          # one field for every frame (persistent clutter)
 
     def rt_source(f: int) -> RadarFrame:
-        return render_scene(scene, cfg, arr, traj, lever, tracer=tracer, frame=f,
-                            noise=scenario.noise, seed=scenario.seed + f, clutter=clutter,
-                            **decimation(scenario))
+        return _body_lever(render_scene(scene, cfg, arr, traj, lever, tracer=tracer, frame=f,
+                                        noise=scenario.noise, seed=scenario.seed + f,
+                                        clutter=clutter, **decimation(scenario)), scenario)
 
     rt_source.reference = reference_target(scenario, scene)
     return rt_source
@@ -212,7 +259,8 @@ def reference_target(scenario: Scenario, rt_scene=None) -> Reference | None:
     """Range and direction of the first target seen from the nominal radar pose.
 
     Point scenes: the first ``[[scene.targets]]`` entry. Ray-traced scenes: the
-    first discrete target of the loaded scene (None when it has none).
+    first discrete target of the loaded scene (None when it has none), its
+    direction in the nominal radar frame N of ``radar.mounting_deg``.
     """
     if scenario.scene.kind == "points":
         t = scenario.scene.targets[0]
@@ -221,8 +269,10 @@ def reference_target(scenario: Scenario, rt_scene=None) -> Reference | None:
     if not targets:
         return None
     from raysim.echoes.oracle import az_el
+    from raysim.platform.mounting import nominal_direction
 
-    d = np.asarray(targets[0].position, dtype=float) - scenario.lever_arm
+    d = nominal_direction(np.asarray(targets[0].position, dtype=float) - scenario.lever_arm,
+                          scenario.radar.mounting_deg)
     r = float(np.linalg.norm(d))
     az, el = az_el(d / r)
     return Reference(r, float(np.degrees(az)), float(np.degrees(el)))
@@ -377,7 +427,9 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
         ``other_specular``; :func:`path_kinds`),
         ``"tracks"``, ``"movers"`` (the MovingObject of every extra mover),
         ``"scene"`` (the loaded scene), ``"clutter"`` (the field's report,
-        empty without it).
+        empty without it), ``"fidelity"`` (the echo model chosen per geometry
+        target, :class:`raysim.echoes.po.fidelity.FidelityChoice` as dicts;
+        empty for ``[scene] fidelity = "mesh"``).
 
     Raises
     ------
@@ -425,12 +477,12 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     elif clutter == "none":
         tracer = replace(tracer, diffuse=False)
     t0 = float(cfg.chirp_times()[0])
-    rest = stationary()
-    paths = tracer(scene, cfg, rest, lever, time=t0)
+    rest, lever_a = radar_pose(scenario, stationary())    # the radar frame A's pose
+    paths = tracer(scene, cfg, rest, lever_a, time=t0)
     tracks = []
     if model is not None:
-        paths, tracks = model.paths(scene, paths, cfg, arr, rest, lever, time=t0)
-    radar_w = rest.point_world([t0], lever)[0, 0]
+        paths, tracks = model.paths(scene, paths, cfg, arr, rest, lever_a, time=t0)
+    radar_w = rest.point_world([t0], lever_a)[0, 0]
     ground = None                      # cars are located on and traced with the ground
     if movers:
         from raysim.echoes.ground.surface import GroundSurface
@@ -449,14 +501,15 @@ def hover_twin(scenario: Scenario, trajectory, *, samples_per_src: int | None = 
     synth = functools.partial(synthesize, eps=nufft_eps)
     out = {"paths": paths, "path_kinds": path_kinds(paths), "tracks": tracks, "scene": scene,
            "movers": objects, "clutter": model.summary() if model is not None else {},
+           "fidelity": [] if tracer.fidelity is None else tracer.fidelity.report(),
            "reference": reference_target(scenario, scene)}
-    for name, motion in (("stationary", rest), ("hover", trajectory)):
+    for name, motion in (("stationary", rest), ("hover", radar_pose(scenario, trajectory)[0])):
         t = time.perf_counter()
-        data, _ = synthesize_paths(paths, cfg, arr, motion, lever, path_chunk=path_chunk,
+        data, _ = synthesize_paths(paths, cfg, arr, motion, lever_a, path_chunk=path_chunk,
                                    eps=nufft_eps,
                                    modulation=None if model is None else model.modulation,
                                    **decimation(scenario))
-        synthesize_tracks(tracks, cfg, arr, motion, lever, out=data, synthesizer=synth)
+        synthesize_tracks(tracks, cfg, arr, motion, lever_a, out=data, synthesizer=synth)
         if scenario.noise:
             add_noise(data, cfg, scenario.seed)
         out[name] = RadarFrame(adc_samples(data, cfg), cfg, arr, cfg.chirp_times(), lever, 0,

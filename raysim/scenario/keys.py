@@ -267,7 +267,9 @@ class ClutterSection(BaseModel):
     wind moving the vegetation (internal clutter motion, Billingsley's model:
     0 = still, else 0.224 m/s (0.5 mph) to 27 m/s, the measured winds);
     ``vegetation`` the clutter materials that move in it (default the
-    vegetation materials, ``["grass"]``).
+    vegetation materials, ``["grass"]``); ``walls`` whether the field also
+    covers walls and other faces steeper than 60 deg (default true; ``false``
+    leaves the ground only).
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
@@ -279,6 +281,8 @@ class ClutterSection(BaseModel):
     ghosts: bool = True
     wind_mps: float = Field(0.0, ge=0, le=27)
     vegetation: tuple[str, ...] | None = None
+    #: None keeps the default (walls on) out of the scenario's canonical JSON.
+    walls: bool | None = None
 
 
 class MoverSection(BaseModel):

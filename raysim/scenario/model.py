@@ -144,7 +144,11 @@ class SceneSection(_Section):
     ``path`` to a Mitsuba XML scene or a mesh file (relative paths are taken
     from the scenario file's folder); ``kind = "meshes"`` with ``[[scene.meshes]]``
     (users' mesh files, :mod:`raysim.scenario.meshes`). ``kind`` may be omitted:
-    it is inferred from which key is given. ``[[scene.movers]]``: cars driving
+    it is inferred from which key is given. ``fidelity``: echo model of each
+    geometry target (``"mesh"``, today's full PO + SBR centres; ``"point"``,
+    ``"centres"``; ``"auto"``, the cheapest within ``fidelity_tolerance``, the
+    relative l2 error of the object's echo against its mesh;
+    :mod:`raysim.echoes.po.fidelity`). ``[[scene.movers]]``: cars driving
     through a ray-traced scene (:class:`raysim.scenario.keys.MoverSection`);
     ``[[scene.rotors]]``: rotating parts (:class:`raysim.scenario.keys.RotorSection`).
     """
@@ -155,6 +159,8 @@ class SceneSection(_Section):
     path: str | None = None
     meshes: list[MeshSpec] = Field(default_factory=list)
     max_depth: int = Field(3, ge=0, le=10)
+    fidelity: Literal["auto", "point", "centres", "mesh"] = "mesh"
+    fidelity_tolerance: float = Field(0.05, gt=0, le=1)
     clutter: ClutterSection = Field(default_factory=ClutterSection)
     movers: list[MoverSection] = Field(default_factory=list)
     rotors: list[RotorSection] = Field(default_factory=list)

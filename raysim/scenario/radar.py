@@ -16,6 +16,7 @@ from raysim.radar.config import (
     TX_POWER_DBM_RANGE,
 )
 from raysim.radar.pattern import resolve_element_gain
+from raysim.scenario.keys import did_you_mean
 
 __all__ = ["RadarSection"]
 
@@ -50,6 +51,13 @@ class RadarSection(_Section):
 
     ``polarisation``: transmit-receive channel of the ground clutter's
     ``sigma0`` (``"VV"`` default, ``"HH"``, ``"HV"``; docs/clutter.md).
+
+    ``mounting_deg``: how the radar sits on the body, as ``--mounting-deg`` of
+    ``raysim flight`` and ``raysim compensate``: a preset (``"down"``, the
+    default, ``"forward"``, ``"oblique"``) or ``[yaw, pitch, roll]`` [deg], the
+    Z-Y-X Euler angles of ``R_BA`` (:mod:`raysim.platform.mounting`). Target
+    directions and beams are then in the nominal radar frame N; the lever arm
+    is the scenario's ``lever_arm_m`` (in B).
     """
 
     carrier_frequency_hz: float = Field(77e9, gt=0)
@@ -65,6 +73,7 @@ class RadarSection(_Section):
     frame_period_s: float | None = Field(None, gt=0)
     element_pattern: str = "patch"
     polarisation: Literal["VV", "HH", "HV"] = "VV"
+    mounting_deg: str | tuple[float, float, float] | None = None
 
     _tx_power = field_validator("tx_power_dbm")(
         lambda v: _in_range(v, TX_POWER_DBM_RANGE, "dBm", "a transmit power"))
@@ -72,6 +81,23 @@ class RadarSection(_Section):
         lambda v: _in_range(v, ANTENNA_GAIN_DBI_RANGE, "dBi", "an antenna gain"))
     _noise_figure = field_validator("noise_figure_db")(
         lambda v: _in_range(v, NOISE_FIGURE_DB_RANGE, "dB", "a noise figure"))
+
+    @field_validator("mounting_deg", mode="before")
+    @classmethod
+    def _mounting(cls, v):
+        """A preset name (lower case) or three finite angles [deg]; None is ``down``."""
+        if v is None:
+            return v
+        from raysim.platform.mounting import MOUNTING_PRESETS, mounting_deg
+
+        try:
+            ypr = mounting_deg(v, "radar.mounting_deg")
+        except ValueError:
+            raise ValueError(f"one of {sorted(MOUNTING_PRESETS)} or [yaw, pitch, roll] "
+                             f"(three finite angles [deg])"
+                             f"{did_you_mean(v, MOUNTING_PRESETS)}") from None
+        name = v.strip().lower() if isinstance(v, str) else None
+        return name if name in MOUNTING_PRESETS else ypr
 
     @property
     def element_gain_dbi(self) -> float:

@@ -525,7 +525,7 @@ def _plan_band(n_local: int, doppler: float, eps: float, decimate) -> Decimation
             break
     if not ok:
         return _refuse(n_local, doppler, f"Doppler band {doppler:.3g} cycles/chirp too wide for "
-                       f"factor {factors[0]} at eps={eps:g}")
+                       f"factor {factors[0]} at tolerance {eps:g}")
     # the cheapest factor, not the largest: edge chirps may have to be exact
     factor = min(ok, key=lambda d: (ok[d][0].size, -d))
     exact, missing, w, err = ok[factor]
@@ -537,12 +537,12 @@ def _plan_band(n_local: int, doppler: float, eps: float, decimate) -> Decimation
                           f"{exact.size} of {n_local} chirps exact")
 
 
-def _screen(src, config: RadarConfig, n_local: int, decimate) -> str | None:
+def _screen(src, config: RadarConfig, n_local: int, decimate, bound=None) -> str | None:
     """Why decimation cannot apply at all (None if it may)."""
     _check_decimate(decimate)
     if decimate == 1:
         return "decimate=1"
-    if not isinstance(src, PathDelays):
+    if not isinstance(src, PathDelays) and bound is None:
         return "dense delays: no geometry to bound the Doppler band"
     if n_local < MIN_CHIRPS:
         return f"too few chirps ({n_local} < {MIN_CHIRPS})"
@@ -574,13 +574,14 @@ def plan_decimation(src: PathDelays, config: RadarConfig, num_chirps: int, eps: 
 
 
 def plan_groups(src: PathDelays, config: RadarConfig, num_chirps: int, eps: float,
-                decimate="auto") -> list[tuple[np.ndarray, DecimationPlan]]:
+                decimate="auto", bound=None) -> list[tuple[np.ndarray, DecimationPlan]]:
     """Split the paths by their Doppler bound and plan each group (see the module docstring).
 
     Candidate bands are the geometric levels ``b_min * 2^j`` up to the largest
     path bound; a dynamic programme over the sorted levels chooses contiguous
     groups (at most :data:`MAX_GROUPS`) that minimise ``sum (paths +
-    ROW_OVERHEAD_PATHS) x exact chirps``.
+    ROW_OVERHEAD_PATHS) x exact chirps``. ``bound`` [path]: the paths' bands, where
+    ``src`` is not a PathDelays (:func:`raysim.synthesis.dense_decimation.dense_doppler`).
 
     Returns
     -------
@@ -588,13 +589,13 @@ def plan_groups(src: PathDelays, config: RadarConfig, num_chirps: int, eps: floa
         Path indices of each group (together every path once) and its plan.
     """
     n_local = int(num_chirps)
-    why = _screen(src, config, n_local, decimate)
+    why = _screen(src, config, n_local, decimate, bound)
     everything = np.arange(src.num_paths)
     if why is not None:
         return [(everything, _refuse(n_local, math.nan, why))]
     if src.num_paths == 0:
         return [(everything, plan_decimation(src, config, n_local, eps, decimate))]
-    bound = path_doppler(src, config, eps)
+    bound = path_doppler(src, config, eps) if bound is None else np.asarray(bound, float)
     hi = float(bound.max())
     lo = max(float(bound.min()), hi * 2.0**-10)    # a still platform: static bounds are 0
     if decimate != "auto" or hi <= 2.0 * lo:

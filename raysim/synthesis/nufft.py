@@ -121,6 +121,15 @@ class _DenseSource:
     def channel_amplitudes(self, chirp: int, channels: slice = slice(None)) -> np.ndarray:
         return self.amp[:, chirp, channels].T
 
+    def select(self, mask: np.ndarray) -> _DenseSource:
+        """The paths where ``mask`` [path] is True."""
+        return _DenseSource(self.tau[mask], self.amp[mask])
+
+    def channel_subset(self, channels: np.ndarray) -> _DenseSource:
+        """The same paths seen by the channels ``channels`` [k] only."""
+        idx = np.asarray(channels, dtype=np.int64)
+        return _DenseSource(self.tau[:, :, idx], self.amp[:, :, idx])
+
 
 def as_source(tau, amplitude=None):
     """Wrap ``tau``/``amplitude`` arrays or a :class:`PathDelays` as a block source."""

@@ -43,8 +43,10 @@ chirps only (every D-th one, plus a few near the edges) and interpolates the
 others along slow time (:mod:`raysim.synthesis.decimate`); with ``"auto"`` the
 paths are split by their own Doppler bound (static scatterers, whose band is
 set by the platform's motion alone, get a much larger factor than moving
-clutter). It applies to ``"kernel"`` and ``"nufft"`` and is refused (every
-chirp exact) where its assumptions fail.
+clutter). It applies to ``"kernel"`` and ``"nufft"``, and to ``"tones"`` for arrays
+of delays (whose band is read from the delays themselves:
+:mod:`raysim.synthesis.dense_decimation`), and is refused (every chirp exact) where
+its assumptions fail.
 """
 
 from __future__ import annotations
@@ -83,6 +85,8 @@ COST_KERNEL_PER_PAIR = 20e-9
 COST_KERNEL_PER_ROW = 15e-6
 #: Share of ``eps`` given to slow-time interpolation when decimating.
 DECIMATION_EPS_SHARE = 0.1
+#: FINUFFT tolerance of the a-posteriori check's rows where the frame's rows are tone sums.
+CHECK_NUFFT_EPS = 1e-7
 #: Tolerance below which only the complex128 direct sum qualifies.
 DIRECT_BELOW_EPS = 1e-6
 
@@ -252,7 +256,8 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
     threads : int, optional
         Threads for the NUFFT and the kernel (default: usable CPUs).
     decimate : "auto", "off" or int, default 1
-        Slow-time decimation factor for ``"kernel"`` and ``"nufft"``
+        Slow-time decimation factor for ``"kernel"`` and ``"nufft"`` (and ``"tones"``
+        for arrays of delays)
         (:func:`raysim.synthesis.decimate.plan_groups`; the row method gets
         ``(1 - DECIMATION_EPS_SHARE) eps``). ``1`` or ``"off"`` renders every
         chirp exactly; refused (every chirp exact) where its assumptions fail.
@@ -315,8 +320,11 @@ def synthesize(tau, amplitude, config: RadarConfig, *, method: Method = "auto",
         raise ValueError(f"eps={eps!r} is below the {tones_error(src.num_paths):.1e} that "
                          f"method 'tones' reaches with {src.num_paths} paths (complex64 "
                          f"accumulation); use method='nufft' or 'direct'")
-    # decimation needs its row share of eps to stay above the methods' floor
-    if method in ("nufft", "kernel") and decimate != 1 and \
+    # decimation needs its row share of eps to stay above the methods' floor; the tone sum
+    # only for arrays of delays (their band is read from the delays themselves)
+    decimable = method in ("nufft", "kernel") or (method == "tones"
+                                                  and not isinstance(src, PathDelays))
+    if decimable and decimate != 1 and \
             (1.0 - DECIMATION_EPS_SHARE) * eps >= MIN_EPS:
         rows_eps = (1.0 - DECIMATION_EPS_SHARE) * eps
         shape = (len(chirps), src.num_channels, config.num_samples)
@@ -381,6 +389,13 @@ def _render_chirps(src, config: RadarConfig, method: str, eps: float, chirp_list
     check's rows: the float32 grid's rounding differs from row to row, so it does not
     interpolate, and with many paths it reaches the interpolation's share of ``eps``).
     """
+    if method == "tones" and not double_grid:       # arrays of delays (see synthesize)
+        synthesize_if(src.tau[:, chirp_list], src.amp[:, chirp_list], config, out=rows)
+        return
+    if method == "tones":
+        # the check's rows: the tone sum's complex64 accumulation differs from row to row
+        # (tones_error) and does not interpolate; FINUFFT at a tight eps does not
+        eps = CHECK_NUFFT_EPS
     if method == "kernel":
         from raysim.synthesis.kernel import kernel_error, render_rows
 
@@ -435,7 +450,9 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
 
     Parameters
     ----------
-    src : PathDelays
+    src : PathDelays, or arrays of delays (``as_source``)
+        The paths; the band of arrays of delays is read from them
+        (:func:`~raysim.synthesis.dense_decimation.dense_doppler`).
     config : RadarConfig
     chirps : range
         Chirps rendered (``target[i]`` is chirp ``chirps[i]``).
@@ -462,6 +479,8 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
     """
     n_local = len(chirps)
     from raysim.synthesis.decimate import (
+        CHECK_SHARE,
+        MAX_CHECK_CHANNELS,
         channel_subset,
         check_channels,
         check_errors,
@@ -470,14 +489,27 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
         scatter_add,
     )
 
-    groups = plan_groups(src, config, n_local, eps, decimate)
+    compact = isinstance(src, PathDelays)
+    bound = None
+    if not compact and decimate != 1 and n_local and src.num_paths:
+        from raysim.synthesis.dense_decimation import dense_doppler
+
+        run = slice(chirps.start, chirps.stop)
+        bound = dense_doppler(src.tau[:, run], src.amp[:, run], config, eps)
+    groups = plan_groups(src, config, n_local, eps, decimate, bound=bound)
     if all(plan.factor == 1 for _, plan in groups):
         if report is not None:
             report.extend({"paths": int(m.size), "factor": 1, "band": p.doppler,
                            "exact_chirps": n_local, "check_l2": 0.0, "check_row": 0.0,
                            "reason": p.reason} for m, p in groups)
         return False
-    chk = check_channels(src)
+    if compact:
+        chk = check_channels(src)
+    else:
+        from raysim.synthesis.dense_decimation import dense_check_channels
+
+        chk = dense_check_channels(src.tau[:, chirps.start:chirps.stop], min(
+            MAX_CHECK_CHANNELS, max(1, int(round(CHECK_SHARE * src.num_channels)))))
     every = chirps.start + np.arange(n_local)
     shape = (n_local, chk.size, target.shape[2])
     state = []
@@ -491,7 +523,8 @@ def render_checked(src: PathDelays, config: RadarConfig, chirps: range, eps: flo
         if plan.factor == 1:                       # exact anyway: nothing to check
             state.append([members, part, plan, full, full, (0.0, 0.0)])
             continue
-        render(channel_subset(part, chk), every, full, check=True)
+        render(channel_subset(part, chk) if compact else part.channel_subset(chk), every, full,
+               check=True)
         plan, pred, errs = _fit_group(plan, full, n_local, eps)
         state.append([members, part, plan, full, pred, errs])
     while True:

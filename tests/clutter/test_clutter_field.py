@@ -15,7 +15,7 @@ from clutter_grounds import grid_ground
 from scipy import stats
 from scipy.signal.windows import blackmanharris
 
-from raysim.echoes.ground.field import ClutterField, FieldSettings, radar_scale
+from raysim.echoes.ground.field import ClutterField, FieldCapped, FieldSettings, radar_scale
 from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS, ament_factor, sigma0
 from raysim.echoes.ground.surface import GroundSurface
 from raysim.echoes.rt.reproject import synthesize_paths
@@ -159,8 +159,9 @@ def test_density_count_and_cost_bound(setup):
     assert rep["cell_area_nadir"] == pytest.approx(HEIGHT**2 * du * dv)
     assert near.sum() >= 10 * 0.5            # Poisson spread of ~10 counts (>5 sigma margin)
     assert np.sum(field.area[near]) == pytest.approx(4 * half**2, rel=0.5)
-    capped = ClutterField.build(ground, config, array, np.zeros(3), np.eye(3),
-                                FieldSettings(shadowing=False, max_scatterers=500))
+    with pytest.warns(FieldCapped, match="max_scatterers = 500"):
+        capped = ClutterField.build(ground, config, array, np.zeros(3), np.eye(3),
+                                    FieldSettings(shadowing=False, max_scatterers=500))
     assert capped.report["density_scale"] < 1
     assert capped.num_scatterers < 500 + 5 * math.sqrt(500)
     with pytest.raises(ValueError, match="scatterers_per_cell"):

@@ -25,7 +25,7 @@ EXACT_RIDGE_MAX_DB = -20.0
 #: Settings of the tests: the ``--quick`` report (persistent clutter field).
 SETTINGS = sr.QUICK
 #: Least clutter-field scatterers of a bundled scene in the QUICK report (measured
-#: 19,360-20,586): about ten per range x angle cell in the beam footprint.
+#: 44,207-63,401): ten per range x angle cell at every incidence in the range window.
 MIN_FIELD_SCATTERERS = 10_000
 
 

@@ -1,6 +1,6 @@
-r"""A persistent clutter field: seeded point scatterers fixed on the ground in W.
+r"""A persistent clutter field: seeded point scatterers fixed on the ground and walls in W.
 
-Each scatterer ``i`` stands for a ground patch of area ``dA_i`` and is one
+Each scatterer ``i`` stands for a surface patch of area ``dA_i`` and is one
 frozen path (``kind = DIFFUSE``) whose complex amplitude is
 
 .. math::
@@ -18,20 +18,19 @@ with the pose is ``R_i``, ``theta_i`` and whether the scatterer is shadowed.
 
 Density
 -------
-Scatterers are a Poisson process of intensity
-``rho(p) = n_cell * clip(P2(p) / P_full, min_pattern, 1) / A_cell(p)``, with
-``P2`` the two-way element pattern relative to its peak
-(:func:`raysim.echoes.ground.density.two_way_pattern`) and ``P_full`` =
-:data:`FULL_DENSITY_DB`: every cell seen within that many dB of the peak gets
-the full ``n_cell`` (Rayleigh cells need about ten scatterers whatever their
-gain), only weaker ones are thinned
-and ``A_cell`` the ground area of one range x angle resolution cell:
-``min(R^2 du dv / (cos b cos theta), (dR / sin theta) R sqrt(du dv))``
-(angular cell footprint near nadir, range ring x angular width away from it).
+Scatterers are a Poisson process of intensity ``rho(p) = n_cell / A_cell(p)``,
+with ``A_cell`` the area of one range x angle resolution cell on the facet
+(:func:`raysim.echoes.ground.density.resolution_cell_area`): every cell the
+radar can see holds ``n_cell`` scatterers on average at every incidence, so a
+cell is a Rayleigh sum wherever it is, and the count is set by the visible area
+and the range, not by the element pattern. The facets are the ground and, with
+``walls`` (default), the walls (:meth:`GroundSurface.clutter_facets`).
 Thinning a bounding intensity and weighting each kept point by
 ``dA_i = 1 / rho(p_i)`` keeps ``sum_i sigma0 dA_i`` an unbiased estimate of the
-integral of ``sigma0`` over the ground. When the expected count exceeds
-``max_scatterers`` the density is scaled down uniformly and the report says so.
+integral of ``sigma0`` over the surface. The expected count is computed from
+the facets before anything is drawn; it is logged, and when it exceeds
+``max_scatterers`` the density is scaled down uniformly, with a
+:class:`FieldCapped` warning that gives the scatterers per cell left.
 
 Wind
 ----
@@ -45,13 +44,15 @@ and the synthesis applies it (:func:`raysim.echoes.rt.reproject.synthesize_paths
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import time as _time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from raysim.echoes.ground.density import two_way_pattern
+from raysim.echoes.ground.density import resolution_cell_area
 from raysim.echoes.ground.icm import MIN_WIND_MPH, MPH, IcmProcess
 from raysim.echoes.ground.sigma0 import CLUTTER_MATERIALS, POLARISATIONS, sigma0
 from raysim.echoes.ground.surface import GroundSurface
@@ -60,11 +61,9 @@ from raysim.radar.arrays import VirtualArray
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
 from raysim.radar.pattern import PATTERN_FLOOR_DB
 
-#: Two-way element gain relative to its peak [dB] down to which the field keeps its full
-#: density; cells seen weaker than this are thinned in proportion (cost), to ``min_pattern``.
-FULL_DENSITY_DB = -20.0
+__all__ = ["FieldSettings", "ClutterField", "FieldCapped", "angular_resolution", "radar_scale"]
 
-__all__ = ["FieldSettings", "ClutterField", "angular_resolution", "radar_scale"]
+_LOG = logging.getLogger(__name__)
 
 #: Longest edge of a ground facet before sampling [m]; smaller facets bound the density tightly.
 MAX_EDGE = 1.0
@@ -74,6 +73,10 @@ BOUND_MARGIN = 1.5
 SHADOW_EPSILON = 0.01
 
 
+class FieldCapped(UserWarning):
+    """The expected scatterer count exceeded ``max_scatterers``: the density was scaled down."""
+
+
 @dataclass(frozen=True)
 class FieldSettings:
     """Options of a clutter field.
@@ -81,9 +84,10 @@ class FieldSettings:
     Attributes
     ----------
     scatterers_per_cell : float
-        Scatterers per range x angle resolution cell where the two-way pattern is 1 (> 0).
-    min_pattern : float
-        Pattern value below which the density stops falling, in (0, 1].
+        Mean scatterers per range x angle resolution cell, at every incidence (> 0).
+    walls : bool
+        Draw scatterers on the walls (facets steeper than
+        :data:`~raysim.echoes.ground.surface.MAX_TILT`) as well as on the ground.
     max_scatterers : int
         Bound on the expected number of scatterers (cost bound), >= 1.
     reuse_distance : float
@@ -106,7 +110,7 @@ class FieldSettings:
     """
 
     scatterers_per_cell: float = 10.0
-    min_pattern: float = 0.1
+    walls: bool = True
     max_scatterers: int = 200_000
     reuse_distance: float = 0.5
     shadowing: bool = True
@@ -119,8 +123,6 @@ class FieldSettings:
     def __post_init__(self) -> None:
         if not self.scatterers_per_cell > 0:
             raise ValueError(f"scatterers_per_cell must be > 0, got {self.scatterers_per_cell!r}")
-        if not 0 < self.min_pattern <= 1:
-            raise ValueError(f"min_pattern must lie in (0, 1], got {self.min_pattern!r}")
         if int(self.max_scatterers) != self.max_scatterers or self.max_scatterers < 1:
             raise ValueError(f"max_scatterers must be an integer >= 1, "
                              f"got {self.max_scatterers!r}")
@@ -196,7 +198,7 @@ def radar_scale(config: RadarConfig) -> float:
 
 def _subdivide(tris: np.ndarray, idx: np.ndarray, max_edge: float):
     """Split triangles into four until no edge exceeds ``max_edge``; keeps the parent index."""
-    out_t, out_i = [], []
+    out_t, out_i = [tris[:0]], [idx[:0]]                     # none in range: no facet
     while len(tris):
         e = np.max(np.linalg.norm(tris - np.roll(tris, 1, axis=1), axis=-1), axis=1)
         small = e <= max_edge
@@ -220,7 +222,7 @@ class ClutterField:
     positions : ndarray, shape ``[scatterer, 3]``
         Positions in W [m].
     normals : ndarray, shape ``[scatterer, 3]``
-        Upward ground normals there.
+        Normals of the surface there (upward on the ground, outward on walls).
     material : ndarray of str, shape ``[scatterer]``
         Clutter material ids.
     area : ndarray, shape ``[scatterer]``
@@ -231,7 +233,8 @@ class ClutterField:
         Radar position the field was built for, in W [m].
     settings : FieldSettings
     report : dict
-        ``num_scatterers``, ``expected``, ``density_scale`` (1 unless capped),
+        ``num_scatterers``, ``wall_scatterers`` (of them on walls), ``expected``,
+        ``density_scale`` (1 unless capped),
         ``cell_area_nadir`` [m^2], ``resolution`` ``(dR, du, dv)``, ``build_s``
         (wall), ``build_cpu_s`` and, in wind, ``icm_scatterers``.
     icm : IcmProcess, optional
@@ -290,29 +293,22 @@ class ClutterField:
         du, dv = angular_resolution(array, config.wavelength)
         r_max = config.max_range + s.reuse_distance
         cos_fov = math.cos(min(s.fov(config) + math.radians(5.0), math.pi / 2))
-        pattern = config.pattern
-        r_wb = np.asarray(r_wb, dtype=float)
 
-        tris = ground.triangles
+        tris, normals, mats = ground.clutter_facets(walls=s.walls)
+        n_ground = len(ground.triangles)
         dist = np.linalg.norm(tris - x0, axis=-1)
         near = dist.min(axis=1) < r_max
         tris, idx = _subdivide(tris[near], np.nonzero(near)[0], MAX_EDGE)
-        normals = ground.normals[idx]
+        normals = normals[idx]
 
         def density(p, n):
             d = p - x0
             r = np.linalg.norm(d, axis=-1)
             u = d / r[..., None]
             cos_b = u @ bore
-            cos_i = np.clip(-np.sum(u * n, axis=-1), 1e-3, 1.0)
-            sin_i = np.sqrt(1.0 - cos_i**2)
-            cb = np.clip(cos_b, 1e-3, 1.0)
-            a_ang = r**2 * du * dv / (cb * cos_i)
-            a_rng = dr / np.maximum(sin_i, 1e-9) * r * math.sqrt(du * dv)
-            rel = two_way_pattern(pattern, u @ r_wb) / 10 ** (FULL_DENSITY_DB / 10)   # u in A
-            w = np.clip(rel, s.min_pattern, 1.0)
-            rho = s.scatterers_per_cell * w / np.minimum(a_ang, a_rng)
-            ok = (r < r_max) & (cos_b >= cos_fov) & (np.sum(u * n, axis=-1) < 0)
+            cos_i = -np.sum(u * n, axis=-1)
+            rho = s.scatterers_per_cell / resolution_cell_area(r, cos_b, cos_i, dr, du, dv)
+            ok = (r < r_max) & (cos_b >= cos_fov) & (cos_i > 0)
             return np.where(ok, rho, 0.0)
 
         probes = np.concatenate([tris, 0.5 * (tris + np.roll(tris, 1, axis=1)),
@@ -321,8 +317,18 @@ class ClutterField:
         bound = BOUND_MARGIN * rho_probe.max(axis=1)
         areas = 0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]),
                                      axis=-1)
+        # the job's size, known before anything is drawn
         expected = float(np.sum(rho_probe[:, -1] * areas))
         scale = min(1.0, s.max_scatterers / expected) if expected > 0 else 1.0
+        _LOG.info("clutter field: %.0f scatterers expected (%g per cell) within %.1f m",
+                  expected * scale, s.scatterers_per_cell * scale, r_max)
+        if scale < 1.0:
+            warnings.warn(FieldCapped(
+                f"clutter field: {expected:.0f} scatterers expected at "
+                f"{s.scatterers_per_cell:g} per resolution cell exceed max_scatterers = "
+                f"{s.max_scatterers}; density scaled by {scale:.3g} to "
+                f"{s.scatterers_per_cell * scale:.3g} per cell (raise max_scatterers or lower "
+                f"scatterers_per_cell)"), stacklevel=2)
         rng = np.random.default_rng([s.seed, 0xC1077E])
         counts = rng.poisson(bound * scale * areas)
         f = np.repeat(np.arange(len(tris)), counts)
@@ -337,13 +343,15 @@ class ClutterField:
         z = (rng.standard_normal(p.shape[0]) + 1j * rng.standard_normal(p.shape[0])) / math.sqrt(2)
         h = _height_above(ground, x0)
         nadir = float("nan") if h is None else h**2 * du * dv
+        on_wall = idx[f] >= n_ground
         report = {"num_scatterers": int(p.shape[0]), "expected": expected * scale,
+                  "wall_scatterers": int(np.sum(on_wall)),
                   "expected_uncapped": expected, "density_scale": scale,
                   "cell_area_nadir": float(nadir), "resolution": (dr, du, dv),
                   "scatterers_per_cell": s.scatterers_per_cell,
                   "build_s": _time.perf_counter() - t_wall,
                   "build_cpu_s": _time.process_time() - t_cpu}
-        material = ground.material[idx[f]]
+        material = mats[idx[f]]
         icm = icm_index = None
         if s.wind_mps > 0:
             # a stream of its own: the still field's draws stay as they are

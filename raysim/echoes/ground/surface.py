@@ -3,7 +3,13 @@
 The clutter field is anchored to the ground: the up-facing triangles (normal
 within :data:`MAX_TILT` of the upward vertical ``-z_W``) of every mesh whose
 material has a backscatter model (:data:`raysim.echoes.ground.sigma0.CLUTTER_MATERIALS`).
-Other meshes (cars, facades, poles) only occlude.
+The steeper facets of those meshes (walls, facades, embankments) are kept
+apart as *walls*: they return diffuse clutter too, but the mirror, the ghosts
+and the ground height (:meth:`GroundSurface.locate`, :meth:`GroundSurface.mean_plane`)
+use the ground alone. A wall of a closed mesh faces the way its winding says
+(outward); a steep facet of an open mesh is kept with both faces, and the
+field keeps the one that faces the radar. Meshes of other materials (cars,
+glass, poles) only occlude.
 """
 
 from __future__ import annotations
@@ -39,41 +45,96 @@ class GroundSurface:
         Clutter material id of each facet.
     occluders : TriangleMesh or None
         Every triangle of the scene in W (ground included), for shadowing rays.
+    wall_triangles : ndarray, shape ``[wall facet, corner, 3]``, optional
+        Facets steeper than :data:`MAX_TILT` with a clutter material, in W [m].
+    wall_normals : ndarray, shape ``[wall facet, 3]``, optional
+        Their unit normals in W (the face that scatters).
+    wall_material : ndarray of str, shape ``[wall facet]``, optional
+        Their clutter material ids.
     """
 
     triangles: np.ndarray
     normals: np.ndarray
     material: np.ndarray
     occluders: TriangleMesh | None = None
+    wall_triangles: np.ndarray | None = None
+    wall_normals: np.ndarray | None = None
+    wall_material: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.triangles, dtype=float)
         if t.ndim != 3 or t.shape[1:] != (3, 3) or len(t) == 0:
             raise ValueError(f"triangles must have shape [facet >= 1, 3, 3], got {t.shape}")
-        bad = sorted(set(np.asarray(self.material).tolist()) - set(CLUTTER_MATERIALS))
+        walls = [self.wall_triangles, self.wall_normals, self.wall_material]
+        if any(w is None for w in walls):
+            if any(w is not None for w in walls):
+                raise ValueError("wall_triangles, wall_normals and wall_material go together: "
+                                 "give all three or none")
+            object.__setattr__(self, "wall_triangles", np.zeros((0, 3, 3)))
+            object.__setattr__(self, "wall_normals", np.zeros((0, 3)))
+            object.__setattr__(self, "wall_material", np.zeros(0, dtype="<U1"))
+        w = np.asarray(self.wall_triangles, dtype=float)
+        if (w.ndim != 3 or w.shape[1:] != (3, 3) or np.shape(self.wall_normals) != (len(w), 3)
+                or np.shape(self.wall_material) != (len(w),)):
+            raise ValueError(f"wall_triangles [facet, 3, 3], wall_normals [facet, 3] and "
+                             f"wall_material [facet] must agree, got {w.shape}, "
+                             f"{np.shape(self.wall_normals)}, {np.shape(self.wall_material)}")
+        mats = {*np.asarray(self.material).tolist(), *np.asarray(self.wall_material).tolist()}
+        bad = sorted(mats - set(CLUTTER_MATERIALS))
         if bad:
             raise ValueError(f"material ids {bad} have no backscatter model; expected "
                              f"{sorted(CLUTTER_MATERIALS)}")
 
+    def clutter_facets(self, walls: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Facets that return diffuse clutter: the ground, then (``walls``) the walls.
+
+        Returns
+        -------
+        triangles : ndarray, shape ``[facet, corner, 3]`` [m]
+        normals : ndarray, shape ``[facet, 3]``
+        material : ndarray of str, shape ``[facet]``
+        """
+        if not walls or len(self.wall_triangles) == 0:
+            return self.triangles, self.normals, self.material
+        return (np.concatenate([self.triangles, self.wall_triangles]),
+                np.concatenate([self.normals, self.wall_normals]),
+                np.concatenate([np.asarray(self.material), np.asarray(self.wall_material)]))
+
     @classmethod
     def from_meshes(cls, meshes: list[tuple[TriangleMesh, str]], *,
                     occluders: list[TriangleMesh] = ()) -> GroundSurface:
-        """Ground from ``(mesh in W, material id)`` pairs.
+        """Ground and walls from ``(mesh in W, material id)`` pairs.
 
-        Facets steeper than :data:`MAX_TILT` and meshes whose material has no
-        backscatter model only occlude.
+        Facets within :data:`MAX_TILT` of horizontal are ground, steeper ones
+        walls (module notes); the facets of a closed mesh that face downwards
+        and meshes whose material has no backscatter model only occlude.
         """
         tris, norms, mats, all_meshes = [], [], [], list(occluders)
+        wt, wn, wm = [], [], []
+        cos_tilt = math.cos(MAX_TILT)
         for mesh, material in meshes:
             all_meshes.append(mesh)
             if material not in CLUTTER_MATERIALS:
                 continue
             n = mesh.normals
-            n = np.where((n @ UP_W)[:, None] < 0, -n, n)          # face the sky
-            keep = n @ UP_W >= math.cos(MAX_TILT)
+            up = n @ UP_W
+            if _is_closed(mesh):                                   # outward faces only
+                n = n * _outward_sign(mesh)
+                up = n @ UP_W
+                keep, steep = up >= cos_tilt, np.abs(up) < cos_tilt
+                walls_t, walls_n = mesh.triangles[steep], n[steep]
+            else:
+                n = np.where(up[:, None] < 0, -n, n)                # ground faces the sky
+                keep = np.abs(up) >= cos_tilt
+                steep = ~keep
+                walls_t = np.concatenate([mesh.triangles[steep]] * 2)
+                walls_n = np.concatenate([n[steep], -n[steep]])    # both faces of a sheet
             tris.append(mesh.triangles[keep])
             norms.append(n[keep])
             mats.extend([material] * int(keep.sum()))
+            wt.append(walls_t)
+            wn.append(walls_n)
+            wm.extend([material] * len(walls_t))
         if not mats:
             raise ValueError(f"no ground facet found: no mesh has one of the materials "
                              f"{sorted(CLUTTER_MATERIALS)} with facets within "
@@ -86,7 +147,9 @@ class GroundSurface:
                 faces.append(m.faces + off)
                 off += len(m.vertices)
             occ = TriangleMesh(np.concatenate(verts), np.concatenate(faces))
-        return cls(np.concatenate(tris), np.concatenate(norms), np.array(mats), occ)
+        return cls(np.concatenate(tris), np.concatenate(norms), np.array(mats), occ,
+                   np.concatenate(wt).reshape(-1, 3, 3), np.concatenate(wn).reshape(-1, 3),
+                   np.array(wm, dtype=np.asarray(mats).dtype if wm else "<U1"))
 
     @classmethod
     def from_scene(cls, scene) -> GroundSurface:
@@ -178,6 +241,21 @@ class GroundSurface:
         origin = (centroid[near] * w[:, None]).sum(axis=0) / w.sum()
         n = (self.normals[near] * w[:, None]).sum(axis=0)
         return origin, n / np.linalg.norm(n)
+
+
+def _is_closed(mesh: TriangleMesh) -> bool:
+    """Whether every edge of ``mesh`` is shared by exactly two facets (a closed surface)."""
+    f = np.asarray(mesh.faces)
+    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(np.all(counts == 2))
+
+
+def _outward_sign(mesh: TriangleMesh) -> float:
+    """+1 when the winding of a closed mesh gives outward normals (positive volume), else -1."""
+    t = mesh.triangles
+    volume = np.sum(np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2]))) / 6.0
+    return 1.0 if volume >= 0 else -1.0
 
 
 def target_meshes(scene) -> list[TriangleMesh]:

@@ -7,9 +7,10 @@ wave of the mesh wedges), :mod:`~raysim.echoes.po.rays` (Mitsuba ray intersectio
 :mod:`~raysim.echoes.po.sbr` (ray tubes), :mod:`~raysim.echoes.po.rcs`
 (monostatic RCS driver), :mod:`~raysim.echoes.po.targets` (canonical meshes and
 closed forms), :mod:`~raysim.echoes.po.paths` (geometry targets as frozen
-scattering-centre paths for the tracer), :mod:`~raysim.echoes.po.car` (a car
-mesh), :mod:`~raysim.echoes.po.sedan` (the detailed car: docs/cars.md). See
-``docs/rcs.md`` and ``docs/scattering.md``.
+scattering-centre paths for the tracer), :mod:`~raysim.echoes.po.fidelity` (the
+cheapest echo model per object: point, reduced centres or mesh),
+:mod:`~raysim.echoes.po.car` (a car mesh), :mod:`~raysim.echoes.po.sedan` (the
+detailed car: docs/cars.md). See ``docs/rcs.md`` and ``docs/scattering.md``.
 """
 
 from raysim.echoes.po.mesh import PoMaterial, TriangleMesh, po_material

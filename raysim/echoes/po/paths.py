@@ -447,6 +447,14 @@ def reprojection_error(terms: ScatteringTerms, centre: np.ndarray, amplitude: np
     return np.abs(approx - exact) / np.maximum(np.abs(exact), 1e-300)
 
 
+def _rows(centre, amp, range_m: float, target, config: RadarConfig, link_budget: bool) -> list:
+    """``(centre, amplitude [sqrt(W) or unitless], velocity)`` of one target's centres."""
+    scale = config.wavelength / (4 * math.pi * range_m**2)
+    if link_budget:   # 0 dBi: the element pattern is applied at re-projection
+        scale *= math.sqrt(10 ** (config.tx_power_dbm / 10) * 1e-3)
+    return [(c, scale * a, target.velocity) for c, a in zip(centre, amp, strict=True)]
+
+
 #: Ground surface of each scene in use (read from its meshes once, not per trace).
 _GROUNDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -464,7 +472,7 @@ def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: flo
                    fov_half_angle: float, min_range: float, max_range: float | None,
                    link_budget: bool = True,
                    tubes_per_wavelength: float = TUBES_PER_WAVELENGTH,
-                   max_bounces: int = MAX_BOUNCES, ground: bool = True):
+                   max_bounces: int = MAX_BOUNCES, ground: bool = True, fidelity=None):
     """Scattering centres of the scene's geometry targets as a :class:`PathSet`.
 
     Parameters
@@ -489,6 +497,11 @@ def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: flo
         Trace each target (``min_bounces == 1``) with its local ground apron
         (:func:`ground_apron`): target-ground multipath. Targets that keep only
         multiple bounces carry their own apron in their mesh.
+    fidelity : raysim.echoes.po.fidelity.FidelityLadder, optional
+        Per-target echo model (:mod:`raysim.echoes.po.fidelity`): a target whose
+        reduced model is re-usable from this radar position is not traced again;
+        a traced one gets the level the ladder picks. None: every target's mesh
+        centres (the ladder's ``"mesh"`` level).
 
     Returns
     -------
@@ -505,6 +518,11 @@ def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: flo
     if ground and any(t.min_bounces == 1 for t in targets):
         surface = _ground_of(scene)
     for t in targets:
+        hit = None if fidelity is None else fidelity.lookup(t.name, radar)
+        if hit is not None:     # reduced model of this object and aspect: no trace
+            rows += _rows(hit[0], hit[1], float(np.linalg.norm(radar - t.position)), t, config,
+                          link_budget)
+            continue
         files = [t.mesh] if isinstance(t.mesh, str) else list(t.mesh)
         parts = [TriangleMesh.load(f) for f in files]
         mesh_w = [TriangleMesh(scene.to_world(m.vertices), m.faces) for m in parts]
@@ -523,11 +541,10 @@ def geometry_paths(scene, targets, config: RadarConfig, radar_w, r_wb, time: flo
         stats["tubes"] += terms.tubes
         stats["terms"] += len(terms.amplitude)
         stats["seconds"] += terms.seconds
-        scale = config.wavelength / (4 * math.pi * terms.range_m**2)
-        if link_budget:   # 0 dBi: the element pattern is applied at re-projection
-            scale *= math.sqrt(10 ** (config.tx_power_dbm / 10) * 1e-3)
-        for c, a in zip(centre, amp, strict=True):
-            rows.append((c, scale * a, t.velocity))
+        if fidelity is not None:
+            centre, amp = fidelity.choose(t.name, centre, amp, radar, r_wb, config,
+                                          range_m=terms.range_m, trace_seconds=terms.seconds)
+        rows += _rows(centre, amp, terms.range_m, t, config, link_budget)
     n = len(rows)
     centre = np.array([r[0] for r in rows]).reshape(n, 3)
     amp = np.array([r[1] for r in rows], dtype=complex)

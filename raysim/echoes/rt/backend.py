@@ -162,10 +162,65 @@ def configure(variant: str | None = None, *, threads: int | None = None,
             raise BackendError(f"cannot activate Mitsuba variant {name!r}{hint}: {err}") from err
     if threads is not None and name.startswith("llvm"):
         dr.set_thread_count(int(threads))
+    _defer_viewers()
     importlib.import_module("sionna.rt")
     cache = os.environ.get("DRJIT_CACHE_DIR", str(Path.home() / ".drjit"))
     _INFO = BackendInfo(name, llvm, int(dr.thread_count()), cache)
     return _INFO
+
+
+#: Sionna RT's Jupyter viewers (IPython, ipywidgets, pythreejs: about half of ``import
+#: sionna.rt``) and the class each exports, loaded on first use instead of at import.
+DEFERRED_VIEWERS = {"sionna.rt.preview": "Previewer",
+                    "sionna.rt.rcs.scattering_model_viewer": "ScatteringModelViewer"}
+
+
+def _defer_viewers() -> None:
+    """Before ``sionna.rt`` is first imported, stand in for its viewer modules.
+
+    ``sionna.rt`` imports ``Previewer`` and ``ScatteringModelViewer`` at import
+    time, but only ``Scene.preview()`` and ``SensingTarget.show()`` use them
+    (raysim never does). A stand-in class's ``__new__`` imports the real module
+    and returns the real object, so a notebook's preview works as before. Inside
+    IPython, where the widgets' stack is loaded anyway, nothing is deferred.
+    """
+    if "sionna.rt" in sys.modules or "IPython" in sys.modules:
+        return
+    import types
+
+    for module, name in DEFERRED_VIEWERS.items():
+        if module in sys.modules:
+            continue
+        stand_in = types.ModuleType(module, "raysim: a Sionna RT viewer, loaded on use")
+
+        def new(cls, *args, _module=module, **kwargs):
+            return getattr(_real_viewer(_module), cls.__name__)(*args, **kwargs)
+
+        setattr(stand_in, name, type(name, (), {"__new__": new, "__doc__":
+                                                f"Stand-in for {module}.{name}: imported on "
+                                                "first use."}))
+        stand_in.__raysim_deferred__ = True
+        sys.modules[module] = stand_in
+
+
+def _real_viewer(module: str):
+    """The real viewer ``module`` (imported now if only its stand-in is loaded); the
+    Sionna modules that imported the stand-in class get the real one."""
+    mod = sys.modules.get(module)
+    if mod is not None and not getattr(mod, "__raysim_deferred__", False):
+        return mod
+    stand_in = sys.modules.pop(module, None)
+    mod = importlib.import_module(module)
+    name = DEFERRED_VIEWERS[module]
+    fake = getattr(stand_in, name, None)
+    for other in list(sys.modules.values()):
+        if getattr(other, "__name__", "").startswith("sionna.rt") and fake is not None \
+                and getattr(other, name, None) is fake:
+            setattr(other, name, getattr(mod, name))
+    parent, _, leaf = module.rpartition(".")
+    if parent in sys.modules:
+        setattr(sys.modules[parent], leaf, mod)
+    return mod
 
 
 def info() -> BackendInfo | None:

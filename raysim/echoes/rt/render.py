@@ -24,7 +24,8 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
                  hover_altitude: float | None = None, noise: bool = False,
                  seed: int | None = None, synthesizer=None,
                  specular: str = "image", clutter="field", decimate="auto",
-                 decimate_tolerance: float | None = None) -> RadarFrame:
+                 decimate_tolerance: float | None = None, fidelity="mesh",
+                 fidelity_tolerance: float | None = None) -> RadarFrame:
     """Simulate one IF frame of a ray-traced scene seen from a moving platform.
 
     The scene is traced once from the radar's pose at the first chirp of the
@@ -84,6 +85,14 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         :func:`raysim.echoes.rt.reproject.synthesize_paths`); ``"auto"`` by default.
     decimate_tolerance : float, optional
         Relative error allowed to its interpolation (default 0.1 x the synthesis eps).
+    fidelity : {"mesh", "auto", "point", "centres"} or FidelityLadder
+        Echo model of each geometry target (:mod:`raysim.echoes.po.fidelity`):
+        its full PO + SBR centres (``"mesh"``, default), a forced reduced level,
+        or the cheapest level within ``fidelity_tolerance`` of the mesh
+        (``"auto"``); pass one ladder to every frame to re-use reduced models.
+    fidelity_tolerance : float, optional
+        Relative l2 error allowed to each object's echo (default
+        :data:`raysim.echoes.po.fidelity.DEFAULT_FIDELITY_TOLERANCE`).
 
     Returns
     -------
@@ -91,11 +100,14 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         ``data`` [chirp, channel, sample] complex64 [sqrt(W)]; ``truth`` holds
         ``scene``, ``trajectory``, ``paths`` (the first :class:`PathSet`),
         ``num_traces``, ``num_paths``, ``dropped`` (counts per cull) and
-        ``clutter`` (the field's report, empty without a field).
+        ``clutter`` (the field's report, empty without a field) and ``fidelity``
+        (the ladder's choices of this frame, :class:`~raysim.echoes.po.fidelity.FidelityChoice`
+        as dicts; empty for ``"mesh"``).
     """
     from dataclasses import replace
 
     from raysim.echoes.moving.scatterers import synthesize_tracks
+    from raysim.echoes.po.fidelity import resolve_fidelity
     from raysim.echoes.scene_clutter import resolve_clutter
 
     if not isinstance(config, RadarConfig):
@@ -111,6 +123,11 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
                          f"got {retrace_every!r}")
     trajectory = stationary() if trajectory is None else trajectory
     tracer = MonostaticTracer() if tracer is None else tracer
+    ladder = resolve_fidelity(fidelity, array, fidelity_tolerance)
+    if ladder is not None:
+        tracer = replace(tracer, fidelity=ladder)
+    ladder = tracer.fidelity
+    num_choices = 0 if ladder is None else len(ladder.choices)
     model = resolve_clutter(clutter)
     if model is not None:
         tracer = model.tracer(tracer)
@@ -152,5 +169,6 @@ def render_scene(scene: str | os.PathLike | SceneDescriptor | RadarScene, config
         add_noise(data, config, seed)
     truth = {"scene": scene.name, "trajectory": trajectory.name, "paths": first,
              "num_traces": len(range(0, n, block)), "num_paths": num_paths, "dropped": dropped,
-             "clutter": {} if model is None else model.summary()}
+             "clutter": {} if model is None else model.summary(),
+             "fidelity": [] if ladder is None else ladder.report()[num_choices:]}
     return RadarFrame(adc_samples(data, config), config, array, chirp_times, lever, frame, truth)

@@ -269,6 +269,9 @@ class MonostaticTracer:
         incidence angle (:mod:`raysim.echoes.rt.rough_bounces`); Sionna itself
         reflects such surfaces with the smooth Fresnel coefficient. ``False``
         keeps Sionna's amplitudes.
+    fidelity : raysim.echoes.po.fidelity.FidelityLadder or None
+        Echo model of each geometry target (:mod:`raysim.echoes.po.fidelity`);
+        ``None`` keeps every target's mesh centres.
     """
 
     max_depth: int = 3
@@ -285,9 +288,15 @@ class MonostaticTracer:
     link_budget: bool = True
     plan: object = None
     rough_bounces: bool = True
+    fidelity: object = None
 
     def __post_init__(self) -> None:
+        from raysim.echoes.po.fidelity import FidelityLadder
         from raysim.echoes.rt.trace_plan import TracePlan
+
+        if self.fidelity is not None and not isinstance(self.fidelity, FidelityLadder):
+            raise ValueError(f"fidelity must be a FidelityLadder or None, "
+                             f"got {type(self.fidelity)}")
 
         if self.plan is not None and not isinstance(self.plan, TracePlan):
             raise ValueError(f"plan must be a TracePlan from plan_trace() or None, "
@@ -411,7 +420,8 @@ class MonostaticTracer:
                 # the pattern's cull cone: beyond it the two-way gain is below the floor
                 fov_half_angle=config.pattern.cull_angle(self.pattern_floor_db),
                 min_range=self.min_range,
-                max_range=self.max_range, link_budget=self.link_budget)
+                max_range=self.max_range, link_budget=self.link_budget,
+                fidelity=self.fidelity)
             self.geometry_stats = fields.pop("stats")       # PO + SBR tubes and time
             sets.append(PathSet(**fields))
         if not sets:

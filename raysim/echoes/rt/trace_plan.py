@@ -363,7 +363,7 @@ def _shape_mesh_file(shape, defaults: dict, scene_file: Path):
     return name, (scene_file.parent / value).resolve()
 
 
-def _aperture_resolution(array: VirtualArray, wavelength: float, fov: float) -> float:
+def aperture_resolution(array: VirtualArray, wavelength: float, fov: float) -> float:
     """``lambda / D`` [rad], ``D`` the virtual aperture along its widest axis of A's X-Y plane."""
     p = array.virtual_positions[:, :2]
     best = 0.0
@@ -522,7 +522,7 @@ def plan_trace(scene: str | os.PathLike | SceneDescriptor | RadarScene, config: 
     root, defaults = _scene_xml(scene_file)
     hover_s = np.array([0.0, 0.0, altitude])
     d_r = config.range_resolution
-    d_theta = _aperture_resolution(array, config.wavelength, fov_half_angle)
+    d_theta = aperture_resolution(array, config.wavelength, fov_half_angle)
 
     shapes, keep_masks = [], {}
     n_cells, omega = 0.0, 0.0

@@ -52,11 +52,15 @@ def _box_surface(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.concatenate(out)
 
 
-def _span(points: np.ndarray, lever: np.ndarray, r_min: float | None = None) -> dict:
-    """Range [m], azimuth and elevation [deg] spans of ``points`` ``[n, 3]`` (W) from ``lever``."""
+def _span(points: np.ndarray, lever: np.ndarray, r_min: float | None = None,
+          turn: np.ndarray | None = None) -> dict:
+    """Range [m], azimuth and elevation [deg] spans of ``points`` ``[n, 3]`` (W) from ``lever``,
+    directions in the nominal radar frame N of the mounting ``turn`` (``R_BA``, default W)."""
     from raysim.echoes.oracle import az_el
 
     v = np.asarray(points, dtype=float).reshape(-1, 3) - lever
+    if turn is not None:
+        v = v @ turn
     r = np.linalg.norm(v, axis=1)
     keep = r > 0
     az, el = az_el(v[keep] / r[keep, None])
@@ -90,7 +94,9 @@ def object_spans(scenario) -> list[dict]:
     Parameters
     ----------
     scenario : raysim.scenario.Scenario
-        Its ``lever_arm_m`` is the radar phase centre at the hover point (W) [m].
+        Its ``lever_arm_m`` is the radar phase centre at the hover point (W) [m];
+        azimuth and elevation are in the nominal radar frame N of its
+        ``radar.mounting_deg``.
 
     Returns
     -------
@@ -99,23 +105,28 @@ def object_spans(scenario) -> list[dict]:
         ``el_deg``: ``(low, high)`` each [m] / [deg].
     """
     from raysim.echoes.oracle import direction
+    from raysim.platform.mounting import is_default_mounting, mounting_matrix
 
     lever = np.asarray(scenario.lever_arm_m, dtype=float)
+    mount = scenario.radar.mounting_deg           # spans in the nominal radar frame N
+    turn = None if is_default_mounting(mount) else mounting_matrix(mount)
     scene = scenario.scene
     out = []
     if scene.kind == "points":
         for i, t in enumerate(scene.targets):
-            p = lever + t.range_m * direction(math.radians(t.az_deg), math.radians(t.el_deg))
-            out.append({"name": f"target {i}", "kind": "target", **_span(p, lever)})
+            u = direction(math.radians(t.az_deg), math.radians(t.el_deg))
+            p = lever + t.range_m * (u if turn is None else turn @ u)
+            out.append({"name": f"target {i}", "kind": "target", **_span(p, lever, turn=turn)})
     elif scene.kind in ("bundled", "mesh"):
         for name, p in _scene_targets_w(scenario):
-            out.append({"name": name, "kind": "target", **_span(p, lever)})
+            out.append({"name": name, "kind": "target", **_span(p, lever, turn=turn)})
     boxes = mesh_boxes(scenario)
-    for b, marker in zip(boxes, mesh_targets(boxes, lever), strict=True):
+    for b, marker in zip(boxes, mesh_targets(boxes, lever, mount), strict=True):
         lo, hi = np.asarray(b["lower_m"]), np.asarray(b["upper_m"])
         near = float(np.linalg.norm(np.clip(lever, lo, hi) - lever))
         pts = np.vstack([_box_surface(lo, hi), np.asarray(marker["position_m"])[None]])
-        out.append({"name": b["name"], "kind": "mesh", **_span(pts, lever, r_min=near)})
+        out.append({"name": b["name"], "kind": "mesh",
+                    **_span(pts, lever, r_min=near, turn=turn)})
     return out
 
 

@@ -105,6 +105,12 @@ class SceneResult:
         each (:func:`raysim.studies.scene_report.meshes.mesh_summary`: ``name``,
         ``num_paths``, ``power_w``, ``power_dbw``, ``detections``); they are
         also in ``targets`` (``"mesh": True``) as named markers. Empty otherwise.
+    fidelity : list of dict
+        Echo model chosen per geometry target (``[scene] fidelity``,
+        :class:`raysim.echoes.po.fidelity.FidelityChoice`: ``name``, ``level``,
+        ``predicted_level``, ``paths``, ``predicted_error`` and
+        ``measured_error`` per level, ``trace_seconds``, ``choice_seconds``).
+        Empty for ``"mesh"``.
     point : dict
         Point metrics of the scenario's reference target
         (:func:`raysim.pipeline.sources.reference_target`): ``reference``
@@ -128,6 +134,7 @@ class SceneResult:
     point: dict = field(default_factory=dict)
     same_aperture: dict = field(default_factory=dict)
     meshes: list = field(default_factory=list)
+    fidelity: list = field(default_factory=list)
 
     def margin_reference(self, key: str) -> ChainResult:
         """The reference chain ``key``'s margin is judged against.
@@ -222,6 +229,7 @@ class SceneResult:
                                            for k, v in self.point["metrics"].items()}}
                               if self.point else {}),
             "meshes": self.meshes,
+            "fidelity": self.fidelity,
             "seconds": self.seconds,
         }
 
@@ -229,11 +237,14 @@ class SceneResult:
 def _targets(scene, settings: ReportSettings) -> list:
     """Known reflectors of a traced scene, or the point targets of a point scenario."""
     from raysim.echoes.oracle import az_el, direction
+    from raysim.platform.mounting import mounting_matrix, nominal_direction
 
     lever = np.asarray(settings.lever_arm, dtype=float)
+    mount = settings.scenario.radar.mounting_deg          # directions in N, positions in W
+    turn = mounting_matrix(mount)                         # the identity for the default
     if scene is None:
-        return [{"name": f"target {i}", "position_m": (lever + t.range_m * direction(
-                     math.radians(t.az_deg), math.radians(t.el_deg))).tolist(),
+        return [{"name": f"target {i}", "position_m": (lever + t.range_m * (turn @ direction(
+                     math.radians(t.az_deg), math.radians(t.el_deg)))).tolist(),
                  "range_m": float(t.range_m), "az_deg": float(t.az_deg),
                  "el_deg": float(t.el_deg), "rcs_dbsm": float(t.rcs_dbsm)}
                 for i, t in enumerate(settings.scenario.scene.targets)]
@@ -241,7 +252,7 @@ def _targets(scene, settings: ReportSettings) -> list:
     for t in scene.targets:
         v = t.position - lever
         r = float(np.linalg.norm(v))
-        a, e = az_el(v / r)
+        a, e = az_el(nominal_direction(v / r, mount))
         out.append({"name": t.name, "position_m": t.position.tolist(), "range_m": r,
                     "az_deg": float(np.rad2deg(a)), "el_deg": float(np.rad2deg(e)),
                     "rcs_dbsm": float(t.rcs_dbsm)})
@@ -515,7 +526,8 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
         seconds["point_metrics"] = time.perf_counter() - t
     bar.close()
     boxes = mesh_boxes(settings.scenario)
-    targets = _targets(sim.get("scene"), settings) + mesh_targets(boxes, settings.lever_arm)
+    targets = _targets(sim.get("scene"), settings) + mesh_targets(
+        boxes, settings.lever_arm, settings.scenario.radar.mounting_deg)
     _match(targets, reference, results, settings)
     meshes = mesh_summary(boxes, sim.get("paths"), {REFERENCE: reference, **results})
     movers = []
@@ -536,4 +548,4 @@ def evaluate_scenario(settings: ReportSettings, *, progress: bool = True,
     return SceneResult(label, settings, reference, results, targets,
                        0 if paths is None else paths.num_paths, sim.get("path_kinds", {}),
                        motion_rms, seconds, movers, sim.get("clutter", {}), point, same,
-                       meshes)
+                       meshes, sim.get("fidelity", []))

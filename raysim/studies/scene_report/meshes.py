@@ -78,7 +78,7 @@ def mesh_boxes(scenario) -> list[dict]:
     return out
 
 
-def mesh_targets(boxes: list[dict], lever_arm) -> list[dict]:
+def mesh_targets(boxes: list[dict], lever_arm, mounting_deg=None) -> list[dict]:
     """Each mesh as a named marker: its centre's range [m], azimuth and elevation [deg].
 
     The centre of a mesh under the radar (a ground plane) is taken at the point of
@@ -91,6 +91,9 @@ def mesh_targets(boxes: list[dict], lever_arm) -> list[dict]:
         :func:`mesh_boxes`.
     lever_arm : sequence of float
         Radar phase centre, shape ``[3]`` (B at the hover point, so in W) [m].
+    mounting_deg : str or (float, float, float), optional
+        Radar mounting: azimuth and elevation in its nominal radar frame N
+        (:mod:`raysim.platform.mounting`); default ``down``.
 
     Returns
     -------
@@ -99,6 +102,7 @@ def mesh_targets(boxes: list[dict], lever_arm) -> list[dict]:
         ``az_deg``, ``el_deg``) plus ``"mesh": True``.
     """
     from raysim.echoes.oracle import az_el
+    from raysim.platform.mounting import nominal_direction
 
     lever = np.asarray(lever_arm, dtype=float)
     out = []
@@ -111,7 +115,7 @@ def mesh_targets(boxes: list[dict], lever_arm) -> list[dict]:
         r = float(np.linalg.norm(v))
         if r == 0:
             continue
-        a, e = az_el(v / r)
+        a, e = az_el(nominal_direction(v / r, mounting_deg))
         out.append({"name": b["name"], "position_m": c.tolist(), "range_m": r,
                     "az_deg": float(np.rad2deg(a)), "el_deg": float(np.rad2deg(e)),
                     "mesh": True})

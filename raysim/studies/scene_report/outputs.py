@@ -139,8 +139,9 @@ def _clutter_words(settings: ReportSettings) -> str:
         return "Sionna's own diffuse paths and ground mirror"
     if settings.clutter == "none":
         return "none (specular paths of the scene only)"
-    return (f"persistent clutter field, {settings.clutter_per_cell:g} scatterers per range x "
-            "angle cell, rough-surface mirror, target-ground ghosts")
+    return (f"persistent clutter field on the ground and walls, {settings.clutter_per_cell:g} "
+            "scatterers per range x angle cell at every incidence, rough-surface mirror, "
+            "target-ground ghosts")
 
 
 def _is_report_scene(st: ReportSettings, settings: ReportSettings) -> bool:
@@ -272,6 +273,28 @@ def _mesh_lines(results: dict) -> list[str]:
     return lines
 
 
+def _fidelity_lines(results: dict) -> list[str]:
+    """Echo model per geometry target (``[scene] fidelity`` other than ``"mesh"``)."""
+    rows = [(s, c) for s, r in results.items() for c in r.fidelity]
+    if not rows:
+        return []
+    lines = ["", "Echo model per geometry target (`[scene] fidelity`): level used and "
+             "predicted, paths, relative l2 error of the object's echo against its mesh "
+             "(predicted / measured; point, centres), PO + SBR trace and choice time (wall)",
+             "", "| scene | object | range_m | level (predicted) | paths point/centres/mesh | "
+             "point error | centres error | trace_s | choice_s |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for s, c in rows:
+        p, m = c["predicted_error"], c["measured_error"]
+        lines.append(
+            f"| {s} | {c['name']} | {c['range_m']:.1f} | {c['level']} ({c['predicted_level']})"
+            f"{' re-used' if c['reused'] else ''} | {c['paths']['point']}/"
+            f"{c['paths']['centres']}/{c['paths']['mesh']} | {p['point']:.3g} / "
+            f"{m['point']:.3g} | {p['centres']:.3g} / {m['centres']:.3g} | "
+            f"{c['trace_seconds']:.2f} | {c['choice_seconds']:.2f} |")
+    return lines
+
+
 def report_markdown(results: dict, settings: ReportSettings) -> str:
     """The report's markdown: entropy, ridge leakage and reflector tables, figure links.
 
@@ -356,13 +379,15 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
     lines += _point_lines(results, cols)
     fields = {s: r.clutter for s, r in results.items() if r.clutter.get("num_scatterers")}
     if fields:
-        lines += ["", "Clutter field: scatterers drawn, expected count, density scale (1 "
-                  "unless `max_scatterers` capped it), build time (wall)", "",
-                  "| scene | scatterers | expected | density scale | build_s |",
-                  "|---|---|---|---|---|"]
-        lines += [f"| {s} | {c['num_scatterers']} | {c['expected']:.0f} | "
-                  f"{c['density_scale']:.3g} | {c['build_s']:.2f} |" for s, c in fields.items()]
+        lines += ["", "Clutter field: scatterers drawn (of them on walls), expected count, "
+                  "density scale (1 unless `max_scatterers` capped it), build time (wall)", "",
+                  "| scene | scatterers | on walls | expected | density scale | build_s |",
+                  "|---|---|---|---|---|---|"]
+        lines += [f"| {s} | {c['num_scatterers']} | {c.get('wall_scatterers', 0)} | "
+                  f"{c['expected']:.0f} | {c['density_scale']:.3g} | {c['build_s']:.2f} |"
+                  for s, c in fields.items()]
     lines += _mesh_lines(results)
+    lines += _fidelity_lines(results)
     lines += ["", "Known reflectors: position error of the nearest detection [m] "
               "(* = outside the match radius), the SNR of the reflector's cell over the "
               f"CFAR's noise estimate (threshold {CFAR_THRESHOLD_DB:g} dB over the mean of "

@@ -73,7 +73,8 @@ def chain_result(chain, rc: np.ndarray, motion, settings: ReportSettings,
     return measure_scene(chain, rc, motion, config=config, array=array, azimuth=az,
                          elevation=el, range_window=settings.range_window,
                          lever_arm=settings.lever_arm, gate_block=settings.gate_block,
-                         spatial_window=settings.spatial_window, subaperture=subaperture)
+                         spatial_window=settings.spatial_window, subaperture=subaperture,
+                         mounting_deg=settings.scenario.radar.mounting_deg)
 
 
 def point_metrics(frames, reference, chain, motion) -> dict:

@@ -71,6 +71,7 @@ SCENARIO_KEYS = {
     "max_depth": ("scene.max_depth",), "clutter": ("scene.clutter.mode",),
     "clutter_per_cell": ("scene.clutter.per_cell",), "decimate": ("synthesis.decimate",),
     "decimate_tolerance": ("synthesis.decimate_tolerance",),
+    "fidelity": ("scene.fidelity",), "fidelity_tolerance": ("scene.fidelity_tolerance",),
 }
 
 
@@ -122,7 +123,8 @@ class ReportSettings:
     :class:`raysim.scenario.Scenario`'s; the attributes below are what the
     report adds. Read-only shortcuts (``num_chirps``, ``array_size``,
     ``lever_arm``, ``jitter_seed``, ``imu``, ``imu_rate``, ``imu_seed``,
-    ``trace_seed``, ``max_depth``, ``clutter``, ``clutter_per_cell``) read the
+    ``trace_seed``, ``max_depth``, ``clutter``, ``clutter_per_cell``, ``fidelity``,
+    ``fidelity_tolerance``) read the
     scenario; :meth:`with_values` changes either.
 
     Attributes
@@ -292,6 +294,16 @@ class ReportSettings:
         """Relative error allowed to that interpolation (``synthesis.decimate_tolerance``;
         None: 0.1 x ``nufft_eps``)."""
         return self.scenario.synthesis.decimate_tolerance
+
+    @property
+    def fidelity(self) -> str:
+        """Echo model of the geometry targets (``scene.fidelity``: ``mesh``, ``auto``, ...)."""
+        return self.scenario.scene.fidelity
+
+    @property
+    def fidelity_tolerance(self) -> float:
+        """Error allowed to each object's echo under ``auto`` (``scene.fidelity_tolerance``)."""
+        return float(self.scenario.scene.fidelity_tolerance)
 
     def with_values(self, **changes) -> ReportSettings:
         """Copy with knobs and scenario values changed, validated again.

@@ -108,14 +108,17 @@ def scene_motion(trajectory, chirp_times, settings: ReportSettings):
     Returns
     -------
     compensation.PlatformMotion
-        From :func:`raysim.pipeline.estimate.estimate_motion` (``velocity="given"``).
+        From :func:`raysim.pipeline.estimate.estimate_motion` (``velocity="given"``),
+        in the nominal radar frame N of ``radar.mounting_deg``.
     """
     from raysim.pipeline.estimate import estimate_motion
+    from raysim.platform.mounting import mount_motion
 
     t = np.asarray(chirp_times, dtype=float)
-    return estimate_motion(*imu_samples(trajectory, t, settings), t,
-                           lever_arm=settings.scenario.lever_arm, trajectory=trajectory,
-                           time_offset=settings.scenario.imu.time_offset_s, velocity="given")
+    motion = estimate_motion(*imu_samples(trajectory, t, settings), t,
+                             lever_arm=settings.scenario.lever_arm, trajectory=trajectory,
+                             time_offset=settings.scenario.imu.time_offset_s, velocity="given")
+    return mount_motion(motion, settings.scenario.radar.mounting_deg)   # beams in N
 
 
 def report_mover(scene, settings: ReportSettings, t0: float = 0.0, ground=None):

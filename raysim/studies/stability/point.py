@@ -216,6 +216,12 @@ class StabilityPoint:
             raise ValueError(f"scenario.scene: got kind {scenario.scene.kind!r} with "
                              f"{len(targets)} targets, expected kind 'points' with one target")
         tgt = targets[0]
+        from raysim.platform.mounting import is_default_mounting
+
+        if not is_default_mounting(scenario.radar.mounting_deg):
+            raise ValueError(f"radar.mounting_deg: got {scenario.radar.mounting_deg!r}, "
+                             f"expected 'down' (the stability study models the down-looking "
+                             f"radar)")
         if any(v != 0.0 for v in tgt.velocity_mps):
             raise ValueError(f"scene.targets.0.velocity_mps: got {tgt.velocity_mps}, expected a "
                              f"static target (0, 0, 0)")
