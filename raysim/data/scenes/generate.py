@@ -210,15 +210,16 @@ CAR_NOMINAL_DBSM = 10.0
 
 def car_target(name: str, x: float, y: float, length: float, width: float,
                height: float) -> tuple[list, dict]:
-    """A car mesh (parts of :func:`raysim.echoes.po.car.car_parts`) nose north at ``(x, y)``.
+    """A detailed car mesh (parts of :func:`raysim.echoes.po.sedan.sedan_parts`: wheel
+    houses, bumpers, plates, mirrors, rims) nose north at ``(x, y)``.
 
     Returns the shapes and the sidecar entry of the geometry target.
     """
-    from raysim.echoes.po.car import car_parts
+    from raysim.echoes.po.sedan import sedan_parts
 
     rot = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])   # x forward -> north
     shapes, mats = [], []
-    for part, mesh, material in car_parts(length, width, height):
+    for part, mesh, material in sedan_parts(length, width, height):
         v = mesh.vertices @ rot.T + [x, y, 0.0]
         shapes.append((f"{name}-{part}", trimesh.Trimesh(v, mesh.faces, process=False),
                        MATERIALS[material]))
@@ -266,8 +267,9 @@ def parking_lot(seed: int = 7) -> Path:
                     "material": [ASPHALT.name, CONCRETE.name], "min_bounces": 2})
     return write_scene("parking_lot", shapes, hover_altitude=15.0, targets=targets,
                        traced_only={"facade-apron": apron, "facade-base": base},
-                       description="asphalt lot, six car meshes (metal body and roof, glass "
-                                   "windows, rubber tyres; traced by PO + SBR), concrete facade "
+                       description="asphalt lot, six car meshes (metal body, bumpers, plates "
+                                   "and mirrors, glass windows, rubber tyres on metal rims; "
+                                   "traced by PO + SBR), concrete facade "
                                    "with glass windows 30 m north, metal lamp post")
 
 

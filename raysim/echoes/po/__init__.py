@@ -9,7 +9,8 @@ wave of the mesh wedges), :mod:`~raysim.echoes.po.rays` (Mitsuba ray intersectio
 closed forms), :mod:`~raysim.echoes.po.paths` (geometry targets as frozen
 scattering-centre paths for the tracer), :mod:`~raysim.echoes.po.fidelity` (the
 cheapest echo model per object: point, reduced centres or mesh),
-:mod:`~raysim.echoes.po.car` (a car mesh). See ``docs/rcs.md`` and ``docs/scattering.md``.
+:mod:`~raysim.echoes.po.car` (a car mesh), :mod:`~raysim.echoes.po.sedan` (the
+detailed car: docs/cars.md). See ``docs/rcs.md`` and ``docs/scattering.md``.
 """
 
 from raysim.echoes.po.mesh import PoMaterial, TriangleMesh, po_material
