@@ -185,23 +185,23 @@ def point_covariance(ranges, azimuth, elevation, range_sigma, azimuth_sigma,
 
 def _ransac(p: np.ndarray, cov: np.ndarray, rng) -> np.ndarray:
     """Inliers ``[point]`` of the plane through three points that holds the most points
-    within :data:`INLIER_SIGMAS` of their spread along its normal (ties: least squares)."""
-    best, best_key = np.zeros(p.shape[0], dtype=bool), (-1, 0.0)
-    for _ in range(RANSAC_DRAWS):
-        i = rng.choice(p.shape[0], 3, replace=False)
-        n = np.cross(p[i[1]] - p[i[0]], p[i[2]] - p[i[0]])
-        norm = np.linalg.norm(n)
-        if norm < 1e-12:
-            continue
-        n = n / norm * np.sign(n[2] or 1.0)
-        if np.arccos(np.clip(n[2], -1.0, 1.0)) > MAX_NORMAL_ANGLE:
-            continue
-        z = (p @ n - p[i[0]] @ n) / np.sqrt(np.einsum("i,nij,j->n", n, cov, n))
-        inl = np.abs(z) <= INLIER_SIGMAS
-        key = (int(inl.sum()), -float(np.sum(z[inl] ** 2)))
-        if key > best_key:
-            best, best_key = inl, key
-    return best
+    within :data:`INLIER_SIGMAS` of their spread along its normal (ties: least squares,
+    then the earliest draw); all draws scored at once."""
+    idx = np.array([rng.choice(p.shape[0], 3, replace=False) for _ in range(RANSAC_DRAWS)])
+    a = p[idx[:, 0]]                                                    # [draw, 3]
+    n = np.cross(p[idx[:, 1]] - a, p[idx[:, 2]] - a)
+    norm = np.linalg.norm(n, axis=1)
+    ok = norm >= 1e-12
+    n = n / np.where(ok, norm, 1.0)[:, None]
+    n = n * np.where(n[:, 2] == 0.0, 1.0, np.sign(n[:, 2]))[:, None]   # pointing down
+    ok &= np.arccos(np.clip(n[:, 2], -1.0, 1.0)) <= MAX_NORMAL_ANGLE
+    if not np.any(ok):
+        return np.zeros(p.shape[0], dtype=bool)
+    n, a = n[ok], a[ok]
+    z = (p @ n.T - np.sum(a * n, axis=1)) / np.sqrt(np.einsum("di,nij,dj->nd", n, cov, n))
+    inl = np.abs(z) <= INLIER_SIGMAS                                    # [point, draw]
+    best = np.lexsort((np.sum(np.where(inl, z ** 2, 0.0), axis=0), -inl.sum(axis=0)))[0]
+    return inl[:, best]
 
 
 def _weighted_fit(p: np.ndarray, cov: np.ndarray, tilt: np.ndarray):
