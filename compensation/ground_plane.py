@@ -19,9 +19,10 @@ Assumption: the ground in view is flat and level. A ground sloped by ``s``
 biases the tilt by ``s`` (the fit levels the ground, not gravity); a wall or a
 roof in the range window is an outlier only when the ground dominates it.
 What it cannot observe: the heading (a rotation about the normal leaves the
-plane unchanged). Its warnings (:class:`GroundPlaneWarning`): no ground point
-in the range window, too few points on the plane, a fit whose residuals exceed
-the points' spreads.
+plane unchanged), and the error common to every frame (a hovering platform sees
+the same scatterers sharing the same cells in every frame). Its warnings
+(:class:`GroundPlaneWarning`): no ground point in the range window, too few
+points on the plane, a fit whose residuals exceed the points' spreads.
 """
 
 from __future__ import annotations
