@@ -12,15 +12,17 @@ least squares with every point's spread along the plane's normal,
 ``sigma_i^2 = n^T C_i n``, the effective-variance method) gives ``phi``'s
 horizontal components, the correction of roll and pitch ``(tilt_n, tilt_e)``
 (:mod:`compensation.radar_inertial`), and their covariance ``(J^T W J)^-1``,
-scaled up by the reduced chi-square when above one.
+scaled up by the reduced chi-square when above one, and again until it covers
+the spread of the fits that leave one frame out (the jackknife).
 
 Assumption: the ground in view is flat and level. A ground sloped by ``s``
 biases the tilt by ``s`` (the fit levels the ground, not gravity); a wall or a
 roof in the range window is an outlier only when the ground dominates it.
 What it cannot observe: the heading (a rotation about the normal leaves the
-plane unchanged). Its warnings (:class:`GroundPlaneWarning`): no ground point
-in the range window, too few points on the plane, a fit whose residuals exceed
-the points' spreads.
+plane unchanged), and the error common to every frame (a hovering platform sees
+the same scatterers sharing the same cells in every frame). Its warnings
+(:class:`GroundPlaneWarning`): no ground point in the range window, too few
+points on the plane, a fit whose residuals exceed the points' spreads.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.linalg import eigh
 from scipy.spatial.transform import Rotation
 
 from ._checks import finite_array
@@ -81,6 +84,8 @@ MIN_INLIER_FRACTION = 0.5
 GROUND_ANGLE_SIGMA = float(np.deg2rad(3.0))
 #: Gauss-Newton passes of the weighted fit (each re-linearises at the current tilt).
 FIT_PASSES = 6
+#: Fewest groups (frames) for the leave-one-group-out jackknife of the tilt's spread.
+MIN_JACKKNIFE_GROUPS = 3
 
 
 class GroundPlaneWarning(ObservabilityWarning):
@@ -112,6 +117,9 @@ class GroundPlane:
     rms : float
         Root mean square of the inliers' distances from the plane [m].
     warnings : tuple of str
+    spread_scale : float
+        Factor (>= 1) on the points' covariance that made it cover the spread of the
+        leave-one-group-out fits (the jackknife over frames); 1 without groups.
     """
 
     tilt: np.ndarray
@@ -123,6 +131,7 @@ class GroundPlane:
     chi2: float
     rms: float
     warnings: tuple[str, ...] = field(default_factory=tuple)
+    spread_scale: float = 1.0
 
     @property
     def usable(self) -> bool:
@@ -142,7 +151,8 @@ class GroundPlane:
         return {"tilt_deg": np.rad2deg(self.tilt).tolist(),
                 "tilt_sigma_deg": np.rad2deg(self.tilt_sigma).tolist(),
                 "height_m": self.height, "points": self.points, "inliers": self.inliers,
-                "chi2": self.chi2, "rms_m": self.rms, "used": self.usable,
+                "chi2": self.chi2, "rms_m": self.rms, "spread_scale": self.spread_scale,
+                "used": self.usable,
                 "assumption": ASSUMPTION, "warnings": list(self.warnings)}
 
 
@@ -176,23 +186,23 @@ def point_covariance(ranges, azimuth, elevation, range_sigma, azimuth_sigma,
 
 def _ransac(p: np.ndarray, cov: np.ndarray, rng) -> np.ndarray:
     """Inliers ``[point]`` of the plane through three points that holds the most points
-    within :data:`INLIER_SIGMAS` of their spread along its normal (ties: least squares)."""
-    best, best_key = np.zeros(p.shape[0], dtype=bool), (-1, 0.0)
-    for _ in range(RANSAC_DRAWS):
-        i = rng.choice(p.shape[0], 3, replace=False)
-        n = np.cross(p[i[1]] - p[i[0]], p[i[2]] - p[i[0]])
-        norm = np.linalg.norm(n)
-        if norm < 1e-12:
-            continue
-        n = n / norm * np.sign(n[2] or 1.0)
-        if np.arccos(np.clip(n[2], -1.0, 1.0)) > MAX_NORMAL_ANGLE:
-            continue
-        z = (p @ n - p[i[0]] @ n) / np.sqrt(np.einsum("i,nij,j->n", n, cov, n))
-        inl = np.abs(z) <= INLIER_SIGMAS
-        key = (int(inl.sum()), -float(np.sum(z[inl] ** 2)))
-        if key > best_key:
-            best, best_key = inl, key
-    return best
+    within :data:`INLIER_SIGMAS` of their spread along its normal (ties: least squares,
+    then the earliest draw); all draws scored at once."""
+    idx = np.array([rng.choice(p.shape[0], 3, replace=False) for _ in range(RANSAC_DRAWS)])
+    a = p[idx[:, 0]]                                                    # [draw, 3]
+    n = np.cross(p[idx[:, 1]] - a, p[idx[:, 2]] - a)
+    norm = np.linalg.norm(n, axis=1)
+    ok = norm >= 1e-12
+    n = n / np.where(ok, norm, 1.0)[:, None]
+    n = n * np.where(n[:, 2] == 0.0, 1.0, np.sign(n[:, 2]))[:, None]   # pointing down
+    ok &= np.arccos(np.clip(n[:, 2], -1.0, 1.0)) <= MAX_NORMAL_ANGLE
+    if not np.any(ok):
+        return np.zeros(p.shape[0], dtype=bool)
+    n, a = n[ok], a[ok]
+    z = (p @ n.T - np.sum(a * n, axis=1)) / np.sqrt(np.einsum("di,nij,dj->nd", n, cov, n))
+    inl = np.abs(z) <= INLIER_SIGMAS                                    # [point, draw]
+    best = np.lexsort((np.sum(np.where(inl, z ** 2, 0.0), axis=0), -inl.sum(axis=0)))[0]
+    return inl[:, best]
 
 
 def _weighted_fit(p: np.ndarray, cov: np.ndarray, tilt: np.ndarray):
@@ -222,7 +232,8 @@ def _weighted_fit(p: np.ndarray, cov: np.ndarray, tilt: np.ndarray):
     return x, np.linalg.inv(info), (q[:, 2] - x[2]) / np.sqrt(var)
 
 
-def fit_ground_plane(points, covariance, *, seed: int = 0, warn: bool = True) -> GroundPlane:
+def fit_ground_plane(points, covariance, *, groups=None, seed: int = 0,
+                     warn: bool = True) -> GroundPlane:
     """Robust plane fit of ground points and the roll and pitch correction it gives.
 
     Parameters
@@ -231,6 +242,14 @@ def fit_ground_plane(points, covariance, *, seed: int = 0, warn: bool = True) ->
         Points in W as the estimated attitude has it (z down) [m].
     covariance : array_like, shape ``[point, 3, 3]``
         Their covariances [m^2] (:func:`point_covariance`).
+    groups : array_like of int, shape ``[point]``, optional
+        Group (frame) of every point. With :data:`MIN_JACKKNIFE_GROUPS` or more, the
+        tilt's covariance is scaled up until it covers the spread of the fits that
+        leave one group out (the delete-one jackknife, Efron and Stein, Ann. Stat.
+        1981): the spreads the points show across frames where the model's
+        understate them (errors heavier than the spreads, or larger on the points
+        that fix the tilt). Errors common to every frame (the same scatterers sharing
+        the same cells) show in neither.
     seed : int
         Seed of the RANSAC draws.
     warn : bool
@@ -240,13 +259,19 @@ def fit_ground_plane(points, covariance, *, seed: int = 0, warn: bool = True) ->
     -------
     GroundPlane
         Inliers by RANSAC, then by the weighted fit (:data:`INLIER_SIGMAS`); the
-        covariance scaled by the reduced chi-square when above one. Without enough
-        points on the plane the tilt is NaN.
+        covariance scaled by the reduced chi-square when above one, then by
+        :attr:`GroundPlane.spread_scale`. Without enough points on the plane the
+        tilt is NaN.
     """
     p = finite_array("points", points, ndim=2)
     if p.shape[1] != 3:
         raise ValueError(f"points must have shape [point, 3], got {p.shape}")
     cov = finite_array("covariance", covariance, shape=(p.shape[0], 3, 3))
+    if groups is not None:
+        groups = np.asarray(groups)
+        if groups.shape != (p.shape[0],) or not np.issubdtype(groups.dtype, np.integer):
+            raise ValueError(f"groups must be integers of shape [{p.shape[0]}] (one per "
+                             f"point), got {groups.dtype} of shape {groups.shape}")
     notes: list[str] = []
     nan2 = np.full(2, np.nan)
     if p.shape[0] < MIN_GROUND_POINTS:
@@ -297,10 +322,38 @@ def fit_ground_plane(points, covariance, *, seed: int = 0, warn: bool = True) ->
             np.isfinite(x[:2])) else np.full(3, np.nan)
         out = GroundPlane(x[:2].copy(), c3[:2, :2].copy(), float(x[2]), normal, p.shape[0],
                           n_in, chi2, rms, tuple(notes))
+        if groups is not None and np.all(np.isfinite(out.tilt)):
+            scale = _jackknife_scale(p, cov, groups, out.tilt_covariance, seed)
+            out = replace(out, tilt_covariance=out.tilt_covariance * scale,
+                          spread_scale=scale)
     if warn:
         for text in out.warnings:
             warnings.warn(text, GroundPlaneWarning, stacklevel=2)
     return out
+
+
+def _jackknife_scale(p: np.ndarray, cov: np.ndarray, groups: np.ndarray,
+                     tilt_cov: np.ndarray, seed: int) -> float:
+    """Least factor (>= 1) on ``tilt_cov`` ``[2, 2]`` that covers the delete-one-group
+    jackknife covariance ``(K - 1) / K sum_k (t_k - t_mean)(t_k - t_mean)^T`` of the tilt:
+    the largest generalised eigenvalue of the two. 1 with fewer than
+    :data:`MIN_JACKKNIFE_GROUPS` groups or when a fit without a group gives no tilt
+    (the jackknife needs every one)."""
+    labels = np.unique(groups)
+    if labels.size < MIN_JACKKNIFE_GROUPS:
+        return 1.0
+    tilts = []
+    for g in labels:
+        keep = groups != g
+        if keep.sum() < MIN_GROUND_POINTS:
+            return 1.0
+        t = fit_ground_plane(p[keep], cov[keep], seed=seed, warn=False).tilt
+        if not np.all(np.isfinite(t)):
+            return 1.0
+        tilts.append(t)
+    d = np.asarray(tilts) - np.mean(tilts, axis=0)
+    jack = (labels.size - 1) / labels.size * (d.T @ d)
+    return float(max(1.0, np.max(eigh(jack, tilt_cov, eigvals_only=True))))
 
 
 def ground_points(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
@@ -361,10 +414,13 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
     The ground points of every frame (:func:`ground_points`, each frame formed with
     its own motion of the one integration, so all are in W as the initial attitude
     has it) fitted together (:func:`fit_ground_plane`; module docstring: the
-    assumption of level flat ground). The frames' points are taken as independent
-    looks: the platform's motion changes which scatterers share a range cell and so
-    their direction errors. The gyro bias turns the later frames' attitude: its
-    spread over the frames' mean time since the first chirp is added to the tilt's.
+    assumption of level flat ground), every frame a group of the jackknife that
+    widens the stated spread to the one the frames show. A hovering platform moves
+    far less than a range cell over a record, so the same scatterers share the same
+    cells in every frame: that part of the error is common to the frames and shows
+    in no spread (what the fit cannot see). The gyro bias turns the later frames'
+    attitude: its spread over the frames' mean time since the first chirp is added
+    to the tilt's.
 
     Parameters
     ----------
@@ -393,7 +449,9 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
                            range_axis=range_axis, gates=gates, **options)
              for rc, m in zip(rcs, motions, strict=True)]
     fit = fit_ground_plane(np.concatenate([p for p, _ in found]),
-                           np.concatenate([c for _, c in found]), warn=False)
+                           np.concatenate([c for _, c in found]),
+                           groups=np.concatenate([np.full(len(p), k) for k, (p, _) in
+                                                  enumerate(found)]).astype(int), warn=False)
     r_axis = np.asarray(range_axis, dtype=float)
     g = np.asarray(gates, dtype=int)
     if fit.points == 0:

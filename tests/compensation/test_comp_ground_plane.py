@@ -5,7 +5,8 @@ off by ``phi = (tilt_n, tilt_e, 0)``, are ``exp(-[phi]x) p``; the fit's tilt is
 ``phi`` exactly without noise, and a ground sloped by ``s`` about north gives
 ``tilt_n + s``. Coverage: the stated covariance of the tilt against its error over
 Monte-Carlo draws of the points' range and angle errors (the model of
-:func:`point_covariance`), with outliers.
+:func:`point_covariance`), with outliers; and, frames seen through their own tilt
+errors, the covariance scaled to the leave-one-frame-out jackknife.
 """
 
 from __future__ import annotations
@@ -116,6 +117,48 @@ def test_stated_covariance_covers_the_error_with_outliers():
     assert used >= 0.95 * DRAWS
     cover = np.mean(np.array(d2) <= CHI2_95)
     assert MIN_COVERAGE <= cover <= MAX_COVERAGE, cover
+
+
+#: Frames of the jackknife draws, points per frame, draws, and the spread of every frame's
+#: own tilt error [rad] (an attitude error of the frame that its points' covariance does
+#: not hold); the least coverage of 100 draws (0.95 less 3 binomial sigma: 0.885).
+FRAMES, FRAME_POINTS, FRAME_DRAWS = 6, 10, 100
+FRAME_TILT_SIGMA = float(np.deg2rad(0.5))
+MIN_FRAME_COVERAGE = 0.885
+
+
+def test_jackknife_over_frames_covers_errors_the_points_do_not_state():
+    """Every frame seen through its own tilt error (not in the points' covariance): the
+    covariance from the points alone covers too seldom; scaled to the leave-one-frame-out
+    jackknife (groups) it covers."""
+    rng = np.random.default_rng(6)
+    d2 = {True: [], False: []}
+    for _ in range(FRAME_DRAWS):
+        frames = [_noisy(rng, _seen(_ground(rng, FRAME_POINTS),
+                                    tilt=TILT + rng.normal(0.0, FRAME_TILT_SIGMA, 2)))
+                  for _ in range(FRAMES)]
+        q, cov = (np.concatenate(v) for v in zip(*frames, strict=True))
+        groups = np.repeat(np.arange(FRAMES), FRAME_POINTS)
+        seed = int(rng.integers(1 << 30))
+        for jack in (True, False):
+            fit = fit_ground_plane(q, cov, groups=groups if jack else None, seed=seed,
+                                   warn=False)
+            assert fit.usable
+            assert (fit.spread_scale >= 1.0) if jack else (fit.spread_scale == 1.0)
+            err = fit.tilt - TILT
+            d2[jack].append(float(err @ np.linalg.solve(fit.tilt_covariance, err)))
+    cover = {k: float(np.mean(np.array(v) <= CHI2_95)) for k, v in d2.items()}
+    assert MIN_FRAME_COVERAGE <= cover[True] <= MAX_COVERAGE, cover
+    assert cover[False] < MIN_FRAME_COVERAGE, cover
+
+
+def test_groups_are_checked():
+    rng = np.random.default_rng(7)
+    q, cov = _noisy(rng, _seen(_ground(rng, 20)))
+    with pytest.raises(ValueError, match="groups must be integers of shape"):
+        fit_ground_plane(q, cov, groups=np.zeros(19, dtype=int))
+    with pytest.raises(ValueError, match="groups must be integers of shape"):
+        fit_ground_plane(q, cov, groups=np.zeros(20))
 
 
 def test_too_few_points_and_bad_fit_warn():
