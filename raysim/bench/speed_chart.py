@@ -78,7 +78,7 @@ REPEAT = 1
 REFERENCE_ERROR_FLOOR = 1e-9
 #: Defaults of the simulator, per knob.
 DEFAULTS = {"nufft_eps": "1e-06", "motion": "stop-and-hop", "geometry": "spherical",
-            "chirp_block": "16", "kernel_eps": "1e-06", "decimation": "off"}
+            "chirp_block": "16", "kernel_eps": "1e-06", "decimation": "auto"}
 #: Bundled scene of the ray-tracing knobs.
 RT_SCENE = "rough_terrain"
 #: Chirps per ray-traced frame (quick, full).
@@ -151,7 +151,8 @@ def _knob(name: str, label: str, settings: list[dict], note: str, *,
     default = DEFAULTS[name] if default is None else default
     for s, f in zip(settings, front, strict=True):
         s["pareto"] = bool(f)
-        s["default"] = s["setting"] == default
+        # a setting's label may carry what it chose in brackets: "auto (D=20/3)"
+        s["default"] = s["setting"].split(" (")[0] == default
     return {"knob": name, "label": label, "default": default, "note": note,
             "time_label": time_label or "time per paper frame [CPU s]",
             "default_on_front": bool(any(s["pareto"] for s in settings if s["default"])),
