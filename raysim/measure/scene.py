@@ -83,10 +83,12 @@ CFAR_RANK = 72
 #: CFAR threshold over the noise estimate (the ordered statistic scaled to the mean
 #: of exponential clutter) [dB].
 CFAR_THRESHOLD_DB = 12.0
-#: Detections kept per measurement (strongest first). The parking lot's stationary
-#: frame has 43 local maxima over the threshold (QUICK), the cars among the 4th to
-#: 31st strongest behind the ground's nadir return and its angular sidelobes.
-MAX_DETECTIONS = 48
+#: Detections kept per measurement (strongest first). The parking lot has 39-44
+#: local maxima over the threshold with QUICK's 8 x 8 array (the cars among the
+#: 9th to 32nd strongest, behind the ground's nadir return and its angular
+#: sidelobes) and 145-155 with the full report's 12 x 12 array and 3 deg grid (the
+#: facade corner about the 125th): all of them kept.
+MAX_DETECTIONS = 256
 #: Direction in A of the ``paper`` chain's own slow-time correction and tilt check
 #: (straight down the radar boresight); re-pointed per beam afterwards.
 BORESIGHT = (0.0, 0.0, 1.0)
