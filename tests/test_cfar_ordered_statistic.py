@@ -123,3 +123,25 @@ def test_object_box_and_distance():
     assert box_distance(box, centre + 3.25 * along)[0] == pytest.approx(1.0, abs=1e-9)
     up = centre + np.array([0, 0, -1.7])
     assert box_distance(box, up)[0] == pytest.approx(1.0, abs=1e-9)
+
+
+def test_an_extended_object_matched_on_its_box_a_point_on_its_position():
+    """A detection on a car's front face, 2.4 m from its reference point: outside a 1 m
+    radius of the point, within it of the box; a point reflector keeps the point rule."""
+    from types import SimpleNamespace
+
+    from raysim.studies.scene_report.evaluate import _nearest
+
+    half = np.array([2.25, 0.9, 0.7])
+    corners = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)]) * half
+    centre = np.array([-9.0, -6.0, 14.3])
+    face = centre + np.array([2.4, 0.0, 0.0])              # 0.15 m beyond the front face
+    result = SimpleNamespace(detections=[{"position_m": face.tolist()}])
+    car = {"position_m": centre.tolist(), "box": object_box(corners + centre)}
+    point = {"position_m": centre.tolist()}
+    got = _nearest(car, result, 1.0)
+    assert got["detected"] and got["rule"] == "box"
+    assert got["error_m"] == pytest.approx(0.15, abs=1e-9)
+    missed = _nearest(point, result, 1.0)
+    assert not missed["detected"] and missed["rule"] == "point"
+    assert missed["error_m"] == pytest.approx(2.4, abs=1e-9)

@@ -143,6 +143,10 @@ class SceneMeasurement:
         The chain's guard warnings (``dpca``: ``dpca aperture``, ``dpca rotation``).
     plan : compensation.DPCAPlan or None
         ``dpca``: its sub-aperture and price; None for the other chains.
+    cells : ndarray of int or None, shape ``[detection, 3]``
+        Every CFAR detection's ``(range, azimuth, elevation)`` index of ``cube``
+        with the default parameters, strongest first, before the
+        :data:`MAX_DETECTIONS` kept (:func:`explain_detection` reuses it).
     """
 
     key: str
@@ -154,6 +158,7 @@ class SceneMeasurement:
     seconds: float
     warnings: tuple = ()
     plan: object = None
+    cells: np.ndarray | None = None
 
     def price(self) -> dict:
         """The ``dpca`` chain's price, JSON-ready; empty for the other chains.
@@ -515,7 +520,8 @@ def explain_detection(result: SceneMeasurement, range_m: float, az_deg: float, e
     box = tuple(slice(max(i - 1, 0), i + 2) for i in near)
     k = np.unravel_index(int(np.argmax(cube[box])), cube[box].shape)
     cell = tuple(int(s.start + j) for s, j in zip(box, k, strict=True))
-    noise = cfar_noise(cube, train=train, guard=guard, rank=rank)[cell]
+    column = cube[:, cell[1]:cell[1] + 1, cell[2]:cell[2] + 1]    # the CFAR runs along range
+    noise = cfar_noise(column, train=train, guard=guard, rank=rank)[cell[0], 0, 0]
     snr = float(10 * np.log10(max(cube[cell], np.finfo(float).tiny) / noise))
     out.update(snr_db=snr, cell=list(cell))
     if not snr > threshold_db:
@@ -525,7 +531,10 @@ def explain_detection(result: SceneMeasurement, range_m: float, az_deg: float, e
     if cube[hood].max() > cube[cell]:
         out["status"] = "masked by a stronger neighbour"
         return out
-    found = cfar_detect(cube, train=train, guard=guard, threshold_db=threshold_db, rank=rank)
+    default = (train, guard, threshold_db, rank) == (CFAR_TRAIN, CFAR_GUARD,
+                                                     CFAR_THRESHOLD_DB, CFAR_RANK)
+    found = (result.cells if default and result.cells is not None else
+             cfar_detect(cube, train=train, guard=guard, threshold_db=threshold_db, rank=rank))
     rank = np.nonzero(np.all(found == np.asarray(cell), axis=1))[0]
     out["status"] = ("detected" if rank.size and rank[0] < max_detections
                      else "beyond the strongest detections kept")
@@ -639,7 +648,8 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
     from raysim.platform.mounting import is_default_mounting, mounting_matrix
 
     turn = None if is_default_mounting(mounting_deg) else mounting_matrix(mounting_deg)
-    for gi, ai, ei in cfar_detect(cube)[:MAX_DETECTIONS]:
+    found = cfar_detect(cube)
+    for gi, ai, ei in found[:MAX_DETECTIONS]:
         u = direction(az[ai], el[ei]) if turn is None else turn @ direction(az[ai], el[ei])
         d = int(np.argmax(rd[gi]))
         detections.append({
@@ -648,4 +658,4 @@ def measure_scene(chain, rc: np.ndarray, motion, *, config, array, azimuth: np.n
             "power_db": float(10 * np.log10(cube[gi, ai, ei] / cube.max())),
             "position_m": (lever + rng[gi] * u).tolist()})
     return SceneMeasurement(key, maps, cube, entropy, detections, leak,
-                            time.perf_counter() - t, tuple(warnings), plan)
+                            time.perf_counter() - t, tuple(warnings), plan, found)
