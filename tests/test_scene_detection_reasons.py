@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 from raysim.measure.scene import (
+    CFAR_RANK,
     CFAR_THRESHOLD_DB,
+    CFAR_TRAIN,
     MISS_REASONS,
     SceneMeasurement,
     cfar_detect,
@@ -17,6 +19,11 @@ from raysim.processing.maps import Map
 RANGE = 10.0 + 0.5 * np.arange(40)                     # gates of the window [m]
 AZ = np.deg2rad(np.arange(-30.0, 31.0, 6.0))           # 11 cells
 EL = AZ.copy()
+#: The ordered statistic of a constant background over its mean in exponential
+#: clutter (``sum_{i=n-k+1}^{n} 1/i``, n training cells, rank k): the CFAR's noise
+#: estimate of a constant background of 1 is 1 over that sum [dB].
+SCALE_DB = 10 * np.log10(np.sum(1.0 / np.arange(2 * CFAR_TRAIN - CFAR_RANK + 1,
+                                                  2 * CFAR_TRAIN + 1)))
 
 
 def _scene(cube: np.ndarray) -> SceneMeasurement:
@@ -40,11 +47,11 @@ def test_every_verdict(scene):
     assert len(cfar_detect(scene.cube)) >= 1
     ok = explain_detection(scene, 20.0, 0.0, 0.0)
     assert ok["status"] == "detected" and ok["cell"] == [20, 5, 5]
-    assert ok["snr_db"] == pytest.approx(30.0, abs=0.5)
+    assert ok["snr_db"] == pytest.approx(30.0 + SCALE_DB, abs=0.5)
     assert ok["threshold_db"] == CFAR_THRESHOLD_DB
     weak = explain_detection(scene, 14.0, -18.0, -18.0)
     assert weak["status"] == "below threshold"
-    assert weak["snr_db"] == pytest.approx(10 * np.log10(3.0), abs=0.3)
+    assert weak["snr_db"] == pytest.approx(10 * np.log10(3.0) + SCALE_DB, abs=0.3)
     masked = explain_detection(scene, 20.0, 12.0, 0.0)
     assert masked["status"] == "masked by a stronger neighbour"
     assert masked["snr_db"] > CFAR_THRESHOLD_DB

@@ -36,7 +36,7 @@ from .settings import (
 from .simulate import report_trajectory, scene_motion, simulate_scene
 
 __all__ = ["SceneResult", "evaluate_scene", "evaluate_scenario", "settings_dict",
-           "mover_truth", "find_mover", "MOVER_CENTRE_SPAN_DB"]
+           "mover_truth", "find_mover", "MOVER_CENTRE_SPAN_DB", "object_box", "box_distance"]
 
 
 def settings_dict(settings: ReportSettings) -> dict:
@@ -68,11 +68,16 @@ class SceneResult:
         of the hovering platform, in :data:`raysim.vocabulary.CHAIN_NAMES` order.
     targets : list of dict
         Known reflectors: ``name``, ``position_m`` (W), ``range_m``, ``az_deg``,
-        ``el_deg`` from the nominal radar phase centre, ``rcs_dbsm``; the
-        nearest detection of the reference (``reference_match``) and of every
-        chain (``match``: chain key -> ``detected``, ``error_m`` [m],
-        ``radius_m`` [m], ``detection`` index); ``cfar``: key (the reference and
-        every chain) -> the CFAR's verdict on the reflector's cell (``status``:
+        ``el_deg`` from the nominal radar phase centre, ``rcs_dbsm``; an
+        extended object (a scene's mesh target: a car) also ``box``
+        (:func:`object_box`); the nearest detection of the reference
+        (``reference_match``) and of every chain (``match``: chain key ->
+        ``detected``, ``error_m`` [m]: distance from the reference point, or
+        from the box for an extended object, 0 inside; ``radius_m`` [m],
+        ``rule``: ``"point"`` or ``"box"``, ``detection`` index); ``cfar``:
+        key (the reference and every chain) -> the CFAR's verdict on the
+        reflector's cell (an extended object matched: the matched detection's
+        cell) (``status``:
         ``detected`` or the reason of a miss, ``snr_db``, ``threshold_db`` [dB],
         :func:`raysim.measure.scene.explain_detection`).
     num_paths : int
@@ -234,6 +239,69 @@ class SceneResult:
         }
 
 
+def object_box(vertices: np.ndarray) -> dict:
+    """The oriented bounding box of a level object's vertices: yaw from its footprint.
+
+    The smallest-area rectangle around the north/east convex hull (one of its
+    sides lies on a hull edge), its down extent from the vertices.
+
+    Parameters
+    ----------
+    vertices : ndarray, shape ``[vertex, 3]``
+        Points in W (NED) [m].
+
+    Returns
+    -------
+    dict
+        ``centre_m`` ``[3]`` (W [m]), ``axes`` ``[3, 3]`` (rows: the box's unit
+        axes in W, the third one down) and ``half_m`` ``[3]`` (half extents
+        along them [m]).
+    """
+    from scipy.spatial import ConvexHull
+
+    v = np.asarray(vertices, dtype=float)
+    ne = v[:, :2]
+    hull = ne[ConvexHull(ne).vertices]
+    best = None
+    for a, b in zip(hull, np.roll(hull, -1, axis=0), strict=True):
+        e = (b - a) / np.linalg.norm(b - a)
+        rot = np.array([e, [-e[1], e[0]]])                      # [2 axes, 2]
+        q = hull @ rot.T
+        lo, hi = q.min(axis=0), q.max(axis=0)
+        area = float(np.prod(hi - lo))
+        if best is None or area < best[0]:
+            best = (area, rot, lo, hi)
+    _, rot, lo, hi = best
+    centre_ne = rot.T @ ((lo + hi) / 2)
+    zlo, zhi = float(v[:, 2].min()), float(v[:, 2].max())
+    axes = np.zeros((3, 3))
+    axes[:2, :2], axes[2, 2] = rot, 1.0
+    return {"centre_m": [float(centre_ne[0]), float(centre_ne[1]), (zlo + zhi) / 2],
+            "axes": axes.tolist(),
+            "half_m": [float((hi - lo)[0] / 2), float((hi - lo)[1] / 2), (zhi - zlo) / 2]}
+
+
+def box_distance(box: dict, points: np.ndarray) -> np.ndarray:
+    """Distance of points from an :func:`object_box` [m]: 0 inside, else to its nearest face.
+
+    ``points`` ``[point, 3]`` in W [m]; returns ``[point]``.
+    """
+    p = np.atleast_2d(np.asarray(points, dtype=float)) - np.asarray(box["centre_m"])
+    local = p @ np.asarray(box["axes"]).T
+    out = np.maximum(np.abs(local) - np.asarray(box["half_m"]), 0.0)
+    return np.linalg.norm(out, axis=1)
+
+
+def _mesh_vertices(target, scene) -> np.ndarray:
+    """World vertices ``[vertex, 3]`` (W [m]) of a scene's mesh target (its parts together)."""
+    import trimesh
+
+    files = [target.mesh] if isinstance(target.mesh, str) else list(target.mesh)
+    v = [np.asarray(trimesh.load(f, force="mesh", process=False).vertices, dtype=float)
+         for f in files]
+    return scene.to_world(np.concatenate(v))
+
+
 def _targets(scene, settings: ReportSettings) -> list:
     """Known reflectors of a traced scene, or the point targets of a point scenario."""
     from raysim.echoes.oracle import az_el, direction
@@ -256,25 +324,40 @@ def _targets(scene, settings: ReportSettings) -> list:
         out.append({"name": t.name, "position_m": t.position.tolist(), "range_m": r,
                     "az_deg": float(np.rad2deg(a)), "el_deg": float(np.rad2deg(e)),
                     "rcs_dbsm": float(t.rcs_dbsm)})
+        if getattr(t, "mesh", None) is not None:           # an extended object: its box
+            out[-1]["box"] = object_box(_mesh_vertices(t, scene))
     return out
 
 
 def _nearest(target: dict, result: ChainResult, radius: float) -> dict:
-    """The detection of ``result`` nearest to ``target`` and whether it is within ``radius``."""
+    """The detection of ``result`` nearest to ``target`` and whether it is within ``radius``.
+
+    A point reflector: distance from its position. An extended object (``box``):
+    distance from its oriented bounding box (0 inside), so a detection on any of
+    its faces matches, not only one near its reference point.
+    """
     if not result.detections:
         return {"detected": False}
-    p = np.asarray(target["position_m"])
-    d = [float(np.linalg.norm(np.asarray(x["position_m"]) - p)) for x in result.detections]
+    pts = np.array([x["position_m"] for x in result.detections], dtype=float)
+    if "box" in target:
+        d, rule = box_distance(target["box"], pts), "box"
+    else:
+        d, rule = np.linalg.norm(pts - np.asarray(target["position_m"]), axis=1), "point"
     i = int(np.argmin(d))
-    return {"detected": bool(d[i] <= radius), "error_m": d[i], "radius_m": radius,
-            "detection": i}
+    return {"detected": bool(d[i] <= radius), "error_m": float(d[i]), "radius_m": radius,
+            "rule": rule, "detection": i}
 
 
 def _match(targets: list, reference: ChainResult, chains: dict,
            settings: ReportSettings) -> None:
     """Attach the nearest detection of the reference and of every chain to every reflector,
     and what the CFAR made of it (``cfar``: key -> :func:`raysim.measure.scene.explain_detection`:
-    ``status``, ``snr_db``, ``threshold_db``, ``cell``)."""
+    ``status``, ``snr_db``, ``threshold_db``, ``cell``).
+
+    The match radius is one resolution cell at the reflector's range: half the
+    null-to-null beamwidth, at least 1 m. An extended object is matched by a
+    detection inside its box expanded by that radius and judged at the matched
+    detection's cell; a point at its position."""
     from raysim.measure.scene import explain_detection
 
     beam = 2.0 / settings.array_size                  # ~ null-to-null half width [rad]
@@ -282,8 +365,14 @@ def _match(targets: list, reference: ChainResult, chains: dict,
         radius = max(1.0, t["range_m"] * beam / 2)
         t["reference_match"] = _nearest(t, reference, radius)
         t["match"] = {c: _nearest(t, r, radius) for c, r in chains.items()}
-        t["cfar"] = {k: explain_detection(r, t["range_m"], t["az_deg"], t["el_deg"])
-                     for k, r in {REFERENCE: reference, **chains}.items()}
+        t["cfar"] = {}
+        for k, r in {REFERENCE: reference, **chains}.items():
+            m = t["reference_match"] if k == REFERENCE else t["match"][k]
+            at = (t["range_m"], t["az_deg"], t["el_deg"])
+            if "box" in t and m.get("detected"):           # the object's own detection
+                x = r.detections[m["detection"]]
+                at = (x["range_m"], x["az_deg"], x["el_deg"])
+            t["cfar"][k] = explain_detection(r, *at)
 
 
 #: Centres of a mover within this of its strongest (``rcs / R^4``) make up its truth [dB].

@@ -13,6 +13,7 @@ import numpy as np
 
 from raysim.io.files import atomic_savefig, atomic_write_json, atomic_write_text
 from raysim.measure.scene import (
+    CFAR_RANK,
     CFAR_THRESHOLD_DB,
     CFAR_TRAIN,
     MISS_REASONS,
@@ -389,9 +390,12 @@ def report_markdown(results: dict, settings: ReportSettings) -> str:
     lines += _mesh_lines(results)
     lines += _fidelity_lines(results)
     lines += ["", "Known reflectors: position error of the nearest detection [m] "
-              "(* = outside the match radius), the SNR of the reflector's cell over the "
-              f"CFAR's noise estimate (threshold {CFAR_THRESHOLD_DB:g} dB over the mean of "
-              f"{2 * CFAR_TRAIN} training cells along range) and, for a miss, why: "
+              "(an extended object, a mesh target: its distance from the object's "
+              "oriented bounding box, 0 inside; * = outside the match radius), the SNR "
+              "of the reflector's cell (an extended object matched: of its detection) "
+              f"over the CFAR's noise estimate (threshold {CFAR_THRESHOLD_DB:g} dB over "
+              f"the ordered statistic {CFAR_RANK} of {2 * CFAR_TRAIN} training cells "
+              "along range, scaled to the clutter mean) and, for a miss, why: "
               + "; ".join(MISS_REASONS), "",
               "| scene | target | range_m | az_deg | el_deg | "
               + " | ".join(cols) + " |", "|---|---|---|---|---|" + "---|" * len(cols)]
