@@ -37,6 +37,7 @@ from scipy.spatial.transform import Rotation
 from ._checks import finite_array
 from .calibration import DIRECTION_SIGMA, UNRESOLVED_DIRECTION_SIGMA, detect_scatterers
 from .geometry import direction
+from .mounting import mounting_rotation, radar_frame_motion, world_directions
 from .observability import ObservabilityWarning
 from .strapdown import PlatformMotion
 
@@ -408,7 +409,8 @@ def ground_points(rc, element_positions, motion: PlatformMotion, *, wavelength: 
 
 
 def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axis, gates,
-                gyro_bias_sigma: float = 0.0, warn: bool = True, **options) -> GroundPlane:
+                gyro_bias_sigma: float = 0.0, warn: bool = True, mounting=None,
+                **options) -> GroundPlane:
     """Roll and pitch correction of a record's initial attitude from the ground in ``gates``.
 
     The ground points of every frame (:func:`ground_points`, each frame formed with
@@ -437,6 +439,12 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
         Spread of the gyro bias left in ``motions`` [rad/s].
     warn : bool
         Issue the warnings (:class:`GroundPlaneWarning`).
+    mounting : array_like ``[3, 3]``, optional
+        ``R_BA`` of a radar that does not look down: every frame's points are found
+        with the motion seen from its nominal frame N
+        (:func:`compensation.mounting.radar_frame_motion`: the search grid and the
+        array's axes are the radar's), then turned into W (``R_BA p``,
+        ``R_BA C R_BA^T``) and fitted there, where the ground is level.
 
     Returns
     -------
@@ -445,9 +453,12 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
     if len(rcs) != len(motions) or len(rcs) < 1:
         raise ValueError(f"rcs holds {len(rcs)} frames and motions {len(motions)}; expected "
                          f"the same number, at least one")
-    found = [ground_points(rc, element_positions, m, wavelength=wavelength,
-                           range_axis=range_axis, gates=gates, **options)
+    rot = None if mounting is None else mounting_rotation(mounting)
+    found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
+                           wavelength=wavelength, range_axis=range_axis, gates=gates, **options)
              for rc, m in zip(rcs, motions, strict=True)]
+    if rot is not None:
+        found = [world_directions(p, rot, c) for p, c in found]
     fit = fit_ground_plane(np.concatenate([p for p, _ in found]),
                            np.concatenate([c for _, c in found]),
                            groups=np.concatenate([np.full(len(p), k) for k, (p, _) in

@@ -200,7 +200,7 @@ def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_
     the one integration of ``options`` (the attitude it corrects: ``initial_attitude``);
     the ground is the farthest surface a down-looking radar sees, so its cells are
     those beyond the last of ``gates``. A mounted radar's ground points are found in
-    its nominal frame N and turned into W by ``R_BA`` (:func:`_mounted_ground_tilt`),
+    its nominal frame N and turned into W by ``R_BA`` (``ground_tilt(..., mounting=R_BA)``),
     so the plane is fitted in W, where the ground is level.
 
     Parameters
@@ -250,45 +250,6 @@ def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_
               method="lattice" if inp.grid_shape is not None else "direct")
     from raysim.platform.mounting import is_default_mounting, mounting_matrix
 
-    if is_default_mounting(mounting):
-        return ground_tilt(rcs, inp.element_positions, motions, **kw)
-    return _mounted_ground_tilt(rcs, inp.element_positions, motions, mounting_matrix(mounting),
-                                **kw)
-
-
-def _mounted_ground_tilt(rcs, positions, motions, rotation, *, gates, range_axis,
-                         gyro_bias_sigma, warn, **options):
-    """:func:`compensation.ground_plane.ground_tilt` of a mounted radar (``R_BA`` [3, 3]).
-
-    Every frame's ground points are found with the motion seen from the nominal
-    radar frame N (:func:`compensation.mounting.radar_frame_motion`: the search grid
-    and the array's axes are the radar's), then turned into W (``R_BA p``,
-    ``R_BA C R_BA^T``) and fitted there, where the ground is level and its normal
-    down; the same warnings and gyro-bias spread as ``ground_tilt``.
-    """
-    import warnings
-    from dataclasses import replace
-
-    from compensation.ground_plane import GroundPlaneWarning, fit_ground_plane, ground_points
-    from compensation.mounting import radar_frame_motion, world_directions
-
-    found = []
-    for rc, m in zip(rcs, motions, strict=True):
-        p, c = ground_points(rc, positions, radar_frame_motion(m, rotation),
-                             range_axis=range_axis, gates=gates, **options)
-        found.append(world_directions(p, rotation, c))      # points and covariances in W
-    fit = fit_ground_plane(np.concatenate([p for p, _ in found]),
-                           np.concatenate([c for _, c in found]), warn=False)
-    r_axis = np.asarray(range_axis, dtype=float)
-    if fit.points == 0:
-        where = (f"{r_axis[gates].min():.2f}-{r_axis[gates].max():.2f} m" if gates.size
-                 else "(no cell)")
-        fit = replace(fit, warnings=(f"ground plane: no ground return in the range window "
-                                     f"{where}; no tilt from the ground",))
-    span = float(np.mean([np.mean(m.time) for m in motions]) - motions[0].time[0])
-    fit = replace(fit, tilt_covariance=fit.tilt_covariance
-                  + np.eye(2) * (float(gyro_bias_sigma) * span) ** 2)
-    if warn:
-        for text in fit.warnings:
-            warnings.warn(text, GroundPlaneWarning, stacklevel=3)
-    return fit
+    return ground_tilt(rcs, inp.element_positions, motions, **kw,
+                       mounting=None if is_default_mounting(mounting) else
+                       mounting_matrix(mounting))
