@@ -82,7 +82,7 @@ __all__ = ["TAPS", "TAP_CHOICES", "MAX_FACTOR", "MIN_CHIRPS", "MAX_GAIN", "Decim
            "doppler_bound", "path_doppler", "interpolation_error", "plan_decimation", "plan_groups",
            "interpolate", "scatter_add", "bessel_tail", "sideband_order", "carson_bandwidth",
            "platform_sidebands", "path_sidebands", "amplitude_band", "CHECK_SHARE",
-           "check_channels", "channel_subset", "check_errors", "halve"]
+           "check_channels", "spread_channels", "channel_subset", "check_errors", "halve"]
 
 #: Exact chirps each interpolated chirp draws on (its nearest ones): the fewest of these
 #: that meets the tolerance in the middle of the frame.
@@ -648,7 +648,13 @@ def check_channels(src: PathDelays, count: int | None = None) -> np.ndarray:
     if count < 1:
         raise ValueError(f"count must be >= 1, got {count!r}")
     dev, w = _modulation(np.swapaxes(src.tx_positions, 0, 1))
-    picks = [int(np.argmax(dev * np.maximum(w, 1e-12)))]
+    return spread_channels(int(np.argmax(dev * np.maximum(w, 1e-12))), n_ch, count)
+
+
+def spread_channels(first: int, n_ch: int, count: int) -> np.ndarray:
+    """``count`` check channels: ``first`` (the most modulated), both ends, then evenly
+    spread ones, sorted (int64 ``[count]``)."""
+    picks = [int(first)]
     for c in [0, n_ch - 1] + list(np.linspace(0, n_ch - 1, count + 2).round().astype(int)):
         if len(picks) >= count:
             break

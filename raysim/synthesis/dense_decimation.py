@@ -32,6 +32,7 @@ from raysim.synthesis.decimate import (
     SLOW_DEGREE,
     amplitude_band,
     sideband_order,
+    spread_channels,
 )
 
 __all__ = ["dense_doppler", "dense_check_channels", "DENSE_BLOCK_ELEMENTS"]
@@ -123,10 +124,4 @@ def dense_check_channels(tau: np.ndarray, count: int) -> np.ndarray:
         wiggle = np.abs(np.diff(tau, n=2, axis=1)).max(axis=1).sum(axis=0)     # [channel]
     else:
         wiggle = np.zeros(n_ch)
-    picks = [int(np.argmax(wiggle))]
-    for c in [0, n_ch - 1] + list(np.linspace(0, n_ch - 1, count + 2).round().astype(int)):
-        if len(picks) >= count:
-            break
-        if int(c) not in picks:
-            picks.append(int(c))
-    return np.array(sorted(picks), dtype=np.int64)
+    return spread_channels(int(np.argmax(wiggle)), n_ch, count)
