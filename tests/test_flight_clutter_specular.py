@@ -55,3 +55,19 @@ def test_specular_mirror_matches_the_image_method_closed_form():
     # the other points are the same field with or without the mirror
     assert all(np.array_equal(a.position, b.position) and a.rcs_dbsm == b.rcs_dbsm
                for a, b in zip(points[:-1], plain, strict=True))
+
+
+def test_clutter_specular_option_reaches_the_flight(tmp_path, capsys):
+    """``raysim flight --clutter-specular`` adds the mirror (its summary line); without
+    the option the clutter has none."""
+    from raysim.cli import main
+
+    base = ["--targets", "default5", "--frames", "1", "--seed", "0", "--clutter-scene",
+            "parking_lot", "--clutter-max-scatterers", "60"]
+    assert main(["flight", str(tmp_path / "plain"), *base]) == 0
+    plain = capsys.readouterr()
+    assert main(["flight", str(tmp_path / "mirror"), *base, "--clutter-specular"]) == 0
+    mirror = capsys.readouterr()
+    assert "ground clutter of parking_lot" in plain.err + plain.out
+    assert "specular mirror" not in plain.err + plain.out
+    assert "specular mirror" in mirror.err + mirror.out
