@@ -88,6 +88,9 @@ def register(subparsers) -> None:
                    "scene's)")
     p.add_argument("--clutter-max-scatterers", type=int, default=200_000, metavar="N",
                    help="bound on the clutter field's scatterers (cost; density scaled down)")
+    p.add_argument("--clutter-specular", action="store_true",
+                   help="add the ground's coherent specular mirror below the radar "
+                   "(Fresnel x Ament of its material) to the clutter")
     p.add_argument("--lever-arm", default="0,0,0.05", metavar="X,Y,Z",
                    help="radar phase centre in the body frame [m]")
     p.add_argument("--attitude", choices=("log", "flight_controller", "level"), default="log",
@@ -138,6 +141,7 @@ def run(args) -> int:
                      clock_drift_ppm=args.clock_drift_ppm, attitude=not args.no_attitude,
                      clutter_scene=args.clutter_scene, clutter_altitude=args.clutter_altitude,
                      clutter_max_scatterers=args.clutter_max_scatterers,
+                     clutter_specular=args.clutter_specular,
                      decimate=args.decimate or "auto",
                      decimate_tolerance=args.decimate_tolerance,
                      progress=not args.no_progress)

@@ -235,7 +235,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
                  log_gaps: int = 0, gaps_in_capture: bool = False,
                  clock_drift_ppm: float = 0.0, attitude: bool = True,
                  clutter_scene: str | None = None, clutter_altitude: float | None = None,
-                 clutter_max_scatterers: int = 200_000, decimate="auto",
+                 clutter_max_scatterers: int = 200_000, clutter_specular: bool = False,
+                 decimate="auto",
                  decimate_tolerance: float | None = None,
                  progress: bool = False) -> FlightFiles:
     """Simulate a flight and write its ULog, DCA1000 capture and SDK ``.cfg``.
@@ -293,6 +294,8 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         Hover height above that ground [m]; default the scene's.
     clutter_max_scatterers : int
         Bound on the clutter field's scatterers (cost).
+    clutter_specular : bool
+        Add the ground's coherent specular mirror below the radar to the clutter.
     decimate : "auto" or "off"
         Slow-time decimation of the targets' and the clutter's synthesis
         (:func:`raysim.synthesis.select.synthesize` on the oracle's delays, tone
@@ -364,7 +367,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         clutter, summary = clutter_points(clutter_scene, cfg, array, lever,
                                           altitude=clutter_altitude, seed=seed,
                                           max_scatterers=clutter_max_scatterers,
-                                          mounting_deg=mount)
+                                          mounting_deg=mount, specular=clutter_specular)
         if progress:
             import sys
 
