@@ -47,7 +47,8 @@ EXACT = 1e-12
 
 
 def test_radar_frame_motion_is_the_mounting_of_raysim():
-    """The compensation's transform to N is raysim's ``mount_motion``; directions of N
+    """The transform to N (raysim's ``mount_motion`` is it) puts every element
+    ``T + R_WB (r_IR + R_BA p)`` at ``R_BA^T`` times its world position; directions of N
     turn back into W by ``R_BA``; a matrix that is no rotation is refused, named."""
     rng = np.random.default_rng(3)
     from scipy.spatial.transform import Rotation
@@ -58,9 +59,13 @@ def test_radar_frame_motion_is_the_mounting_of_raysim():
                        rng.normal(size=(n, 3)), np.array([0.03, -0.02, 0.1]))
     for mount in ("forward", "oblique", (10.0, -5.0, 30.0)):
         r = mounting_matrix(mount)
-        a, b = radar_frame_motion(m, r), mount_motion(m, mount)
-        for name in ("attitude", "position", "velocity", "angular_rate", "lever_arm"):
-            assert np.allclose(getattr(a, name), getattr(b, name), atol=EXACT), name
+        a = radar_frame_motion(m, r)
+        assert mount_motion(m, mount).attitude is not m.attitude
+        assert np.allclose(mount_motion(m, mount).attitude, a.attitude, atol=EXACT)
+        p = rng.normal(size=3) * 0.01                      # an element in A [m]
+        world = m.position + np.einsum("nij,j->ni", m.attitude, m.lever_arm + r @ p)
+        in_n = a.position + np.einsum("nij,j->ni", a.attitude, a.lever_arm + p)
+        assert np.allclose(in_n, world @ r, atol=EXACT)    # R_BA^T x, rows
         # the radar's velocity along a direction is the same in N and in W
         u_n = rng.normal(size=(n, 3))
         u_w = world_directions(u_n, r)

@@ -127,17 +127,18 @@ def mount_motion(motion, value):
     """
     if is_default_mounting(value):
         return motion
-    m = mounting_matrix(value)
-    return replace(motion, attitude=m.T @ motion.attitude @ m, position=motion.position @ m,
-                   velocity=motion.velocity @ m, angular_rate=motion.angular_rate @ m,
-                   lever_arm=m.T @ motion.lever_arm)
+    from compensation.mounting import radar_frame_motion
+
+    return radar_frame_motion(motion, mounting_matrix(value))
 
 
 def nominal_target_position(range_m: float, az: float, el: float, lever_arm,
                             value) -> np.ndarray:
     """World position [m] of a point at ``range_m`` [m] in direction ``(az, el)`` [rad] of N
     from the radar at the nominal pose: ``r_IR + R_BA u(az, el) range_m``."""
-    u = np.array([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)])
+    from compensation.geometry import direction
+
+    u = direction(az, el)
     return np.asarray(lever_arm, dtype=float) + mounting_matrix(value) @ u * float(range_m)
 
 
