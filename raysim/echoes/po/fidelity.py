@@ -62,6 +62,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from raysim.radar.config import SPEED_OF_LIGHT, RadarConfig
+from raysim.synthesis.tones import synthesize_if
 
 __all__ = ["FIDELITY_LEVELS", "FIDELITY_MODES", "DEFAULT_FIDELITY_TOLERANCE", "CHECK_CHANNELS",
            "MERGE_CELLS", "REUSE_DISTANCE", "FidelityChoice", "FidelityLadder", "point_model",
@@ -241,7 +242,7 @@ def predicted_error(centre, amplitude, point, label, *, range_cell: float,
 
 def check_echo(centre, amplitude, radar_w, r_wb, config: RadarConfig, array,
                channels=None) -> np.ndarray:
-    """IF echo of points on one chirp at the trace pose, by a direct sum.
+    """IF echo of points on one chirp at the trace pose, their tone sum (``synthesize_if``).
 
     ``s[m, k] = sum_p A_p exp(j 2 pi (f_c tau + mu tau t_k - mu tau^2 / 2))`` with
     ``tau = (|x_tx,m - c_p| + |x_rx,m - c_p|) / c`` (exact spherical legs, 0 dBi
@@ -264,7 +265,7 @@ def check_echo(centre, amplitude, radar_w, r_wb, config: RadarConfig, array,
 
     Returns
     -------
-    ndarray of complex, shape ``[channel, sample]``
+    ndarray of complex64, shape ``[channel, sample]``
     """
     if channels is None:
         channels = np.unique(np.linspace(0, array.num_channels - 1,
@@ -276,18 +277,8 @@ def check_echo(centre, amplitude, radar_w, r_wb, config: RadarConfig, array,
     c = np.asarray(centre, float)
     tau = (np.linalg.norm(tx[:, None] - c[None], axis=2)
            + np.linalg.norm(rx[:, None] - c[None], axis=2)) / SPEED_OF_LIGHT   # [channel, point]
-    mu, k = config.chirp_rate, config.num_samples
-    amp = np.asarray(amplitude, complex)
-    out = np.zeros((len(channels), k), complex)
-    for m in range(len(channels)):
-        tm = tau[m]
-        start = amp * np.exp(2j * math.pi * (config.carrier_frequency * tm - 0.5 * mu * tm**2))
-        # the tone over the samples as powers of one step (a tenth of the time of exp)
-        step = np.broadcast_to(np.exp(2j * math.pi * mu * tm / config.sample_rate)[:, None],
-                               (len(tm), k - 1))
-        tone = np.concatenate([np.ones((len(tm), 1), complex), np.cumprod(step, axis=1)], 1)
-        out[m] = start @ tone
-    return out
+    amp = np.asarray(amplitude, complex)[:, None, None]                   # [point, 1, 1]
+    return synthesize_if(tau.T[:, None, :], amp, config, workers=1)[0]
 
 
 def _relative(a: np.ndarray, ref: np.ndarray) -> float:
