@@ -1,4 +1,4 @@
-"""Two-dimensional method of moments (MoM): the full-wave echo width of perfectly conducting cylinders.
+"""Two-dimensional method of moments (MoM): full-wave echo width of conducting cylinders.
 
 A reference for the physical-optics engine's edge diffraction
 (:mod:`~raysim.echoes.po.edges`): a perfectly conducting cylinder, infinite
@@ -198,7 +198,7 @@ def _hankel(x: np.ndarray) -> np.ndarray:
 
 
 def _hankel_smooth(x: np.ndarray) -> np.ndarray:
-    """``H_0^(2)(x) + j (2/pi) ln x``: continuous at 0, where it is ``1 - j (2/pi)(gamma - ln 2)``."""
+    """``H_0^(2)(x) + j (2/pi) ln x``, continuous: ``1 - j (2/pi)(gamma - ln 2)`` at 0."""
     small = x < 1e-8
     xs = np.where(small, 1.0, x)
     val = _hankel(xs) + 2j / np.pi * np.log(xs)
@@ -394,7 +394,8 @@ def echo_width(contour: Contour, wavelength: float, phi_deg, polarisation: str =
                          f"got {type(contour).__name__}")
     phi = np.atleast_1d(np.asarray(phi_deg, dtype=float))
     if phi.ndim != 1 or len(phi) == 0 or not np.isfinite(phi).all():
-        raise ValueError(f"phi_deg must be a non-empty list of finite angles [deg], got {phi_deg!r}")
+        raise ValueError(f"phi_deg must be a non-empty list of finite angles [deg], "
+                         f"got {phi_deg!r}")
     n = mom_job_size(contour, pol)
     k = 2 * math.pi / wavelength
     z = _impedance(contour, k, pol)
