@@ -107,6 +107,16 @@ def test_strip_symmetries(pol):
     np.testing.assert_allclose(z, z.T, rtol=SYMMETRY_REL, atol=SYMMETRY_REL * abs(z).max())
 
 
+@pytest.mark.parametrize("pol", ["TM", "TE"])
+def test_winding_does_not_matter(pol):
+    """The same polygon run clockwise and anticlockwise (the TE rooftops' direction)."""
+    square = np.array([[-0.8, -0.8], [0.8, -0.8], [0.8, 0.8], [-0.8, 0.8]]) * LAM
+    angles = [0.0, 25.0, 45.0]
+    one = M.echo_width(M.polyline(square, LAM / 20, closed=True), LAM, angles, pol)
+    other = M.echo_width(M.polyline(square[::-1], LAM / 20, closed=True), LAM, angles, pol)
+    np.testing.assert_allclose(db(one.echo_width_m), db(other.echo_width_m), atol=SYMMETRY_DB)
+
+
 def test_thin_closed_rectangle_tends_to_the_strip_tm():
     """A closed rectangle around a strip (TM) tends to the zero-thickness strip as it thins.
 
@@ -157,3 +167,7 @@ def test_bad_input():
         M.strip(LAM, -1.0)
     with pytest.raises(ValueError, match="sides"):
         M.regular_polygon(LAM, 2)
+    with pytest.raises(ValueError, match="nodes"):
+        M.Contour(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="distinct"):
+        M.Contour(np.array([[0.0, 0.0], [0.0, 0.0]]))

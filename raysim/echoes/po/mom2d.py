@@ -52,6 +52,7 @@ R. F. Harrington, *Field Computation by Moment Methods*, 1968, ch. 4.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -93,6 +94,17 @@ class Contour:
 
     nodes: np.ndarray
     closed: bool = False
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.nodes, dtype=float)
+        least = 3 if self.closed else 2
+        if v.ndim != 2 or v.shape[1] != 2 or len(v) < least or not np.isfinite(v).all():
+            raise ValueError(f"nodes must be finite (x, y) points, shape [node >= {least}, 2], "
+                             f"got shape {v.shape}")
+        object.__setattr__(self, "nodes", v)
+        object.__setattr__(self, "closed", bool(self.closed))
+        if not np.all(self.lengths > 0):
+            raise ValueError("nodes: consecutive nodes must be distinct (no zero-length segment)")
 
     @property
     def starts(self) -> np.ndarray:
@@ -306,6 +318,7 @@ def _impedance(contour: Contour, k: float, polarisation: str) -> np.ndarray:
     starts, ends = contour.starts, contour.ends
     t = (ends - starts) / length[:, None]
     tt = t @ t.T
+    total = kern.sum(axis=(0, 1))
     _, rise, fall = _rooftops(contour)
     # (segment, half-basis index, derivative) of each rooftop's two pieces
     pieces = [(rise, 1, 1.0 / length[rise]), (fall, 0, -1.0 / length[fall])]
@@ -313,7 +326,7 @@ def _impedance(contour: Contour, k: float, polarisation: str) -> np.ndarray:
     for sm, am, dm in pieces:
         for sn, bn, dn in pieces:
             vec = kern[am, bn][np.ix_(sm, sn)] * tt[np.ix_(sm, sn)]
-            scal = kern.sum(axis=(0, 1))[np.ix_(sm, sn)] * np.outer(dm, dn)
+            scal = total[np.ix_(sm, sn)] * np.outer(dm, dn)
             z += (k * vec - scal / k) / 4
     return z
 
@@ -382,8 +395,6 @@ def echo_width(contour: Contour, wavelength: float, phi_deg, polarisation: str =
         A non-positive wavelength, non-finite angles, an unknown polarisation, a
         contour that is not a :class:`Contour`, or too many unknowns (:func:`mom_job_size`).
     """
-    import time
-
     started = time.perf_counter()
     wavelength = _positive(wavelength, "wavelength")
     pol = str(polarisation).upper()
