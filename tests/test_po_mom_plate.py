@@ -17,7 +17,7 @@ import pytest
 
 from raysim.echoes.po import monostatic_rcs, po_material
 from raysim.echoes.po import targets as T
-from raysim.echoes.po.edges import facing_edge_pairs, sharp_edges
+from raysim.echoes.po.edges import _fresnel_transition, facing_edge_pairs, sharp_edges
 from raysim.echoes.po.mesh import TriangleMesh
 from raysim.echoes.po.strip_reference import compare_long_plate, long_plate
 
@@ -39,6 +39,8 @@ DOUBLE_TE_DB = 20 * math.log10(1 + 1 / (2 * math.sqrt(2 * math.pi * K * WIDTH)))
 FIRST_ORDER_TE_DB = 1.0
 #: The plate's short edges' terms against the long edges' [dB]: O(lambda / L), L = 200 lambda.
 SHORT_EDGES_DB = 0.02
+#: The engine against the NumPy reference of the same closed forms [dB] (rounding only).
+FORMULA_DB = 0.01
 
 
 @pytest.fixture(scope="module")
@@ -106,6 +108,48 @@ def test_box_right_angle_wedges_against_moments():
     assert np.max(np.abs(c.po["TM"] - c.mom["TM"])) > 1.5
     assert np.max(np.abs(c.po["TE"] - c.mom["TE"])) > 2.5
     np.testing.assert_array_equal(c.double["TE"], c.ptd["TE"])   # no facing half-planes
+
+
+def test_fresnel_transition_asymptotes():
+    """Kouyoumjian & Pathak (Proc. IEEE 62(11), 1974, eqs. for small and large X):
+    ``F ~ [sqrt(pi X) - 2 X exp(j pi/4) - (2/3) X^2 exp(-j pi/4)] exp(j (pi/4 + X))`` and
+    ``F ~ 1 + j/(2X) - 3/(4X^2) - 15j/(8X^3)``; each truncation errs by the next term's order."""
+    small = np.array([1e-4, 1e-3, 1e-2])
+    ref = ((np.sqrt(np.pi * small) - 2 * small * np.exp(1j * np.pi / 4)
+            - 2 / 3 * small**2 * np.exp(-1j * np.pi / 4)) * np.exp(1j * (np.pi / 4 + small)))
+    assert np.all(np.abs(_fresnel_transition(small) - ref) < small**2.5)
+    big = np.array([20.0, 100.0, 1e3])
+    ref = 1 + 1j / (2 * big) - 3 / (4 * big**2) - 15j / (8 * big**3)
+    # next term 105/(16 X^4); the Fresnel integrals' rounding below 1e-12
+    assert np.all(np.abs(_fresnel_transition(big) - ref) < 10 / big**4 + 1e-12)
+
+
+def ref_plate_double(side, theta):
+    """Square plate rotated by ``theta`` about its y edges, HH: the y edges' double
+    diffraction ``side C_2 / (2 pi)`` (the x edges' pair has ``w_h = 0`` in this plane)."""
+    k = K
+    x = np.array([2 * k * side * math.cos((math.pi / 2 + s * theta) / 2) ** 2 for s in (1, -1)])
+    prod = np.prod(_fresnel_transition(x) / np.cos([(math.pi / 2 + theta) / 2,
+                                                     (math.pi / 2 - theta) / 2]))
+    c2 = (1j * np.exp(1j * np.pi / 4) * math.sqrt(2 / (math.pi * k * side))
+          * np.exp(-1j * k * side) * prod)
+    return side * c2 / (2 * math.pi)
+
+
+def test_double_diffraction_matches_its_formula():
+    """The engine's plate (HH, double) against Ross's first order plus the closed-form pair
+    term, in plain NumPy (only rounding differs)."""
+    from test_po_diffraction import ref_plate_ptd
+
+    side = 0.05
+    angles = [3.35, 20.0, 45.0, 70.0, 85.0]
+    got = monostatic_rcs(T.square_plate(side), po_material("metal", FREQ), angles, [0.0],
+                         polarisation="HH", max_bounces=1, diffraction=True,
+                         double_diffraction=True).rcs_dbsm[:, 0]
+    ref = [10 * np.log10(4 * math.pi * abs(ref_plate_ptd(side, math.radians(a), False)
+                                          + ref_plate_double(side, math.radians(a))) ** 2)
+           for a in angles]
+    np.testing.assert_allclose(got, ref, atol=FORMULA_DB)
 
 
 def test_facing_edge_pairs():
