@@ -190,3 +190,24 @@ def test_double_diffraction_bad_input():
         compare_long_plate(WIDTH, [95.0])
     with pytest.raises(ValueError, match="shape"):
         compare_long_plate(WIDTH, [5.0], shape="wedge")
+
+
+def test_cli_double_diffraction(capsys):
+    import json
+
+    from raysim.cli import main
+
+    base = ["rcs", "plate:0.05", "--az-deg", "70", "--el-deg", "0", "--max-bounces", "1",
+            "--pol", "HH", "--no-progress"]
+    assert main(base + ["--double-diffraction"]) == 2                  # without --diffraction
+    assert main(base + ["--diffraction", "--double-diffraction", "--range-m", "20"]) == 2
+    err = capsys.readouterr().err
+    assert "--double-diffraction" in err
+    assert main(base + ["--diffraction", "--double-diffraction", "--json"]) == 0
+    out = capsys.readouterr()
+    assert "edge-pair segments" in out.err
+    got = json.loads(out.out)["rcs_dbsm"][0][0]
+    want = monostatic_rcs(T.square_plate(0.05), po_material("metal", FREQ), [70.0], [0.0],
+                          polarisation="HH", max_bounces=1, diffraction=True,
+                          double_diffraction=True).rcs_dbsm[0, 0]
+    assert abs(got - want) < FORMULA_DB
