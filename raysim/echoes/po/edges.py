@@ -62,7 +62,7 @@ from raysim.echoes.po.mesh import TriangleMesh
 
 __all__ = ["MeshEdges", "sharp_edges", "wedge_coefficients", "fringe_coefficients",
            "edge_amplitude", "edge_terms_near", "SHARP_EDGE_DEG", "MIN_SIN_BETA",
-           "EdgePairs", "facing_edge_pairs", "double_amplitude"]
+           "EdgePairs", "facing_edge_pairs", "pair_amplitude"]
 
 #: Default: an edge is sharp when the normals of its two facets differ by more than this [deg]
 #: (a faceted sphere's or a car body's smooth curvature stays below it).
@@ -375,7 +375,7 @@ def _take(edges: MeshEdges, mask: np.ndarray) -> MeshEdges:
                      edges.normal[mask], edges.n[mask])
 
 
-# ---- second order: double diffraction between the facing edges of a flat face ----------
+# ---- multiple diffraction between the facing edges of a flat face ----------------------
 
 
 @dataclass(frozen=True)
@@ -442,7 +442,7 @@ def facing_edge_pairs(edges: MeshEdges) -> EdgePairs:
         return empty
     if len(half) > MAX_PAIR_EDGES:
         raise ValueError(f"{len(half)} boundary edges to pair, expected at most {MAX_PAIR_EDGES}: "
-                         f"leave double diffraction off for this mesh")
+                         f"leave multiple diffraction off for this mesh")
     a, b = edges.start[half], edges.end[half]
     f, nrm = edges.face_dir[half], edges.normal[half]
     length = np.linalg.norm(b - a, axis=1)
@@ -486,27 +486,33 @@ def _fresnel_transition(x: np.ndarray) -> np.ndarray:
     return 2j * v * np.exp(1j * x) * tail
 
 
-def double_amplitude(pairs: EdgePairs, u: np.ndarray, e_pol: np.ndarray, k: float,
-                     scene=None) -> complex:
-    """Far-field co-polar amplitude ``F`` [m] of the double diffraction across edge pairs.
+def pair_amplitude(pairs: EdgePairs, u: np.ndarray, e_pol: np.ndarray, k: float,
+                   scene=None, *, orders: str = "all") -> complex:
+    """Far-field co-polar amplitude ``F`` [m] of the multiple diffraction across edge pairs.
 
     The field one edge diffracts along the face, grazing, is diffracted again by
-    the other edge towards the radar (both ways round, on both sides of the
-    sheet). With Keller's half-plane coefficient, the grazing-incidence factor
-    1/2 and the uniform (UTD) transition function ``F`` of each edge's
-    shadow boundary at the distance ``w`` (Kouyoumjian & Pathak, Proc. IEEE
-    62(11), 1974; Balanis, *Advanced Engineering Electromagnetics*, 2nd ed.,
-    sec. 13.3), per unit length of midline:
+    the other edge, towards the radar (double diffraction) or back across the
+    face, and so on. In the 2-D problem of the plane normal to the edges
+    (wavenumber ``k_t = k sin beta``, the radar's projected direction), with
+    Keller's half-plane coefficient, the factor 1/2 of grazing incidence, the
+    uniform (UTD) transition function ``F`` of the shadow boundary of the wave
+    that grazes the face (Kouyoumjian & Pathak, Proc. IEEE 62(11), 1974;
+    Balanis, *Advanced Engineering Electromagnetics*, 2nd ed., sec. 13.3) and
+    both sides of the sheet: an edge X lit at the angle ``a_X`` (from its face,
+    towards the face normal) sends ``s_X = -2 c F(2 k_t w cos^2(a_X/2)) / cos(a_X/2)``
+    across, ``c = exp(-j pi/4) / (2 sqrt(2 pi k_t))``; the crossing is
+    ``G = exp(-j k_t w) / sqrt(w)``; an edge returns a grazing wave with
+    ``R = -2 c G`` and radiates one with ``s_X``. Summing the paths (the
+    ``orders="all"`` geometric series in closed form),
 
-    ``C_2 = j exp(j pi/4) sqrt(2 / (pi k_t w)) exp(-j k_t w) prod_A,B F(X) / cos(a/2)``,
+    ``S = G / (1 - R^2) [2 s_A s_B + R (s_A^2 e_A + s_B^2 e_B)]``,
 
-    ``X = 2 k_t w cos^2(a/2)``, ``a`` the radar's angle at each edge from its
-    face (its direction into the face), both towards the same face normal, and
-    ``k_t = k sin beta``; evaluated, like single diffraction, with ``u``
-    projected on the plane normal to the edges.
-    Only the hard (magnetic field along the edges) part: the soft one vanishes at
-    grazing to this order. ``F = 1/(2 pi) sum w_h C_2 int exp(2 j k u.r) dl`` along
-    the midlines, ``w_h`` as for single diffraction.
+    ``e_X = exp(2 j k u.(r_X - r_mid))`` (``orders="double"``: ``S = 2 G s_A s_B``),
+    and per unit length of the pair's midline ``C = -exp(j pi/4) sqrt(2 pi k_t) S``,
+    ``F = 1/(2 pi) sum w_h C int exp(2 j k u.r) dl``, ``w_h`` as for single
+    diffraction. Only the hard part (magnetic field along the edges): a grazing
+    soft wave is zero to this order (slope diffraction is left out). Exactly
+    at grazing (the radar in the face's plane) it fails: see docs/rcs.md.
 
     Parameters
     ----------
@@ -518,12 +524,16 @@ def double_amplitude(pairs: EdgePairs, u: np.ndarray, e_pol: np.ndarray, k: floa
         Wavenumber [rad/m].
     scene : RayScene, optional
         Both edge points must see the radar; ``None``: all visible.
+    orders : {"all", "double"}
+        Every number of crossings, or the double diffraction alone.
 
     Returns
     -------
     complex
         ``F`` [m], phase referred to the origin.
     """
+    if orders not in ("all", "double"):
+        raise ValueError(f"orders must be 'all' or 'double', got {orders!r}")
     if len(pairs) == 0:
         return 0j
     a = pairs.end - pairs.start
@@ -539,15 +549,25 @@ def double_amplitude(pairs: EdgePairs, u: np.ndarray, e_pol: np.ndarray, k: floa
     ang_a = np.mod(np.arctan2(un, uf), 2 * np.pi)          # at the first edge, face towards +f
     ang_b = np.mod(np.arctan2(un, -uf), 2 * np.pi)         # at the second, face towards -f
     kw = k_t * pairs.width
-    prod = np.ones(len(pairs), complex)
+    c = np.exp(-1j * np.pi / 4) / (2 * np.sqrt(2 * np.pi * k_t))
+    send = []
     for ang in (ang_a, ang_b):
-        c = np.cos(ang / 2)
-        x = 2 * kw * c**2
-        # F(X)/cos(a/2) -> sqrt(2 pi k_t w) exp(j pi/4) sign(cos) as cos(a/2) -> 0
-        tiny = np.abs(c) < 1e-12
+        half = np.cos(ang / 2)
+        # F(X)/cos(a/2) -> sqrt(2 pi k_t w) exp(j pi/4) as cos(a/2) -> 0
+        tiny = np.abs(half) < 1e-12
         lim = np.sqrt(2 * np.pi * kw) * np.exp(1j * np.pi / 4)
-        prod *= np.where(tiny, lim, _fresnel_transition(x) / np.where(tiny, 1.0, c))
-    c2 = 1j * np.exp(1j * np.pi / 4) * np.sqrt(2 / (np.pi * kw)) * np.exp(-1j * kw) * prod
+        ratio = _fresnel_transition(2 * kw * half**2) / np.where(tiny, 1.0, half)
+        send.append(-2 * c * np.where(tiny, lim, ratio))
+    s_a, s_b = send
+    g = np.exp(-1j * kw) / np.sqrt(pairs.width)
+    if orders == "double":
+        total = 2 * g * s_a * s_b
+    else:
+        r = -2 * c * g
+        back = k * uf * pairs.width                      # 2 k u.(r_B - r_mid)
+        total = g / (1 - r**2) * (2 * s_a * s_b + r * (s_a**2 * np.exp(-1j * back)
+                                                     + s_b**2 * np.exp(1j * back)))
+    c2 = -np.exp(1j * np.pi / 4) * np.sqrt(2 * np.pi * k_t) * total
     mid = pairs.start + a / 2
     live = ok & (w_h > 0)
     if scene is not None and live.any():

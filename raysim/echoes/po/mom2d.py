@@ -62,8 +62,8 @@ import scipy.special
 __all__ = ["Contour", "MomEchoWidth", "strip", "polyline", "regular_polygon", "echo_width",
            "MAX_UNKNOWNS", "SEGMENTS_PER_WAVELENGTH", "mom_job_size"]
 
-#: Largest number of unknowns (the dense complex matrix and the kernel samples, about
-#: 1 kB per unknown squared, stay below 1 GB).
+#: Largest number of unknowns (the kernel samples and the matrices, ``BYTES_PER_PAIR`` per
+#: unknown squared, stay near 1 GB at the peak).
 MAX_UNKNOWNS = 1000
 #: Default segment density [segments per wavelength].
 SEGMENTS_PER_WAVELENGTH = 20.0
@@ -73,8 +73,10 @@ NEAR_POINTS = 8
 #: Segment pairs whose midpoints are closer than this many (longer) segment lengths get
 #: the closed-form logarithm.
 NEAR_SEGMENTS = 2.5
-#: Kernel samples and matrix entries held per unknown pair [bytes] (for the job size).
-BYTES_PER_PAIR = 16 * (4 + FAR_POINTS**2)
+#: Peak memory per unknown pair [bytes] (for the job size): per pair of quadrature points
+#: the separations, distances, Bessel values and Hankel kernel (64 B), then the four
+#: segment kernels and the matrix (80 B).
+BYTES_PER_PAIR = 64 * FAR_POINTS**2 + 80
 
 _EULER_GAMMA = 0.5772156649015329
 

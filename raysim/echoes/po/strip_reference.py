@@ -66,10 +66,10 @@ class StripComparison:
         ``"plate"`` (strip) or ``"box"`` (square cylinder).
     width, wavelength, length : float
         Strip width (square side), wavelength and the engine's length [m].
-    mom, po, ptd, double : dict of str to ndarray, shape ``[phi]``
+    mom, po, ptd, multiple : dict of str to ndarray, shape ``[phi]``
         ``sigma_2D / lambda`` [dB] per polarisation ``"TM"``, ``"TE"``: the
         method of moments, the engine's PO, its PO + PTD and PO + PTD with
-        double diffraction (``sigma_3D lambda / (2 L^2)``).
+        the multiple diffraction of facing edges (``sigma_3D lambda / (2 L^2)``).
     seconds : dict of str to float
         Wall-clock time of the moment solves (``"mom"``) and the engine runs (``"engine"``).
     """
@@ -82,18 +82,18 @@ class StripComparison:
     mom: dict
     po: dict
     ptd: dict
-    double: dict
+    multiple: dict
     seconds: dict
 
     def table(self) -> str:
         """The comparison as a Markdown table [dB relative to lambda]."""
         head = ("| phi [deg] | TM: MoM | PO | PO + PTD | TE: MoM | PO | PO + PTD "
-                "| PO + PTD + double |\n|---|---|---|---|---|---|---|---|\n")
+                "| PO + PTD + multiple |\n|---|---|---|---|---|---|---|---|\n")
         rows = []
         for i, p in enumerate(self.phi_deg):
             vals = [self.mom["TM"][i], self.po["TM"][i], self.ptd["TM"][i],
                     self.mom["TE"][i], self.po["TE"][i], self.ptd["TE"][i],
-                    self.double["TE"][i]]
+                    self.multiple["TE"][i]]
             rows.append(f"| {p:g} | " + " | ".join(
                 "-inf" if v < -200 else f"{v:.2f}" for v in vals) + " |")
         return head + "\n".join(rows)
@@ -151,13 +151,13 @@ def compare_long_plate(width: float, phi_deg, *, frequency: float = DEFAULT_FREQ
     t1 = time.perf_counter()
     metal = po_material("pec", frequency)
     to_2d = 10 * math.log10(lam / (2 * length**2) / lam)
-    po, ptd, double = {}, {}, {}
+    po, ptd, multiple = {}, {}, {}
     for pol, channel in ENGINE_POLARISATION.items():
-        for out, order in ((po, 0), (ptd, 1), (double, 2)):
+        for out, order in ((po, 0), (ptd, 1), (multiple, 2)):
             res = monostatic_rcs(mesh, metal, phi, [0.0], frequency=frequency,
                                  polarisation=channel, max_bounces=1, diffraction=order > 0,
-                                 double_diffraction=order > 1)
+                                 multiple_diffraction=order > 1)
             out[pol] = res.rcs_dbsm[:, 0] + to_2d
     t2 = time.perf_counter()
-    return StripComparison(phi, shape, float(width), lam, float(length), mom, po, ptd, double,
+    return StripComparison(phi, shape, float(width), lam, float(length), mom, po, ptd, multiple,
                            {"mom": t1 - t0, "engine": t2 - t1})
