@@ -255,6 +255,8 @@ def test_multiple_diffraction_symmetries():
     b = monostatic_rcs(flipped, metal, [40.0], [5.0], **kw).rcs_dbsm[:, 0]
     assert np.all(np.isfinite(a)) and abs(a[0] - a[1]) < FORMULA_DB
     assert abs(a[0] - b[0]) < FORMULA_DB
+    info = monostatic_rcs(plate, metal, [40.0], [5.0], **kw).info
+    assert info["edge_pairs"] == 2 and info["pair_segments"] == 2 * math.ceil(0.05 / LAM)
     moved = TriangleMesh(plate.vertices + [0.01, -0.02, 0.003], plate.faces)
     c = monostatic_rcs(moved, metal, [40.0], [5.0], **kw).rcs_dbsm[0, 0]
     assert abs(a[0] - c) < FORMULA_DB

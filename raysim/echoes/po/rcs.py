@@ -382,13 +382,14 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
             raise ValueError(f"range_m={range_m!r} puts the radar inside the target "
                              f"(radius {mesh.radius:.3g} m)")
         near_edge = FRESNEL_FRACTION * math.sqrt(wavelength * range_m)
-    edges = segments = pairs = None
+    edges = segments = pairs = edge_pairs = None
     if diffraction:
         edges = sharp_edges(mesh)
         seg_len = EDGE_SEGMENT_WAVELENGTHS * wavelength
         segments = edges.split(seg_len if near_edge is None else min(seg_len, near_edge))
         if multiple_diffraction:
-            pairs = facing_edge_pairs(edges).split(seg_len)
+            edge_pairs = facing_edge_pairs(edges)
+            pairs = edge_pairs.split(seg_len)
     rcs_job_size(mesh, len(az) * len(el), spacing, int(max_bounces), near_edge,
                  0 if segments is None else len(segments))
     scene = RayScene(mesh, variant)
@@ -431,5 +432,6 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
         info.update(edges=len(edges), edge_segments=len(segments),
                     edge_seconds=edge_seconds, seconds=time.perf_counter() - started)
     if pairs is not None:
-        info.update(multiple_diffraction=True, pair_segments=len(pairs))
+        info.update(multiple_diffraction=True, edge_pairs=len(edge_pairs),
+                    pair_segments=len(pairs))
     return RcsResult(frequency, range_m, az, el, out, pol, info)
