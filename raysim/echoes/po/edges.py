@@ -8,7 +8,9 @@ the monostatic case it is radiated by equivalent edge currents: per unit length
 of edge the fringe coefficient is Keller's diffraction coefficient of the wedge
 minus the edge-diffraction coefficient of the PO current on its lit faces, and
 the coefficients are integrated exactly along each straight edge segment (a
-``sinc`` factor, as in Gordon's facet integral).
+``sinc`` factor, as in Gordon's facet integral). Facing parallel half-plane
+edges (a plate's opposite sides) may add their multiple diffraction, the wave
+that grazes across the face from one to the other (:func:`pair_amplitude`).
 
 Conventions (those of :mod:`~raysim.echoes.po.integral`): time ``exp(+j omega t)``,
 the radar in the unit direction ``u``, co-polar scattering amplitude ``F`` [m],
