@@ -5,7 +5,7 @@ exact as ``w / lambda -> oo``; the edges' first-order fringe wave, relative
 amplitude ``1 / (k w)``, bounds the difference: Ufimtsev, *Fundamentals of the
 Physical Theory of Diffraction*, 2007, ch. 4); a circular cylinder's
 eigenfunction series (Balanis, *Advanced Engineering Electromagnetics*, 2nd ed.,
-2012, sec. 11.5: ``sigma_2D = (4/k) |sum_n (-1)^n J_n(ka) / H_n^(2)(ka)|^2``
+2012, ch. 11, scattering by a circular cylinder: ``sigma_2D = (4/k) |sum_n (-1)^n J_n(ka) / H_n^(2)(ka)|^2``
 for TM, ``J_n'`` and ``H_n^(2)'`` for TE) for a polygon of many facets.
 """
 
@@ -44,7 +44,7 @@ def db(x):
 
 
 def ref_cylinder(ka: float, pol: str, terms: int = 60) -> float:
-    """Exact monostatic echo width of a PEC circular cylinder [m] (Balanis sec. 11.5)."""
+    """Exact monostatic echo width of a PEC circular cylinder [m] (Balanis ch. 11)."""
     n = np.arange(-terms, terms + 1)
     if pol == "TM":
         c = sp.jv(n, ka) / sp.hankel2(n, ka)

@@ -2,7 +2,7 @@
 
 A plate 4 wavelengths wide and 200 long, rotated about its long edges, is a
 strip: ``sigma_3D = sigma_2D 2 L^2 / lambda`` (Knott, Shaeffer & Tuley, *Radar
-Cross Section*, 2nd ed., 1993, ch. 5). The reference is the method of moments
+Cross Section*, 2nd ed., 1993: the 2-D to 3-D relation). The reference is the method of moments
 (raysim.echoes.po.mom2d, itself tested against closed forms in test_po_mom2d.py).
 Aspects: the strip's lobe peaks ``k w sin(phi) = (m + 1/2) pi`` (PO's
 ``cos phi sinc(k w sin phi)``), and near grazing.

@@ -499,7 +499,7 @@ def pair_amplitude(pairs: EdgePairs, u: np.ndarray, e_pol: np.ndarray, k: float,
     Keller's half-plane coefficient, the factor 1/2 of grazing incidence, the
     uniform (UTD) transition function ``F`` of the shadow boundary of the wave
     that grazes the face (Kouyoumjian & Pathak, Proc. IEEE 62(11), 1974;
-    Balanis, *Advanced Engineering Electromagnetics*, 2nd ed., sec. 13.3) and
+    Balanis, *Advanced Engineering Electromagnetics*, 2nd ed., ch. 13) and
     both sides of the sheet: an edge X lit at the angle ``a_X`` (from its face,
     towards the face normal) sends ``s_X = -2 c F(2 k_t w cos^2(a_X/2)) / cos(a_X/2)``
     across, ``c = exp(-j pi/4) / (2 sqrt(2 pi k_t))``; the crossing is

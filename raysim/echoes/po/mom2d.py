@@ -22,7 +22,7 @@ project's). Segment pairs are integrated by Gauss-Legendre quadrature; on
 neighbouring pairs the logarithmic singularity ``-j (2/pi) ln(k R)`` of
 ``H_0^(2)`` is integrated in closed form along the source segment and only the
 smooth rest numerically (Peterson, Ray & Mittra, *Computational Methods for
-Electromagnetics*, IEEE Press 1998, ch. 2 and 4).
+Electromagnetics*, IEEE Press 1998, ch. 2).
 
 Geometry: the radar lies in the direction ``(sin phi, cos phi)`` from the
 origin, ``phi`` from the ``+y`` axis towards ``+x``; a strip along ``x`` is seen
@@ -36,7 +36,7 @@ with ``V`` the excitation vector and ``I = Z^-1 V`` the currents (reciprocity:
 the receiving pattern is the excitation). A wide strip gives ``k w^2`` at
 broadside in both polarisations (physical optics); a cylinder ``L`` long
 (``L >> lambda``, seen normal to its length) has ``sigma_3D = sigma_2D 2 L^2 / lambda``
-(Knott, Shaeffer & Tuley, *Radar Cross Section*, 2nd ed., 1993, ch. 5).
+(Knott, Shaeffer & Tuley, *Radar Cross Section*, 2nd ed., 1993: the 2-D to 3-D relation).
 
 What it cannot give: a closed contour is wrong near its interior resonances
 (the EFIE's spurious modes, e.g. a circle's ``J_0(k a) = 0`` in TM and
@@ -45,7 +45,8 @@ What it cannot give: a closed contour is wrong near its interior resonances
 References
 ----------
 A. F. Peterson, S. L. Ray, R. Mittra, *Computational Methods for Electromagnetics*, 1998.
-C. A. Balanis, *Advanced Engineering Electromagnetics*, 2nd ed., Wiley 2012, ch. 11-12.
+C. A. Balanis, *Advanced Engineering Electromagnetics*, 2nd ed., Wiley 2012, ch. 11
+(scattering by circular cylinders: the test reference) and ch. 12 (integral equations).
 R. F. Harrington, *Field Computation by Moment Methods*, 1968, ch. 4.
 """
 

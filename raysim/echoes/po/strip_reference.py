@@ -4,7 +4,7 @@ A flat plate ``width`` wide (along ``x``) and ``length`` long (along ``y``,
 ``length >> lambda``) in ``z = 0``, rotated in azimuth about its long edges, is
 the 3-D counterpart of a strip: seen normal to its length its RCS is the strip's
 echo width times ``2 L^2 / lambda`` (Knott, Shaeffer & Tuley, *Radar Cross
-Section*, 2nd ed., 1993, ch. 5), up to the short edges' own terms, which are
+Section*, 2nd ed., 1993: the 2-D to 3-D relation), up to the short edges' own terms, which are
 ``O(lambda / L)`` of the long edges'. The engine's azimuth is the strip's
 ``phi`` (:mod:`~raysim.echoes.po.mom2d`); VV (electric field along the long edges)
 is the strip's TM, HH its TE. A long box of square cross-section (right-angle
