@@ -3,10 +3,11 @@
 Closed forms: a wide strip's broadside echo width ``k w^2`` (physical optics,
 exact as ``w / lambda -> oo``; the edges' first-order fringe wave, relative
 amplitude ``1 / (k w)``, bounds the difference: Ufimtsev, *Fundamentals of the
-Physical Theory of Diffraction*, 2007, ch. 4); a circular cylinder's
-eigenfunction series (Balanis, *Advanced Engineering Electromagnetics*, 2nd ed.,
-2012, ch. 11, scattering by a circular cylinder: ``sigma_2D = (4/k) |sum_n (-1)^n J_n(ka) / H_n^(2)(ka)|^2``
-for TM, ``J_n'`` and ``H_n^(2)'`` for TE) for a polygon of many facets.
+Physical Theory of Diffraction*, 2007); a circular cylinder's eigenfunction
+series (Balanis, *Advanced Engineering Electromagnetics*, 2nd ed., 2012, ch. 11,
+scattering by a circular cylinder:
+``sigma_2D = (4/k) |sum_n (-1)^n J_n(ka) / H_n^(2)(ka)|^2`` for TM, ``J_n'`` and
+``H_n^(2)'`` for TE) for a polygon of many facets.
 """
 
 from __future__ import annotations
