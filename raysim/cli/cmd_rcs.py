@@ -66,6 +66,10 @@ def register(subparsers) -> None:
     p.add_argument("--diffraction", action="store_true",
                    help="add the edge diffraction (PTD fringe wave) of the mesh's sharp and "
                    "boundary edges; conductors only; its cost is printed on stderr")
+    p.add_argument("--multiple-diffraction", action="store_true",
+                   help="with --diffraction, also the multiple diffraction (double and higher "
+                   "orders) between the facing parallel edges of flat faces (a plate's opposite "
+                   "sides, HH mostly); far field (no --range-m), mesh targets only (docs/rcs.md)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--plot", metavar="FILE", default=None, help="write a PNG pattern plot")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -158,6 +162,10 @@ def run(args) -> int:
         raise ValueError(f"--freq-hz: got {args.freq_hz!r}, expected a positive frequency")
     if args.range_m is not None and not (math.isfinite(args.range_m) and args.range_m > 0):
         raise ValueError(f"--range-m: got {args.range_m!r}, expected a positive range")
+    if args.multiple_diffraction and not (args.diffraction and args.range_m is None
+                                        and not str(args.mesh).startswith("car:")):
+        raise ValueError("--multiple-diffraction adds to --diffraction in the far field of a "
+                         "mesh target: give --diffraction, leave out --range-m, not a car:")
     if str(args.mesh).startswith("car:"):
         result = _car(args, az, el)
         return _report(args, result, "per part")
@@ -170,11 +178,14 @@ def run(args) -> int:
                             range_m=args.range_m, polarisation=args.pol,
                             max_bounces=args.max_bounces,
                             rays_per_wavelength=args.rays_per_wavelength,
-                            progress=not args.no_progress, diffraction=args.diffraction)
+                            progress=not args.no_progress, diffraction=args.diffraction,
+                            multiple_diffraction=args.multiple_diffraction)
     if args.diffraction:
         info = result.info
-        print(f"note: diffraction: {info['edges']} edges in {info['edge_segments']} segments, "
-              f"{info['edge_seconds']:.3g} s of {info['seconds']:.3g} s (wall clock)",
+        pairs = (f" and {info['pair_segments']} edge-pair segments"
+                 if args.multiple_diffraction else "")
+        print(f"note: diffraction: {info['edges']} edges in {info['edge_segments']} segments"
+              f"{pairs}, {info['edge_seconds']:.3g} s of {info['seconds']:.3g} s (wall clock)",
               file=sys.stderr)
     return _report(args, result, material.name)
 

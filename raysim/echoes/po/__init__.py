@@ -10,7 +10,9 @@ closed forms), :mod:`~raysim.echoes.po.paths` (geometry targets as frozen
 scattering-centre paths for the tracer), :mod:`~raysim.echoes.po.fidelity` (the
 cheapest echo model per object: point, reduced centres or mesh),
 :mod:`~raysim.echoes.po.car` (a car mesh), :mod:`~raysim.echoes.po.sedan` (the
-detailed car: docs/cars.md). See ``docs/rcs.md`` and ``docs/scattering.md``.
+detailed car: docs/cars.md), :mod:`~raysim.echoes.po.mom2d` (the 2-D method of
+moments, a full-wave reference) and :mod:`~raysim.echoes.po.strip_reference` (the
+engine against it on a long plate). See ``docs/rcs.md`` and ``docs/scattering.md``.
 """
 
 from raysim.echoes.po.mesh import PoMaterial, TriangleMesh, po_material

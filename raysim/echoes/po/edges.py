@@ -8,7 +8,9 @@ the monostatic case it is radiated by equivalent edge currents: per unit length
 of edge the fringe coefficient is Keller's diffraction coefficient of the wedge
 minus the edge-diffraction coefficient of the PO current on its lit faces, and
 the coefficients are integrated exactly along each straight edge segment (a
-``sinc`` factor, as in Gordon's facet integral).
+``sinc`` factor, as in Gordon's facet integral). Facing parallel half-plane
+edges (a plate's opposite sides) may add their multiple diffraction, the wave
+that grazes across the face from one to the other (:func:`pair_amplitude`).
 
 Conventions (those of :mod:`~raysim.echoes.po.integral`): time ``exp(+j omega t)``,
 the radar in the unit direction ``u``, co-polar scattering amplitude ``F`` [m],
@@ -61,7 +63,8 @@ import numpy as np
 from raysim.echoes.po.mesh import TriangleMesh
 
 __all__ = ["MeshEdges", "sharp_edges", "wedge_coefficients", "fringe_coefficients",
-           "edge_amplitude", "edge_terms_near", "SHARP_EDGE_DEG", "MIN_SIN_BETA"]
+           "edge_amplitude", "edge_terms_near", "SHARP_EDGE_DEG", "MIN_SIN_BETA",
+           "EdgePairs", "facing_edge_pairs", "pair_amplitude"]
 
 #: Default: an edge is sharp when the normals of its two facets differ by more than this [deg]
 #: (a faceted sphere's or a car body's smooth curvature stays below it).
@@ -372,3 +375,211 @@ def edge_terms_near(edges: MeshEdges, u: np.ndarray, e_pol: np.ndarray, k: float
 def _take(edges: MeshEdges, mask: np.ndarray) -> MeshEdges:
     return MeshEdges(edges.start[mask], edges.end[mask], edges.face_dir[mask],
                      edges.normal[mask], edges.n[mask])
+
+
+# ---- multiple diffraction between the facing edges of a flat face ----------------------
+
+
+@dataclass(frozen=True)
+class EdgePairs:
+    """Facing, parallel half-plane edges of one flat face (a plate's opposite sides).
+
+    Each pair is described on its midline, the segment halfway between the two
+    edges over the length where they face each other.
+
+    Attributes
+    ----------
+    start, end : ndarray, shape ``[pair, 3]``
+        Midline end points [m].
+    face_dir : ndarray, shape ``[pair, 3]``
+        Unit vector from the first edge across the face to the second.
+    normal : ndarray, shape ``[pair, 3]``
+        Unit normal of the face (the side the angles are measured towards).
+    width : ndarray, shape ``[pair]``
+        Distance between the two edges [m].
+    """
+
+    start: np.ndarray
+    end: np.ndarray
+    face_dir: np.ndarray
+    normal: np.ndarray
+    width: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.width)
+
+    def split(self, max_length: float) -> EdgePairs:
+        """The same pairs cut along their midlines into pieces no longer than ``max_length`` [m]."""
+        if not max_length > 0:
+            raise ValueError(f"max_length must be > 0 m, got {max_length!r}")
+        mid = MeshEdges(self.start, self.end, self.face_dir, self.normal, self.width)
+        cut = mid.split(max_length)
+        return EdgePairs(cut.start, cut.end, cut.face_dir, cut.normal, cut.n)
+
+
+#: Most half-plane edges compared pairwise when looking for facing pairs (the test is
+#: ``[edge, edge]`` arrays, 200 bytes per pair).
+MAX_PAIR_EDGES = 4000
+#: Parallel, coplanar and opposite within this (1 - cosine; and share of the edge length).
+PAIR_TOLERANCE = 1e-9
+
+
+def facing_edge_pairs(edges: MeshEdges) -> EdgePairs:
+    """Pairs of half-plane edges that face each other across one flat face.
+
+    Two boundary edges (``n = 2``) pair when they are parallel, lie in one plane
+    with normals along its normal, their faces point at each other
+    (``face_dir`` opposite, each towards the other edge) and their projections
+    on the edge direction overlap. Each pair is listed once. The face between
+    them is assumed continuous (a plate's opposite sides), not checked.
+
+    Raises
+    ------
+    ValueError
+        More than ``MAX_PAIR_EDGES`` half-plane edges.
+    """
+    half = np.flatnonzero(edges.n == 2.0)
+    empty = EdgePairs(*(np.zeros((0, 3)),) * 4, np.zeros(0))
+    if len(half) < 2:
+        return empty
+    if len(half) > MAX_PAIR_EDGES:
+        raise ValueError(f"{len(half)} boundary edges to pair, expected at most {MAX_PAIR_EDGES}: "
+                         f"leave multiple diffraction off for this mesh")
+    a, b = edges.start[half], edges.end[half]
+    f, nrm = edges.face_dir[half], edges.normal[half]
+    length = np.linalg.norm(b - a, axis=1)
+    t = (b - a) / length[:, None]
+    rel = a[None] - a[:, None]                                        # [i, j, 3]: a_j - a_i
+    w = np.einsum("ijk,ik->ij", rel, f)
+    scale = max(float(length.max()), 1e-12)
+    ok = ((np.abs(np.abs(t @ t.T) - 1) < PAIR_TOLERANCE)
+          & (np.abs(np.abs(nrm @ nrm.T) - 1) < PAIR_TOLERANCE)
+          & (np.abs(f @ f.T + 1) < PAIR_TOLERANCE)
+          & (np.abs(np.einsum("ijk,ik->ij", rel, nrm)) < PAIR_TOLERANCE * scale)
+          & (w > PAIR_TOLERANCE * scale))
+    ok &= np.triu(np.ones_like(ok), 1)
+    i, j = np.nonzero(ok)
+    if len(i) == 0:
+        return empty
+    # overlap of edge j's projection with edge i, along t_i from a_i
+    s1 = np.einsum("pk,pk->p", a[j] - a[i], t[i])
+    s2 = np.einsum("pk,pk->p", b[j] - a[i], t[i])
+    lo = np.maximum(0.0, np.minimum(s1, s2))
+    hi = np.minimum(length[i], np.maximum(s1, s2))
+    keep = hi - lo > PAIR_TOLERANCE * scale
+    i, j, lo, hi = i[keep], j[keep], lo[keep], hi[keep]
+    if len(i) == 0:
+        return empty
+    width = w[i, j]
+    shift = a[i] + (width / 2)[:, None] * f[i]
+    return EdgePairs(shift + lo[:, None] * t[i], shift + hi[:, None] * t[i], f[i], nrm[i], width)
+
+
+def _fresnel_transition(x: np.ndarray) -> np.ndarray:
+    """Kouyoumjian-Pathak transition function of ``X >= 0`` (time ``exp(+j omega t)``).
+
+    ``F(X) = 2 j sqrt(X) exp(j X) int_sqrt(X)^oo exp(-j tau^2) d tau``, ``-> 1`` as ``X -> oo``.
+    """
+    from scipy.special import fresnel
+
+    v = np.sqrt(x)
+    s, c = fresnel(v * math.sqrt(2 / math.pi))
+    tail = math.sqrt(math.pi / 2) * ((0.5 - c) - 1j * (0.5 - s))
+    return 2j * v * np.exp(1j * x) * tail
+
+
+def pair_amplitude(pairs: EdgePairs, u: np.ndarray, e_pol: np.ndarray, k: float,
+                   scene=None, *, orders: str = "all") -> complex:
+    """Far-field co-polar amplitude ``F`` [m] of the multiple diffraction across edge pairs.
+
+    The field one edge diffracts along the face, grazing, is diffracted again by
+    the other edge, towards the radar (double diffraction) or back across the
+    face, and so on. In the 2-D problem of the plane normal to the edges
+    (wavenumber ``k_t = k sin beta``, the radar's projected direction), with
+    Keller's half-plane coefficient, the factor 1/2 of grazing incidence, the
+    uniform (UTD) transition function ``F`` of the shadow boundary of the wave
+    that grazes the face (Kouyoumjian & Pathak, Proc. IEEE 62(11), 1974;
+    Balanis, *Advanced Engineering Electromagnetics*, 2nd ed., ch. 13) and
+    both sides of the sheet: an edge X lit at the angle ``a_X`` (from its face,
+    towards the face normal) sends ``s_X = -2 c F(2 k_t w cos^2(a_X/2)) / cos(a_X/2)``
+    across, ``c = exp(-j pi/4) / (2 sqrt(2 pi k_t))``; the crossing is
+    ``G = exp(-j k_t w) / sqrt(w)``; an edge returns a grazing wave with
+    ``R = -2 c G`` and radiates one with ``s_X``. Summing the paths (the
+    ``orders="all"`` geometric series in closed form),
+
+    ``S = G / (1 - R^2) [2 s_A s_B + R (s_A^2 e_A + s_B^2 e_B)]``,
+
+    ``e_X = exp(2 j k u.(r_X - r_mid))`` (``orders="double"``: ``S = 2 G s_A s_B``),
+    and per unit length of the pair's midline ``C = -exp(j pi/4) sqrt(2 pi k_t) S``,
+    ``F = 1/(2 pi) sum w_h C int exp(2 j k u.r) dl``, ``w_h`` as for single
+    diffraction. Only the hard part (magnetic field along the edges): a grazing
+    soft wave is zero to this order (slope diffraction is left out). Exactly
+    at grazing (the radar in the face's plane) it fails: see docs/rcs.md.
+
+    Parameters
+    ----------
+    pairs : EdgePairs
+        From :func:`facing_edge_pairs`, split to a wavelength at most.
+    u, e_pol : ndarray, shape ``[3]``
+        Unit direction to the radar and polarisation.
+    k : float
+        Wavenumber [rad/m].
+    scene : RayScene, optional
+        Both edge points must see the radar; ``None``: all visible.
+    orders : {"all", "double"}
+        Every number of crossings, or the double diffraction alone.
+
+    Returns
+    -------
+    complex
+        ``F`` [m], phase referred to the origin.
+    """
+    if orders not in ("all", "double"):
+        raise ValueError(f"orders must be 'all' or 'double', got {orders!r}")
+    if len(pairs) == 0:
+        return 0j
+    a = pairs.end - pairs.start
+    length = np.linalg.norm(a, axis=1)
+    t = a / length[:, None]
+    ut = t @ u
+    sin2 = 1.0 - ut**2
+    ok = sin2 > MIN_SIN_BETA**2
+    safe = np.where(ok, sin2, 1.0)
+    w_h = (np.cross(u, t) @ e_pol) ** 2 / safe
+    k_t = k * np.sqrt(safe)
+    un, uf = pairs.normal @ u, pairs.face_dir @ u
+    ang_a = np.mod(np.arctan2(un, uf), 2 * np.pi)          # at the first edge, face towards +f
+    ang_b = np.mod(np.arctan2(un, -uf), 2 * np.pi)         # at the second, face towards -f
+    kw = k_t * pairs.width
+    c = np.exp(-1j * np.pi / 4) / (2 * np.sqrt(2 * np.pi * k_t))
+    send = []
+    for ang in (ang_a, ang_b):
+        half = np.cos(ang / 2)
+        # F(X)/cos(a/2) -> sqrt(2 pi k_t w) exp(j pi/4) as cos(a/2) -> 0
+        tiny = np.abs(half) < 1e-12
+        lim = np.sqrt(2 * np.pi * kw) * np.exp(1j * np.pi / 4)
+        ratio = _fresnel_transition(2 * kw * half**2) / np.where(tiny, 1.0, half)
+        send.append(-2 * c * np.where(tiny, lim, ratio))
+    s_a, s_b = send
+    g = np.exp(-1j * kw) / np.sqrt(pairs.width)
+    if orders == "double":
+        total = 2 * g * s_a * s_b
+    else:
+        r = -2 * c * g
+        back = k * uf * pairs.width                      # 2 k u.(r_B - r_mid)
+        total = g / (1 - r**2) * (2 * s_a * s_b + r * (s_a**2 * np.exp(-1j * back)
+                                                     + s_b**2 * np.exp(1j * back)))
+    c2 = -np.exp(1j * np.pi / 4) * np.sqrt(2 * np.pi * k_t) * total
+    mid = pairs.start + a / 2
+    live = ok & (w_h > 0)
+    if scene is not None and live.any():
+        half = (pairs.width / 2)[:, None] * pairs.face_dir
+        for side, fdir in ((-half, pairs.face_dir), (half, -pairs.face_dir)):
+            pts = (mid + side)[live]
+            edge = MeshEdges(pts, pts + t[live], fdir[live], pairs.normal[live],
+                             np.full(len(pts), 2.0))
+            live[live] = _visible(scene, edge, pts, np.broadcast_to(u, pts.shape),
+                                  np.full(len(pts), np.inf))
+    w = 2 * k * u
+    line = length * np.exp(1j * mid @ w) * np.sinc(a @ w / (2 * np.pi))
+    return complex(np.sum(np.where(live, w_h * c2 * line, 0.0)) / (2 * np.pi))

@@ -30,7 +30,13 @@ import numpy as np
 
 # u(az, el) = (cos el sin az, sin el, cos el cos az): one definition of the direction
 from compensation.geometry import direction as radar_direction
-from raysim.echoes.po.edges import edge_amplitude, edge_terms_near, sharp_edges
+from raysim.echoes.po.edges import (
+    edge_amplitude,
+    edge_terms_near,
+    facing_edge_pairs,
+    pair_amplitude,
+    sharp_edges,
+)
 from raysim.echoes.po.integral import po_vector, polygon_phase_integral
 from raysim.echoes.po.mesh import PoMaterial, TriangleMesh
 from raysim.echoes.po.rays import RayScene
@@ -289,7 +295,7 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
                    polarisation: str = "VV", max_bounces: int = MAX_BOUNCES,
                    rays_per_wavelength: float = RAYS_PER_WAVELENGTH,
                    variant: str | None = None, progress: bool = False,
-                   diffraction: bool = False) -> RcsResult:
+                   diffraction: bool = False, multiple_diffraction: bool = False) -> RcsResult:
     """Monostatic PO + SBR RCS of ``mesh`` for every (azimuth, elevation).
 
     Parameters
@@ -318,20 +324,28 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
         Add the PTD fringe wave of the mesh's sharp edges
         (:mod:`~raysim.echoes.po.edges`; conductors only). ``False`` (default):
         PO + SBR alone, unchanged.
+    multiple_diffraction : bool
+        With ``diffraction``, add the multiple diffraction (double and higher
+        orders, summed) between the facing parallel edges of flat faces (a
+        plate's opposite sides; hard polarisation;
+        :func:`~raysim.echoes.po.edges.pair_amplitude`). Far field only.
+        ``False`` (default): first order only, unchanged.
 
     Returns
     -------
     RcsResult
         ``rcs_m2`` shaped ``[azimuth, elevation]``; with ``diffraction``, ``info``
-        reports ``edges``, ``edge_segments`` and the wall-clock seconds spent on
-        them (``edge_seconds``) and in all (``seconds``).
+        reports ``edges``, ``edge_segments`` (and ``edge_pairs``,
+        ``pair_segments`` with ``multiple_diffraction``) and the wall-clock
+        seconds spent on them (``edge_seconds``) and in all (``seconds``).
 
     Raises
     ------
     ValueError
         Non-positive frequency, range or density, unknown polarisation,
         ``max_bounces`` outside 1..10, a job too large (:func:`rcs_job_size`),
-        ``diffraction`` not a bool or asked of a material other than a conductor.
+        ``diffraction`` not a bool or asked of a material other than a conductor,
+        ``multiple_diffraction`` without ``diffraction`` or with a finite range.
     """
     started = time.perf_counter()
     if not (math.isfinite(frequency) and frequency > 0):
@@ -347,6 +361,12 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
         raise ValueError(f"rays_per_wavelength must be > 0, got {rays_per_wavelength!r}")
     if not isinstance(diffraction, (bool, np.bool_)):
         raise ValueError(f"diffraction must be True or False, got {diffraction!r}")
+    if not isinstance(multiple_diffraction, (bool, np.bool_)):
+        raise ValueError(f"multiple_diffraction must be True or False, "
+                         f"got {multiple_diffraction!r}")
+    if multiple_diffraction and not (diffraction and range_m is None):
+        raise ValueError("multiple_diffraction adds to first-order diffraction in the far field: "
+                         "give diffraction=True and range_m=None, or leave it off")
     if diffraction and not material.is_pec:
         raise ValueError(f"diffraction: the edge fringe wave is that of a perfect conductor; "
                          f"material {material.name!r} is not one (use 'metal' or 'pec', or "
@@ -362,11 +382,14 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
             raise ValueError(f"range_m={range_m!r} puts the radar inside the target "
                              f"(radius {mesh.radius:.3g} m)")
         near_edge = FRESNEL_FRACTION * math.sqrt(wavelength * range_m)
-    edges = segments = None
+    edges = segments = pairs = edge_pairs = None
     if diffraction:
         edges = sharp_edges(mesh)
         seg_len = EDGE_SEGMENT_WAVELENGTHS * wavelength
         segments = edges.split(seg_len if near_edge is None else min(seg_len, near_edge))
+        if multiple_diffraction:
+            edge_pairs = facing_edge_pairs(edges)
+            pairs = edge_pairs.split(seg_len)
     rcs_job_size(mesh, len(az) * len(el), spacing, int(max_bounces), near_edge,
                  0 if segments is None else len(segments))
     scene = RayScene(mesh, variant)
@@ -392,6 +415,8 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
                 t0 = time.perf_counter()
                 if range_m is None:
                     f += edge_amplitude(segments, u, e_pol, k, scene)
+                    if pairs is not None:
+                        f += pair_amplitude(pairs, u, e_pol, k, scene)
                 else:
                     f += complex(np.sum(edge_terms_near(segments, u, e_pol, k, range_m,
                                                         scene)[0]))
@@ -406,4 +431,7 @@ def monostatic_rcs(mesh: TriangleMesh, material: PoMaterial, azimuth_deg, elevat
     if segments is not None:
         info.update(edges=len(edges), edge_segments=len(segments),
                     edge_seconds=edge_seconds, seconds=time.perf_counter() - started)
+    if pairs is not None:
+        info.update(multiple_diffraction=True, edge_pairs=len(edge_pairs),
+                    pair_segments=len(pairs))
     return RcsResult(frequency, range_m, az, el, out, pol, info)
