@@ -165,3 +165,43 @@ def test_mounted_point_from_toml_scenario():
     b = evaluate(direct, ("none", "exact"), coherent_map=False)
     assert json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
     assert a["exact"]["angle_error_worst_deg"] < EXACT_ANGLE_TOL_DEG
+
+
+# --------------------------------------------------------------- the maps and the command
+def _recording(seen: list):
+    """Stand-in for ``stability.evaluate`` that records each point's mounting."""
+    from raysim.studies.stability import STABILITY_METRICS
+
+    def evaluate_stub(point, chains=MAP_CHAINS, **_):
+        seen.append(point.mounting_deg)
+        out = {c: {m: 0.0 for m in STABILITY_METRICS} for c in chains}
+        out["warnings"], out["strapdown"] = [], "stub"
+        return out
+
+    return evaluate_stub
+
+
+def test_maps_and_command_take_the_mounting(tmp_path, monkeypatch):
+    """``--mounting-deg`` reaches every point of every map; a map or point record of one
+    mounting is not reused for another."""
+    from raysim.cli import main
+    from raysim.studies.stability import read_netcdf
+    from raysim.studies.stability import runner as stability_runner
+
+    seen: list = []
+    monkeypatch.setattr(stability_runner, "evaluate", _recording(seen))
+    args = ["stability", "--out", str(tmp_path), "--quick", "--no-progress", "--executor",
+            "serial", "--maps", "clock"]
+    assert main(args + ["--mounting-deg", "forward"]) == 0
+    n = len(seen)
+    assert n > 0 and set(seen) == {(90.0, 0.0, 90.0)}
+    assert json.loads((tmp_path / "summary.json").read_text())["clock"]["mounting_deg"] == \
+        [90.0, 0.0, 90.0]
+    assert json.loads(read_netcdf(tmp_path / "clock.nc").attrs["mounting_deg"]) == \
+        [90.0, 0.0, 90.0]
+    assert main(args + ["--mounting-deg", "90,0,90"]) == 0        # the same map: reused
+    assert len(seen) == n
+    assert main(args) == 0                                          # down: computed again
+    assert len(seen) == 2 * n and set(seen[n:]) == {(0.0, 0.0, 0.0)}
+    assert json.loads((tmp_path / "summary.json").read_text())["clock"]["mounting_deg"] == \
+        [0.0, 0.0, 0.0]
