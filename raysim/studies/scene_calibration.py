@@ -239,14 +239,18 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
                             model.summary() if model is not None else {}, found)
 
 
-if __name__ == "__main__":     # python -m raysim.studies.scene_calibration [SEEDS]
+if __name__ == "__main__":     # python -m raysim.studies.scene_calibration [SEEDS [MOUNTING]]
     import sys
 
+    from raysim.studies.scene_report import QUICK
+
+    quick = QUICK if len(sys.argv) < 3 else QUICK.with_values(
+        scenario=QUICK.scenario.with_values({"radar.mounting_deg": sys.argv[2]}))
     print("| IMU seed | offset error [ms] | scatterers | ridge leakage estimated / true per "
           "frame [dB] | worst gap [dB] | CPU [s] |\n|---|---|---|---|---|---|")
     for s in range(int(sys.argv[1]) if len(sys.argv) > 1 else 3):
         cpu = time.process_time()
-        r = scene_calibration(imu_seed=s)
+        r = scene_calibration(settings=quick, imu_seed=s)
         cpu = time.process_time() - cpu
         pairs = ", ".join(f"{a:.1f} / {b:.1f}" for a, b in zip(
             r.leakage_estimated_db, r.leakage_true_db, strict=True))
