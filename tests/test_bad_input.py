@@ -404,11 +404,8 @@ CASES = [
         lambda _: __import__("raysim.studies.stability", fromlist=["x"]).StabilityPoint
         .from_scenario(validate(dict(scene={"kind": "bundled", "name": "parking_lot"}))),
         ValueError, ("scenario.scene", "'bundled'", "one target")),
-    Bad("stability-point-from-mounted-scenario",
-        lambda _: __import__("raysim.studies.stability", fromlist=["x"]).StabilityPoint
-        .from_scenario(validate(dict(radar={"mounting_deg": "forward"},
-                                     scene={"targets": [{"range_m": 5.0}]}))),
-        ValueError, ("radar.mounting_deg", "'forward'", "'down'")),
+    Bad("stability-unknown-mounting", lambda _: _stability_point(mounting_deg="sideways"),
+        ValueError, ("mounting_deg", "'sideways'", "forward")),
 ]
 
 

@@ -12,6 +12,8 @@ examples:
       the full maps (340 points)
   raysim stability --out out/stability --maps clock lever_arm --executor serial
       two maps, points in a plain loop instead of a Dask cluster
+  raysim stability --out out/stability_forward --quick --mounting-deg forward
+      the same body motions seen by a forward-looking radar
 
 maps: rotation_azimuth rotation_elevation frequency_chirps imu_grade imu_rate clock
       lever_arm hover_jitter
@@ -44,21 +46,28 @@ def register(subparsers) -> None:
     p.add_argument("--executor", choices=("auto", "dask", "serial"), default="auto",
                    help="run the points on an in-process Dask cluster (auto: when installed) "
                    "or in a plain loop")
+    p.add_argument("--mounting-deg", default=None, metavar="YAW,PITCH,ROLL|NAME",
+                   help="radar mounting R_BA: Z-Y-X Euler angles [deg] or down, forward, "
+                   "oblique; target angles in the mounted radar's nominal frame "
+                   "(default: down)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``raysim stability``; prints the summary table; returns the exit code."""
     from raysim.cli.options import check_output, known_name
+    from raysim.platform.mounting import mounting_deg
     from raysim.studies.stability import MAPS, summary_table, write_stability
 
     for name in args.maps or ():
         known_name(name, MAPS, "--maps", "stability map")
+    mounting_deg(args.mounting_deg)          # checked before anything is written
     maps = args.maps or list(MAPS)
     check_output(args.out, "dir", "--out", names=["summary.json"] + [
         f"{m}.{ext}" for m in maps for ext in ("json", "nc", "png")])
     summary = write_stability(args.out, quick=args.quick, maps=args.maps,
-                              progress=not args.no_progress, executor=args.executor)
+                              progress=not args.no_progress, executor=args.executor,
+                              mounting_deg=args.mounting_deg)
     print(summary_table(summary))
     print(f"wrote {len(summary)} maps to {args.out}")
     return 0

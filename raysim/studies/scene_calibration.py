@@ -24,6 +24,15 @@ as :func:`raysim.echoes.rt.render.render_scene` and the scene report do. The
 report's car (``settings.mover_speed``) is refused: the self-calibration
 measures a stationary scene.
 
+The radar is mounted as the settings' scenario says (``radar.mounting_deg``,
+:mod:`raysim.platform.mounting`), as in the scene report: the trace and the
+synthesis take the radar frame A's pose
+(:func:`raysim.platform.mounting.mount_trajectory`), the IMU stays on the body,
+the self-calibration finds its scatterers in the nominal radar frame N
+(``mounting=R_BA``) and both chains form their beams there
+(:func:`raysim.platform.mounting.mount_motion`). The default ``down`` mounting
+takes none of these turns.
+
 The metric is the scene report's ridge leakage (RD power outside Doppler bins
 -1..+1 over the total, :func:`raysim.studies.scene_report.process.chain_result`).
 """
@@ -62,6 +71,10 @@ class SceneCalibration:
         The clutter field's report
         (:meth:`raysim.echoes.scene_clutter.SceneClutter.summary`: scatterer
         count, build time); empty with Sionna's clutter.
+    scatterer_positions_m : ndarray, shape ``[scatterer, 3]``
+        Where the scatterers used were found, in W [m]: the range of their gate
+        from the nominal radar phase centre (the lever arm; the body hovers at
+        the origin) along their direction, found in N and turned by ``R_BA``.
     """
 
     leakage_estimated_db: np.ndarray
@@ -72,6 +85,7 @@ class SceneCalibration:
     report: dict
     seconds: dict
     clutter: dict = field(default_factory=dict)
+    scatterer_positions_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def worst_gap_db(self) -> float:
@@ -90,9 +104,11 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     scene : str
         Bundled scene name (:data:`raysim.echoes.rt.scenes.SCENES`).
     settings : raysim.studies.scene_report.ReportSettings, optional
-        Radar, array, tracing, ground clutter (``clutter``, ``clutter_per_cell``)
-        and processing; default :data:`raysim.studies.scene_report.QUICK`
-        (the persistent clutter field). ``mover_speed`` must be None.
+        Radar (its mounting ``scenario.radar.mounting_deg`` included), array,
+        tracing, ground clutter (``clutter``, ``clutter_per_cell``) and
+        processing; default :data:`raysim.studies.scene_report.QUICK` (the
+        persistent clutter field, the radar looking down). ``mover_speed``
+        must be None.
     frames : int
         Frames (two or more, so that the gyro bias is estimated).
     frame_period : float
@@ -127,6 +143,12 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     from raysim.pipeline.self_calibration import calibrate_record
     from raysim.pipeline.sensors import imu_record
     from raysim.platform.motion import stationary
+    from raysim.platform.mounting import (
+        is_default_mounting,
+        mount_motion,
+        mount_trajectory,
+        mounting_matrix,
+    )
     from raysim.processing.maps import range_compress
     from raysim.studies.scene_report import QUICK, chain_result, hover_trajectory
     from raysim.synthesis.select import synthesize
@@ -149,6 +171,10 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     t0 = IMU_LEAD_S
     times = [config.chirp_times(f, t0) for f in range(frames)]     # [frame][chirp] [s]
     traj = hover_trajectory(settings.jitter_seed if jitter_seed is None else jitter_seed, t0)
+    mount = settings.scenario.radar.mounting_deg
+    turn = None if is_default_mounting(mount) else mounting_matrix(mount)        # R_BA
+    rest, lever_a = mount_trajectory(stationary(), lever, mount)    # the radar frame A's pose
+    traj_a = mount_trajectory(traj, lever, mount)[0]
     seconds = {}
     t = time.perf_counter()
     loaded = load_scene(scene, frequency=config.carrier_frequency)
@@ -157,9 +183,9 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     tracks = []
     if model is not None:
         tracer = model.tracer(tracer)
-    paths = tracer(loaded, config, stationary(), lever, time=float(times[0][0]))
+    paths = tracer(loaded, config, rest, lever_a, time=float(times[0][0]))
     if model is not None:
-        paths, tracks = model.paths(loaded, paths, config, array, stationary(), lever,
+        paths, tracks = model.paths(loaded, paths, config, array, rest, lever_a,
                                     time=float(times[0][0]))
     seconds["trace"] = time.perf_counter() - t
     t = time.perf_counter()
@@ -167,11 +193,11 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     synth = functools.partial(synthesize, eps=settings.nufft_eps)
     rcs = []
     for f in range(frames):
-        cube, _ = synthesize_paths(paths, config, array, traj, lever, frame=f, t0=t0,
+        cube, _ = synthesize_paths(paths, config, array, traj_a, lever_a, frame=f, t0=t0,
                                    path_chunk=settings.path_chunk, eps=settings.nufft_eps,
                                    decimate=settings.decimate,
                                    decimate_tolerance=settings.decimate_tolerance)
-        synthesize_tracks(tracks, config, array, traj, lever, out=cube, frame=f, t0=t0,
+        synthesize_tracks(tracks, config, array, traj_a, lever_a, out=cube, frame=f, t0=t0,
                           synthesizer=synth)
         rcs.append(range_compress(cube) * taper)
     seconds["synthesis"] = time.perf_counter() - t
@@ -182,11 +208,12 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     rec = imu_record(traj, imu, rate=settings.imu_rate, times=[t0, end], seed=imu_seed,
                      time_offset=time_offset, start=0.0).to_arrays()
     t = time.perf_counter()
+    mounted = {} if turn is None else {"mounting": turn}        # scatterers found in N
     res = calibrate_record(rcs, times, array.virtual_positions, *rec,
                            wavelength=config.center_wavelength, range_axis=r_axis,
                            time_offset=0.0, grid_shape=array.grid_shape, detect_gates=gates,
                            lever_arm=lever, initial_attitude=traj.attitude([t0]).as_matrix()[0],
-                           velocity="hover", imu_grade=imu).result
+                           velocity="hover", imu_grade=imu, **mounted).result
     seconds["calibration"] = time.perf_counter() - t
     ideal = imu_record(traj, "ideal", rate=settings.imu_rate, times=[t0, end], seed=imu_seed,
                        start=0.0).to_arrays()
@@ -195,25 +222,35 @@ def scene_calibration(scene: str = "flat_reflectors", settings=None, *, frames: 
     t = time.perf_counter()
     n = config.num_chirps
     est, true = [], []
-    for f in range(frames):
-        est.append(chain_result("exact", rcs[f], res.motions[f], settings, config,
-                                array).ridge_leakage_db)
-        true.append(chain_result("exact", rcs[f], truth.select(slice(f * n, (f + 1) * n)),
+    for f in range(frames):                   # beams in N
+        est.append(chain_result("exact", rcs[f], mount_motion(res.motions[f], mount),
+                                settings, config, array).ridge_leakage_db)
+        true.append(chain_result("exact", rcs[f],
+                                 mount_motion(truth.select(slice(f * n, (f + 1) * n)), mount),
                                  settings, config, array).ridge_leakage_db)
     seconds["chains"] = time.perf_counter() - t
+    found = np.zeros((0, 3))
+    if res.scatterers:
+        u = np.stack([sc.direction for sc in res.scatterers])                # [scatterer, 3]
+        found = lever + r_axis[[sc.gate for sc in res.scatterers]][:, None] * (
+            u if turn is None else u @ turn.T)
     return SceneCalibration(np.array(est), np.array(true), float(res.time_offset),
                             float(time_offset), len(res.scatterers), res.report(), seconds,
-                            model.summary() if model is not None else {})
+                            model.summary() if model is not None else {}, found)
 
 
-if __name__ == "__main__":     # python -m raysim.studies.scene_calibration [SEEDS]
+if __name__ == "__main__":     # python -m raysim.studies.scene_calibration [SEEDS [MOUNTING]]
     import sys
 
+    from raysim.studies.scene_report import QUICK
+
+    quick = QUICK if len(sys.argv) < 3 else QUICK.with_values(
+        scenario=QUICK.scenario.with_values({"radar.mounting_deg": sys.argv[2]}))
     print("| IMU seed | offset error [ms] | scatterers | ridge leakage estimated / true per "
           "frame [dB] | worst gap [dB] | CPU [s] |\n|---|---|---|---|---|---|")
     for s in range(int(sys.argv[1]) if len(sys.argv) > 1 else 3):
         cpu = time.process_time()
-        r = scene_calibration(imu_seed=s)
+        r = scene_calibration(settings=quick, imu_seed=s)
         cpu = time.process_time() - cpu
         pairs = ", ".join(f"{a:.1f} / {b:.1f}" for a, b in zip(
             r.leakage_estimated_db, r.leakage_true_db, strict=True))

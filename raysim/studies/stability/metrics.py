@@ -61,6 +61,8 @@ STRAPDOWN = "raysim.pipeline.estimate.estimate_motion"
 def point_gate(point: StabilityPoint) -> tuple[np.ndarray, int, float]:
     """The target's range gate of a point (its companion scatterer included).
 
+    The radar is placed by :meth:`StabilityPoint.radar_pose` (its mounting).
+
     Returns
     -------
     gate : ndarray, shape ``[chirp, channel]``, complex128
@@ -70,9 +72,9 @@ def point_gate(point: StabilityPoint) -> tuple[np.ndarray, int, float]:
     range_m : float
         Range of that bin [m].
     """
-    return gated_source(point.config, point.array, point.trajectory, point.targets,
-                        range_m=point.target_range_m, lever_arm=point.lever_arm_m,
-                        t0=point.t0_s)
+    trajectory, lever = point.radar_pose()       # the radar frame A (mounting)
+    return gated_source(point.config, point.array, trajectory, point.targets,
+                        range_m=point.target_range_m, lever_arm=lever, t0=point.t0_s)
 
 
 def _reference(point: StabilityPoint) -> Reference:

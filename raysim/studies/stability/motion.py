@@ -2,7 +2,10 @@
 
 The chains treat IMU time stamps as radar time (``imu_time_offset_s`` and
 ``imu_clock_drift_ppm`` are errors they do not know about) and are given the
-believed lever arm ``lever_arm_m + lever_arm_error_m``.
+believed lever arm ``lever_arm_m + lever_arm_error_m``. The IMU sits on the
+body; a mounted radar's chains get the navigation solution in its nominal
+radar frame N (:func:`raysim.platform.mounting.mount_motion`), where its beams
+are formed.
 """
 
 from __future__ import annotations
@@ -57,13 +60,17 @@ def point_motion(point: StabilityPoint, chirp_times: np.ndarray | None = None):
     Returns
     -------
     compensation.PlatformMotion
-        Pose at every chirp; ``lever_arm`` is the believed one.
+        Pose at every chirp, in the nominal radar frame N of ``point.mounting_deg``
+        (W itself for the default ``down``); ``lever_arm`` is the believed one.
     """
+    from raysim.platform.mounting import mount_motion
+
     times = point.chirp_times() if chirp_times is None else np.asarray(chirp_times, dtype=float)
     t, gyro, accel = point_imu_record(point, times).to_arrays()
     options = {}
     if point.init == "hover":
         options = dict(initial_attitude=np.eye(3), initial_position=np.zeros(3))
-    return estimate_motion(t, gyro, accel, times, lever_arm=point.believed_lever_arm_m,
-                           trajectory=point.trajectory, time_offset=0.0,
-                           velocity="given" if point.init == "truth" else "hover", **options)
+    motion = estimate_motion(t, gyro, accel, times, lever_arm=point.believed_lever_arm_m,
+                             trajectory=point.trajectory, time_offset=0.0,
+                             velocity="given" if point.init == "truth" else "hover", **options)
+    return mount_motion(motion, point.mounting_deg)          # beams in N

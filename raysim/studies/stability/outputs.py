@@ -93,7 +93,8 @@ def summarise(ds) -> dict:
     Returns
     -------
     dict
-        ``map``, ``title``, ``note``, ``quick``, ``strapdown``, ``axes``
+        ``map``, ``title``, ``note``, ``quick``, ``strapdown``, ``mounting_deg``
+        (yaw, pitch, roll [deg] of the radar mounting), ``axes``
         (name -> units and values), ``units`` (metric -> unit),
         ``velocity_bin`` [m/s], ``half_beamwidth_deg``, ``chains`` (chain key ->
         metric -> seed-median array, ``fail_fraction``, ``failing``,
@@ -101,6 +102,7 @@ def summarise(ds) -> dict:
     """
     out = {"map": ds.attrs["map"], "title": ds.attrs["title"], "note": ds.attrs["note"],
            "quick": bool(ds.attrs["quick"]), "strapdown": ds.attrs.get("strapdown", ""),
+           "mounting_deg": json.loads(ds.attrs.get("mounting_deg", "[0.0, 0.0, 0.0]")),
            "axes": {}, "units": {m: metric_unit(m) for m in STABILITY_METRICS}, "chains": {}}
     for a in _map_axes(ds):
         out["axes"][a] = {"units": ds[a].attrs.get("units", ""), "values": ds[a].values.tolist()}
@@ -205,8 +207,11 @@ def plot_stability(ds, path: str | os.PathLike) -> Path:
             ax.set_title(f"{c}: {label}", fontsize=7)
         cax = fig.add_axes([0.92, 0.56 - 0.47 * row, 0.012, 0.34])
         fig.colorbar(mesh, cax=cax, label="log10 (fail above 0)")
-    fig.suptitle(f"{ds.attrs['title']}  (black: boundary of this criterion; white dotted: "
-                 f"either criterion fails; red dashed: worse than none)", fontsize=9)
+    mount = json.loads(ds.attrs.get("mounting_deg", "[0.0, 0.0, 0.0]"))
+    mounted = "" if not any(mount) else f", radar mounted {tuple(mount)} deg"
+    fig.suptitle(f"{ds.attrs['title']}{mounted}  (black: boundary of this criterion; "
+                 f"white dotted: either criterion fails; red dashed: worse than none)",
+                 fontsize=9)
     try:
         return atomic_savefig(fig, Path(path), dpi=100)
     finally:

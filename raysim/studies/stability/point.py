@@ -12,6 +12,14 @@ scenario file has, are ``lever_arm_error_m`` (error of the lever arm the
 chains believe), ``init`` (initial state of the strapdown) and ``t0_s``
 (frame start). :meth:`StabilityPoint.from_scenario` builds a point from a
 TOML scenario.
+
+A mounted radar (``mounting_deg``, TOML ``radar.mounting_deg``;
+:mod:`raysim.platform.mounting`) is placed as every echo source places it: the
+gate sees the radar frame A's own trajectory (:meth:`StabilityPoint.radar_pose`),
+the target sits at ``(az, el)`` of the nominal radar frame N, the IMU stays on
+the body and the chains form their beams in N with the motion expressed there
+(:func:`raysim.platform.mounting.mount_motion`). The default ``down`` mounting
+takes none of these turns (results as without the field).
 """
 
 from __future__ import annotations
@@ -47,8 +55,8 @@ class StabilityPoint:
         Target range from the nominal radar phase centre [m]
         (``scene.targets[0].range_m``).
     target_az_deg, target_el_deg : float
-        Target direction at the nominal attitude [deg], in (-90, 90)
-        (``scene.targets[0].az_deg`` / ``el_deg``).
+        Target direction at the nominal attitude [deg], in (-90, 90), in the
+        nominal radar frame N (``scene.targets[0].az_deg`` / ``el_deg``).
     lever_arm_m : array_like, shape ``[3]``
         True radar phase centre in B [m] (``lever_arm_m``).
     lever_arm_error_m : array_like, shape ``[3]``
@@ -79,6 +87,11 @@ class StabilityPoint:
         horizontal displacement changes (clutter inside a beam). None: one target.
     companion_db : float
         RCS of the companion relative to the target's [dB].
+    mounting_deg : str or (float, float, float)
+        Radar mounting ``R_BA`` (TOML ``radar.mounting_deg``): a name of
+        :data:`raysim.platform.mounting.MOUNTING_PRESETS` or Z-Y-X Euler
+        angles (yaw, pitch, roll) [deg]; stored as the three angles. Default
+        ``down`` (A parallel to B).
     """
 
     config: RadarConfig
@@ -98,8 +111,13 @@ class StabilityPoint:
     seed: int = 0
     companion_az_deg: float | None = None
     companion_db: float = -6.0
+    mounting_deg: tuple = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
+        from raysim.platform.mounting import mounting_deg
+
+        object.__setattr__(self, "mounting_deg", mounting_deg(self.mounting_deg,
+                                                              "mounting_deg"))
         if not isinstance(self.config, RadarConfig):
             raise ValueError(f"config must be a RadarConfig, got {type(self.config).__name__}")
         if not isinstance(self.array, VirtualArray) or self.array.grid_shape is None:
@@ -151,26 +169,53 @@ class StabilityPoint:
         return math.radians(self.target_el_deg)
 
     @property
+    def mounted(self) -> bool:
+        """Whether the radar is mounted other than ``down`` (A turned from B)."""
+        from raysim.platform.mounting import is_default_mounting
+
+        return not is_default_mounting(self.mounting_deg)
+
+    def _static(self, az: float, rcs_dbsm: float = 10.0) -> PointTarget:
+        """A static point at the target's range and elevation, azimuth ``az`` [rad] of N."""
+        if not self.mounted:
+            return PointTarget.at(self.target_range_m, az, self.target_el, rcs_dbsm=rcs_dbsm,
+                                  radar_origin=self.lever_arm_m)
+        from raysim.platform.mounting import nominal_target_position
+
+        return PointTarget(nominal_target_position(self.target_range_m, az, self.target_el,
+                                                   self.lever_arm_m, self.mounting_deg),
+                           rcs_dbsm=rcs_dbsm)
+
+    @property
     def target(self) -> PointTarget:
-        """The static target, placed from the nominal radar phase centre."""
-        return PointTarget.at(self.target_range_m, self.target_az, self.target_el,
-                              radar_origin=self.lever_arm_m)
+        """The static target, placed from the nominal radar phase centre along
+        ``R_BA u(az, el)`` (W)."""
+        return self._static(self.target_az)
 
     @property
     def targets(self) -> list[PointTarget]:
         """The target, then the companion (if any), both static, 10 dBsm and ``companion_db``."""
         out = [self.target]
         if self.companion_az_deg is not None:
-            out.append(PointTarget.at(self.target_range_m,
-                                      math.radians(self.target_az_deg + self.companion_az_deg),
-                                      self.target_el, rcs_dbsm=10.0 + self.companion_db,
-                                      radar_origin=self.lever_arm_m))
+            out.append(self._static(math.radians(self.target_az_deg + self.companion_az_deg),
+                                    10.0 + self.companion_db))
         return out
 
     @property
     def direction(self) -> np.ndarray:
-        """True target direction from the nominal radar phase centre, shape ``[3]``."""
+        """True target direction from the nominal radar phase centre in N, shape ``[3]``
+        (the frame the chains' beams are formed in)."""
         return direction(self.target_az, self.target_el)
+
+    def radar_pose(self) -> tuple:
+        """Trajectory and lever arm [m] of the radar frame A, as every echo source takes them.
+
+        :func:`raysim.platform.mounting.mount_trajectory` of ``trajectory`` and
+        ``lever_arm_m``; the default mounting returns them themselves.
+        """
+        from raysim.platform.mounting import mount_trajectory
+
+        return mount_trajectory(self.trajectory, self.lever_arm_m, self.mounting_deg)
 
     @property
     def believed_lever_arm_m(self) -> np.ndarray:
@@ -203,8 +248,9 @@ class StabilityPoint:
         StabilityPoint
             ``config`` = ``scenario.radar_config()``, ``array`` =
             ``scenario.virtual_array()``, ``trajectory`` =
-            ``scenario.trajectory()``, the target, lever arm and IMU fields of
-            the file, ``seed`` = ``scenario.imu_seed``.
+            ``scenario.trajectory()``, the target, lever arm, mounting
+            (``radar.mounting_deg``) and IMU fields of the file, ``seed`` =
+            ``scenario.imu_seed``.
         """
         from raysim.scenario import Scenario
 
@@ -216,12 +262,6 @@ class StabilityPoint:
             raise ValueError(f"scenario.scene: got kind {scenario.scene.kind!r} with "
                              f"{len(targets)} targets, expected kind 'points' with one target")
         tgt = targets[0]
-        from raysim.platform.mounting import is_default_mounting
-
-        if not is_default_mounting(scenario.radar.mounting_deg):
-            raise ValueError(f"radar.mounting_deg: got {scenario.radar.mounting_deg!r}, "
-                             f"expected 'down' (the stability study models the down-looking "
-                             f"radar)")
         if any(v != 0.0 for v in tgt.velocity_mps):
             raise ValueError(f"scene.targets.0.velocity_mps: got {tgt.velocity_mps}, expected a "
                              f"static target (0, 0, 0)")
@@ -233,4 +273,4 @@ class StabilityPoint:
                    imu_spec=imu.preset if imu.preset != "custom" else scenario.imu_spec(),
                    imu_rate_hz=imu.rate_hz, imu_time_offset_s=imu.time_offset_s,
                    imu_clock_drift_ppm=imu.clock_drift_ppm, init=init, t0_s=t0_s,
-                   seed=scenario.imu_seed)
+                   seed=scenario.imu_seed, mounting_deg=scenario.radar.mounting_deg)

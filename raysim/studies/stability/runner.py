@@ -21,6 +21,8 @@ import numpy as np
 
 from raysim.io.files import atomic_write_json
 from raysim.pipeline.tasks import dask_client, have_distributed, run_tasks
+from raysim.platform.mounting import MOUNTING_PRESETS
+from raysim.platform.mounting import mounting_deg as mounting_deg_of
 from raysim.studies.stability.criteria import criteria_for
 from raysim.studies.stability.grids import INT_AXES, MAPS, MapSpec
 from raysim.studies.stability.metrics import MAP_CHAINS, STABILITY_METRICS, evaluate
@@ -33,6 +35,8 @@ __all__ = ["EXECUTORS", "POINT_VERSION", "run_map", "write_stability"]
 POINT_VERSION = 3
 #: How the points run: ``auto`` (Dask when installed), ``dask`` or ``serial``.
 EXECUTORS = ("auto", "dask", "serial")
+#: The default mounting (yaw, pitch, roll) [deg]: the radar looks down.
+DOWN = MOUNTING_PRESETS["down"]
 
 
 def _check_executor(executor: str) -> None:
@@ -48,16 +52,22 @@ def _map_spec(spec: MapSpec | str) -> MapSpec:
     return spec
 
 
-def _point_key(spec: MapSpec, kw: dict, seed: int, chains: Sequence[str]) -> str:
-    blob = json.dumps({"map": spec.name, "values": kw, "seed": int(seed),
-                       "chains": list(chains), "version": POINT_VERSION},
-                      sort_keys=True, separators=(",", ":"))
+def _point_key(spec: MapSpec, kw: dict, seed: int, chains: Sequence[str],
+               mounting: tuple = DOWN) -> str:
+    fields = {"map": spec.name, "values": kw, "seed": int(seed), "chains": list(chains),
+              "version": POINT_VERSION}
+    if tuple(mounting) != DOWN:              # the down radar's keys stay as they were
+        fields["mounting_deg"] = list(mounting)
+    blob = json.dumps(fields, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
-def _evaluate_point(spec: MapSpec, kw: dict, seed: int, chains: Sequence[str]) -> dict:
+def _evaluate_point(spec: MapSpec, kw: dict, seed: int, chains: Sequence[str],
+                    mounting: tuple = DOWN) -> dict:
     """One map point: metrics and thresholds (a plain, JSON-ready dict)."""
     point = spec.build(seed=seed, **kw)
+    if tuple(mounting) != DOWN:
+        point = point.with_(mounting_deg=mounting)
     res = evaluate(point, chains)
     crit = criteria_for(point.config, point.array)
     return {"values": kw, "seed": int(seed),
@@ -74,7 +84,7 @@ def _load_record(path: Path) -> dict | None:
 
 def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] | None = None,
             progress: bool = True, points_dir: str | os.PathLike | None = None,
-            executor: str = "auto", client=None):
+            executor: str = "auto", client=None, mounting_deg=None):
     """Evaluate a stability map, point by point, resumably.
 
     Parameters
@@ -99,6 +109,10 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] |
         ``"auto"``: Dask when ``distributed`` is importable.
     client : distributed.Client, optional
         Run the points on this client (any scheduler whose workers import raysim).
+    mounting_deg : str or (float, float, float), optional
+        Radar mounting of every point (:attr:`StabilityPoint.mounting_deg`): the
+        map's body motion seen by a radar mounted so, its target angles in the
+        nominal radar frame N; default ``down``.
 
     Returns
     -------
@@ -110,10 +124,12 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] |
         run: NaN metrics), ``worse_than_none``
         (bool: ``|pseudo_velocity_mps|`` or ``angle_error_worst_deg`` above the
         baseline's), and the thresholds ``velocity_bin`` [m/s],
-        ``half_beamwidth_deg``, ``doppler_bin_hz`` per grid point.
+        ``half_beamwidth_deg``, ``doppler_bin_hz`` per grid point; attribute
+        ``mounting_deg`` (JSON list of yaw, pitch, roll [deg]).
     """
     spec = _map_spec(spec)
     _check_executor(executor)
+    mounting = mounting_deg_of(mounting_deg)
     if chains is None:
         chains = spec.chains or MAP_CHAINS
     chains = [s.key for s in parse_chains(chains)]
@@ -126,7 +142,7 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] |
         kw = {name: (int(v[i]) if name in INT_AXES else float(v[i]))
               for name, v, i in zip(names, values, g, strict=True)}
         for s in range(n_seed):
-            todo.append((g, s, kw, _point_key(spec, kw, s, chains)))
+            todo.append((g, s, kw, _point_key(spec, kw, s, chains, mounting)))
     pdir = None if points_dir is None else Path(points_dir)
     records: dict[str, dict] = {}
     if pdir is not None:
@@ -152,7 +168,7 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] |
 
     use_dask = client is not None or executor == "dask" or (
         executor == "auto" and len(missing) > 1 and have_distributed())
-    tasks = [(key, (spec, kw, s, tuple(chains))) for _, s, kw, key in missing]
+    tasks = [(key, (spec, kw, s, tuple(chains), mounting)) for _, s, kw, key in missing]
     try:
         with (dask_client(client) if missing and use_dask
               else contextlib.nullcontext(False)) as cl:
@@ -160,7 +176,9 @@ def run_map(spec: MapSpec | str, *, quick: bool = False, chains: Sequence[str] |
     finally:
         if bar is not None:
             bar.close()
-    return _dataset(spec, quick, chains, names, values, shape, todo, records)
+    ds = _dataset(spec, quick, chains, names, values, shape, todo, records)
+    ds.attrs["mounting_deg"] = json.dumps(list(mounting))
+    return ds
 
 
 def _dataset(spec, quick, chains, names, values, shape, todo, records):
@@ -212,7 +230,7 @@ def _dataset(spec, quick, chains, names, values, shape, todo, records):
 
 def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
                     maps: Sequence[str] | None = None, progress: bool = True,
-                    executor: str = "auto") -> dict:
+                    executor: str = "auto", mounting_deg=None) -> dict:
     """Produce every stability map: NetCDF, JSON and PNG per map plus ``summary.json``.
 
     Each file is written atomically; a map already finished in ``out_dir``
@@ -231,6 +249,9 @@ def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
         Progress bars on stderr.
     executor : {"auto", "dask", "serial"}
         See :func:`run_map`.
+    mounting_deg : str or (float, float, float), optional
+        Radar mounting of every map (see :func:`run_map`); a stored map of
+        another mounting is computed again.
 
     Returns
     -------
@@ -244,17 +265,21 @@ def write_stability(out_dir: str | os.PathLike, *, quick: bool = False,
         if n not in MAPS:
             raise ValueError(f"unknown stability map {n!r}; expected one of {sorted(MAPS)}")
     _check_executor(executor)
+    mounting = mounting_deg_of(mounting_deg)
     out.mkdir(parents=True, exist_ok=True)
     with contextlib.ExitStack() as stack:
         client = None
         if executor == "dask" or (executor == "auto" and have_distributed()):
             client = stack.enter_context(dask_client())
-        return _write_maps(out, names, quick, progress, client)
+        return _write_maps(out, names, quick, progress, client, mounting)
 
 
-def _same_axes(ds, spec: MapSpec, quick: bool) -> bool:
-    """Whether a stored map was computed on the axes (and seeds) the spec asks for now."""
+def _same_axes(ds, spec: MapSpec, quick: bool, mounting: tuple = DOWN) -> bool:
+    """Whether a stored map was computed on the axes (and seeds) and with the mounting
+    the spec and the run ask for now."""
     if int(ds.attrs.get("quick", -1)) != int(quick):
+        return False
+    if tuple(json.loads(ds.attrs.get("mounting_deg", "[0.0, 0.0, 0.0]"))) != tuple(mounting):
         return False
     if int(ds.attrs.get("point_version", -1)) != POINT_VERSION:
         return False                           # older record format or chains: recompute
@@ -266,7 +291,8 @@ def _same_axes(ds, spec: MapSpec, quick: bool) -> bool:
     return ds.sizes.get("seed", 0) == (spec.quick_seeds if quick else spec.seeds)
 
 
-def _write_maps(out: Path, names: list, quick: bool, progress: bool, client) -> dict:
+def _write_maps(out: Path, names: list, quick: bool, progress: bool, client,
+                mounting: tuple = DOWN) -> dict:
     summary = {}
     for n in names:
         nc = out / f"{n}.nc"
@@ -276,13 +302,14 @@ def _write_maps(out: Path, names: list, quick: bool, progress: bool, client) -> 
                 old = read_netcdf(nc)
             except ValueError:
                 old = None                     # unreadable: recompute and replace
-            if old is not None and _same_axes(old, MAPS[n], quick):
+            if old is not None and _same_axes(old, MAPS[n], quick, mounting):
                 ds = old
         if ds is None:
             t = time.perf_counter()
             ds = run_map(n, quick=quick, progress=progress, client=client,
                          executor="serial" if client is None else "dask",
-                         points_dir=out / "points" / f"{n}{'_quick' if quick else ''}")
+                         points_dir=out / "points" / f"{n}{'_quick' if quick else ''}",
+                         mounting_deg=mounting)
             ds.attrs["seconds"] = round(time.perf_counter() - t, 2)
             write_netcdf(ds, nc)
         summ = summarise(ds)
