@@ -358,6 +358,12 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            if is_default_mounting(mounting_deg)
                            else mounting_matrix(mounting_deg), **options)
     report = cal.report
+    from compensation.azimuth_shift import record_azimuth_warning
+
+    spread = record_azimuth_warning(cal.result, inp.element_positions, [
+        t[:, inp.tx_slot] for t in inp.slot_times], None if is_default_mounting(mounting_deg)
+        else mounting_matrix(mounting_deg))         # warned; a velocity spread as an angle
+    report["warnings"] = [*report.get("warnings", ()), *spread]
     if ground is not None:   # without an attitude its failures, with one a disagreement
         import warnings
 
