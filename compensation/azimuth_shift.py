@@ -31,17 +31,16 @@ import warnings
 import numpy as np
 
 from ._checks import finite_array
+from .calibration import doppler_measurements
 from .guards import CompensationWarning
 from .mounting import world_directions
-from .radar_inertial import ACCEL_BIAS, ATTITUDE, VELOCITY
-from .strapdown import STANDARD_GRAVITY, PlatformMotion
 
-__all__ = ["AZIMUTH_SPREAD_WARN_DEG", "azimuth_shift", "azimuth_spread", "azimuth_spread_warning",
-           "record_azimuth_warning", "velocity_covariance_at"]
+__all__ = ["AZIMUTH_SHIFT_WARN_DEG", "azimuth_shift", "calibration_azimuth_check",
+           "residual_azimuth_shift", "residual_azimuth_warning"]
 
-#: One-sigma azimuth spread [deg] above which :func:`azimuth_spread_warning` warns: half
-#: the 0.2 deg a compensated target's beam is held to, so that two sigmas reach it.
-AZIMUTH_SPREAD_WARN_DEG = 0.1
+#: Azimuth shift [deg] of a scatterer above which :func:`residual_azimuth_warning`
+#: warns: half the 0.2 deg a compensated target's beam is held to.
+AZIMUTH_SHIFT_WARN_DEG = 0.1
 
 
 def azimuth_shift(range_rate_error, cross_range_velocity, element_x, channel_time,
@@ -86,120 +85,101 @@ def azimuth_shift(range_rate_error, cross_range_velocity, element_x, channel_tim
     return e / np.cos(el)
 
 
-def velocity_covariance_at(covariance, attitude, elapsed: float) -> np.ndarray:
-    """Covariance ``[3, 3]`` [m^2/s^2] of the body velocity ``elapsed`` [s] after the
-    reference time, from that of a radar-inertial state ``[14, 14]``
-    (:data:`compensation.radar_inertial.STATE_NAMES`).
-
-    The velocity error grows with the attitude error on the hover's specific force
-    (``phi x f``, ``f = (0, 0, -g)`` in W) and the accelerometer bias (``-R_WB b``),
-    ``attitude`` ``R_WB`` [3, 3] of the frame; the gyro bias, of second order over a
-    record of frames, is left out.
-    """
-    p = finite_array("covariance", covariance, shape=(14, 14))
-    r = finite_array("attitude", attitude, shape=(3, 3))
-    f = np.array([0.0, 0.0, -STANDARD_GRAVITY])
-    j = np.zeros((3, 14))
-    j[:, VELOCITY] = np.eye(3)
-    j[:, ATTITUDE] = -np.array([[0.0, -f[2], f[1]], [f[2], 0.0, -f[0]],
-                                [-f[1], f[0], 0.0]]) * elapsed
-    j[:, ACCEL_BIAS] = -r * elapsed
-    return j @ p @ j.T
-
-
-def azimuth_spread(velocity_cov, motion: PlatformMotion, element_positions, channel_time,
-                   azimuth, elevation, mounting=None) -> tuple[np.ndarray, np.ndarray]:
-    """One-sigma azimuth shift [rad] that a velocity spread leaves towards directions.
+def residual_azimuth_shift(rcs, element_positions, motions, scatterers, options, *,
+                           wavelength: float, channel_times, mounting=None
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """The residual range rate the compensated beams leave each scatterer in each frame,
+    and the azimuth shift it gives there (:func:`azimuth_shift`).
 
     Parameters
     ----------
-    velocity_cov : array_like, shape ``[3, 3]``
-        Covariance of the radar velocity in W over the frame [m^2/s^2].
-    motion : PlatformMotion
-        The frame's motion (body, W): its mean radar velocity gives the cross-range one.
-    element_positions : array_like, shape ``[channel, 3]``
-        Virtual positions in the radar frame A [m].
-    channel_time : array_like, shape ``[chirp, channel]``
-        Transmit time of every channel in every chirp loop [s].
-    azimuth, elevation : array_like, shape ``[direction]``
-        Directions of the beams' frame (W, or N of a mounted radar) [rad].
-    mounting : array_like, shape ``[3, 3]``, optional
-        ``R_BA`` (:mod:`compensation.mounting`); default down-looking.
-
-    Returns
-    -------
-    (ndarray, ndarray)
-        The spread ``[direction]`` [rad] and the velocity spread along each
-        direction ``[direction]`` [m/s].
-    """
-    c = finite_array("velocity_cov", velocity_cov, shape=(3, 3))
-    az = finite_array("azimuth", azimuth, ndim=1)
-    el = finite_array("elevation", elevation, shape=az.shape)
-    u = world_directions(np.stack([np.cos(el) * np.sin(az), np.sin(el),
-                                   np.cos(el) * np.cos(az)], axis=-1), mounting)
-    across = world_directions(np.stack([np.cos(az), np.zeros_like(az), -np.sin(az)],
-                                       axis=-1), mounting)
-    sigma = np.sqrt(np.maximum(np.einsum("di,ij,dj->d", u, c, u), 0.0))
-    v = across @ motion.radar_velocity.mean(axis=0)
-    x = finite_array("element_positions", element_positions, ndim=2)[:, 0]
-    return np.abs(azimuth_shift(sigma, v, x, channel_time, el)), sigma
-
-
-def azimuth_spread_warning(spread, sigma, azimuth, elevation, frame: int) -> str | None:
-    """The warning of the largest :func:`azimuth_spread` over directions ``[direction]``
-    [rad] of a frame when it exceeds :data:`AZIMUTH_SPREAD_WARN_DEG`, or None."""
-    k = int(np.argmax(spread))
-    deg = float(np.rad2deg(spread[k]))
-    if deg <= AZIMUTH_SPREAD_WARN_DEG:
-        return None
-    return (f"azimuth: the estimated radar velocity is known to +-{1e3 * sigma[k]:.1f} mm/s "
-            f"(one sigma) towards azimuth {np.rad2deg(azimuth[k]):.1f} deg, elevation "
-            f"{np.rad2deg(elevation[k]):.1f} deg in frame {frame}; with the radar's motion "
-            f"across the beam during the frame that moves the azimuth of a target there by "
-            f"+-{deg:.2f} deg (over {AZIMUTH_SPREAD_WARN_DEG:g} deg): a Doppler the scene "
-            f"leaves unresolved reads as an angle")
-
-
-def record_azimuth_warning(result, element_positions, channel_times, mounting=None,
-                           warn: bool = True) -> tuple[str, ...]:
-    """The azimuth spread a self-calibrated record's velocity leaves at its scatterers.
-
-    Parameters
-    ----------
-    result : compensation.calibration.CalibrationResult
-        A self-calibration; without a radar-inertial estimate (no velocity
-        estimated) nothing is said.
+    rcs : sequence of ndarray, each shape ``[chirp, channel, range]``
+        Range-compressed frames.
     element_positions : array_like, shape ``[channel, 3]``
         Virtual positions in A [m].
+    motions : sequence of PlatformMotion
+        The motion (body, W) of each frame the beams are compensated with.
+    scatterers : sequence of compensation.calibration.Scatterer
+        Stationary scatterers, directions in W (N of a mounted radar).
+    options : dict
+        For :func:`compensation.rigid_body_projection` (``range_axis`` included).
+    wavelength : float
+        [m].
     channel_times : sequence of array_like, each shape ``[chirp, channel]``
         Transmit time of every channel in every chirp loop of each frame [s].
     mounting : array_like, shape ``[3, 3]``, optional
         ``R_BA``; default down-looking.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Range rate ``u . (v_used - v_true)`` [m/s] and azimuth shift [rad], both
+        ``[frame, scatterer]`` (one Doppler block per frame).
+    """
+    meas = doppler_measurements(rcs, element_positions, motions, scatterers,
+                                {**options, "wavelength": wavelength}, wavelength=wavelength,
+                                blocks=1, mounting=mounting)
+    rate = meas.range_rate.reshape(len(motions), len(scatterers))
+    az = np.array([s.azimuth for s in scatterers])
+    el = np.array([s.elevation for s in scatterers])
+    across = world_directions(np.stack([np.cos(az), np.zeros_like(az), -np.sin(az)],
+                                       axis=-1), mounting)      # increasing azimuth, W
+    x = finite_array("element_positions", element_positions, ndim=2)[:, 0]
+    shift = np.stack([azimuth_shift(-rate[k], across @ m.radar_velocity.mean(axis=0), x,
+                                    times, el)
+                      for k, (m, times) in enumerate(zip(motions, channel_times, strict=True))])
+    return rate, shift
+
+
+def residual_azimuth_warning(rate, shift, scatterers, warn: bool = True) -> tuple[str, ...]:
+    """The warning of the largest :func:`residual_azimuth_shift` (``rate`` and ``shift``
+    ``[frame, scatterer]``) when it exceeds :data:`AZIMUTH_SHIFT_WARN_DEG`, issued as a
+    :class:`compensation.guards.CompensationWarning` unless ``warn`` is false; else
+    nothing."""
+    k, j = np.unravel_index(int(np.argmax(np.abs(shift))), np.shape(shift))
+    deg = float(np.rad2deg(abs(shift[k, j])))
+    if deg <= AZIMUTH_SHIFT_WARN_DEG:
+        return ()
+    s = scatterers[j]
+    text = (f"azimuth: the compensated beams leave the scatterer at azimuth "
+            f"{np.rad2deg(s.azimuth):.1f} deg, elevation {np.rad2deg(s.elevation):.1f} deg a "
+            f"range rate of {1e3 * rate[k, j]:+.1f} mm/s in frame {k} (the estimated velocity "
+            f"does not explain its Doppler: the scene leaves the velocity across its "
+            f"scatterers uncertain); while the radar moves across the beam that moves its "
+            f"azimuth by {np.rad2deg(shift[k, j]):+.2f} deg (over {AZIMUTH_SHIFT_WARN_DEG:g})")
+    if warn:
+        warnings.warn(text, CompensationWarning, stacklevel=3)
+    return (text,)
+
+
+def calibration_azimuth_check(result, rcs, element_positions, channel_times, *,
+                              wavelength: float, range_axis, grid_shape=None,
+                              channel_slot=None, mounting=None, warn: bool = True
+                              ) -> tuple[str, ...]:
+    """:func:`residual_azimuth_warning` of a self-calibration's scatterers under its motion.
+
+    Parameters
+    ----------
+    result : compensation.calibration.CalibrationResult
+    rcs, element_positions, channel_times, wavelength, mounting
+        As :func:`residual_azimuth_shift`.
+    range_axis : array_like, shape ``[range]``
+        Range of each bin [m].
+    grid_shape, channel_slot
+        The array's grid and TDM slots (:func:`compensation.rigid_body_projection`).
     warn : bool
-        Also issue it as a :class:`compensation.guards.CompensationWarning`.
+        Issue the warning too.
 
     Returns
     -------
     tuple of str
-        :func:`azimuth_spread_warning` of the worst frame (the velocity spread
-        of each frame's middle by :func:`velocity_covariance_at`), or nothing.
+        The warning, or nothing.
     """
-    ri = result.radar_inertial
-    if ri is None:
-        return ()
-    az = np.array([s.azimuth for s in result.scatterers])
-    el = np.array([s.elevation for s in result.scatterers])
-    worst = None
-    for k, (m, times) in enumerate(zip(ri.motions, channel_times, strict=True)):
-        mid = m.num_chirps // 2
-        cov = velocity_covariance_at(ri.covariance, m.attitude[mid],
-                                     float(m.time[mid] - ri.motions[0].time[0]))
-        spread, sigma = azimuth_spread(cov, m, element_positions, times, az, el, mounting)
-        if worst is None or spread.max() > worst[0].max():
-            worst = (spread, sigma, k)
-    text = azimuth_spread_warning(*worst[:2], az, el, worst[2])
-    if text is None:
-        return ()
-    if warn:
-        warnings.warn(text, CompensationWarning, stacklevel=2)
-    return (text,)
+    options = {"range_axis": range_axis, "grid_shape": grid_shape,
+               "method": "lattice" if grid_shape is not None else "direct"}
+    if channel_slot is not None:
+        options["channel_slot"] = channel_slot
+    rate, shift = residual_azimuth_shift(rcs, element_positions, result.motions,
+                                         result.scatterers, options, wavelength=wavelength,
+                                         channel_times=channel_times, mounting=mounting)
+    return residual_azimuth_warning(rate, shift, result.scatterers, warn=warn)

