@@ -36,8 +36,8 @@ TILT_SIGMAS = 3.0
 #: Mountings whose beams miss the bounds, with the figures measured (worst target and
 #: frame; seed 1 here, seeds 2-4 by hand): the forward radar 3 m over the ground. Not its
 #: mounting nor its IMU attitude (tests/test_flight_mounted_chain.py), but two limits of
-#: the scene. The ground lies in the first target's range cell 18-30 deg below it, which
-#: the array hardly separates in elevation: with the true motion that target misses by
+#: the scene. The ground lies in the first target's range cell 36 deg below it, which the
+#: array hardly separates in elevation: with the true motion that target misses by
 #: 0.25 deg (seed 1). The three targets lie in a narrow cone ahead, so the self-calibrated
 #: velocity across it stays uncertain and its error moves their azimuth while the drone
 #: drifts across the beams (:mod:`compensation.azimuth_shift`): seeds 3 and 4 miss by
