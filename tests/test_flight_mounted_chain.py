@@ -225,3 +225,28 @@ def test_ground_clutter_in_a_target_cell_moves_it_with_the_true_motion(tmp_path,
                                         lambda m, t: t, seed=CLUTTER_SEED)
     assert np.all(np.abs(truth["clean"]) <= ANGLE_TOL_DEG), truth["clean"]
     assert np.max(np.abs(truth["clutter"][0])) > ANGLE_TOL_DEG, truth["clutter"]
+
+
+#: Relative agreement of the closed form with its limits, and a shift that is zero but
+#: for rounding [rad].
+LIMIT_TOL = 1e-3
+ZERO_SHIFT = 1e-12
+
+
+def test_azimuth_shift_limits_and_bad_input():
+    """Without motion across the beam and with every channel at once there is no shift;
+    across a long synthetic aperture the real array no longer matters and the shift is
+    a moving target's, ``dv_r / v`` (Raney 1971); TDM slots alone give ``2 c dv_r / s_x^2``;
+    a channel table that does not match the elements is refused, named."""
+    x = np.arange(8) * 2e-3                                  # elements along azimuth [m]
+    at_once = np.repeat(np.arange(64)[:, None] * 2e-4, x.size, axis=1)
+    assert abs(azimuth_shift(0.01, 0.0, x, at_once)) <= ZERO_SHIFT
+    long = np.repeat(np.linspace(0.0, 10.0, 64)[:, None], x.size, axis=1)
+    assert abs(azimuth_shift(0.01, 0.2, x, long) / (0.01 / 0.2) - 1) <= LIMIT_TOL
+    slots = at_once + np.where(x < 8e-3, 0.0, 7e-5)          # the second half fires later
+    cov = np.mean((x - x.mean()) * (slots[0] - slots[0].mean()))
+    assert abs(azimuth_shift(0.01, 0.0, x, slots) / (2 * cov * 0.01 / x.var()) - 1) <= LIMIT_TOL
+    assert abs(azimuth_shift(0.01, 0.0, x, slots, np.deg2rad(60.0))
+               / azimuth_shift(0.01, 0.0, x, slots) - 2.0) <= LIMIT_TOL     # 1 / cos(el)
+    with pytest.raises(ValueError, match="channel_time"):
+        azimuth_shift(0.01, 0.2, x, at_once[:, :3])
