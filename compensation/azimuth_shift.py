@@ -19,8 +19,8 @@ beam's offset in direction cosine), least spread at::
 ``s_t^2`` that of the transmit times over the frame and ``c`` their
 covariance (a TDM array's slots fire one after another); the azimuth shift is
 ``e / cos(el)``. With ``v`` = 0 only the TDM term ``2 c dv_r / s_x^2`` remains.
-The wavelength cancels. For a 3 x 4 TDM array (``s_x`` about one wavelength,
-3.9 mm at 77 GHz) over 64 loops of 210 us (13.4 ms) and ``v`` = 0.1 m/s it is
+The wavelength cancels. For the 3 x 4 TDM array of the flights (``s_x`` 3.8 mm,
+about a wavelength) over 64 loops of 210 us (13.4 ms) and ``v`` = 0.1 m/s it is
 0.024 deg per mm/s of velocity error.
 """
 
