@@ -143,9 +143,9 @@ def residual_azimuth_warning(rate, shift, scatterers, warn: bool = True) -> tupl
     s = scatterers[j]
     text = (f"azimuth: the compensated beams leave the scatterer at azimuth "
             f"{np.rad2deg(s.azimuth):.1f} deg, elevation {np.rad2deg(s.elevation):.1f} deg a "
-            f"range rate of {1e3 * rate[k, j]:+.1f} mm/s in frame {k} (the estimated velocity "
-            f"does not explain its Doppler: the scene leaves the velocity across its "
-            f"scatterers uncertain); while the radar moves across the beam that moves its "
+            f"range rate of {1e3 * rate[k, j]:+.1f} mm/s in frame {k}, a Doppler the estimated "
+            f"motion does not remove (its velocity, where the scene leaves it uncertain); "
+            f"while the radar moves across the beam that Doppler moves the scatterer's "
             f"azimuth by {np.rad2deg(shift[k, j]):+.2f} deg (over {AZIMUTH_SHIFT_WARN_DEG:g})")
     if warn:
         warnings.warn(text, CompensationWarning, stacklevel=3)
