@@ -22,6 +22,10 @@ these stable keys, followed by a colon and the numbers:
     The published lever-arm phase ``v_r(t_n) (t_n - t_0)`` departs from the
     integrated displacement by more than :data:`ROTATION_PHASE_LIMIT` because
     the radial velocity changes over the frame.
+``"azimuth"``
+    After a self-calibration, the range rate the beams leave a scatterer moves its
+    azimuth by more than :data:`compensation.azimuth_shift.AZIMUTH_SHIFT_WARN_DEG`
+    (:func:`compensation.azimuth_shift.calibration_azimuth_check`).
 
 IMU gaps are handled at ingestion (:mod:`compensation.ingestion`): short
 ones are interpolated with an ``"imu gaps"`` warning, longer ones raise

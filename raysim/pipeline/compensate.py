@@ -358,6 +358,13 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            if is_default_mounting(mounting_deg)
                            else mounting_matrix(mounting_deg), **options)
     report = cal.report
+    from compensation.azimuth_shift import calibration_azimuth_check
+
+    report["warnings"] = [*report.get("warnings", ()), *calibration_azimuth_check(   # warned
+        cal.result, rcs, inp.element_positions, [t[:, inp.tx_slot] for t in inp.slot_times],
+        wavelength=inp.config.center_wavelength, range_axis=r_axis, grid_shape=inp.grid_shape,
+        channel_slot=options.get("channel_slot"), mounting=None
+        if is_default_mounting(mounting_deg) else mounting_matrix(mounting_deg))]
     if ground is not None:   # without an attitude its failures, with one a disagreement
         import warnings
 
