@@ -32,10 +32,24 @@ standing 3 cm proud: the bumper beam that a plastic fascia hides is what
 reflects at 77 GHz), ``plates`` metal (aluminium licence plates, 520 x 110 mm,
 tilted 5 deg back), ``mirrors`` metal (housings and their silvered glass).
 
+Nose: two **grille** openings (``GRILLE_Y`` x ``GRILLE_Z`` either side of a 12 cm
+centre bar) cut in the body, each a metal recess (the radiator ducting) whose back
+is the **radiator**, a flat metal plate ``RADIATOR_DEPTH`` behind the opening, with
+two round-edged metal **slats** across it; two **headlamp** openings at the nose's
+corners, each a recess whose back is a metal **paraboloid reflector** of focal
+length ``HEADLAMP_FOCAL``, axis forward (the polycarbonate lens in front, nearly
+transparent at 77 GHz, is left out: the tracer does not transmit). The recesses
+close the body again, so ``body``, ``glass``, ``grille`` and ``headlamps`` are
+one closed surface. The radiator core is fins and tubes, part of which the wave
+enters; a flat plate is the upper bound of its reflection.
+
 Facets: about ``facet`` along the body and across its sections (default
 :data:`SEDAN_FACET`, 5 cm, below the Fresnel size ``sqrt(lambda r)`` of panels
 of radius ``r > 0.7 m`` at 77 GHz: the facets do not glint on their own); the
-default car has about 33 000 facets, a 0.15 m car about 8 500 (for fast tests).
+default car has about 41 000 facets (7 000 of them the headlamp reflectors, faceted
+at 6 mm), a 0.15 m car about 8 500 (for fast tests; above
+``OPENINGS_MAX_FACET`` the loft has too few quads for the openings and the nose
+stays closed).
 The mesh is deterministic (no random numbers). Each part is closed (the lofted
 body, revolved tyres and rims, swept bumpers, boxes) except where two parts
 touch.
