@@ -73,14 +73,19 @@ def coarse():
 def default():
     from raysim.echoes.po.sedan import sedan_parts
 
-    return {name: (mesh, mat) for name, mesh, mat in sedan_parts()}
+    return {name: (mesh, mat) for name, mesh, mat in sedan_parts(openings=True)}
 
 
 def test_parts_materials_and_facets(coarse, default):
+    from raysim.echoes.po.sedan import sedan_parts
+
     closed_nose = {"body": "metal", "glass": "glass", "tyres": "rubber", "rims": "metal",
                    "bumpers": "metal", "plates": "metal", "mirrors": "metal"}
-    # the coarse car (facet above OPENINGS_MAX_FACET) keeps a closed nose
+    # the coarse car (facet above OPENINGS_MAX_FACET) keeps a closed nose, and so does
+    # the car without openings (the bundled scene's)
     assert {k: v[1] for k, v in coarse.items()} == closed_nose
+    assert {k: v for k, _, v in sedan_parts(facet=COARSE_FACET, openings=True)} == closed_nose
+    assert {k: v for k, _, v in sedan_parts(facet=0.08)} == closed_nose
     assert {k: v[1] for k, v in default.items()} == {
         **closed_nose, "grille": "metal", "headlamps": "metal", "slats": "metal"}
     n = sum(len(m.faces) for m, _ in coarse.values())

@@ -65,7 +65,8 @@ def _models():
 
 
 #: Car models by name: ``simple`` (:func:`raysim.echoes.po.car.car_parts`, lofted
-#: body, glass, tyres) and ``sedan`` (:func:`raysim.echoes.po.sedan.sedan_parts`).
+#: body, glass, tyres) and ``sedan`` (:func:`raysim.echoes.po.sedan.sedan_parts` with
+#: its grille and headlamp openings).
 CAR_MODELS = ("simple", "sedan")
 
 
@@ -81,10 +82,10 @@ def car_model(name: str, facet: float | None = None) -> list:
         raise ValueError(f"car model: got {name!r}, expected one of {list(CAR_MODELS)}")
     make = _models()[name]
     if facet is None:
-        return make()
+        return make(openings=True) if name == "sedan" else make()
     if name != "sedan":
         raise ValueError(f"car model {name!r} has a fixed facet size; facet applies to 'sedan'")
-    return make(facet=facet)
+    return make(facet=facet, openings=True)
 
 
 class CarRcs:

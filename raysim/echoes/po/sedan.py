@@ -249,8 +249,9 @@ def _outward(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     return f if vol > 0 else f[:, ::-1]
 
 
-def _body(design: _Design) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Lofted body: vertices, faces and each face's material (``"metal"``/``"glass"``)."""
+def _body(design: _Design, openings: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lofted body: vertices, faces and each face's label (``"metal"``, ``"glass"``, and
+    with ``openings`` ``"grille"``, ``"headlamps"``)."""
     f = design.facet
     w = design.width
     counts = {"tunnel": max(2, math.ceil(TUNNEL_HALF_WIDTH / f)),
@@ -311,7 +312,7 @@ def _body(design: _Design) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     new_v, new_f, new_mat = [], [], []
     windows = [(GRILLE_Y, GRILLE_Z, "grille", None), (HEADLAMP_Y, HEADLAMP_Z, "headlamps",
                                                       HEADLAMP_FOCAL)]
-    for (y_rng, z_rng, name, focal) in windows if f <= OPENINGS_MAX_FACET else ():
+    for (y_rng, z_rng, name, focal) in windows if openings and f <= OPENINGS_MAX_FACET else ():
         for sign in (1.0, -1.0):
             quads = _window(grid, side_seg, sign, y_rng, z_rng)
             if not quads.any():
@@ -570,7 +571,8 @@ def _mirrors(design: _Design) -> tuple[np.ndarray, np.ndarray]:
 
 
 def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *,
-                facet: float = SEDAN_FACET) -> list[tuple[str, TriangleMesh, str]]:
+                facet: float = SEDAN_FACET,
+                openings: bool = False) -> list[tuple[str, TriangleMesh, str]]:
     """The parts of the detailed car: ``(name, mesh, material)``.
 
     Parameters
@@ -580,6 +582,11 @@ def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *
     facet : float
         Facet size along and across the body [m], 0.02-0.3 (default
         :data:`SEDAN_FACET`; coarser meshes for fast checks).
+    openings : bool
+        Cut the grille and headlamp openings in the nose, with their recesses,
+        radiator, slats and reflectors (the RCS study's and ``raysim rcs
+        car:sedan``'s car). Off, the nose is closed: the car of the bundled
+        ``parking_lot`` scene, generated before the openings.
 
     Returns
     -------
@@ -589,9 +596,9 @@ def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *
         (metal: the lamp recesses, their backs paraboloid reflectors),
         ``tyres`` (rubber), ``rims`` (metal), ``bumpers`` (metal), ``plates``
         (metal), ``mirrors`` (metal), ``slats`` (metal). ``body``, ``glass``,
-        ``grille`` and ``headlamps`` together are one closed surface. Above
-        :data:`OPENINGS_MAX_FACET` the nose is closed: no ``grille`` nor
-        ``headlamps``.
+        ``grille`` and ``headlamps`` together are one closed surface. The
+        last four (and ``slats``) only with ``openings`` and ``facet`` at most
+        :data:`OPENINGS_MAX_FACET`.
 
     Raises
     ------
@@ -603,7 +610,7 @@ def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *
         if not (isinstance(value, (int, float)) and lo <= value <= hi):
             raise ValueError(f"car {name} must lie in [{lo}, {hi}] m, got {value!r}")
     design = _Design(float(length), float(width), float(height), float(facet))
-    v, f, mat = _body(design)
+    v, f, mat = _body(design, bool(openings))
     parts = [(name, TriangleMesh(v, f[mat == label]), "glass" if name == "glass" else "metal")
              for name, label in (("body", "metal"), ("glass", "glass"), ("grille", "grille"),
                                  ("headlamps", "headlamps")) if np.any(mat == label)]
