@@ -87,7 +87,8 @@ def test_parts_materials_and_facets(coarse, default):
     assert {k: v for k, _, v in sedan_parts(facet=COARSE_FACET, openings=True)} == closed_nose
     assert {k: v for k, _, v in sedan_parts(facet=0.08)} == closed_nose
     assert {k: v[1] for k, v in default.items()} == {
-        **closed_nose, "grille": "metal", "headlamps": "metal", "slats": "metal"}
+        **closed_nose, "radiator": "metal", "ducts": "plastic", "headlamps": "metal",
+        "lamp_housings": "plastic", "slats": "metal"}
     n = sum(len(m.faces) for m, _ in coarse.values())
     assert COARSE_FACETS[0] <= n <= COARSE_FACETS[1]
     n = sum(len(m.faces) for m, _ in default.values())
@@ -108,7 +109,8 @@ def test_parts_are_closed_and_sized(coarse, default):
     assert body.is_watertight
     assert BODY_VOLUME_M3[0] < body.volume < BODY_VOLUME_M3[1]
     # the openings' recesses close the body again: one closed surface, less volume
-    nose = _trimesh([default[k][0] for k in ("body", "glass", "grille", "headlamps")])
+    nose = _trimesh([default[k][0] for k in ("body", "glass", "radiator", "ducts",
+                                             "headlamps", "lamp_housings")])
     assert nose.is_watertight
     assert BODY_VOLUME_M3[0] < nose.volume < body.volume
     assert _trimesh([default["slats"][0]]).is_watertight
@@ -178,17 +180,20 @@ def _first_hit(parts, origin, direction):
 
 def test_grille_opens_on_the_radiator(default):
     """A ray from ahead through a grille opening (clear of the plate and slats) meets the
-    radiator, a plate facing forward RADIATOR_DEPTH behind the opening's rearmost rim point."""
+    radiator, a plate facing forward RADIATOR_DEPTH behind the opening's rearmost rim
+    point, where the ducts' walls end."""
     from raysim.echoes.po.sedan import GRILLE_Y, RADIATOR_DEPTH
 
     parts = {k: v[0] for k, v in default.items()}
     for y in (0.30, -0.30):
         name, p, n = _first_hit(parts, np.array([10.0, y, 0.55]), np.array([-1.0, 0, 0]))
-        assert name == "grille"
+        assert name == "radiator"
         assert abs(n[0]) == pytest.approx(1.0)                 # the radiator faces forward
-        grille = default["grille"][0]
-        used = grille.vertices[np.unique(grille.faces)]
-        rim = used[(used[:, 1] * np.sign(y) >= GRILLE_Y[0]) & (used[:, 0] > p[0] + 0.01)]
+        ducts = default["ducts"][0]
+        used = ducts.vertices[np.unique(ducts.faces)]
+        used = used[used[:, 1] * np.sign(y) >= GRILLE_Y[0]]
+        assert used[:, 0].min() == pytest.approx(p[0], abs=1e-9)
+        rim = used[used[:, 0] > p[0] + 0.01]
         assert rim[:, 0].min() - p[0] == pytest.approx(RADIATOR_DEPTH, abs=1e-9)
 
 

@@ -32,15 +32,17 @@ standing 3 cm proud: the bumper beam that a plastic fascia hides is what
 reflects at 77 GHz), ``plates`` metal (aluminium licence plates, 520 x 110 mm,
 tilted 5 deg back), ``mirrors`` metal (housings and their silvered glass).
 
-Nose: two **grille** openings (``GRILLE_Y`` x ``GRILLE_Z`` either side of a 12 cm
-centre bar) cut in the body, each a metal recess (the radiator ducting) whose back
-is the **radiator**, a flat metal plate ``RADIATOR_DEPTH`` behind the opening, with
-two round-edged metal **slats** across it; two **headlamp** openings at the nose's
-corners, each a recess whose back is a metal **paraboloid reflector** of focal
-length ``HEADLAMP_FOCAL``, axis forward (the polycarbonate lens in front, nearly
-transparent at 77 GHz, is left out: the tracer does not transmit). The recesses
-close the body again, so ``body``, ``glass``, ``grille`` and ``headlamps`` are
-one closed surface. The radiator core is fins and tubes, part of which the wave
+Nose (``openings``): two **grille** openings (``GRILLE_Y`` x ``GRILLE_Z``
+either side of a 12 cm centre bar) cut in the body, each a recess whose walls
+are the plastic air **ducts** and whose back is the **radiator**, a flat metal
+plate ``RADIATOR_DEPTH`` behind the opening, with two round-edged metal (chromed)
+**slats** across it; two **headlamp** openings at the nose's corners, each a
+recess whose walls are the plastic **lamp housing** and whose back is a metal
+**paraboloid reflector** of focal length ``HEADLAMP_FOCAL``, axis forward (the
+polycarbonate lens in front, nearly transparent at 77 GHz, is left out: the
+tracer does not transmit). The recesses close the body again: ``body``,
+``glass``, ``radiator``, ``ducts``, ``headlamps`` and ``lamp_housings`` are one
+closed surface. The radiator core is fins and tubes, part of which the wave
 enters; a flat plate is the upper bound of its reflection.
 
 Facets: about ``facet`` along the body and across its sections (default
@@ -251,7 +253,7 @@ def _outward(v: np.ndarray, f: np.ndarray) -> np.ndarray:
 
 def _body(design: _Design, openings: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Lofted body: vertices, faces and each face's label (``"metal"``, ``"glass"``, and
-    with ``openings`` ``"grille"``, ``"headlamps"``)."""
+    with ``openings`` ``"ducts"``, ``"radiator"``, ``"lamp_housings"``, ``"headlamps"``)."""
     f = design.facet
     w = design.width
     counts = {"tunnel": max(2, math.ceil(TUNNEL_HALF_WIDTH / f)),
@@ -310,19 +312,21 @@ def _body(design: _Design, openings: bool) -> tuple[np.ndarray, np.ndarray, np.n
     side_seg = ring_labels == "side"
     keep = np.ones(len(faces), bool)
     new_v, new_f, new_mat = [], [], []
-    windows = [(GRILLE_Y, GRILLE_Z, "grille", None), (HEADLAMP_Y, HEADLAMP_Z, "headlamps",
-                                                      HEADLAMP_FOCAL)]
-    for (y_rng, z_rng, name, focal) in windows if openings and f <= OPENINGS_MAX_FACET else ():
+    windows = [(GRILLE_Y, GRILLE_Z, ("ducts", "radiator"), None),
+               (HEADLAMP_Y, HEADLAMP_Z, ("lamp_housings", "headlamps"), HEADLAMP_FOCAL)]
+    for (y_rng, z_rng, names, focal) in windows if openings and f <= OPENINGS_MAX_FACET else ():
         for sign in (1.0, -1.0):
             quads = _window(grid, side_seg, sign, y_rng, z_rng)
             if not quads.any():
                 continue
             keep[:n_loft] &= ~np.tile(quads.ravel(), 2)
             loop = _rim(quads, m)
-            rv, rf = _recess(v[loop], loop, len(v) + sum(len(a) for a in new_v), focal)
+            rv, walls, back = _recess(v[loop], loop, len(v) + sum(len(a) for a in new_v),
+                                      focal)
             new_v.append(rv)
-            new_f.append(rf)
-            new_mat.append(np.full(len(rf), name, dtype=object))
+            new_f += [walls, back]
+            new_mat += [np.full(len(walls), names[0], dtype=object),
+                        np.full(len(back), names[1], dtype=object)]
     v = np.concatenate([v, *new_v])
     faces = _outward(v, np.concatenate([faces[keep], *new_f]))
     material = np.concatenate([material[keep], *new_mat])
@@ -360,14 +364,14 @@ def _rim(quads: np.ndarray, m: int) -> np.ndarray:
 
 
 def _recess(front: np.ndarray, loop: np.ndarray, base: int,
-            focal: float | None) -> tuple[np.ndarray, np.ndarray]:
+            focal: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A recess behind a rim: walls along ``-x`` and a back, flat or a paraboloid.
 
     ``front`` ``[k, 3]`` are the rim's points (ids ``loop``, in the winding of the
     cut quads); new vertices get ids from ``base``. ``focal`` None: a flat back
     :data:`RADIATOR_DEPTH` behind the rim's rearmost point; else a paraboloid of
     that focal length [m], axis ``+x`` through the rim's centre, its rim behind the
-    opening. Returns the new vertices and the faces (walls and back).
+    opening. Returns the new vertices, the walls' faces and the back's faces.
     """
     yz = front[:, 1:]
     centre = yz.mean(axis=0)
@@ -403,6 +407,7 @@ def _recess(front: np.ndarray, loop: np.ndarray, base: int,
         b[-1] = base + (first[k] + p) % n
         faces.append([loop[k], loop[(k + 1) % len(loop)], b[-1]])
         faces.extend([loop[k], b[t + 1], b[t]] for t in range(p))
+    walls, faces = np.asarray(faces, dtype=np.int64), []
     for k in range(n_rings - 1):                          # back: ring k (outer) to k + 1
         o = base + k * n + np.arange(n)
         i = o + n
@@ -412,7 +417,7 @@ def _recess(front: np.ndarray, loop: np.ndarray, base: int,
     last = base + (n_rings - 1) * n + np.arange(n)
     faces.extend(np.stack([last, np.roll(last, -1), np.full(n, base + n_rings * n)],
                           1).tolist())
-    return verts, np.asarray(faces, dtype=np.int64)
+    return verts, walls, np.asarray(faces, dtype=np.int64)
 
 
 def _revolve(profile: np.ndarray, sections: int) -> tuple[np.ndarray, np.ndarray]:
@@ -591,14 +596,14 @@ def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *
     Returns
     -------
     list of (str, TriangleMesh, str)
-        ``body`` (metal), ``glass`` (glass), ``grille`` (metal: the recesses
-        behind the two grille openings, their backs the radiator), ``headlamps``
-        (metal: the lamp recesses, their backs paraboloid reflectors),
-        ``tyres`` (rubber), ``rims`` (metal), ``bumpers`` (metal), ``plates``
-        (metal), ``mirrors`` (metal), ``slats`` (metal). ``body``, ``glass``,
-        ``grille`` and ``headlamps`` together are one closed surface. The
-        last four (and ``slats``) only with ``openings`` and ``facet`` at most
-        :data:`OPENINGS_MAX_FACET`.
+        ``body`` (metal), ``glass`` (glass), ``radiator`` (metal: the backs of
+        the grille recesses), ``ducts`` (plastic: their walls), ``headlamps``
+        (metal: the paraboloid reflectors), ``lamp_housings`` (plastic: the lamp
+        recesses' walls), ``tyres`` (rubber), ``rims`` (metal), ``bumpers``
+        (metal), ``plates`` (metal), ``mirrors`` (metal), ``slats`` (metal).
+        The first six are one closed surface. ``radiator``, ``ducts``,
+        ``headlamps``, ``lamp_housings`` and ``slats`` come only with
+        ``openings`` and ``facet`` at most :data:`OPENINGS_MAX_FACET`.
 
     Raises
     ------
@@ -611,14 +616,17 @@ def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *
             raise ValueError(f"car {name} must lie in [{lo}, {hi}] m, got {value!r}")
     design = _Design(float(length), float(width), float(height), float(facet))
     v, f, mat = _body(design, bool(openings))
-    parts = [(name, TriangleMesh(v, f[mat == label]), "glass" if name == "glass" else "metal")
-             for name, label in (("body", "metal"), ("glass", "glass"), ("grille", "grille"),
-                                 ("headlamps", "headlamps")) if np.any(mat == label)]
+    parts = [(name, TriangleMesh(v, f[mat == label]), material)
+             for name, label, material in (
+                 ("body", "metal", "metal"), ("glass", "glass", "glass"),
+                 ("radiator", "radiator", "metal"), ("ducts", "ducts", "plastic"),
+                 ("headlamps", "headlamps", "metal"),
+                 ("lamp_housings", "lamp_housings", "plastic")) if np.any(mat == label)]
     (tv, tf), (rv, rf) = _wheels(design)
     parts.append(("tyres", TriangleMesh(tv, tf), "rubber"))
     parts.append(("rims", TriangleMesh(rv, rf), "metal"))
     extra = [("bumpers", _bumpers), ("plates", _plates), ("mirrors", _mirrors)]
-    if np.any(mat == "grille"):
+    if np.any(mat == "radiator"):
         extra.append(("slats", _slats))
     for name, make in extra:
         parts.append((name, TriangleMesh(*make(design)), "metal"))
