@@ -43,12 +43,13 @@ CENTRE_POWER_SHARE = 0.9
 
 #: 77 GHz RCS of passenger cars seen from the ground (elevation 0-5 deg),
 #: ``aspect [deg] -> (low, high)`` [dBsm], after averaging over a few degrees: ranges over
-#: cars RECALLED from the figures of Kamel, Peden & Pitts (IEEE TAP 2017), Geary et al.
-#: (2013), Schipper et al. (24 GHz, EuCAP 2011) and Silberling et al. (DRI-TM-14-70-1,
-#: 2014). The stored copies of these sources that could be searched give only their
-#: first page (title, abstract, contents): no value per aspect was read, so none
-#: replaces a recalled one (:data:`MEASURED_PROVENANCE`; docs/cars.md lists what was
-#: read). No 77 GHz measurement from 30-60 deg elevation is known to us.
+#: cars RECALLED from the figures of Kamel, Peden et al. (recalled as IEEE TAP 2017; the
+#: abstract read is Bel Kamel, Peden & Pajusco, EuCAP 2017), Geary et al. (2013),
+#: Schipper et al. (24 GHz, EuCAP 2011) and Silberling et al. (DRI-TM-14-70-1, 2014).
+#: The stored copies of these sources that could be searched give only their first
+#: page (title, abstract, contents): no value per aspect was read, so none replaces a
+#: recalled one (:data:`MEASURED_PROVENANCE`; docs/cars.md lists what was read). No
+#: 77 GHz measurement from 30-60 deg elevation is known to us.
 MEASURED_DBSM = {0: (10.0, 20.0), 30: (5.0, 15.0), 60: (5.0, 15.0), 90: (20.0, 35.0),
                  120: (5.0, 15.0), 150: (5.0, 15.0), 180: (10.0, 20.0)}
 #: Where each range of :data:`MEASURED_DBSM` comes from: ``"recalled"`` (from memory of
