@@ -293,8 +293,11 @@ def scattering_centres(parts, az: float, el: float, *, range_m: float = 50.0,
     cum = np.cumsum(power[order]) / power.sum()
     n90 = int(np.searchsorted(cum, share) + 1)
     out = []
+    # parts cut from one vertex array (the sedan's body, glass, recesses) own only the
+    # vertices their facets use
+    used = [m.vertices[np.unique(m.faces)] for m in meshes]
     for c in order[:n90]:
-        d = [np.min(np.linalg.norm(m.vertices - centre[c], axis=1)) for m in meshes]
+        d = [np.min(np.linalg.norm(u - centre[c], axis=1)) for u in used]
         out.append({"xyz": [round(float(x), 2) for x in centre[c]],
                     "part": parts[int(np.argmin(d))][0], "share": float(power[c] / power.sum()),
                     "dbsm": float(10 * np.log10(4 * math.pi * power[c]))})
