@@ -55,3 +55,30 @@ def test_cli_car_job_sized_and_checked(capsys):
     assert main(["rcs", "car:sedan", "--az-deg", "0:360:0.01", "--el-deg", "-90:90:0.01"]) == 2
     err = capsys.readouterr().err
     assert "directions" in err and "--az-deg / --el-deg" in err
+
+
+def test_table_says_where_the_measured_ranges_come_from():
+    """Every measured range in the table carries its provenance, and only at ground level
+    (no measurement from 30-60 deg elevation is known)."""
+    from raysim.studies.car_rcs import (
+        MEASURED_DBSM,
+        MEASURED_PROVENANCE,
+        CarRcs,
+        table_markdown,
+    )
+
+    assert set(MEASURED_PROVENANCE) == set(MEASURED_DBSM)
+    assert set(MEASURED_PROVENANCE.values()) <= {"recalled", "read"}
+    az = np.arange(0.0, 181.0, 2.0)
+    el = np.array([0.0, 45.0])
+    ones = np.ones((len(az), len(el)))
+    rows = table_markdown({"m": CarRcs(az, el, ones, ones, 0.0)}).splitlines()[2:]
+    assert len(rows) == len(MEASURED_DBSM) * len(el)
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        aspect, elevation, measured = float(cells[1]), float(cells[2]), cells[5]
+        if elevation == 0.0:
+            low, high = MEASURED_DBSM[int(aspect)]
+            assert measured == f"{low:g} to {high:g} ({MEASURED_PROVENANCE[int(aspect)]})"
+        else:
+            assert measured == "-"

@@ -28,8 +28,8 @@ import time
 import numpy as np
 
 __all__ = ["CAR_MODELS", "car_model", "car_rcs", "aspect_average", "scattering_centres",
-           "swing_db", "MEASURED_DBSM", "CAR_REFERENCE_Z", "AVERAGE_HALF_WIDTH_DEG",
-           "CENTRE_CELL_M", "CarRcs", "table_markdown"]
+           "swing_db", "MEASURED_DBSM", "MEASURED_PROVENANCE", "CAR_REFERENCE_Z",
+           "AVERAGE_HALF_WIDTH_DEG", "CENTRE_CELL_M", "CarRcs", "table_markdown"]
 
 #: Height of the car's reference point (phase centre of the sweep) [m].
 CAR_REFERENCE_Z = 0.7
@@ -41,14 +41,21 @@ CENTRE_CELL_M = 0.25
 #: Share of the centres' summed power that the counted centres carry.
 CENTRE_POWER_SHARE = 0.9
 
-#: Published 77 GHz RCS of passenger cars seen from the ground (elevation 0-5 deg),
-#: ``aspect [deg] -> (low, high)`` [dBsm], after averaging over a few degrees. Recalled
-#: from the figures of Kamel, Peden & Pitts (IEEE TAP 2017), Geary et al. (2013),
-#: Schipper et al. (24 GHz, EuCAP 2011) and DRI-TM-14-70-1 (2014), which could not be
-#: read here: the comparison is indicative. No 77 GHz measurement from 30-60 deg
-#: elevation is known to us.
+#: 77 GHz RCS of passenger cars seen from the ground (elevation 0-5 deg),
+#: ``aspect [deg] -> (low, high)`` [dBsm], after averaging over a few degrees: ranges over
+#: cars RECALLED from the figures of Kamel, Peden et al. (recalled as IEEE TAP 2017; the
+#: abstract read is Bel Kamel, Peden & Pajusco, EuCAP 2017), Geary et al. (2013),
+#: Schipper et al. (24 GHz, EuCAP 2011) and Silberling et al. (DRI-TM-14-70-1, 2014).
+#: The stored copies of these sources that could be searched give only their first
+#: page (title, abstract, contents): no value per aspect was read, so none replaces a
+#: recalled one (:data:`MEASURED_PROVENANCE`; docs/cars.md lists what was read). No
+#: 77 GHz measurement from 30-60 deg elevation is known to us.
 MEASURED_DBSM = {0: (10.0, 20.0), 30: (5.0, 15.0), 60: (5.0, 15.0), 90: (20.0, 35.0),
                  120: (5.0, 15.0), 150: (5.0, 15.0), 180: (10.0, 20.0)}
+#: Where each range of :data:`MEASURED_DBSM` comes from: ``"recalled"`` (from memory of
+#: a paper's figure; the table says so) or ``"read"`` (read in a cited source, with
+#: its statistic, the radar's elevation and the car in docs/cars.md).
+MEASURED_PROVENANCE = {a: "recalled" for a in MEASURED_DBSM}
 
 
 def _models():
@@ -59,7 +66,8 @@ def _models():
 
 
 #: Car models by name: ``simple`` (:func:`raysim.echoes.po.car.car_parts`, lofted
-#: body, glass, tyres) and ``sedan`` (:func:`raysim.echoes.po.sedan.sedan_parts`).
+#: body, glass, tyres) and ``sedan`` (:func:`raysim.echoes.po.sedan.sedan_parts` with
+#: its grille and headlamp openings).
 CAR_MODELS = ("simple", "sedan")
 
 
@@ -75,10 +83,10 @@ def car_model(name: str, facet: float | None = None) -> list:
         raise ValueError(f"car model: got {name!r}, expected one of {list(CAR_MODELS)}")
     make = _models()[name]
     if facet is None:
-        return make()
+        return make(openings=True) if name == "sedan" else make()
     if name != "sedan":
         raise ValueError(f"car model {name!r} has a fixed facet size; facet applies to 'sedan'")
-    return make(facet=facet)
+    return make(facet=facet, openings=True)
 
 
 class CarRcs:
@@ -285,8 +293,11 @@ def scattering_centres(parts, az: float, el: float, *, range_m: float = 50.0,
     cum = np.cumsum(power[order]) / power.sum()
     n90 = int(np.searchsorted(cum, share) + 1)
     out = []
+    # parts cut from one vertex array (the sedan's body, glass, recesses) own only the
+    # vertices their facets use
+    used = [m.vertices[np.unique(m.faces)] for m in meshes]
     for c in order[:n90]:
-        d = [np.min(np.linalg.norm(m.vertices - centre[c], axis=1)) for m in meshes]
+        d = [np.min(np.linalg.norm(u - centre[c], axis=1)) for u in used]
         out.append({"xyz": [round(float(x), 2) for x in centre[c]],
                     "part": parts[int(np.argmin(d))][0], "share": float(power[c] / power.sum()),
                     "dbsm": float(10 * np.log10(4 * math.pi * power[c]))})
@@ -294,13 +305,15 @@ def scattering_centres(parts, az: float, el: float, *, range_m: float = 50.0,
 
 
 def table_markdown(results: dict, aspects=tuple(MEASURED_DBSM)) -> str:
-    """Markdown table: aspect, elevation, PO + SBR, PO + SBR + PTD, measured range [dBsm].
+    """Markdown table: aspect, elevation, PO + SBR, PO + SBR + PTD, measured range [dBsm]
+    with its provenance (:data:`MEASURED_PROVENANCE`).
 
     ``results`` maps a model name to a :class:`CarRcs` computed with diffraction
     on a 1 deg aspect grid; values are the ``+-2.5 deg`` power averages.
     """
     lines = ["| model | aspect [deg] | elevation [deg] | PO + SBR [dBsm] | "
-             "PO + SBR + PTD [dBsm] | measured, ground level [dBsm] |", "|---|---|---|---|---|---|"]
+             "PO + SBR + PTD [dBsm] | measured, ground level [dBsm] (provenance) |",
+             "|---|---|---|---|---|---|"]
     for name, r in results.items():
         po = 10 * np.log10(aspect_average(r.po_m2, r.azimuth_deg))
         di = 10 * np.log10(aspect_average(r.diffraction_m2, r.azimuth_deg))
@@ -308,7 +321,8 @@ def table_markdown(results: dict, aspects=tuple(MEASURED_DBSM)) -> str:
             for a in aspects:
                 i = int(np.argmin(np.abs(r.azimuth_deg - a)))
                 meas = MEASURED_DBSM.get(a)
-                m = f"{meas[0]:g} to {meas[1]:g}" if (meas and e <= 5) else "-"
+                m = (f"{meas[0]:g} to {meas[1]:g} ({MEASURED_PROVENANCE[a]})"
+                     if (meas and e <= 5) else "-")
                 lines.append(f"| {name} | {a:g} | {e:g} | {po[i, j]:.1f} | {di[i, j]:.1f} | {m} |")
     return "\n".join(lines) + "\n"
 

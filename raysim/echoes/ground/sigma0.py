@@ -49,8 +49,12 @@ ratio ``VV / HV``. Values (:data:`CLUTTER_MATERIALS`, docs/clutter.md): roads
 ``VV``); bare soil from Nashashibi, Sarabandi & Ulaby's 35/94 GHz soil
 measurements (IGARSS 1994); grass from Ulaby et al., IEEE TAP 46(1), 1998 (95 GHz
 near grazing: co-pol channels within about 1 dB, cross-pol about 6 dB under:
-volume scattering by leaves depolarises most). These are ratios read from the
-measurements to about +-2 dB, not fits.
+volume scattering by leaves depolarises most). These ratios are recalled from
+the published curves to about +-2 dB, not fits, and were not read again: the
+stored copies of these sources give only titles and abstracts (Li & Sarabandi's
+94 GHz road-surface abstract confirms polarimetric measurements of asphalt and
+concrete at 70-88 deg incidence, Ulaby et al. 1998 95 GHz terrain at 70-90 deg),
+no ratio (docs/clutter.md, Polarisation, lists what was read).
 
 Coherent specular reflection of a rough surface (Ament, J. Appl. Phys. 24, 1953;
 Beckmann & Spizzichino 1963, eq. 5.29), amplitude factor:
@@ -68,7 +72,8 @@ by the same measurements:
 * asphalt: Sarabandi, Li & Nashashibi, IEEE TAP 45(11), 1997 (94 GHz road
   surfaces, ``s`` 0.2-1 mm, ``sigma0`` falling from about -15 dB near 30 deg
   to about -30 dB at grazing);
-* concrete: Sarabandi et al. 1997 and ITU-R P.2040 permittivity;
+* concrete: Sarabandi et al. 1997 and ITU-R P.2040 permittivity (also the
+  walls' material: no 76-81 GHz wall backscatter could be read, docs/clutter.md);
 * dry soil and grass: Ulaby & Dobson 1989 (95 GHz soil and grass statistics),
   Ulaby, Moore & Fung Vol. III App. E (permittivity).
 """

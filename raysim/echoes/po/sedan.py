@@ -32,10 +32,26 @@ standing 3 cm proud: the bumper beam that a plastic fascia hides is what
 reflects at 77 GHz), ``plates`` metal (aluminium licence plates, 520 x 110 mm,
 tilted 5 deg back), ``mirrors`` metal (housings and their silvered glass).
 
+Nose (``openings``): two **grille** openings (``GRILLE_Y`` x ``GRILLE_Z``
+either side of a 12 cm centre bar) cut in the body, each a recess whose walls
+are the plastic air **ducts** and whose back is the **radiator**, a flat metal
+plate ``RADIATOR_DEPTH`` behind the opening, with two round-edged metal (chromed)
+**slats** across it; two **headlamp** openings at the nose's corners, each a
+recess whose walls are the plastic **lamp housing** and whose back is a metal
+**paraboloid reflector** of focal length ``HEADLAMP_FOCAL``, axis forward (the
+polycarbonate lens in front, nearly transparent at 77 GHz, is left out: the
+tracer does not transmit). The recesses close the body again: ``body``,
+``glass``, ``radiator``, ``ducts``, ``headlamps`` and ``lamp_housings`` are one
+closed surface. The radiator core is fins and tubes, part of which the wave
+enters; a flat plate is the upper bound of its reflection.
+
 Facets: about ``facet`` along the body and across its sections (default
 :data:`SEDAN_FACET`, 5 cm, below the Fresnel size ``sqrt(lambda r)`` of panels
 of radius ``r > 0.7 m`` at 77 GHz: the facets do not glint on their own); the
-default car has about 33 000 facets, a 0.15 m car about 8 500 (for fast tests).
+default car has about 41 000 facets (7 000 of them the headlamp reflectors, faceted
+at 6 mm), a 0.15 m car about 8 500 (for fast tests; above
+``OPENINGS_MAX_FACET`` the loft has too few quads for the openings and the nose
+stays closed).
 The mesh is deterministic (no random numbers). Each part is closed (the lofted
 body, revolved tyres and rims, swept bumpers, boxes) except where two parts
 touch.
@@ -50,7 +66,8 @@ import numpy as np
 from raysim.echoes.po.mesh import TriangleMesh
 
 __all__ = ["sedan_parts", "SEDAN_FACET", "ARCH_RADIUS", "TYRE_RADIUS", "SIDE_RADIUS",
-           "PLAN_RADIUS", "ROOF_RADIUS", "NOSE_RADIUS"]
+           "PLAN_RADIUS", "ROOF_RADIUS", "NOSE_RADIUS", "GRILLE_Y", "GRILLE_Z", "RADIATOR_DEPTH",
+           "HEADLAMP_Y", "HEADLAMP_Z", "HEADLAMP_FOCAL", "OPENINGS_MAX_FACET"]
 
 #: Default facet size of the detailed car [m].
 SEDAN_FACET = 0.05
@@ -76,6 +93,24 @@ FLOOR_Z = 0.16
 WHEEL_HOUSE_DEPTH = 0.30
 #: Undercarriage tunnel: half-width and depth [m].
 TUNNEL_HALF_WIDTH, TUNNEL_DEPTH = 0.20, 0.12
+#: Grille openings in the nose, left of the centre line (the right one is the mirror
+#: image; a 12 cm bar stays between them): bounds of ``y`` and ``z`` [m].
+GRILLE_Y, GRILLE_Z = (0.06, 0.40), (0.44, 0.66)
+#: Depth of the radiator (a flat metal plate) behind the grille opening's rim, from the
+#: rim's rearmost point [m].
+RADIATOR_DEPTH = 0.25
+#: Height of the grille slats (round-edged bars across each opening) [m].
+SLAT_Z = (0.51, 0.59)
+#: Headlamp openings at the nose's corners, left (the right is the mirror image) [m].
+HEADLAMP_Y, HEADLAMP_Z = (0.50, 0.74), (0.56, 0.70)
+#: Focal length of the headlamp reflectors (metal paraboloids, axis forward) [m].
+HEADLAMP_FOCAL = 0.025
+#: Coarsest facet that still cuts the openings [m]: a coarser loft has too few quads in
+#: the windows, and its nose stays closed (a car for quick checks only).
+OPENINGS_MAX_FACET = 0.08
+#: Facet of the reflectors [m]: below the Fresnel size ``sqrt(lambda 2 F)`` (1.4 cm at
+#: 77 GHz) of their curvature.
+REFLECTOR_FACET = 0.006
 
 
 def _pchip(xp, yp):
@@ -216,8 +251,9 @@ def _outward(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     return f if vol > 0 else f[:, ::-1]
 
 
-def _body(design: _Design) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Lofted body: vertices, faces and each face's material (``"metal"``/``"glass"``)."""
+def _body(design: _Design, openings: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lofted body: vertices, faces and each face's label (``"metal"``, ``"glass"``, and
+    with ``openings`` ``"ducts"``, ``"radiator"``, ``"lamp_housings"``, ``"headlamps"``)."""
     f = design.facet
     w = design.width
     counts = {"tunnel": max(2, math.ceil(TUNNEL_HALF_WIDTH / f)),
@@ -252,8 +288,7 @@ def _body(design: _Design) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         centre = n_v + k
         caps_f.append(np.stack([np.full(m, centre), np.roll(ids, -1), ids], 1))
     v = np.concatenate([v, np.array(caps_v)])
-    faces = np.concatenate([faces] + caps_f)
-    faces = _outward(v, faces)
+    faces = np.concatenate([faces] + caps_f)                # turned outward below
     # materials: each loft face by its section segment and station
     n_loft = (len(xs) - 1) * m * 2
     j = np.concatenate([np.tile(np.arange(m), len(xs) - 1)] * 2)
@@ -271,7 +306,118 @@ def _body(design: _Design) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rail_y[i], rail_y[i + 1]) - 0.08)                              # A/C pillars 8 cm
     material = np.full(len(faces), "metal", dtype=object)
     material[:n_loft][glass_side | screen] = "glass"
+    # openings in the nose: the loft's quads inside each window are cut and the
+    # hole's rim is extruded back to the radiator or to a headlamp reflector
+    grid = v[:len(xs) * m].reshape(len(xs), m, 3)
+    side_seg = ring_labels == "side"
+    keep = np.ones(len(faces), bool)
+    new_v, new_f, new_mat = [], [], []
+    windows = [(GRILLE_Y, GRILLE_Z, ("ducts", "radiator"), None),
+               (HEADLAMP_Y, HEADLAMP_Z, ("lamp_housings", "headlamps"), HEADLAMP_FOCAL)]
+    for (y_rng, z_rng, names, focal) in windows if openings and f <= OPENINGS_MAX_FACET else ():
+        for sign in (1.0, -1.0):
+            quads = _window(grid, side_seg, sign, y_rng, z_rng)
+            if not quads.any():
+                continue
+            keep[:n_loft] &= ~np.tile(quads.ravel(), 2)
+            loop = _rim(quads, m)
+            rv, walls, back = _recess(v[loop], loop, len(v) + sum(len(a) for a in new_v),
+                                      focal)
+            new_v.append(rv)
+            new_f += [walls, back]
+            new_mat += [np.full(len(walls), names[0], dtype=object),
+                        np.full(len(back), names[1], dtype=object)]
+    v = np.concatenate([v, *new_v])
+    faces = _outward(v, np.concatenate([faces[keep], *new_f]))
+    material = np.concatenate([material[keep], *new_mat])
     return v, faces, material
+
+
+def _window(grid: np.ndarray, side_seg: np.ndarray, sign: float, y_rng, z_rng) -> np.ndarray:
+    """Loft quads ``[station - 1, m]`` of the nose's sides whose corners all lie in a window."""
+    y, z, x = sign * grid[..., 1], grid[..., 2], grid[..., 0]
+    inside = (y >= y_rng[0]) & (y <= y_rng[1]) & (z >= z_rng[0]) & (z <= z_rng[1]) & (x > 0)
+    nxt = np.roll(inside, -1, axis=1)
+    seg = side_seg & np.roll(side_seg, -1)
+    return inside[:-1] & nxt[:-1] & inside[1:] & nxt[1:] & seg[None]
+
+
+def _rim(quads: np.ndarray, m: int) -> np.ndarray:
+    """Vertex ids of the rim of a set of loft quads, in the quads' winding (one loop)."""
+    n_st = quads.shape[0] + 1
+    idx = np.arange(n_st * m).reshape(n_st, m)
+    edges = set()
+    for i, j in zip(*np.nonzero(quads), strict=True):
+        a, b = idx[i, j], idx[i, (j + 1) % m]
+        c, d = idx[i + 1, (j + 1) % m], idx[i + 1, j]
+        edges |= {(a, b), (b, c), (c, d), (d, a)}
+    nxt = {p: q for p, q in edges if (q, p) not in edges}
+    start = min(nxt)
+    loop = [start]
+    while nxt[loop[-1]] != start:
+        loop.append(nxt[loop[-1]])
+        if len(loop) > len(nxt):
+            break
+    if len(loop) != len(nxt):
+        raise RuntimeError("a nose opening's rim is not one loop; change its window")
+    return np.array(loop)
+
+
+def _recess(front: np.ndarray, loop: np.ndarray, base: int,
+            focal: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A recess behind a rim: walls along ``-x`` and a back, flat or a paraboloid.
+
+    ``front`` ``[k, 3]`` are the rim's points (ids ``loop``, in the winding of the
+    cut quads); new vertices get ids from ``base``. ``focal`` None: a flat back
+    :data:`RADIATOR_DEPTH` behind the rim's rearmost point; else a paraboloid of
+    that focal length [m], axis ``+x`` through the rim's centre, its rim behind the
+    opening. Returns the new vertices, the walls' faces and the back's faces.
+    """
+    yz = front[:, 1:]
+    centre = yz.mean(axis=0)
+    if focal is None:
+        pieces = np.ones(len(front), int)
+    else:
+        step = np.linalg.norm(np.roll(yz, -1, axis=0) - yz, axis=1)
+        pieces = np.maximum(1, np.ceil(step / REFLECTOR_FACET).astype(int))
+    # the back's rim: each rim edge split into ``pieces`` (rim point k at ring[first[k]])
+    first = np.concatenate([[0], np.cumsum(pieces)[:-1]])
+    ring = np.concatenate([yz[k] + np.linspace(0, 1, p, endpoint=False)[:, None]
+                           * (yz[(k + 1) % len(yz)] - yz[k]) for k, p in enumerate(pieces)])
+    r2_max = np.max(np.sum((ring - centre) ** 2, axis=1))
+    if focal is None:
+        n_rings = 1
+
+        def depth(q):
+            return np.full(len(q), front[:, 0].min() - RADIATOR_DEPTH)
+    else:
+        n_rings = max(1, int(math.ceil(math.sqrt(r2_max) / REFLECTOR_FACET)))
+        vertex = front[:, 0].min() - 0.01 - r2_max / (4 * focal)
+
+        def depth(q):
+            return vertex + np.sum((q - centre) ** 2, axis=1) / (4 * focal)
+    n = len(ring)
+    # rings of the back from its rim (k = n_rings) in to the centre, then the centre
+    rings = [centre + (ring - centre) * (k / n_rings) for k in range(n_rings, 0, -1)]
+    pts = np.concatenate(rings + [centre[None]])
+    verts = np.concatenate([depth(pts)[:, None], pts], axis=1)
+    faces = []
+    for k, p in enumerate(pieces):                        # walls: fan from the front point
+        b = base + first[k] + np.arange(p + 1)
+        b[-1] = base + (first[k] + p) % n
+        faces.append([loop[k], loop[(k + 1) % len(loop)], b[-1]])
+        faces.extend([loop[k], b[t + 1], b[t]] for t in range(p))
+    walls, faces = np.asarray(faces, dtype=np.int64), []
+    for k in range(n_rings - 1):                          # back: ring k (outer) to k + 1
+        o = base + k * n + np.arange(n)
+        i = o + n
+        o1, i1 = np.roll(o, -1), np.roll(i, -1)
+        faces.extend(np.stack([o, o1, i1], 1).tolist())
+        faces.extend(np.stack([o, i1, i], 1).tolist())
+    last = base + (n_rings - 1) * n + np.arange(n)
+    faces.extend(np.stack([last, np.roll(last, -1), np.full(n, base + n_rings * n)],
+                          1).tolist())
+    return verts, walls, np.asarray(faces, dtype=np.int64)
 
 
 def _revolve(profile: np.ndarray, sections: int) -> tuple[np.ndarray, np.ndarray]:
@@ -386,6 +532,21 @@ def _bumpers(design: _Design) -> tuple[np.ndarray, np.ndarray]:
     return _join(items)
 
 
+def _slats(design: _Design) -> tuple[np.ndarray, np.ndarray]:
+    """Grille slats: round-edged bars (8 x 20 mm) across each opening, 2 cm inside it."""
+    x = np.linspace(design.front_end, design.h, 600)
+    items = []
+    for z in SLAT_Z:
+        o = _outline(design, x, z)
+        o = o[(o[:, 1] > GRILLE_Y[0] + 0.03) & (o[:, 1] < GRILLE_Y[1] - 0.03)][::-1]
+        step = np.linalg.norm(np.diff(o, axis=0), axis=1).sum() / min(design.facet, 0.025)
+        o = o[np.round(np.linspace(0, len(o) - 1, max(4, int(step) + 1))).astype(int)]
+        o = o - [0.02, 0.0]
+        for sign in (1.0, -1.0):
+            items.append(_sweep(o * [1.0, sign], 0.004, 0.01, z))
+    return _join(items)
+
+
 def _plates(design: _Design) -> tuple[np.ndarray, np.ndarray]:
     """Front and rear licence plates (520 x 110 x 5 mm), tilted 5 deg back."""
     items = []
@@ -415,7 +576,8 @@ def _mirrors(design: _Design) -> tuple[np.ndarray, np.ndarray]:
 
 
 def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *,
-                facet: float = SEDAN_FACET) -> list[tuple[str, TriangleMesh, str]]:
+                facet: float = SEDAN_FACET,
+                openings: bool = False) -> list[tuple[str, TriangleMesh, str]]:
     """The parts of the detailed car: ``(name, mesh, material)``.
 
     Parameters
@@ -425,12 +587,23 @@ def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *
     facet : float
         Facet size along and across the body [m], 0.02-0.3 (default
         :data:`SEDAN_FACET`; coarser meshes for fast checks).
+    openings : bool
+        Cut the grille and headlamp openings in the nose, with their recesses,
+        radiator, slats and reflectors (the RCS study's and ``raysim rcs
+        car:sedan``'s car). Off, the nose is closed: the car of the bundled
+        ``parking_lot`` scene, generated before the openings.
 
     Returns
     -------
     list of (str, TriangleMesh, str)
-        ``body`` (metal), ``glass`` (glass), ``tyres`` (rubber), ``rims``
-        (metal), ``bumpers`` (metal), ``plates`` (metal), ``mirrors`` (metal).
+        ``body`` (metal), ``glass`` (glass), ``radiator`` (metal: the backs of
+        the grille recesses), ``ducts`` (plastic: their walls), ``headlamps``
+        (metal: the paraboloid reflectors), ``lamp_housings`` (plastic: the lamp
+        recesses' walls), ``tyres`` (rubber), ``rims`` (metal), ``bumpers``
+        (metal), ``plates`` (metal), ``mirrors`` (metal), ``slats`` (metal).
+        The first six are one closed surface. ``radiator``, ``ducts``,
+        ``headlamps``, ``lamp_housings`` and ``slats`` come only with
+        ``openings`` and ``facet`` at most :data:`OPENINGS_MAX_FACET`.
 
     Raises
     ------
@@ -442,13 +615,19 @@ def sedan_parts(length: float = 4.5, width: float = 1.8, height: float = 1.45, *
         if not (isinstance(value, (int, float)) and lo <= value <= hi):
             raise ValueError(f"car {name} must lie in [{lo}, {hi}] m, got {value!r}")
     design = _Design(float(length), float(width), float(height), float(facet))
-    v, f, mat = _body(design)
-    parts = [("body", TriangleMesh(v, f[mat == "metal"]), "metal"),
-             ("glass", TriangleMesh(v, f[mat == "glass"]), "glass")]
+    v, f, mat = _body(design, bool(openings))
+    parts = [(name, TriangleMesh(v, f[mat == label]), material)
+             for name, label, material in (
+                 ("body", "metal", "metal"), ("glass", "glass", "glass"),
+                 ("radiator", "radiator", "metal"), ("ducts", "ducts", "plastic"),
+                 ("headlamps", "headlamps", "metal"),
+                 ("lamp_housings", "lamp_housings", "plastic")) if np.any(mat == label)]
     (tv, tf), (rv, rf) = _wheels(design)
     parts.append(("tyres", TriangleMesh(tv, tf), "rubber"))
     parts.append(("rims", TriangleMesh(rv, rf), "metal"))
-    for name, (pv, pf) in (("bumpers", _bumpers(design)), ("plates", _plates(design)),
-                           ("mirrors", _mirrors(design))):
-        parts.append((name, TriangleMesh(pv, pf), "metal"))
+    extra = [("bumpers", _bumpers), ("plates", _plates), ("mirrors", _mirrors)]
+    if np.any(mat == "radiator"):
+        extra.append(("slats", _slats))
+    for name, make in extra:
+        parts.append((name, TriangleMesh(*make(design)), "metal"))
     return parts

@@ -186,8 +186,14 @@ RUBBER = MaterialSpec("rubber", relative_permittivity=3.0, conductivity=0.6, thi
 """Tyre rubber at 77 GHz: ``eps_r = 3.0 - j 0.14`` (loss tangent 0.05), an assumed value
 typical of carbon-black-filled elastomers at W band; used for the cars' tyres."""
 
+PLASTIC = MaterialSpec("plastic", relative_permittivity=2.3, conductivity=0.005, thickness=0.003,
+                       color=(0.15, 0.15, 0.15))
+"""Polypropylene-like car plastic at 77 GHz: ``eps_r = 2.3 - j 0.0012`` (loss tangent 5e-4),
+an assumed value typical of unfilled polyolefins at W band; normal-incidence Fresnel
+reflection ``|Gamma| = -13.8 dB``. Used for the sedan's grille ducts and lamp housings."""
+
 #: Every material above by name.
-MATERIALS = {m.name: m for m in (DRY_SOIL, ASPHALT, METAL, CONCRETE, GLASS, RUBBER)}
+MATERIALS = {m.name: m for m in (DRY_SOIL, ASPHALT, METAL, CONCRETE, GLASS, RUBBER, PLASTIC)}
 
 
 # ----------------------------------------------------------------------------- targets
