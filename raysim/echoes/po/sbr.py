@@ -17,6 +17,13 @@ of a tube after bounces on flat facets is a spherical wave from the image of
 ``P`` (amplitude ``R / s`` at unfolded path length ``s``, cross-section
 ``dOmega s^2``), and the return to ``P`` carries ``R / R_b`` and
 ``exp(-j k R_b)``.
+
+Curved surfaces: a tube reflects on the interpolated normal of the smooth
+surface the facets sample (:meth:`RayScene.shading_normals`), and its term is
+scaled by its spreading since launch, measured from its neighbours in the
+launch grid (:func:`_spreading`): a concave reflector's exit aperture then
+radiates with the geometric-optics weight, and a caustic (a focus) turns the
+phase. After flat facets only the factor is 1.
 """
 
 from __future__ import annotations
@@ -46,8 +53,20 @@ def launch_grid(scene: RayScene, u: np.ndarray, e_h: np.ndarray, e_v: np.ndarray
 
     Far field: orthographic projection of the vertices (or of the points
     ``cover``, shape ``[point, 3]``, when given); near field: their central
-    projection from the radar at ``range_m * u``.
+    projection from the radar at ``range_m * u``. Tube ``i ny + j`` lies at
+    column ``i`` (along ``e_h``) and row ``j`` (along ``e_v``) of ``ny`` rows.
     """
+    return _grid(*_launch_axes(scene, u, e_h, e_v, spacing, range_m, cover), e_h, e_v)
+
+
+def _grid(xs, ys, e_h, e_v):
+    """Tube centres of columns ``xs`` and rows ``ys`` [m], shape ``[ray, 3]`` (``i ny + j``)."""
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    return gx.reshape(-1, 1) * e_h + gy.reshape(-1, 1) * e_v
+
+
+def _launch_axes(scene, u, e_h, e_v, spacing, range_m, cover):
+    """Columns and rows of :func:`launch_grid`: coordinates along ``e_h`` and ``e_v`` [m]."""
     v = scene.mesh.vertices if cover is None else np.asarray(cover, dtype=float)
     if range_m is not None:
         depth = range_m - v @ u
@@ -63,15 +82,7 @@ def launch_grid(scene: RayScene, u: np.ndarray, e_h: np.ndarray, e_v: np.ndarray
     check_memory(SBR_BYTES_PER_RAY * n, f"{n} SBR ray tubes ({xs.size} x {ys.size} at "
                  f"{spacing:.3g} m)", "--rays-per-wavelength, the target size or "
                  "--max-bounces 1")
-    gx, gy = np.meshgrid(xs, ys, indexing="ij")
-    return gx.reshape(-1, 1) * e_h + gy.reshape(-1, 1) * e_v
-
-
-def _grid_shape(grid: np.ndarray, e_h: np.ndarray, e_v: np.ndarray) -> tuple[int, int]:
-    """``(columns along e_h, rows along e_v)`` of a :func:`launch_grid` (index ``i ny + j``)."""
-    y = grid @ e_v
-    ny = int(np.argmax(y[1:] < y[:-1])) + 1 if len(y) > 1 and np.any(y[1:] < y[:-1]) else len(y)
-    return len(grid) // ny, ny
+    return xs, ys
 
 
 def _spreading(tube, ny, x, d, a, b, normal, smooth, width):
@@ -278,7 +289,9 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
     if max_bounces < 2:
         return empty
     k = 2 * np.pi / wavelength
-    grid = launch_grid(scene, u, e_h, e_v, spacing, range_m, cover)
+    xs, ys = _launch_axes(scene, u, e_h, e_v, spacing, range_m, cover)
+    grid = _grid(xs, ys, e_h, e_v)
+    ny = len(ys)
     lift = 2 * scene.mesh.radius + 1.0
     if range_m is None:
         d = np.broadcast_to(-u, grid.shape).copy()
@@ -295,7 +308,6 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
         domega = spacing**2 * (range_m / rho) / rho**2       # tube solid angle [sr]
     e = np.broadcast_to(e_pol.astype(complex), grid.shape).copy()
     tube = np.arange(len(grid))
-    _, ny = _grid_shape(grid, e_h, e_v)
     smooth = np.ones((len(grid), 2), bool)
     a = np.broadcast_to(e_h, grid.shape).copy()
     b = np.broadcast_to(e_v, grid.shape).copy()
