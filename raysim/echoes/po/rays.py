@@ -90,6 +90,22 @@ class RayScene:
         #: Offset of secondary ray origins along the facet normal [m].
         self.epsilon = 1e-6 * max(mesh.radius, 1e-3)
         self._corner_normals = None
+        self._curved = None
+
+    @property
+    def corner_normals(self) -> np.ndarray:
+        """Smoothed corner normals, shape ``[facet, corner, 3]`` (:func:`corner_normals`)."""
+        if self._corner_normals is None:
+            self._corner_normals = corner_normals(self.mesh)
+        return self._corner_normals
+
+    @property
+    def curved(self) -> bool:
+        """Whether any facet's corner normals differ from its own (a smoothed surface)."""
+        if self._curved is None:
+            dots = np.einsum("fci,fi->fc", self.corner_normals, self.normals)
+            self._curved = bool(np.any(dots < 1.0 - 1e-9))
+        return self._curved
 
     def shading_normals(self, facet: np.ndarray, x: np.ndarray) -> np.ndarray:
         """Interpolated (Phong) unit normals at points on facets, shape ``[ray, 3]``.
@@ -101,8 +117,6 @@ class RayScene:
         x : ndarray, shape ``[ray, 3]``
             Points on those facets [m].
         """
-        if self._corner_normals is None:
-            self._corner_normals = corner_normals(self.mesh)
         t = self.mesh.triangles[facet]
         e1, e2, r = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0], x - t[:, 0]
         d11, d12, d22 = (np.einsum("ri,ri->r", p, q) for p, q in ((e1, e1), (e1, e2), (e2, e2)))
@@ -111,7 +125,7 @@ class RayScene:
         w1 = np.clip((d22 * r1 - d12 * r2) / det, 0.0, 1.0)
         w2 = np.clip((d11 * r2 - d12 * r1) / det, 0.0, 1.0)
         w0 = np.clip(1.0 - w1 - w2, 0.0, 1.0)
-        c = self._corner_normals[facet]
+        c = self.corner_normals[facet]
         n = w0[:, None] * c[:, 0] + w1[:, None] * c[:, 1] + w2[:, None] * c[:, 2]
         return n / np.linalg.norm(n, axis=1, keepdims=True)
 

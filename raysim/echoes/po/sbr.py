@@ -338,11 +338,12 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
         side = -np.sign(np.einsum("ri,ri->r", flat, d))[:, None]
         flat = flat * side
         lifted = x + scene.epsilon * flat
-        # reflect as the smooth surface the facets sample (the facet's own on a flat face)
-        n = scene.shading_normals(facet, x) * side
-        n = np.where((np.einsum("ri,ri->r", n, d) < 0)[:, None], n, flat)
-        spread = _spreading(tube, ny, x, d, a, b, flat, smooth,
-                            spacing if domega is None else np.sqrt(domega) * path)
+        n, spread = flat, np.ones(len(x), complex)
+        if scene.curved:     # reflect as the smooth surface the facets sample
+            n = scene.shading_normals(facet, x) * side
+            n = np.where((np.einsum("ri,ri->r", n, d) < 0)[:, None], n, flat)
+            spread = _spreading(tube, ny, x, d, a, b, flat, smooth,
+                                spacing if domega is None else np.sqrt(domega) * path)
         which = None if facet_material is None else facet_material[facet]
         on_ground = None
         if ground is not None:
