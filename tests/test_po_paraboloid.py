@@ -93,3 +93,25 @@ def test_elliptic_paraboloid_double_bounce_is_geometric_optics(rt_backend, metal
     print(f"{pol}: GO {db(ref):.2f} dBsm, SBR far {db(far):.2f}, at 50 m {db(near):.2f}")
     assert abs(db(far / ref)) < PARABOLOID_GO_DB
     assert abs(db(near / far)) < RANGE_DB
+
+
+def test_flat_faces_keep_their_normals_and_curved_meshes_are_smoothed(rt_backend):
+    """A trihedral's folds stay sharp (tubes trace as on flat facets); a dish is smoothed."""
+    tri = RayScene(T.trihedral(0.05))
+    assert not tri.curved
+    np.testing.assert_allclose(tri.corner_normals, np.repeat(tri.normals[:, None], 3, axis=1),
+                               atol=1e-12)
+    dish = RayScene(T.paraboloid(FOCAL, A, B_ROUND, 0.005))
+    assert dish.curved
+    # at the vertex the smoothed normal is the axis (the flat facets there tilt by ~ facet / 4F)
+    apex = np.argmin(np.linalg.norm(dish.mesh.vertices, axis=1))
+    touching = np.flatnonzero((dish.mesh.faces == apex).any(axis=1))
+    corner = dish.corner_normals[touching][dish.mesh.faces[touching] == apex]
+    assert np.all(corner[:, 2] > 1 - 1e-9)
+
+
+def test_paraboloid_bad_input():
+    with pytest.raises(ValueError, match="focal"):
+        T.paraboloid(0.0, A, B_ROUND, FACET)
+    with pytest.raises(ValueError, match="facet"):
+        T.paraboloid(FOCAL, A, B_ROUND, -1.0)
