@@ -37,6 +37,7 @@ from scipy.spatial.transform import Rotation
 from ._checks import finite_array
 from .calibration import DIRECTION_SIGMA, UNRESOLVED_DIRECTION_SIGMA, detect_scatterers
 from .geometry import direction
+from .ground_dense import DENSE_ANGLE_SIGMA, DENSE_RANGE_SIGMA_CELLS, dense_ground_directions
 from .mounting import mounting_rotation, radar_frame_motion, world_directions
 from .observability import ObservabilityWarning
 from .strapdown import PlatformMotion
@@ -408,6 +409,48 @@ def ground_points(rc, element_positions, motion: PlatformMotion, *, wavelength: 
         r, az, el, bin_m / np.sqrt(12.0), max(DIRECTION_SIGMA, GROUND_ANGLE_SIGMA), se)
 
 
+def dense_points(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
+                 range_axis, gates, channel_slot=None) -> tuple[np.ndarray, np.ndarray]:
+    """Ground points of a frame from every ground cell's plane waves and their covariances.
+
+    :func:`compensation.ground_dense.dense_ground_directions` (its parameters), each
+    point ``r u`` with :data:`compensation.ground_dense.DENSE_RANGE_SIGMA_CELLS` in range
+    and :data:`compensation.ground_dense.DENSE_ANGLE_SIGMA` in azimuth and elevation.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Points ``[point, 3]`` [m] (W as ``motion`` has it, from the radar) and their
+        covariances ``[point, 3, 3]`` [m^2].
+    """
+    r_axis = np.asarray(range_axis, dtype=float)
+    r, u = dense_ground_directions(rc, element_positions, motion, wavelength=wavelength,
+                                   range_axis=r_axis, gates=gates, channel_slot=channel_slot)
+    if r.size == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3, 3))
+    az, el = np.arctan2(u[:, 0], u[:, 2]), np.arcsin(np.clip(u[:, 1], -1.0, 1.0))
+    cell = float(r_axis[1] - r_axis[0])
+    return r[:, None] * u, point_covariance(r, az, el, DENSE_RANGE_SIGMA_CELLS * cell,
+                                            DENSE_ANGLE_SIGMA, DENSE_ANGLE_SIGMA)
+
+
+#: Frames (spread over the record) whose dense ground points are fitted: a hovering
+#: platform sees the same scatterers in every frame, so more frames add cost, not looks.
+DENSE_FRAMES = 6
+#: Azimuth sectors about the nadir of the spatial jackknife (a hovering platform sees
+#: the same scatterers in every frame, so frames share their errors; sectors do not).
+JACKKNIFE_SECTORS = 8
+
+
+def sector_groups(points) -> np.ndarray:
+    """Sector ``[point]`` (0 .. :data:`JACKKNIFE_SECTORS` - 1) of every point's bearing
+    ``atan2(p_e, p_n)`` about the nadir: the groups of the spatial jackknife."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    bearing = np.arctan2(p[:, 1], p[:, 0]) + np.pi
+    return np.minimum((bearing / (2 * np.pi) * JACKKNIFE_SECTORS).astype(int),
+                      JACKKNIFE_SECTORS - 1)
+
+
 def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axis, gates,
                 gyro_bias_sigma: float = 0.0, warn: bool = True, mounting=None,
                 **options) -> GroundPlane:
@@ -454,15 +497,23 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
         raise ValueError(f"rcs holds {len(rcs)} frames and motions {len(motions)}; expected "
                          f"the same number, at least one")
     rot = None if mounting is None else mounting_rotation(mounting)
-    found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
-                           wavelength=wavelength, range_axis=range_axis, gates=gates, **options)
-             for rc, m in zip(rcs, motions, strict=True)]
-    if rot is not None:
-        found = [world_directions(p, rot, c) for p, c in found]
-    fit = fit_ground_plane(np.concatenate([p for p, _ in found]),
-                           np.concatenate([c for _, c in found]),
-                           groups=np.concatenate([np.full(len(p), k) for k, (p, _) in
-                                                  enumerate(found)]).astype(int), warn=False)
+    if rot is None:         # the down-looking radar: every ground cell's plane waves
+        pick = np.unique(np.linspace(0, len(rcs) - 1, min(DENSE_FRAMES, len(rcs))).round()
+                         ).astype(int)
+        found = [dense_points(rcs[k], element_positions, motions[k], wavelength=wavelength,
+                              range_axis=range_axis, gates=gates,
+                              channel_slot=options.get("channel_slot")) for k in pick]
+        points = np.concatenate([p for p, _ in found])
+        groups = sector_groups(points)
+    else:
+        found = [world_directions(*ground_points(
+            rc, element_positions, radar_frame_motion(m, rot), wavelength=wavelength,
+            range_axis=range_axis, gates=gates, **options), rot)
+            for rc, m in zip(rcs, motions, strict=True)]
+        points = np.concatenate([p for p, _ in found])
+        groups = np.concatenate([np.full(len(p), k) for k, (p, _) in enumerate(found)])
+    fit = fit_ground_plane(points, np.concatenate([c for _, c in found]),
+                           groups=groups.astype(int), warn=False)
     r_axis = np.asarray(range_axis, dtype=float)
     g = np.asarray(gates, dtype=int)
     if fit.points == 0:
