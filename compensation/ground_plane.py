@@ -1,9 +1,12 @@
 """Roll and pitch from the ground plane in the radar data.
 
 A down-looking radar over flat ground sees ground clutter: each clutter
-scatterer has a range ``r`` and a direction ``u`` (azimuth from the array,
-elevation from the raised TX's phase comparison,
-:func:`compensation.elevation.measure_elevation`), a point ``p = r u``. Formed
+scatterer has a range ``r`` and a direction ``u``, a point ``p = r u``. A
+down-looking radar's points are the scatterers that every ground cell's plane
+waves give (:mod:`compensation.ground_dense`: range from the range kernel over
+the cells, direction from the whole array at one slot-aligned instant); a mounted
+radar's are its beam maxima (azimuth from the array, elevation from the raised
+TX's phase comparison, :func:`compensation.elevation.measure_elevation`). Formed
 with the platform's estimated attitude ``R_est`` the points are in W as that
 attitude has it; with the true attitude ``R = exp([phi]x) R_est`` the ground
 points satisfy ``e_z . exp([phi]x) p = h`` (``e_z`` down in W, ``h`` the height).
@@ -13,14 +16,17 @@ least squares with every point's spread along the plane's normal,
 horizontal components, the correction of roll and pitch ``(tilt_n, tilt_e)``
 (:mod:`compensation.radar_inertial`), and their covariance ``(J^T W J)^-1``,
 scaled up by the reduced chi-square when above one, and again until it covers
-the spread of the fits that leave one frame out (the jackknife).
+the spread of the fits that leave one group out (the jackknife: groups of azimuth
+sectors about the nadir for the dense points, whose errors the frames share;
+frames for the beam maxima).
 
 Assumption: the ground in view is flat and level. A ground sloped by ``s``
 biases the tilt by ``s`` (the fit levels the ground, not gravity); a wall or a
 roof in the range window is an outlier only when the ground dominates it.
 What it cannot observe: the heading (a rotation about the normal leaves the
-plane unchanged), and the error common to every frame (a hovering platform sees
-the same scatterers sharing the same cells in every frame). Its warnings
+plane unchanged), and, with the frames as groups, the error common to every frame
+(a hovering platform sees the same scatterers sharing the same cells in every
+frame; the sectors' jackknife sees it as the spread between parts of the ground). Its warnings
 (:class:`GroundPlaneWarning`): no ground point in the range window, too few
 points on the plane, a fit whose residuals exceed the points' spreads.
 """
@@ -456,14 +462,16 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
                 **options) -> GroundPlane:
     """Roll and pitch correction of a record's initial attitude from the ground in ``gates``.
 
-    The ground points of every frame (:func:`ground_points`, each frame formed with
-    its own motion of the one integration, so all are in W as the initial attitude
-    has it) fitted together (:func:`fit_ground_plane`; module docstring: the
-    assumption of level flat ground), every frame a group of the jackknife that
-    widens the stated spread to the one the frames show. A hovering platform moves
-    far less than a range cell over a record, so the same scatterers share the same
-    cells in every frame: that part of the error is common to the frames and shows
-    in no spread (what the fit cannot see). The gyro bias turns the later frames'
+    The ground points of every frame (a down-looking radar's: :func:`dense_points` of
+    up to :data:`DENSE_FRAMES` frames spread over the record, every azimuth sector
+    about the nadir a group of the jackknife, :func:`sector_groups`; a mounted
+    radar's: :func:`ground_points`, every frame a group), each frame formed with its
+    own motion of the one integration, so all are in W as the initial attitude has
+    it, fitted together (:func:`fit_ground_plane`; module docstring: the assumption
+    of level flat ground); the jackknife widens the stated spread to the one the
+    groups show. A hovering platform moves far less than a range cell over a
+    record, so the same scatterers share the same cells in every frame: with frames
+    as groups that part of the error shows in no spread. The gyro bias turns the later frames'
     attitude: its spread over the frames' mean time since the first chirp is added
     to the tilt's.
 
@@ -477,7 +485,7 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
         Motion of every frame (one integration; its attitude at the first chirp is
         the ``R_est`` the tilt corrects).
     wavelength, range_axis, gates, **options
-        As :func:`ground_points`.
+        As :func:`ground_points` (the dense points take ``channel_slot`` of ``options``).
     gyro_bias_sigma : float
         Spread of the gyro bias left in ``motions`` [rad/s].
     warn : bool
