@@ -62,9 +62,9 @@ TRACK_DU = 0.03
 MIN_TRACK_CELLS = 2
 #: Largest relative misfit of a track's amplitudes to the range kernel.
 MAX_KERNEL_MISFIT = 0.1
-#: Spread of a dense point's azimuth and elevation [rad]: the fitted plane waves of
-#: the flights' ``parking_lot`` clutter (60 scatterers, one run of six frames) lie
-#: about the true plane with a reduced chi-square of 0.8 at 0.3 deg (docs/self_calibration.md).
+#: Spread of a dense point's azimuth and elevation [rad]: the points of the flights'
+#: ``parking_lot`` clutter (60 scatterers, six frames, seeds 1-3) lie about their fitted
+#: plane with a reduced chi-square of 0.7-1.5 at 0.3 deg (docs/self_calibration.md).
 DENSE_ANGLE_SIGMA = float(np.deg2rad(0.3))
 #: Spread of a dense point's range [cells] (the kernel fit of a track).
 DENSE_RANGE_SIGMA_CELLS = 0.1

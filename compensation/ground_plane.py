@@ -440,8 +440,9 @@ def dense_points(rc, element_positions, motion: PlatformMotion, *, wavelength: f
                                             DENSE_ANGLE_SIGMA, DENSE_ANGLE_SIGMA)
 
 
-#: Frames (spread over the record) whose dense ground points are fitted: a hovering
-#: platform sees the same scatterers in every frame, so more frames add cost, not looks.
+#: Most frames (spread over the record) whose dense ground points are fitted: their
+#: receiver noise and interpolation errors average, the mixing of scatterers that share
+#: cells they repeat (each 0.5 s of CPU; docs/self_calibration.md).
 DENSE_FRAMES = 6
 #: Azimuth sectors about the nadir of the spatial jackknife (a hovering platform sees
 #: the same scatterers in every frame, so frames share their errors; sectors do not).
@@ -463,8 +464,9 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
     """Roll and pitch correction of a record's initial attitude from the ground in ``gates``.
 
     The ground points of every frame (a down-looking radar's: :func:`dense_points` of
-    up to :data:`DENSE_FRAMES` frames spread over the record, every azimuth sector
-    about the nadir a group of the jackknife, :func:`sector_groups`; a mounted
+    up to :data:`DENSE_FRAMES` frames spread over the record, their covariances times
+    the frames' number (a hover repeats one look), every azimuth sector about the
+    nadir a group of the jackknife, :func:`sector_groups`; a mounted
     radar's: :func:`ground_points`, every frame a group), each frame formed with its
     own motion of the one integration, so all are in W as the initial attitude has
     it, fitted together (:func:`fit_ground_plane`; module docstring: the assumption
@@ -513,6 +515,9 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
                               channel_slot=options.get("channel_slot")) for k in pick]
         points = np.concatenate([p for p, _ in found])
         groups = sector_groups(points)
+        # a hover repeats one look: the same scatterers mix in the same cells in every
+        # frame, so the frames together hold one frame's information on that error
+        found = [(p, c * pick.size) for p, c in found]
     else:
         found = [world_directions(*ground_points(
             rc, element_positions, radar_frame_motion(m, rot), wavelength=wavelength,
