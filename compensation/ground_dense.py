@@ -15,8 +15,8 @@ FFT of a tone, ``rho`` its range in cells): the cells of one direction are
 joined into a track and ``rho`` fitted to them, so a point's range is the
 scatterer's, not its cell's centre, and its direction the power-weighted mean of
 its cells'. A cell that holds one scatterer gives its direction to a few
-hundredths of a degree (a measured noise-free-like case: 4 mm off the plane
-at 15 m).
+hundredths of a degree (the strongest scatterer of the flights' clutter: 4 mm
+off the plane at 15 m, docs/self_calibration.md).
 
 TDM MIMO: the channels of transmit slot ``s`` are sampled ``s`` slots after
 slot 0, while the platform moves; the raised TX, the only elevation baseline,

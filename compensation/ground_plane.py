@@ -519,10 +519,10 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
         # frame, so the frames together hold one frame's information on that error
         found = [(p, c * pick.size) for p, c in found]
     else:
-        found = [world_directions(*ground_points(
-            rc, element_positions, radar_frame_motion(m, rot), wavelength=wavelength,
-            range_axis=range_axis, gates=gates, **options), rot)
-            for rc, m in zip(rcs, motions, strict=True)]
+        found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
+                               wavelength=wavelength, range_axis=range_axis, gates=gates,
+                               **options) for rc, m in zip(rcs, motions, strict=True)]
+        found = [world_directions(p, rot, c) for p, c in found]
         points = np.concatenate([p for p, _ in found])
         groups = np.concatenate([np.full(len(p), k) for k, (p, _) in enumerate(found)])
     fit = fit_ground_plane(points, np.concatenate([c for _, c in found]),
