@@ -239,6 +239,9 @@ def dense_ground_directions(rc, element_positions, motion: PlatformMotion, *,
     empty = np.zeros(0), np.zeros((0, 3))
     if g.size == 0 or x.shape[0] < 2:
         return empty
+    if r_axis.shape != (x.shape[-1],) or r_axis.size < 2:
+        raise ValueError(f"range_axis must hold the {x.shape[-1]} cells of rc (two or more), "
+                         f"got shape {r_axis.shape}")
     n_fft = x.shape[-1] if fft_size is None else int(fft_size)
     cell = float(r_axis[1] - r_axis[0])
     snap = aligned_snapshot(x, motion.time, channel_slot)[:, g]        # [channel, gate]
@@ -270,7 +273,7 @@ def dense_ground_directions(rc, element_positions, motion: PlatformMotion, *,
                     break
                 used[k].add(nxt[0])
                 track.append((k, *sources[k][nxt[0]]))
-            if len(track) < MIN_TRACK_CELLS or np.any(np.diff([t[0] for t in track]) != 1):
+            if len(track) < MIN_TRACK_CELLS:
                 continue
             idx = np.array([t[0] for t in track])
             amp = np.array([t[2] for t in track])
@@ -289,7 +292,7 @@ def dense_ground_directions(rc, element_positions, motion: PlatformMotion, *,
                 continue
             w = np.abs(amp) ** 2
             u_mean = np.sum(np.array([t[1] for t in track]) * w[:, None], axis=0) / w.sum()
-            pts.append((rho * cell, u_mean))
+            pts.append((r_axis[0] + rho * cell, u_mean))      # rho counts from cell 0
     if not pts:
         return empty
     r = np.array([a for a, _ in pts])

@@ -142,3 +142,12 @@ def test_repeated_frames_state_one_look():
     assert three.points == 3 * one.points and three.inliers == 3 * one.inliers
     np.testing.assert_allclose(three.tilt, one.tilt, rtol=REPEAT_RTOL)
     np.testing.assert_allclose(three.tilt_covariance, one.tilt_covariance, rtol=REPEAT_RTOL)
+
+
+def test_range_axis_must_match_the_cells():
+    pos, slot = _array()
+    rc = np.zeros((LOOPS, len(pos), CELLS), complex)
+    with pytest.raises(ValueError, match="range_axis must hold the 150 cells"):
+        dense_ground_directions(rc, pos, static_motion(np.arange(LOOPS * 3) * SLOT_S),
+                                wavelength=WAVELENGTH, range_axis=np.arange(10) * CELL,
+                                gates=np.arange(5), channel_slot=slot)
