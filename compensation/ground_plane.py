@@ -1,9 +1,12 @@
 """Roll and pitch from the ground plane in the radar data.
 
 A down-looking radar over flat ground sees ground clutter: each clutter
-scatterer has a range ``r`` and a direction ``u`` (azimuth from the array,
-elevation from the raised TX's phase comparison,
-:func:`compensation.elevation.measure_elevation`), a point ``p = r u``. Formed
+scatterer has a range ``r`` and a direction ``u``, a point ``p = r u``. A
+down-looking radar's points are the scatterers that every ground cell's plane
+waves give (:mod:`compensation.ground_dense`: range from the range kernel over
+the cells, direction from the whole array at one slot-aligned instant); a mounted
+radar's are its beam maxima (azimuth from the array, elevation from the raised
+TX's phase comparison, :func:`compensation.elevation.measure_elevation`). Formed
 with the platform's estimated attitude ``R_est`` the points are in W as that
 attitude has it; with the true attitude ``R = exp([phi]x) R_est`` the ground
 points satisfy ``e_z . exp([phi]x) p = h`` (``e_z`` down in W, ``h`` the height).
@@ -13,14 +16,17 @@ least squares with every point's spread along the plane's normal,
 horizontal components, the correction of roll and pitch ``(tilt_n, tilt_e)``
 (:mod:`compensation.radar_inertial`), and their covariance ``(J^T W J)^-1``,
 scaled up by the reduced chi-square when above one, and again until it covers
-the spread of the fits that leave one frame out (the jackknife).
+the spread of the fits that leave one group out (the jackknife: groups of azimuth
+sectors about the nadir for the dense points, whose errors the frames share;
+frames for the beam maxima).
 
 Assumption: the ground in view is flat and level. A ground sloped by ``s``
 biases the tilt by ``s`` (the fit levels the ground, not gravity); a wall or a
 roof in the range window is an outlier only when the ground dominates it.
 What it cannot observe: the heading (a rotation about the normal leaves the
-plane unchanged), and the error common to every frame (a hovering platform sees
-the same scatterers sharing the same cells in every frame). Its warnings
+plane unchanged), and, with the frames as groups, the error common to every frame
+(a hovering platform sees the same scatterers sharing the same cells in every
+frame; the sectors' jackknife sees it as the spread between parts of the ground). Its warnings
 (:class:`GroundPlaneWarning`): no ground point in the range window, too few
 points on the plane, a fit whose residuals exceed the points' spreads.
 """
@@ -37,6 +43,7 @@ from scipy.spatial.transform import Rotation
 from ._checks import finite_array
 from .calibration import DIRECTION_SIGMA, UNRESOLVED_DIRECTION_SIGMA, detect_scatterers
 from .geometry import direction
+from .ground_dense import DENSE_ANGLE_SIGMA, DENSE_RANGE_SIGMA_CELLS, dense_ground_directions
 from .mounting import mounting_rotation, radar_frame_motion, world_directions
 from .observability import ObservabilityWarning
 from .strapdown import PlatformMotion
@@ -408,19 +415,65 @@ def ground_points(rc, element_positions, motion: PlatformMotion, *, wavelength: 
         r, az, el, bin_m / np.sqrt(12.0), max(DIRECTION_SIGMA, GROUND_ANGLE_SIGMA), se)
 
 
+def dense_points(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
+                 range_axis, gates, channel_slot=None) -> tuple[np.ndarray, np.ndarray]:
+    """Ground points of a frame from every ground cell's plane waves and their covariances.
+
+    :func:`compensation.ground_dense.dense_ground_directions` (its parameters), each
+    point ``r u`` with :data:`compensation.ground_dense.DENSE_RANGE_SIGMA_CELLS` in range
+    and :data:`compensation.ground_dense.DENSE_ANGLE_SIGMA` in azimuth and elevation.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Points ``[point, 3]`` [m] (W as ``motion`` has it, from the radar) and their
+        covariances ``[point, 3, 3]`` [m^2].
+    """
+    r_axis = np.asarray(range_axis, dtype=float)
+    r, u = dense_ground_directions(rc, element_positions, motion, wavelength=wavelength,
+                                   range_axis=r_axis, gates=gates, channel_slot=channel_slot)
+    if r.size == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3, 3))
+    az, el = np.arctan2(u[:, 0], u[:, 2]), np.arcsin(np.clip(u[:, 1], -1.0, 1.0))
+    cell = float(r_axis[1] - r_axis[0])
+    return r[:, None] * u, point_covariance(r, az, el, DENSE_RANGE_SIGMA_CELLS * cell,
+                                            DENSE_ANGLE_SIGMA, DENSE_ANGLE_SIGMA)
+
+
+#: Most frames (spread over the record) whose dense ground points are fitted: their
+#: receiver noise and interpolation errors average, the mixing of scatterers that share
+#: cells they repeat (each 0.5 s of CPU; docs/self_calibration.md).
+DENSE_FRAMES = 6
+#: Azimuth sectors about the nadir of the spatial jackknife (a hovering platform sees
+#: the same scatterers in every frame, so frames share their errors; sectors do not).
+JACKKNIFE_SECTORS = 8
+
+
+def sector_groups(points) -> np.ndarray:
+    """Sector ``[point]`` (0 .. :data:`JACKKNIFE_SECTORS` - 1) of every point's bearing
+    ``atan2(p_e, p_n)`` about the nadir: the groups of the spatial jackknife."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    bearing = np.arctan2(p[:, 1], p[:, 0]) + np.pi
+    return np.minimum((bearing / (2 * np.pi) * JACKKNIFE_SECTORS).astype(int),
+                      JACKKNIFE_SECTORS - 1)
+
+
 def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axis, gates,
                 gyro_bias_sigma: float = 0.0, warn: bool = True, mounting=None,
                 **options) -> GroundPlane:
     """Roll and pitch correction of a record's initial attitude from the ground in ``gates``.
 
-    The ground points of every frame (:func:`ground_points`, each frame formed with
-    its own motion of the one integration, so all are in W as the initial attitude
-    has it) fitted together (:func:`fit_ground_plane`; module docstring: the
-    assumption of level flat ground), every frame a group of the jackknife that
-    widens the stated spread to the one the frames show. A hovering platform moves
-    far less than a range cell over a record, so the same scatterers share the same
-    cells in every frame: that part of the error is common to the frames and shows
-    in no spread (what the fit cannot see). The gyro bias turns the later frames'
+    The ground points of every frame (a down-looking radar's: :func:`dense_points` of
+    up to :data:`DENSE_FRAMES` frames spread over the record, their covariances times
+    the frames' number (a hover repeats one look), every azimuth sector about the
+    nadir a group of the jackknife, :func:`sector_groups`; a mounted
+    radar's: :func:`ground_points`, every frame a group), each frame formed with its
+    own motion of the one integration, so all are in W as the initial attitude has
+    it, fitted together (:func:`fit_ground_plane`; module docstring: the assumption
+    of level flat ground); the jackknife widens the stated spread to the one the
+    groups show. A hovering platform moves far less than a range cell over a
+    record, so the same scatterers share the same cells in every frame: with frames
+    as groups that part of the error shows in no spread. The gyro bias turns the later frames'
     attitude: its spread over the frames' mean time since the first chirp is added
     to the tilt's.
 
@@ -434,7 +487,7 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
         Motion of every frame (one integration; its attitude at the first chirp is
         the ``R_est`` the tilt corrects).
     wavelength, range_axis, gates, **options
-        As :func:`ground_points`.
+        As :func:`ground_points` (the dense points take ``channel_slot`` of ``options``).
     gyro_bias_sigma : float
         Spread of the gyro bias left in ``motions`` [rad/s].
     warn : bool
@@ -454,15 +507,26 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
         raise ValueError(f"rcs holds {len(rcs)} frames and motions {len(motions)}; expected "
                          f"the same number, at least one")
     rot = None if mounting is None else mounting_rotation(mounting)
-    found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
-                           wavelength=wavelength, range_axis=range_axis, gates=gates, **options)
-             for rc, m in zip(rcs, motions, strict=True)]
-    if rot is not None:
+    if rot is None:         # the down-looking radar: every ground cell's plane waves
+        pick = np.unique(np.linspace(0, len(rcs) - 1, min(DENSE_FRAMES, len(rcs))).round()
+                         ).astype(int)
+        found = [dense_points(rcs[k], element_positions, motions[k], wavelength=wavelength,
+                              range_axis=range_axis, gates=gates,
+                              channel_slot=options.get("channel_slot")) for k in pick]
+        points = np.concatenate([p for p, _ in found])
+        groups = sector_groups(points)
+        # a hover repeats one look: the same scatterers mix in the same cells in every
+        # frame, so the frames together hold one frame's information on that error
+        found = [(p, c * pick.size) for p, c in found]
+    else:
+        found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
+                               wavelength=wavelength, range_axis=range_axis, gates=gates,
+                               **options) for rc, m in zip(rcs, motions, strict=True)]
         found = [world_directions(p, rot, c) for p, c in found]
-    fit = fit_ground_plane(np.concatenate([p for p, _ in found]),
-                           np.concatenate([c for _, c in found]),
-                           groups=np.concatenate([np.full(len(p), k) for k, (p, _) in
-                                                  enumerate(found)]).astype(int), warn=False)
+        points = np.concatenate([p for p, _ in found])
+        groups = np.concatenate([np.full(len(p), k) for k, (p, _) in enumerate(found)])
+    fit = fit_ground_plane(points, np.concatenate([c for _, c in found]),
+                           groups=groups.astype(int), warn=False)
     r_axis = np.asarray(range_axis, dtype=float)
     g = np.asarray(gates, dtype=int)
     if fit.points == 0:
