@@ -49,6 +49,7 @@ def _oracle_db(theta_deg: float, phi_deg: float, lobes, k1: float, k2: float) ->
     raise AssertionError(f"no lobe for theta {theta_deg}, phi {phi_deg}")
 
 
+@pytest.mark.sionna
 def test_lobe_centres_give_g_max(rt_backend):
     """Aspect and elevation of each lobe's centre (theta = 90 - el, phi = az) give its
     peak G_max of Table 7.9.2.1-4: front (nose, 18.25 deg up) 15.52, left and right
@@ -72,6 +73,7 @@ def test_lobe_centres_give_g_max(rt_backend):
     assert r.mean_dbsm[1, 0] < back.g_max - 0.5
 
 
+@pytest.mark.sionna
 def test_model_is_eq_7_9_2_3(rt_backend):
     """Sionna's evaluation on a grid of aspects and elevations (the lobes' boundaries at
     45 and 135 deg aspect and 60 deg elevation left out: there two lobes' floors differ
@@ -99,6 +101,7 @@ def test_model_is_eq_7_9_2_3(rt_backend):
             assert r.mean_dbsm[i] == pytest.approx(r.mean_dbsm[k[0]], abs=FLOAT32_DB_TOL), a
 
 
+@pytest.mark.sionna
 def test_band_matches_sionnas_draws(rt_backend):
     """The 5-95 % band (and the median) of sigma_S, from its Gaussian in dB with mean
     -ln(10)/20 s^2, equal the quantiles of Sionna's own draws (random_sigma_s) over
@@ -139,6 +142,7 @@ def test_bad_angles_refused():
         sector_median_db(np.zeros(3), [0.0, 10.0, 20.0], "back")
 
 
+@pytest.mark.sionna
 def test_table_has_the_model_at_every_elevation(rt_backend):
     """The study's table carries the model's mean and 5-95 % band on every row."""
     from raysim.studies.car_rcs import MEASURED_DBSM, CarRcs, table_markdown
@@ -170,24 +174,38 @@ def sedan_sweep(rt_backend):
     return car_rcs(car_model("sedan"), az, COMPARED_ELEVATIONS_DEG)
 
 
-@pytest.mark.parametrize("sector", ["front", "side", "back"])
-def test_sedan_sector_median_within_the_models_band(sedan_sweep, sector):
+#: Cases of the comparison where the statistic does not hold, with the values of the
+#: run that showed it (sedan / model median, dBsm; docs/cars.md). Strict: a case that
+#: comes to hold fails the suite, so this list and the docs are revisited.
+DISAGREE = {("front", 30.0): "sedan -14.0 vs model 9.3 dBsm: 23 dB under the band",
+            ("side", 0.0): "sedan 3.5 vs model 12.1 dBsm: 8.6 dB under (band 5.6 dB)",
+            ("side", 30.0): "sedan -11.8 vs model 10.4 dBsm: 22 dB under the band",
+            ("back", 0.0): "sedan 14.3 vs model 8.6 dBsm: 5.7 dB over (band 5.6 dB)",
+            ("back", 30.0): "sedan -9.9 vs model 6.1 dBsm: 16 dB under the band"}
+
+
+@pytest.mark.sionna
+@pytest.mark.slow
+@pytest.mark.parametrize("sector,elevation", [
+    pytest.param(s, e, marks=[pytest.mark.xfail(strict=True, reason=DISAGREE[(s, e)])]
+                 if (s, e) in DISAGREE else [])
+    for s in ("front", "side", "back") for e in COMPARED_ELEVATIONS_DEG])
+def test_sedan_sector_median_within_the_models_band(sedan_sweep, sector, elevation):
     """Statistic (chosen before any comparison was run): per lobe sector (front 0-45,
     side 45-135, back 135-180 deg aspect) and elevation (0 and 30 deg), the median over
     the sector's aspects of the sedan's RCS [dBsm] lies within the model's 5-95 % band
     about the median over the same aspects of the model's median, i.e. within
     ``1.645 sigma_S,dB`` = 5.61 dB (sigma_S's lognormal spread, 3.41 dB). Raw samples
     every 10 deg, not aspect-averaged: the median is robust to the flashes that the
-    coarse grid hits or misses."""
+    coarse grid hits or misses. Holds for the front at ground level only (DISAGREE)."""
     from raysim.studies.car_rcs_3gpp import sector_median_db, tr38901_vehicle_rcs
 
     r = sedan_sweep
-    model = tr38901_vehicle_rcs(r.azimuth_deg, r.elevation_deg)
-    sedan = sector_median_db(10 * np.log10(r.po_m2), r.azimuth_deg, sector)
-    ref = sector_median_db(model.median_dbsm, r.azimuth_deg, sector)
-    half_band = model.high_dbsm[0, 0] - model.median_dbsm[0, 0]
-    for j, e in enumerate(r.elevation_deg):
-        print(f"{sector} at {e:g} deg: sedan {sedan[j]:.1f} dBsm, model median {ref[j]:.1f} "
-              f"dBsm (band {ref[j] - half_band:.1f} to {ref[j] + half_band:.1f})")
-    for j, e in enumerate(r.elevation_deg):
-        assert abs(sedan[j] - ref[j]) <= half_band, (sector, e, sedan[j], ref[j])
+    j = int(np.flatnonzero(r.elevation_deg == elevation)[0])
+    model = tr38901_vehicle_rcs(r.azimuth_deg, [elevation])
+    sedan = float(sector_median_db(10 * np.log10(r.po_m2[:, j]), r.azimuth_deg, sector))
+    ref = float(sector_median_db(model.median_dbsm[:, 0], r.azimuth_deg, sector))
+    half_band = float(model.high_dbsm[0, 0] - model.median_dbsm[0, 0])
+    print(f"{sector} at {elevation:g} deg: sedan {sedan:.1f} dBsm, model median {ref:.1f} "
+          f"dBsm (band {ref - half_band:.1f} to {ref + half_band:.1f})")
+    assert abs(sedan - ref) <= half_band, (sector, elevation, sedan, ref)
