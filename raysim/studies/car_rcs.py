@@ -16,6 +16,10 @@ wave); with diffraction the PTD fringe wave of the conducting parts' sharp edges
 (:mod:`raysim.echoes.po.edges`) is added coherently. Measurements average the
 power over a few degrees of aspect (turntable steps, a beam's width): the table
 averages the power over ``+-AVERAGE_HALF_WIDTH_DEG``.
+
+Beside the meshes the table gives the 3GPP TR 38.901 vehicle (RCS model 2, one
+scattering point; :mod:`raysim.studies.car_rcs_3gpp`): its mean and 5-95 % band
+at every elevation, and per lobe sector the cars' medians against it.
 """
 
 from __future__ import annotations
@@ -424,7 +428,11 @@ def main(argv=None) -> int:
                   f"(wall clock)", file=sys.stderr)
         centres[name] = {(a, e): scattering_centres(parts, a, e, range_m=args.range_m)
                          for a in (30, 60, 90, 150) for e in (0, 45)}
-    from raysim.studies.car_rcs_3gpp import TR38901_PROVENANCE, tr38901_vehicle_rcs
+    from raysim.studies.car_rcs_3gpp import (
+        TR38901_PROVENANCE,
+        sector_table_markdown,
+        tr38901_vehicle_rcs,
+    )
 
     model = tr38901_vehicle_rcs(az, el)
     text = ["## RCS versus aspect (+-2.5 deg power average)\n",
@@ -432,6 +440,11 @@ def main(argv=None) -> int:
             f"{TR38901_PROVENANCE}), its mean and the 5-95 % band of its lognormal spread, "
             f"at every elevation.\n", table_markdown(results, model=model),
             "\n## Over all aspects 0-180 deg\n", summary_markdown(results, model),
+            "\n## Per lobe sector against the TR 38.901 vehicle\n",
+            "Medians over each lobe's aspect sector (front 0-45, side 45-135, back 135-180 "
+            "deg) of the +-2.5 deg averages (PO + SBR, VV), against the model's median and "
+            "its 5-95 % band (lognormal sigma_S, 3.41 dB).\n",
+            sector_table_markdown(results, model),
             "\n## Scattering centres (0.25 m cells, VV)\n",
             "The strongest centres: part, share of the power, position (x forward, y left, "
             "z up from the ground under the car's centre) [m].\n",

@@ -29,7 +29,8 @@ import numpy as np
 
 __all__ = ["TR38901_OBJECT_TYPE", "TR38901_MODEL", "TR38901_PROVENANCE", "BAND_PROBABILITIES",
            "VehicleModelRcs", "tr38901_parameters", "model_angles_deg", "sigma_s_quantile_db",
-           "tr38901_vehicle_rcs", "LOBE_SECTORS_DEG", "sector_median_db"]
+           "tr38901_vehicle_rcs", "LOBE_SECTORS_DEG", "sector_median_db",
+           "sector_table_markdown"]
 
 #: Sensing target of Sionna's tables: the vehicle with a single scattering point.
 TR38901_OBJECT_TYPE = "vehicle-single-sp"
@@ -176,3 +177,43 @@ def sector_median_db(values_db, azimuth_deg, sector: str) -> np.ndarray:
     if not inside.any():
         raise ValueError(f"no aspect in the {sector} sector {lo:g}-{hi:g} deg: {az}")
     return np.median(np.asarray(values_db, float)[inside], axis=0)
+
+
+def sector_table_markdown(results: dict, model: VehicleModelRcs) -> str:
+    """Markdown table: per car, elevation and lobe sector, the median over the sector of
+    the car's ``+-2.5 deg`` averaged PO + SBR RCS against the model's median and band.
+
+    Parameters
+    ----------
+    results : dict
+        Car name -> :class:`raysim.studies.car_rcs.CarRcs` (aspects 0-180 deg).
+    model : VehicleModelRcs
+        On the same aspects and elevations.
+
+    Returns
+    -------
+    str
+        One row per car, elevation and sector; the last column says whether the car's
+        median lies inside the model's 5-95 % band about the model's median, or by how
+        many dB it misses it.
+    """
+    from raysim.studies.car_rcs import aspect_average
+
+    lines = ["| model | elevation [deg] | sector | car, median of the averages [dBsm] | "
+             "TR 38.901 median (5-95 %) [dBsm] | car against the band |",
+             "|---|---|---|---|---|---|"]
+    half = sigma_s_quantile_db(BAND_PROBABILITIES[1], model.sigma_s_std_db) \
+        - sigma_s_quantile_db(0.5, model.sigma_s_std_db)
+    for name, r in results.items():
+        car = 10 * np.log10(aspect_average(r.po_m2, r.azimuth_deg))
+        for j, e in enumerate(r.elevation_deg):
+            k = int(np.flatnonzero(np.isclose(model.elevation_deg, e))[0])
+            for sector in LOBE_SECTORS_DEG:
+                c = float(sector_median_db(car[:, j], r.azimuth_deg, sector))
+                m = float(sector_median_db(model.median_dbsm[:, k], model.azimuth_deg, sector))
+                d = c - m
+                verdict = ("inside" if abs(d) <= half else
+                           f"{'over' if d > 0 else 'under'} by {abs(d) - half:.1f} dB")
+                lines.append(f"| {name} | {e:g} | {sector} | {c:.1f} | {m:.1f} ({m - half:.1f} "
+                             f"to {m + half:.1f}) | {verdict} |")
+    return "\n".join(lines) + "\n"
