@@ -444,7 +444,8 @@ def main(argv=None) -> int:
             "Medians over each lobe's aspect sector (front 0-45, side 45-135, back 135-180 "
             "deg) of the +-2.5 deg averages (PO + SBR, VV), against the model's median and "
             "its 5-95 % band (lognormal sigma_S, 3.41 dB).\n",
-            sector_table_markdown(results, model),
+            sector_table_markdown({n: (r.azimuth_deg, r.elevation_deg, 10 * np.log10(
+                aspect_average(r.po_m2, r.azimuth_deg))) for n, r in results.items()}, model),
             "\n## Scattering centres (0.25 m cells, VV)\n",
             "The strongest centres: part, share of the power, position (x forward, y left, "
             "z up from the ground under the car's centre) [m].\n",

@@ -179,14 +179,16 @@ def sector_median_db(values_db, azimuth_deg, sector: str) -> np.ndarray:
     return np.median(np.asarray(values_db, float)[inside], axis=0)
 
 
-def sector_table_markdown(results: dict, model: VehicleModelRcs) -> str:
+def sector_table_markdown(cars: dict, model: VehicleModelRcs) -> str:
     """Markdown table: per car, elevation and lobe sector, the median over the sector of
-    the car's ``+-2.5 deg`` averaged PO + SBR RCS against the model's median and band.
+    the car's RCS against the model's median and band.
 
     Parameters
     ----------
-    results : dict
-        Car name -> :class:`raysim.studies.car_rcs.CarRcs` (aspects 0-180 deg).
+    cars : dict
+        Car name -> ``(azimuth_deg [aspect], elevation_deg [elevation], rcs_dbsm [aspect,
+        elevation])``: aspects 0-180 deg, the RCS in dBsm (the study's ``+-2.5 deg``
+        power averages).
     model : VehicleModelRcs
         On the same aspects and elevations.
 
@@ -197,19 +199,16 @@ def sector_table_markdown(results: dict, model: VehicleModelRcs) -> str:
         median lies inside the model's 5-95 % band about the model's median, or by how
         many dB it misses it.
     """
-    from raysim.studies.car_rcs import aspect_average
-
-    lines = ["| model | elevation [deg] | sector | car, median of the averages [dBsm] | "
+    lines = ["| model | elevation [deg] | sector | car, median [dBsm] | "
              "TR 38.901 median (5-95 %) [dBsm] | car against the band |",
              "|---|---|---|---|---|---|"]
     half = sigma_s_quantile_db(BAND_PROBABILITIES[1], model.sigma_s_std_db) \
         - sigma_s_quantile_db(0.5, model.sigma_s_std_db)
-    for name, r in results.items():
-        car = 10 * np.log10(aspect_average(r.po_m2, r.azimuth_deg))
-        for j, e in enumerate(r.elevation_deg):
+    for name, (az, el, car) in cars.items():
+        for j, e in enumerate(np.asarray(el, float)):
             k = int(np.flatnonzero(np.isclose(model.elevation_deg, e))[0])
             for sector in LOBE_SECTORS_DEG:
-                c = float(sector_median_db(car[:, j], r.azimuth_deg, sector))
+                c = float(sector_median_db(np.asarray(car)[:, j], az, sector))
                 m = float(sector_median_db(model.median_dbsm[:, k], model.azimuth_deg, sector))
                 d = c - m
                 verdict = ("inside" if abs(d) <= half else
