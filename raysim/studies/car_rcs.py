@@ -337,15 +337,15 @@ def table_markdown(results: dict, aspects=tuple(MEASURED_DBSM), model=None) -> s
 
 
 def _model_cell(model, aspect: float, elevation: float) -> str:
-    """``mean (low to high)`` of ``model`` at one grid direction [dBsm], or ``-``."""
+    """``mean (low to high)`` of ``model`` [dBsm] at its aspect nearest ``aspect`` (as the
+    cars' rows) and at ``elevation``, or ``-`` without a model."""
     if model is None:
         return "-"
-    i = np.flatnonzero(np.isclose(model.azimuth_deg, aspect))
     j = np.flatnonzero(np.isclose(model.elevation_deg, elevation))
-    if not (i.size and j.size):
-        raise ValueError(f"the TR 38.901 model has no value at aspect {aspect:g} deg, "
-                         f"elevation {elevation:g} deg")
-    i, j = i[0], j[0]
+    if not j.size:
+        raise ValueError(f"the TR 38.901 model has no value at elevation {elevation:g} deg "
+                         f"(it has {model.elevation_deg})")
+    i, j = int(np.argmin(np.abs(model.azimuth_deg - aspect))), j[0]
     return (f"{model.mean_dbsm[i, j]:.1f} ({model.low_dbsm[i, j]:.1f} to "
             f"{model.high_dbsm[i, j]:.1f})")
 
