@@ -17,6 +17,13 @@ of a tube after bounces on flat facets is a spherical wave from the image of
 ``P`` (amplitude ``R / s`` at unfolded path length ``s``, cross-section
 ``dOmega s^2``), and the return to ``P`` carries ``R / R_b`` and
 ``exp(-j k R_b)``.
+
+Curved surfaces: a tube reflects on the interpolated normal of the smooth
+surface the facets sample (:meth:`RayScene.shading_normals`), and its term is
+scaled by its spreading since launch, measured from its neighbours in the
+launch grid (:func:`_spreading`): a concave reflector's exit aperture then
+radiates with the geometric-optics weight, and a caustic (a focus) turns the
+phase. After flat facets only the factor is 1.
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from raysim.echoes.po.edges import SHARP_EDGE_DEG
 from raysim.echoes.po.integral import po_vector, reflect
 from raysim.echoes.po.mesh import PoMaterial
 from raysim.echoes.po.rays import RayScene
@@ -45,8 +53,20 @@ def launch_grid(scene: RayScene, u: np.ndarray, e_h: np.ndarray, e_v: np.ndarray
 
     Far field: orthographic projection of the vertices (or of the points
     ``cover``, shape ``[point, 3]``, when given); near field: their central
-    projection from the radar at ``range_m * u``.
+    projection from the radar at ``range_m * u``. Tube ``i ny + j`` lies at
+    column ``i`` (along ``e_h``) and row ``j`` (along ``e_v``) of ``ny`` rows.
     """
+    return _grid(*_launch_axes(scene, u, e_h, e_v, spacing, range_m, cover), e_h, e_v)
+
+
+def _grid(xs, ys, e_h, e_v):
+    """Tube centres of columns ``xs`` and rows ``ys`` [m], shape ``[ray, 3]`` (``i ny + j``)."""
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    return gx.reshape(-1, 1) * e_h + gy.reshape(-1, 1) * e_v
+
+
+def _launch_axes(scene, u, e_h, e_v, spacing, range_m, cover):
+    """Columns and rows of :func:`launch_grid`: coordinates along ``e_h`` and ``e_v`` [m]."""
     v = scene.mesh.vertices if cover is None else np.asarray(cover, dtype=float)
     if range_m is not None:
         depth = range_m - v @ u
@@ -62,8 +82,51 @@ def launch_grid(scene: RayScene, u: np.ndarray, e_h: np.ndarray, e_v: np.ndarray
     check_memory(SBR_BYTES_PER_RAY * n, f"{n} SBR ray tubes ({xs.size} x {ys.size} at "
                  f"{spacing:.3g} m)", "--rays-per-wavelength, the target size or "
                  "--max-bounces 1")
-    gx, gy = np.meshgrid(xs, ys, indexing="ij")
-    return gx.reshape(-1, 1) * e_h + gy.reshape(-1, 1) * e_v
+    return xs, ys
+
+
+def _spreading(tube, ny, x, d, a, b, normal, smooth, width):
+    """Divergence and caustic factor of the tubes at one hit, shape ``[ray]`` (complex).
+
+    The tube's cross-section at this hit is spanned by the hit points of its
+    neighbours in the launch grid (forward, else backward), projected normal to
+    ``d`` and measured in the tube's reflected frame ``(a, b)`` [m]: the matrix
+    ``M`` (``2 x 2``, over ``width``) is the identity after flat facets only.
+    The field scales as ``1 / sqrt|det M|`` and the footprint as ``|det M|``:
+    the term by ``sqrt|det M|`` (Deschamps' GO spreading), times ``j`` per
+    caustic crossed (negative eigenvalue of ``M``; Kouyoumjian & Pathak 1974).
+    A tube without a neighbour on the same smooth surface at every hit
+    (``smooth``, shape ``[grid, 2]``) keeps the factor 1.
+    """
+    n_grid = len(smooth)
+    pos = np.full((n_grid, 3), np.nan)
+    pos[tube] = x
+    nrm = np.zeros((n_grid, 3))
+    nrm[tube] = normal
+    live = np.zeros(n_grid, bool)
+    live[tube] = True
+    cos_max = np.cos(np.radians(SHARP_EDGE_DEG))
+    col, row = tube // ny, tube % ny
+    nx = n_grid // ny
+    span = []
+    for axis, (step, lo, hi) in enumerate(((ny, col, nx), (1, row, ny))):
+        fwd = np.where(lo + 1 < hi, tube + step, tube)
+        bwd = np.where(lo > 0, tube - step, tube)
+        ok_f = (fwd != tube) & live[fwd] & (np.einsum("ri,ri->r", nrm[fwd], normal) >= cos_max)
+        ok_b = (bwd != tube) & live[bwd] & (np.einsum("ri,ri->r", nrm[bwd], normal) >= cos_max)
+        smooth[tube, axis] &= ok_f | ok_b
+        delta = np.where(ok_f[:, None], pos[fwd] - x, x - pos[bwd])
+        delta = delta - np.einsum("ri,ri->r", delta, d)[:, None] * d
+        span.append((delta, ok_f | ok_b))
+    (dx, okx), (dy, oky) = span
+    w = np.broadcast_to(width, (len(tube),))
+    m11, m12 = np.einsum("ri,ri->r", dx, a) / w, np.einsum("ri,ri->r", dy, a) / w
+    m21, m22 = np.einsum("ri,ri->r", dx, b) / w, np.einsum("ri,ri->r", dy, b) / w
+    det, trace = m11 * m22 - m12 * m21, m11 + m22
+    caustics = np.where(det < 0, 1, np.where(trace < 0, 2, 0))
+    factor = np.sqrt(np.abs(det)) * 1j ** caustics
+    good = okx & oky & smooth[tube].all(axis=1) & np.isfinite(factor)
+    return np.where(good, factor, 1.0 + 0j)
 
 
 def _tube_integral(q, a, b, n, d, spacing):
@@ -154,7 +217,8 @@ def _per_material(materials, which, fn, *arrays):
 
 
 def _via_ground(scene, material, facet_material, ground, coherence, mirror, radar, range_m,
-                k, e_pol, radiate, hit, first, x, lifted, d, e, n, a, b, which, width, path):
+                k, e_pol, radiate, hit, first, x, lifted, d, e, n, a, b, which, width, path,
+                spread):
     """Terms of target hits that return to the radar by a ground bounce (image method).
 
     The tube footprint radiates towards the radar's image ``mirror`` (its far
@@ -194,7 +258,7 @@ def _via_ground(scene, material, facet_material, ground, coherence, mirror, rada
     total = path[sel] + r_b
     amp = (range_m / path[sel]) * (range_m / r_b) * np.exp(-1j * k * (total - 2 * range_m))
     term = ((-1j * k / (4 * np.pi)) * (vec @ e_pol) * amp
-            * _tube_integral(k * (back - d_), a_, b_, n_, d_, width[sel]))
+            * _tube_integral(k * (back - d_), a_, b_, n_, d_, width[sel]) * spread[sel])
     return TubeTerms(term, first[sel], s, total, up[ok] / r_up[ok][:, None],
                      np.full(len(sel), hit + 1), 0)
 
@@ -225,7 +289,9 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
     if max_bounces < 2:
         return empty
     k = 2 * np.pi / wavelength
-    grid = launch_grid(scene, u, e_h, e_v, spacing, range_m, cover)
+    xs, ys = _launch_axes(scene, u, e_h, e_v, spacing, range_m, cover)
+    grid = _grid(xs, ys, e_h, e_v)
+    ny = len(ys)
     lift = 2 * scene.mesh.radius + 1.0
     if range_m is None:
         d = np.broadcast_to(-u, grid.shape).copy()
@@ -241,6 +307,8 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
         path = np.zeros(len(grid))                           # unfolded length from P
         domega = spacing**2 * (range_m / rho) / rho**2       # tube solid angle [sr]
     e = np.broadcast_to(e_pol.astype(complex), grid.shape).copy()
+    tube = np.arange(len(grid))
+    smooth = np.ones((len(grid), 2), bool)
     a = np.broadcast_to(e_h, grid.shape).copy()
     b = np.broadcast_to(e_v, grid.shape).copy()
     first = None
@@ -259,15 +327,23 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
         keep = facet >= 0
         if not keep.any():
             break
-        o, d, e, a, b, t, facet, path = (x[keep] for x in (o, d, e, a, b, t, facet, path))
+        o, d, e, a, b, t, facet, path, tube = (x[keep] for x in (o, d, e, a, b, t, facet, path,
+                                                                 tube))
         if domega is not None:
             domega = domega[keep]
         x = o + t[:, None] * d
         first = x if first is None else first[keep]
         path = path + t
-        n = scene.normals[facet]
-        n = n * -np.sign(np.einsum("ri,ri->r", n, d))[:, None]
-        lifted = x + scene.epsilon * n
+        flat = scene.normals[facet]
+        side = -np.sign(np.einsum("ri,ri->r", flat, d))[:, None]
+        flat = flat * side
+        lifted = x + scene.epsilon * flat
+        n, spread = flat, np.ones(len(x), complex)
+        if scene.curved:     # reflect as the smooth surface the facets sample
+            n = scene.shading_normals(facet, x) * side
+            n = np.where((np.einsum("ri,ri->r", n, d) < 0)[:, None], n, flat)
+            spread = _spreading(tube, ny, x, d, a, b, flat, smooth,
+                                spacing if domega is None else np.sqrt(domega) * path)
         which = None if facet_material is None else facet_material[facet]
         on_ground = None
         if ground is not None:
@@ -296,14 +372,14 @@ def sbr_contributions(scene: RayScene, material, u: np.ndarray, e_pol: np.ndarra
                 vec = _per_material(material, which, po_vector, d, e, n,
                                     np.ascontiguousarray(np.broadcast_to(back, d.shape)))
                 term = ((-1j * k / (4 * np.pi)) * (vec @ e_pol) * amp
-                        * _tube_integral(k * (back - d), a, b, n, d, width))
+                        * _tube_integral(k * (back - d), a, b, n, d, width) * spread)
                 out.append(TubeTerms(term[seen], first[seen], x[seen], total[seen],
                                      np.array(back)[seen], np.full(int(seen.sum()), hit), 0))
             if on_ground is not None and radiate.any():
                 out.append(_via_ground(scene, material, facet_material, ground, coherence,
                                        mirror, radar, range_m, k, e_pol, radiate, hit,
                                        first, x, lifted, d, e, n, a, b, which,
-                                       np.sqrt(domega) * path, path))
+                                       np.sqrt(domega) * path, path, spread))
         d_new, e = _per_material(material, which, reflect, d, e, n)
         if on_ground is not None and coherence is not None and on_ground.any():
             rough = np.ones(len(facet))
