@@ -145,6 +145,7 @@ def tr38901_vehicle_rcs(azimuth_deg, elevation_deg) -> VehicleModelRcs:
     a, e = np.meshgrid(np.radians(az), np.radians(el), indexing="ij")
     u = [np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]
     k_s = mi.Vector3f(*(mi.Float(c.ravel()) for c in u))
+    # monostatic: the wave arrives along -u and returns along u (bistatic angle 0)
     mean = np.array(rcs.sigma_md_db(-k_s, k_s), float).reshape(a.shape)
     return VehicleModelRcs(az, el, mean, params.sigma_s_db)
 
