@@ -16,6 +16,10 @@ wave); with diffraction the PTD fringe wave of the conducting parts' sharp edges
 (:mod:`raysim.echoes.po.edges`) is added coherently. Measurements average the
 power over a few degrees of aspect (turntable steps, a beam's width): the table
 averages the power over ``+-AVERAGE_HALF_WIDTH_DEG``.
+
+Beside the meshes the table gives the 3GPP TR 38.901 vehicle (RCS model 2, one
+scattering point; :mod:`raysim.studies.car_rcs_3gpp`): its mean and 5-95 % band
+at every elevation, and per lobe sector the cars' medians against it.
 """
 
 from __future__ import annotations
@@ -304,16 +308,20 @@ def scattering_centres(parts, az: float, el: float, *, range_m: float = 50.0,
     return {"count": len(power), "n90": n90, "centres": out}
 
 
-def table_markdown(results: dict, aspects=tuple(MEASURED_DBSM)) -> str:
+def table_markdown(results: dict, aspects=tuple(MEASURED_DBSM), model=None) -> str:
     """Markdown table: aspect, elevation, PO + SBR, PO + SBR + PTD, measured range [dBsm]
-    with its provenance (:data:`MEASURED_PROVENANCE`).
+    with its provenance (:data:`MEASURED_PROVENANCE`), and the 3GPP TR 38.901 vehicle.
 
     ``results`` maps a model name to a :class:`CarRcs` computed with diffraction
-    on a 1 deg aspect grid; values are the ``+-2.5 deg`` power averages.
+    on a 1 deg aspect grid; values are the ``+-2.5 deg`` power averages. ``model``
+    (:class:`raysim.studies.car_rcs_3gpp.VehicleModelRcs` on the aspects and the
+    results' elevations) fills the last column with its mean and 5-95 % band at
+    every elevation; without it the column is ``-``.
     """
     lines = ["| model | aspect [deg] | elevation [deg] | PO + SBR [dBsm] | "
-             "PO + SBR + PTD [dBsm] | measured, ground level [dBsm] (provenance) |",
-             "|---|---|---|---|---|---|"]
+             "PO + SBR + PTD [dBsm] | measured, ground level [dBsm] (provenance) | "
+             "TR 38.901 vehicle, mean (5-95 %) [dBsm] |",
+             "|---|---|---|---|---|---|---|"]
     for name, r in results.items():
         po = 10 * np.log10(aspect_average(r.po_m2, r.azimuth_deg))
         di = 10 * np.log10(aspect_average(r.diffraction_m2, r.azimuth_deg))
@@ -323,12 +331,31 @@ def table_markdown(results: dict, aspects=tuple(MEASURED_DBSM)) -> str:
                 meas = MEASURED_DBSM.get(a)
                 m = (f"{meas[0]:g} to {meas[1]:g} ({MEASURED_PROVENANCE[a]})"
                      if (meas and e <= 5) else "-")
-                lines.append(f"| {name} | {a:g} | {e:g} | {po[i, j]:.1f} | {di[i, j]:.1f} | {m} |")
+                lines.append(f"| {name} | {a:g} | {e:g} | {po[i, j]:.1f} | {di[i, j]:.1f} | {m} "
+                             f"| {_model_cell(model, a, e)} |")
     return "\n".join(lines) + "\n"
 
 
-def summary_markdown(results: dict) -> str:
-    """Per model and elevation: median, 10-90 % range and largest 10 deg swing [dB]."""
+def _model_cell(model, aspect: float, elevation: float) -> str:
+    """``mean (low to high)`` of ``model`` [dBsm] at its aspect nearest ``aspect`` (as the
+    cars' rows) and at ``elevation``, or ``-`` without a model."""
+    if model is None:
+        return "-"
+    j = np.flatnonzero(np.isclose(model.elevation_deg, elevation))
+    if not j.size:
+        raise ValueError(f"the TR 38.901 model has no value at elevation {elevation:g} deg "
+                         f"(it has {model.elevation_deg})")
+    i, j = int(np.argmin(np.abs(model.azimuth_deg - aspect))), j[0]
+    return (f"{model.mean_dbsm[i, j]:.1f} ({model.low_dbsm[i, j]:.1f} to "
+            f"{model.high_dbsm[i, j]:.1f})")
+
+
+def summary_markdown(results: dict, model=None) -> str:
+    """Per model and elevation: median, 10-90 % range and largest 10 deg swing [dB].
+
+    ``model`` (:class:`raysim.studies.car_rcs_3gpp.VehicleModelRcs`, on the results'
+    grid) adds a row per elevation: the median and 10-90 % of its mean over aspect.
+    """
     lines = ["| model | elevation [deg] | median PO + SBR (PTD) [dBsm] | 10-90 % [dBsm] | "
              "swing in 10 deg, samples / averaged [dB] |", "|---|---|---|---|---|"]
     for name, r in results.items():
@@ -341,6 +368,11 @@ def summary_markdown(results: dict) -> str:
             lines.append(f"| {name} | {e:g} | {np.median(10 * np.log10(po_avg[:, j])):.1f} "
                          f"({np.median(db):.1f}) | {np.percentile(db, 10):.1f} to "
                          f"{np.percentile(db, 90):.1f} | {raw_swing[j]:.1f} / {avg_swing[j]:.1f} |")
+    if model is not None:
+        for j, e in enumerate(model.elevation_deg):
+            db = model.mean_dbsm[:, j]
+            lines.append(f"| TR 38.901 vehicle, mean | {e:g} | {np.median(db):.1f} | "
+                         f"{np.percentile(db, 10):.1f} to {np.percentile(db, 90):.1f} | - |")
     return "\n".join(lines) + "\n"
 
 
@@ -396,8 +428,24 @@ def main(argv=None) -> int:
                   f"(wall clock)", file=sys.stderr)
         centres[name] = {(a, e): scattering_centres(parts, a, e, range_m=args.range_m)
                          for a in (30, 60, 90, 150) for e in (0, 45)}
-    text = ["## RCS versus aspect (+-2.5 deg power average)\n", table_markdown(results),
-            "\n## Over all aspects 0-180 deg\n", summary_markdown(results),
+    from raysim.studies.car_rcs_3gpp import (
+        TR38901_PROVENANCE,
+        sector_table_markdown,
+        tr38901_vehicle_rcs,
+    )
+
+    model = tr38901_vehicle_rcs(az, el)
+    text = ["## RCS versus aspect (+-2.5 deg power average)\n",
+            f"The last column: the 3GPP TR 38.901 vehicle (RCS model 2, one scattering point; "
+            f"{TR38901_PROVENANCE}), its mean and the 5-95 % band of its lognormal spread, "
+            f"at every elevation.\n", table_markdown(results, model=model),
+            "\n## Over all aspects 0-180 deg\n", summary_markdown(results, model),
+            "\n## Per lobe sector against the TR 38.901 vehicle\n",
+            "Medians over each lobe's aspect sector (front 0-45, side 45-135, back 135-180 "
+            "deg) of the +-2.5 deg averages (PO + SBR, VV), against the model's median and "
+            "its 5-95 % band (lognormal sigma_S, 3.41 dB).\n",
+            sector_table_markdown({n: (r.azimuth_deg, r.elevation_deg, 10 * np.log10(
+                aspect_average(r.po_m2, r.azimuth_deg))) for n, r in results.items()}, model),
             "\n## Scattering centres (0.25 m cells, VV)\n",
             "The strongest centres: part, share of the power, position (x forward, y left, "
             "z up from the ground under the car's centre) [m].\n",
