@@ -1,8 +1,10 @@
-"""The 3GPP TR 38.901 vehicle RCS model (raysim.studies.car_rcs_3gpp) and the sedan against it.
+"""The 3GPP TR 38.901 vehicle RCS model (raysim.studies.car_rcs_3gpp).
 
 The model is evaluated by Sionna RT's ``TR38901RCS``; these tests check the angle mapping
 on the lobe centres, eq. 7.9.2-3 written out here, the 5-95 % band against Sionna's own
-draws of ``sigma_S``, and compare the sedan's swept RCS with the model per lobe sector.
+draws of ``sigma_S``, and the verdicts of the study's per-sector table. The sedan is
+compared with the model on the study's full sweep (docs/cars.md), not here: a sweep
+coarse enough for a test fixes a sector's median no better than the model's spread.
 """
 
 from __future__ import annotations
@@ -22,12 +24,6 @@ QUANTILE_TOL_DB = 0.25
 #: Five standard errors of the draws' linear mean (lognormal, deviation 0.92 for
 #: s = 3.41 dB: ``sqrt(exp((s ln10 / 10)^2) - 1)``).
 LINEAR_MEAN_TOL = 5 * 0.92 / math.sqrt(SIGMA_S_DRAWS)
-#: Aspect step of the sedan's sweep in the comparison [deg] (0-180 deg: 19 aspects).
-SEDAN_ASPECT_STEP_DEG = 10.0
-#: Elevations of the comparison [deg]: ground level and the drone's lowest. At 45 and
-#: 60 deg the model is at the floor ``G_max - sigma_max`` (about 7.1 dBsm) at most
-#: aspects: the fit's clip, not a lobe's shape (docs/cars.md).
-COMPARED_ELEVATIONS_DEG = (0.0, 30.0)
 
 
 def _oracle_db(theta_deg: float, phi_deg: float, lobes, k1: float, k2: float) -> float:
@@ -162,56 +158,6 @@ def test_table_has_the_model_at_every_elevation(rt_backend):
                             f"{model.high_dbsm[i, j]:.1f})")
     assert model.high_dbsm[0, 0] - model.mean_dbsm[0, 0] == pytest.approx(4.27, abs=0.01)
     assert model.mean_dbsm[0, 0] - model.low_dbsm[0, 0] == pytest.approx(6.95, abs=0.01)
-
-
-@pytest.fixture(scope="module")
-def sedan_sweep(rt_backend):
-    """The study's sedan (openings, 5 cm facets), VV, PO + SBR at 50 m, every
-    SEDAN_ASPECT_STEP_DEG of aspect at COMPARED_ELEVATIONS_DEG."""
-    from raysim.studies.car_rcs import car_model, car_rcs
-
-    az = np.arange(0.0, 180.0 + 1e-9, SEDAN_ASPECT_STEP_DEG)
-    return car_rcs(car_model("sedan"), az, COMPARED_ELEVATIONS_DEG)
-
-
-#: Cases of the comparison where the statistic does not hold, with the values of the
-#: run that showed it (sedan / model median, dBsm; docs/cars.md). Strict: a case that
-#: comes to hold fails the suite, so this list and the docs are revisited. At ground
-#: level the verdicts depend on the 10 deg grid: the study's 2 deg, +-2.5 deg averaged
-#: sweep puts the front over the band and the side and back inside (docs/cars.md).
-DISAGREE = {("front", 0.0): "sedan 0.8 vs model 6.6 dBsm: 0.1 dB under the band (5.6 dB)",
-            ("front", 30.0): "sedan -0.8 vs model 9.3 dBsm: 4.5 dB under the band",
-            ("side", 0.0): "sedan 4.7 vs model 12.1 dBsm: 1.8 dB under the band",
-            ("side", 30.0): "sedan -4.4 vs model 10.4 dBsm: 9.2 dB under the band",
-            ("back", 0.0): "sedan 14.3 vs model 8.6 dBsm: 0.1 dB over the band",
-            ("back", 30.0): "sedan -5.5 vs model 6.1 dBsm: 6.0 dB under the band"}
-
-
-@pytest.mark.sionna
-@pytest.mark.slow
-@pytest.mark.parametrize("sector,elevation", [
-    pytest.param(s, e, marks=[pytest.mark.xfail(strict=True, reason=DISAGREE[(s, e)])]
-                 if (s, e) in DISAGREE else [])
-    for s in ("front", "side", "back") for e in COMPARED_ELEVATIONS_DEG])
-def test_sedan_sector_median_within_the_models_band(sedan_sweep, sector, elevation):
-    """Statistic (chosen before any comparison was run): per lobe sector (front 0-45,
-    side 45-135, back 135-180 deg aspect) and elevation (0 and 30 deg), the median over
-    the sector's aspects of the sedan's RCS [dBsm] lies within the model's 5-95 % band
-    about the median over the same aspects of the model's median, i.e. within
-    ``1.645 sigma_S,dB`` = 5.61 dB (sigma_S's lognormal spread, 3.41 dB). Raw samples
-    every 10 deg, not aspect-averaged: the median is robust to the flashes that the
-    coarse grid hits or misses. Holds in none of the six cases (DISAGREE)."""
-    from raysim.studies.car_rcs_3gpp import sector_median_db, tr38901_vehicle_rcs
-
-    r = sedan_sweep
-    j = int(np.flatnonzero(r.elevation_deg == elevation)[0])
-    model = tr38901_vehicle_rcs(r.azimuth_deg, [elevation])
-    sedan = float(sector_median_db(10 * np.log10(r.po_m2[:, j]), r.azimuth_deg, sector))
-    ref = float(sector_median_db(model.median_dbsm[:, 0], r.azimuth_deg, sector))
-    half_band = float(model.high_dbsm[0, 0] - model.median_dbsm[0, 0])
-    print(f"{sector} at {elevation:g} deg: sedan {sedan:.1f} dBsm, model median {ref:.1f} "
-          f"dBsm (band {ref - half_band:.1f} to {ref + half_band:.1f})")
-    assert abs(sedan - ref) <= half_band, (sector, elevation, sedan, ref)
 
 
 def test_sector_table_verdicts():
