@@ -400,6 +400,18 @@ def _directions(rcs, positions, motions, scatterers, options) -> np.ndarray:
     return out
 
 
+def _with_prior(estimate: np.ndarray, cov: np.ndarray, prior_sigma: float
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """A measured gyro bias ``[3]`` (covariance ``[3, 3]``) combined with the IMU's zero-mean
+    prior of spread ``prior_sigma`` per axis [rad/s]: the information-weighted mean and its
+    covariance ``(C^-1 + I / s^2)^-1`` (a fit over a few scatterers and frames can be looser
+    than the datasheet's turn-on bias; alone it would replace a good prior by a worse one)."""
+    info = np.linalg.inv(cov)
+    # an ideal IMU's zero spread floored as :func:`prior_sigmas` floors it
+    post = np.linalg.inv(info + np.eye(3) / max(prior_sigma, 1e-6) ** 2)
+    return post @ (info @ estimate), 0.5 * (post + post.T)
+
+
 def _vertex(lo: float, mid: float, hi: float) -> float:
     """Vertex offset in steps of the parabola through three samples."""
     den = lo - 2.0 * mid + hi
@@ -589,6 +601,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         return [radar_frame_motion(m, mounting) for m in ms]
 
     tau = float(finite_array("time_offset", time_offset, shape=()))
+    errors = DEFAULT_IMU_ERRORS if imu_errors is None else imu_errors
     bias = np.zeros(3)
     clock = gb = None
 
@@ -646,8 +659,10 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             dirs = world_directions(_directions(rcs, positions, seen(motions), scatterers,
                                                 proj), mounting)
             att = np.stack([m.attitude[m.num_chirps // 2] for m in motions])
-            gb = fit_gyro_bias(mids, dirs, att)
-            bias = bias + gb.bias
+            fit = fit_gyro_bias(mids, dirs, att)
+            fused, cov = _with_prior(bias + fit.bias, fit.covariance, errors.gyro_bias_sigma)
+            gb = GyroBias(fused - bias, cov, fit.residual_rms)
+            bias = fused
             motions = integrate()
     ri = None
     if "velocity" in estimate:
@@ -656,7 +671,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
                                             wavelength=lam, blocks=blocks,
                                             mounting=mounting),
-            imu_errors=DEFAULT_IMU_ERRORS if imu_errors is None else imu_errors,
+            imu_errors=errors,
             initial_velocity=motions[0].velocity[0], initial_attitude=motions[0].attitude[0],
             initial_position=motions[0].position[0], time_offset=tau, gyro_bias=bias,
             gyro_bias_cov=None if gb is None else gb.covariance,

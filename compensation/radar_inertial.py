@@ -258,6 +258,9 @@ class RadarInertialResult:
     warnings : tuple of str
         Observability and geometry warnings (also issued as
         :class:`ObservabilityWarning`).
+    misfit_sigma : float
+        Spread of the Doppler model's misfit added to every range rate's
+        [m/s] (:func:`_misfit_sigma`).
     """
 
     state: np.ndarray
@@ -274,6 +277,7 @@ class RadarInertialResult:
     measurements: int
     rejected: int
     warnings: tuple[str, ...] = field(default_factory=tuple)
+    misfit_sigma: float = 0.0
 
     @property
     def sigma(self) -> np.ndarray:
@@ -293,6 +297,7 @@ class RadarInertialResult:
                 "unconstrained": list(self.unconstrained),
                 "weak_directions": list(self.weak_directions), "chi2": self.chi2,
                 "measurements": self.measurements, "rejected": self.rejected,
+                "misfit_sigma": self.misfit_sigma,
                 "warnings": list(self.warnings)}
 
 
@@ -570,7 +575,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     x = np.zeros(14)
     cov = p0
     motions = integrate(x)
-    chi2, kept, rejected, fisher = 1.0, 0, 0, np.zeros((14, 14))
+    chi2, kept, rejected, fisher, misfit = 1.0, 0, 0, np.zeros((14, 14)), 0.0
     keep = held = dvdx = h_track = None
     for _ in range(int(iterations)):
         meas = measure(motions)
@@ -578,9 +583,14 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
             raise ValueError(f"the record gives {meas.frame.size} Doppler measurements (frames "
                              f"x blocks x scatterers); the radar-inertial estimate takes at "
                              f"most {MAX_MEASUREMENTS}: select fewer frames or scatterers")
-        # the static-world consensus once: later passes measure the same scatterers and blocks
+        # the Doppler model's misfit and the static-world consensus once: later passes
+        # measure the same scatterers and blocks
         if keep is None or keep.size != meas.frame.size:
+            misfit = _misfit_sigma(meas)
+            meas = _with_misfit(meas, misfit)
             keep = _consensus(meas)
+        else:
+            meas = _with_misfit(meas, misfit)
         rejected = int(np.count_nonzero(~keep))
         meas = meas.select(keep)
         kept = meas.frame.size
@@ -634,7 +644,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     att = Rotation.from_rotvec(x[ATTITUDE]).as_matrix() @ r0
     return RadarInertialResult(x, cov, p0, names, dirs, tuple(motions), v0 + x[VELOCITY], att,
                                tau0 + float(x[CLOCK_OFFSET]), bg0 + x[GYRO_BIAS], chi2, kept,
-                               rejected, notes)
+                               rejected, notes, misfit)
 
 
 def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
@@ -653,6 +663,39 @@ def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
     out = cov.copy()
     out[ACCEL_BIAS, ACCEL_BIAS] += leak * np.outer(down, down)
     return out
+
+
+def _misfit_sigma(meas: DopplerMeasurements) -> float:
+    """Robust spread of the range rates about one velocity per block [m/s].
+
+    A beam's range rate is that of every scatterer and sidelobe in its cell,
+    not of one point at its direction, and the residual of its phase line
+    (``sigma``) does not see that. Within a block every stationary scatterer
+    sees the same radar velocity, so the residuals of a least-squares velocity
+    per block (blocks of more than three measurements) show the misfit: their
+    median absolute value over all blocks, times 1.4826 (the normal's MAD) and
+    ``sqrt(n / (n - 3))`` for the three fitted components. Zero without such
+    a block.
+    """
+    res, dof, total = [], 0, 0
+    blocks = np.unique(np.column_stack([meas.frame, meas.window]), axis=0)
+    for b in blocks:
+        idx = np.flatnonzero((meas.frame == b[0]) & (meas.window[:, 0] == b[1]))
+        if idx.size <= 3:
+            continue
+        a = -meas.directions[idx]
+        v, *_ = np.linalg.lstsq(a, meas.range_rate[idx], rcond=None)
+        res.append(meas.range_rate[idx] - a @ v)
+        dof, total = dof + idx.size - 3, total + idx.size
+    if not res:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(np.concatenate(res))) * np.sqrt(total / dof))
+
+
+def _with_misfit(meas: DopplerMeasurements, misfit: float) -> DopplerMeasurements:
+    """``meas`` with the misfit spread added to every range rate's in quadrature."""
+    return DopplerMeasurements(meas.directions, meas.range_rate, np.hypot(meas.sigma, misfit),
+                               meas.frame, meas.window, meas.direction_cov)
 
 
 def _consensus(meas: DopplerMeasurements) -> np.ndarray:
