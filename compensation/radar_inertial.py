@@ -672,10 +672,12 @@ def _misfit_sigma(meas: DopplerMeasurements) -> float:
     not of one point at its direction, and the residual of its phase line
     (``sigma``) does not see that. Within a block every stationary scatterer
     sees the same radar velocity, so the residuals of a least-squares velocity
-    per block (blocks of more than three measurements) show the misfit: their
-    median absolute value over all blocks, times 1.4826 (the normal's MAD) and
-    ``sqrt(n / (n - 3))`` for the three fitted components. Zero without such
-    a block.
+    per block (blocks of more than three measurements) show it: their spread
+    ``s`` is the median absolute value over all blocks times 1.4826 (the
+    normal's MAD) and ``sqrt(n / (n - 3))`` for the three fitted components,
+    robust to the moving or spurious scatterers the consensus rejects later.
+    The misfit is what ``s`` holds beyond the stated spreads,
+    ``sqrt(max(s^2 - median(sigma)^2, 0))``; zero without such a block.
     """
     res, dof, total = [], 0, 0
     blocks = np.unique(np.column_stack([meas.frame, meas.window]), axis=0)
@@ -689,7 +691,8 @@ def _misfit_sigma(meas: DopplerMeasurements) -> float:
         dof, total = dof + idx.size - 3, total + idx.size
     if not res:
         return 0.0
-    return float(1.4826 * np.median(np.abs(np.concatenate(res))) * np.sqrt(total / dof))
+    spread = 1.4826 * np.median(np.abs(np.concatenate(res))) * np.sqrt(total / dof)
+    return float(np.sqrt(max(spread ** 2 - np.median(meas.sigma) ** 2, 0.0)))
 
 
 def _with_misfit(meas: DopplerMeasurements, misfit: float) -> DopplerMeasurements:
