@@ -666,20 +666,33 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             motions = integrate()
     ri = None
     if "velocity" in estimate:
-        ri = estimate_radar_inertial(
-            imu_time, gyro, accel, frames,
-            lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
-                                            wavelength=lam, blocks=blocks,
-                                            mounting=mounting),
-            imu_errors=errors,
-            initial_velocity=motions[0].velocity[0], initial_attitude=motions[0].attitude[0],
-            initial_position=motions[0].position[0], time_offset=tau, gyro_bias=bias,
-            gyro_bias_cov=None if gb is None else gb.covariance,
-            clock_offset_sigma=None if clock is None else clock.offset_sigma,
-            tilt_covariance=tilt_covariance, attitude_track=attitude_track,
-            attitude_given=attitude_given,
-            reference_time=frames[0][0],
-            **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
+        first = motions[0]
+
+        def radar_inertial(offset: float, offset_sigma):
+            return estimate_radar_inertial(
+                imu_time, gyro, accel, frames,
+                lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
+                                                wavelength=lam, blocks=blocks,
+                                                mounting=mounting),
+                imu_errors=errors,
+                initial_velocity=first.velocity[0], initial_attitude=first.attitude[0],
+                initial_position=first.position[0], time_offset=offset, gyro_bias=bias,
+                gyro_bias_cov=None if gb is None else gb.covariance,
+                clock_offset_sigma=offset_sigma,
+                tilt_covariance=tilt_covariance, attitude_track=attitude_track,
+                attitude_given=attitude_given,
+                reference_time=frames[0][0],
+                **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
+
+        ri = radar_inertial(tau, None if clock is None else clock.offset_sigma)
+        if clock is not None:
+            # the clock fits above saw the motion of per-frame velocities; an acceleration
+            # left in it bends the phase tracks like an offset: fit the offset once more
+            # on the radar-inertial motion and estimate again from there
+            ms = seen(ri.motions)
+            clock = fit_time_shift(_clock_tracks(_beams(rcs, positions, ms, scatterers, proj),
+                                                 ms, scatterers, lam), drift=drift)
+            ri = radar_inertial(ri.time_offset + clock.offset, clock.offset_sigma)
         motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias
         cov0 = ri.initial_velocity_covariance
     else:
