@@ -402,12 +402,10 @@ def _directions(rcs, positions, motions, scatterers, options) -> np.ndarray:
 
 def _with_prior(estimate: np.ndarray, cov: np.ndarray, prior_sigma: float
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """A measured gyro bias ``[3]`` (covariance ``[3, 3]``) combined with the IMU's zero-mean
-    prior of spread ``prior_sigma`` per axis [rad/s]: the information-weighted mean and its
-    covariance ``(C^-1 + I / s^2)^-1`` (a fit over a few scatterers and frames can be looser
-    than the datasheet's turn-on bias; alone it would replace a good prior by a worse one)."""
+    """Fitted gyro bias ``[3]`` (covariance ``C [3, 3]``) and the IMU's zero-mean prior of
+    spread ``s`` = ``prior_sigma`` per axis [rad/s] (0 floored to 1e-6), combined: the mean
+    and ``(C^-1 + I / s^2)^-1`` (a fit on few scatterers can be looser than the prior)."""
     info = np.linalg.inv(cov)
-    # an ideal IMU's zero spread floored as :func:`prior_sigmas` floors it
     post = np.linalg.inv(info + np.eye(3) / max(prior_sigma, 1e-6) ** 2)
     return post @ (info @ estimate), 0.5 * (post + post.T)
 
@@ -661,34 +659,29 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             att = np.stack([m.attitude[m.num_chirps // 2] for m in motions])
             fit = fit_gyro_bias(mids, dirs, att)
             fused, cov = _with_prior(bias + fit.bias, fit.covariance, errors.gyro_bias_sigma)
-            gb = GyroBias(fused - bias, cov, fit.residual_rms)
-            bias = fused
+            gb, bias = GyroBias(fused - bias, cov, fit.residual_rms), fused
             motions = integrate()
     ri = None
     if "velocity" in estimate:
         first = motions[0]
-
         def radar_inertial(offset: float, offset_sigma):
             return estimate_radar_inertial(
                 imu_time, gyro, accel, frames,
                 lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
                                                 wavelength=lam, blocks=blocks,
                                                 mounting=mounting),
-                imu_errors=errors,
-                initial_velocity=first.velocity[0], initial_attitude=first.attitude[0],
-                initial_position=first.position[0], time_offset=offset, gyro_bias=bias,
+                imu_errors=errors, initial_velocity=first.velocity[0],
+                initial_attitude=first.attitude[0], initial_position=first.position[0],
+                time_offset=offset, gyro_bias=bias, clock_offset_sigma=offset_sigma,
                 gyro_bias_cov=None if gb is None else gb.covariance,
-                clock_offset_sigma=offset_sigma,
                 tilt_covariance=tilt_covariance, attitude_track=attitude_track,
-                attitude_given=attitude_given,
-                reference_time=frames[0][0],
+                attitude_given=attitude_given, reference_time=frames[0][0],
                 **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
 
         ri = radar_inertial(tau, None if clock is None else clock.offset_sigma)
         if clock is not None:
-            # the clock fits above saw the motion of per-frame velocities; an acceleration
-            # left in it bends the phase tracks like an offset: fit the offset once more
-            # on the radar-inertial motion and estimate again from there
+            # the clock fits above saw the per-frame velocities' motion, whose acceleration
+            # error bends the phase tracks like an offset: fit again on the estimate's
             ms = seen(ri.motions)
             clock = fit_time_shift(_clock_tracks(_beams(rcs, positions, ms, scatterers, proj),
                                                  ms, scatterers, lam), drift=drift)

@@ -59,7 +59,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._checks import finite_array, positive
-from .ego_velocity import MIN_CONSENSUS, fit_ego_velocity
+from .ego_velocity import MIN_CONSENSUS, block_misfit, fit_ego_velocity
 from .guards import CompensationWarning
 from .multiframe import integrate_record
 from .observability import (
@@ -260,7 +260,7 @@ class RadarInertialResult:
         :class:`ObservabilityWarning`).
     misfit_sigma : float
         Spread of the Doppler model's misfit added to every range rate's
-        [m/s] (:func:`_misfit_sigma`).
+        [m/s] (:func:`compensation.ego_velocity.block_misfit`).
     """
 
     state: np.ndarray
@@ -586,7 +586,9 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         # the Doppler model's misfit and the static-world consensus once: later passes
         # measure the same scatterers and blocks
         if keep is None or keep.size != meas.frame.size:
-            misfit = _misfit_sigma(meas)
+            blocks = np.unique(np.column_stack([meas.frame, meas.window]), axis=0,
+                               return_inverse=True)[1].ravel()
+            misfit = block_misfit(meas.directions, meas.range_rate, meas.sigma, blocks)
             meas = _with_misfit(meas, misfit)
             keep = _consensus(meas)
         else:
@@ -663,36 +665,6 @@ def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
     out = cov.copy()
     out[ACCEL_BIAS, ACCEL_BIAS] += leak * np.outer(down, down)
     return out
-
-
-def _misfit_sigma(meas: DopplerMeasurements) -> float:
-    """Robust spread of the range rates about one velocity per block [m/s].
-
-    A beam's range rate is that of every scatterer and sidelobe in its cell,
-    not of one point at its direction, and the residual of its phase line
-    (``sigma``) does not see that. Within a block every stationary scatterer
-    sees the same radar velocity, so the residuals of a least-squares velocity
-    per block (blocks of more than three measurements) show it: their spread
-    ``s`` is the median absolute value over all blocks times 1.4826 (the
-    normal's MAD) and ``sqrt(n / (n - 3))`` for the three fitted components,
-    robust to the moving or spurious scatterers the consensus rejects later.
-    The misfit is what ``s`` holds beyond the stated spreads,
-    ``sqrt(max(s^2 - median(sigma)^2, 0))``; zero without such a block.
-    """
-    res, dof, total = [], 0, 0
-    blocks = np.unique(np.column_stack([meas.frame, meas.window]), axis=0)
-    for b in blocks:
-        idx = np.flatnonzero((meas.frame == b[0]) & (meas.window[:, 0] == b[1]))
-        if idx.size <= 3:
-            continue
-        a = -meas.directions[idx]
-        v, *_ = np.linalg.lstsq(a, meas.range_rate[idx], rcond=None)
-        res.append(meas.range_rate[idx] - a @ v)
-        dof, total = dof + idx.size - 3, total + idx.size
-    if not res:
-        return 0.0
-    spread = 1.4826 * np.median(np.abs(np.concatenate(res))) * np.sqrt(total / dof)
-    return float(np.sqrt(max(spread ** 2 - np.median(meas.sigma) ** 2, 0.0)))
 
 
 def _with_misfit(meas: DopplerMeasurements, misfit: float) -> DopplerMeasurements:
