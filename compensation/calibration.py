@@ -549,8 +549,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         radar-inertial estimate has the drift in its state and applies it).
     imu_errors : ImuErrors, optional
         Noise densities and bias spreads of the IMU, the process noise and
-        priors of the radar-inertial estimate; default
-        :data:`DEFAULT_IMU_ERRORS`.
+        priors of the radar-inertial estimate and the gyro-bias fit's prior;
+        default :data:`DEFAULT_IMU_ERRORS`.
     attitude_given : bool
         Whether ``initial_attitude`` is an estimate (a flight controller's,
         levelled) rather than the nominal hover attitude
