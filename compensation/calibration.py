@@ -402,9 +402,8 @@ def _directions(rcs, positions, motions, scatterers, options) -> np.ndarray:
 
 def _with_prior(estimate: np.ndarray, cov: np.ndarray, prior_sigma: float
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Fitted gyro bias ``[3]`` (covariance ``C [3, 3]``) and the IMU's zero-mean prior of
-    spread ``s`` = ``prior_sigma`` per axis [rad/s] (0 floored to 1e-6), combined: the mean
-    and ``(C^-1 + I / s^2)^-1`` (a fit on few scatterers can be looser than the prior)."""
+    """Fitted gyro bias ``[3]`` (covariance ``C [3, 3]``; few scatterers: looser than the IMU)
+    and the IMU's zero-mean prior ``s`` [rad/s] (0 floored to 1e-6): mean, ``(C^-1 + I/s^2)^-1``."""
     info = np.linalg.inv(cov)
     post = np.linalg.inv(info + np.eye(3) / max(prior_sigma, 1e-6) ** 2)
     return post @ (info @ estimate), 0.5 * (post + post.T)
@@ -663,8 +662,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             motions = integrate()
     ri = None
     if "velocity" in estimate:
-        first = motions[0]
-        def radar_inertial(offset: float, offset_sigma):
+        def radar_inertial(offset: float, offset_sigma, first=motions[0]):
             return estimate_radar_inertial(
                 imu_time, gyro, accel, frames,
                 lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
@@ -680,12 +678,14 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
 
         ri = radar_inertial(tau, None if clock is None else clock.offset_sigma)
         if clock is not None:
-            # the clock fits above saw the per-frame velocities' motion, whose acceleration
-            # error bends the phase tracks like an offset: fit again on the estimate's
+            # the fits above saw the per-frame velocities' motion, its acceleration error bends
+            # the phase tracks like an offset: fit again, estimate again where it moves
             ms = seen(ri.motions)
-            clock = fit_time_shift(_clock_tracks(_beams(rcs, positions, ms, scatterers, proj),
+            refit = fit_time_shift(_clock_tracks(_beams(rcs, positions, ms, scatterers, proj),
                                                  ms, scatterers, lam), drift=drift)
-            ri = radar_inertial(ri.time_offset + clock.offset, clock.offset_sigma)
+            if abs(refit.offset) > refit.offset_sigma:
+                clock, ri = refit, radar_inertial(ri.time_offset + refit.offset,
+                                                  refit.offset_sigma)
         motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias
         cov0 = ri.initial_velocity_covariance
     else:
