@@ -400,6 +400,15 @@ def _directions(rcs, positions, motions, scatterers, options) -> np.ndarray:
     return out
 
 
+def _with_prior(estimate: np.ndarray, cov: np.ndarray, prior_sigma: float
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Fitted gyro bias ``[3]`` (covariance ``C [3, 3]``; few scatterers: looser than the IMU)
+    and the IMU's zero-mean prior ``s`` [rad/s] (0 floored to 1e-6): mean, ``(C^-1 + I/s^2)^-1``."""
+    info = np.linalg.inv(cov)
+    post = np.linalg.inv(info + np.eye(3) / max(prior_sigma, 1e-6) ** 2)
+    return post @ (info @ estimate), 0.5 * (post + post.T)
+
+
 def _vertex(lo: float, mid: float, hi: float) -> float:
     """Vertex offset in steps of the parabola through three samples."""
     den = lo - 2.0 * mid + hi
@@ -539,8 +548,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         radar-inertial estimate has the drift in its state and applies it).
     imu_errors : ImuErrors, optional
         Noise densities and bias spreads of the IMU, the process noise and
-        priors of the radar-inertial estimate; default
-        :data:`DEFAULT_IMU_ERRORS`.
+        priors of the radar-inertial estimate and the gyro-bias fit's prior;
+        default :data:`DEFAULT_IMU_ERRORS`.
     attitude_given : bool
         Whether ``initial_attitude`` is an estimate (a flight controller's,
         levelled) rather than the nominal hover attitude
@@ -589,6 +598,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         return [radar_frame_motion(m, mounting) for m in ms]
 
     tau = float(finite_array("time_offset", time_offset, shape=()))
+    errors = DEFAULT_IMU_ERRORS if imu_errors is None else imu_errors
     bias = np.zeros(3)
     clock = gb = None
 
@@ -646,25 +656,36 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             dirs = world_directions(_directions(rcs, positions, seen(motions), scatterers,
                                                 proj), mounting)
             att = np.stack([m.attitude[m.num_chirps // 2] for m in motions])
-            gb = fit_gyro_bias(mids, dirs, att)
-            bias = bias + gb.bias
+            fit = fit_gyro_bias(mids, dirs, att)
+            fused, cov = _with_prior(bias + fit.bias, fit.covariance, errors.gyro_bias_sigma)
+            gb, bias = GyroBias(fused - bias, cov, fit.residual_rms), fused
             motions = integrate()
     ri = None
     if "velocity" in estimate:
-        ri = estimate_radar_inertial(
-            imu_time, gyro, accel, frames,
-            lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
-                                            wavelength=lam, blocks=blocks,
-                                            mounting=mounting),
-            imu_errors=DEFAULT_IMU_ERRORS if imu_errors is None else imu_errors,
-            initial_velocity=motions[0].velocity[0], initial_attitude=motions[0].attitude[0],
-            initial_position=motions[0].position[0], time_offset=tau, gyro_bias=bias,
-            gyro_bias_cov=None if gb is None else gb.covariance,
-            clock_offset_sigma=None if clock is None else clock.offset_sigma,
-            tilt_covariance=tilt_covariance, attitude_track=attitude_track,
-            attitude_given=attitude_given,
-            reference_time=frames[0][0],
-            **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
+        def radar_inertial(offset: float, offset_sigma, first=motions[0]):
+            return estimate_radar_inertial(
+                imu_time, gyro, accel, frames,
+                lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
+                                                wavelength=lam, blocks=blocks,
+                                                mounting=mounting),
+                imu_errors=errors, initial_velocity=first.velocity[0],
+                initial_attitude=first.attitude[0], initial_position=first.position[0],
+                time_offset=offset, gyro_bias=bias, clock_offset_sigma=offset_sigma,
+                gyro_bias_cov=None if gb is None else gb.covariance,
+                tilt_covariance=tilt_covariance, attitude_track=attitude_track,
+                attitude_given=attitude_given, reference_time=frames[0][0],
+                **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
+
+        ri = radar_inertial(tau, None if clock is None else clock.offset_sigma)
+        if clock is not None:
+            # the fits above saw the per-frame velocities' motion, its acceleration error bends
+            # the phase tracks like an offset: fit again, estimate again where it moves
+            ms = seen(ri.motions)
+            refit = fit_time_shift(_clock_tracks(_beams(rcs, positions, ms, scatterers, proj),
+                                                 ms, scatterers, lam), drift=drift)
+            if abs(refit.offset) > refit.offset_sigma:
+                clock, ri = refit, radar_inertial(ri.time_offset + refit.offset,
+                                                  refit.offset_sigma)
         motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias
         cov0 = ri.initial_velocity_covariance
     else:

@@ -189,3 +189,47 @@ def fit_ego_velocity(directions, radial_velocity, sigma=None, *, threshold: floa
     cov = cov * (max(chi2, 1.0) if scale_known else chi2)
     rms = float(np.sqrt(np.mean(res ** 2)))
     return EgoVelocity(sol.x, cov, inl, rms)
+
+
+def block_misfit(directions, range_rate, sigma, block) -> float:
+    """Spread of range rates about one velocity per block beyond their stated spreads [m/s].
+
+    A beam's range rate is that of every scatterer and sidelobe in its cell, not
+    of one point at its direction, and the residual of its phase line (``sigma``)
+    does not see that. Within a block every stationary scatterer sees the same
+    radar velocity, so the residuals of a least-squares velocity per block
+    (blocks of more than three range rates) show it: their spread ``s`` is the
+    median absolute residual over all blocks times 1.4826 (the normal's MAD) and
+    ``sqrt(n / (n - 3))`` for the three fitted components, robust to the moving
+    or spurious scatterers a consensus rejects later.
+
+    Parameters
+    ----------
+    directions : array_like, shape ``[measurement, 3]``
+        Unit directions ``u`` [1].
+    range_rate, sigma : array_like, shape ``[measurement]``
+        Range rates and their stated spreads [m/s].
+    block : array_like of int, shape ``[measurement]``
+        Block of each range rate.
+
+    Returns
+    -------
+    float
+        ``sqrt(max(s^2 - median(sigma)^2, 0))``; zero without a block of four.
+    """
+    u = finite_array("directions", directions, ndim=2)
+    vr = finite_array("range_rate", range_rate, shape=(u.shape[0],))
+    s = finite_array("sigma", sigma, shape=(u.shape[0],))
+    blk = np.asarray(block).reshape(u.shape[0])
+    res, dof = [], 0
+    for b in np.unique(blk):
+        idx = np.flatnonzero(blk == b)
+        if idx.size > 3:
+            v, *_ = np.linalg.lstsq(-u[idx], vr[idx], rcond=None)
+            res.append(vr[idx] + u[idx] @ v)
+            dof += idx.size - 3
+    if not res:
+        return 0.0
+    r = np.concatenate(res)
+    spread = 1.4826 * np.median(np.abs(r)) * np.sqrt(r.size / dof)
+    return float(np.sqrt(max(spread ** 2 - np.median(s) ** 2, 0.0)))

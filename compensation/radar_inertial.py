@@ -59,7 +59,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._checks import finite_array, positive
-from .ego_velocity import MIN_CONSENSUS, fit_ego_velocity
+from .ego_velocity import MIN_CONSENSUS, block_misfit, fit_ego_velocity
 from .guards import CompensationWarning
 from .multiframe import integrate_record
 from .observability import (
@@ -258,6 +258,9 @@ class RadarInertialResult:
     warnings : tuple of str
         Observability and geometry warnings (also issued as
         :class:`ObservabilityWarning`).
+    misfit_sigma : float
+        Spread of the Doppler model's misfit added to every range rate's
+        [m/s] (:func:`compensation.ego_velocity.block_misfit`).
     """
 
     state: np.ndarray
@@ -274,6 +277,7 @@ class RadarInertialResult:
     measurements: int
     rejected: int
     warnings: tuple[str, ...] = field(default_factory=tuple)
+    misfit_sigma: float = 0.0
 
     @property
     def sigma(self) -> np.ndarray:
@@ -293,6 +297,7 @@ class RadarInertialResult:
                 "unconstrained": list(self.unconstrained),
                 "weak_directions": list(self.weak_directions), "chi2": self.chi2,
                 "measurements": self.measurements, "rejected": self.rejected,
+                "misfit_sigma": self.misfit_sigma,
                 "warnings": list(self.warnings)}
 
 
@@ -570,7 +575,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     x = np.zeros(14)
     cov = p0
     motions = integrate(x)
-    chi2, kept, rejected, fisher = 1.0, 0, 0, np.zeros((14, 14))
+    chi2, kept, rejected, fisher, misfit = 1.0, 0, 0, np.zeros((14, 14)), 0.0
     keep = held = dvdx = h_track = None
     for _ in range(int(iterations)):
         meas = measure(motions)
@@ -578,9 +583,16 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
             raise ValueError(f"the record gives {meas.frame.size} Doppler measurements (frames "
                              f"x blocks x scatterers); the radar-inertial estimate takes at "
                              f"most {MAX_MEASUREMENTS}: select fewer frames or scatterers")
-        # the static-world consensus once: later passes measure the same scatterers and blocks
+        # the Doppler model's misfit and the static-world consensus once: later passes
+        # measure the same scatterers and blocks
         if keep is None or keep.size != meas.frame.size:
+            blocks = np.unique(np.column_stack([meas.frame, meas.window]), axis=0,
+                               return_inverse=True)[1].ravel()
+            misfit = block_misfit(meas.directions, meas.range_rate, meas.sigma, blocks)
+            meas = _with_misfit(meas, misfit)
             keep = _consensus(meas)
+        else:
+            meas = _with_misfit(meas, misfit)
         rejected = int(np.count_nonzero(~keep))
         meas = meas.select(keep)
         kept = meas.frame.size
@@ -634,7 +646,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     att = Rotation.from_rotvec(x[ATTITUDE]).as_matrix() @ r0
     return RadarInertialResult(x, cov, p0, names, dirs, tuple(motions), v0 + x[VELOCITY], att,
                                tau0 + float(x[CLOCK_OFFSET]), bg0 + x[GYRO_BIAS], chi2, kept,
-                               rejected, notes)
+                               rejected, notes, misfit)
 
 
 def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
@@ -653,6 +665,12 @@ def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
     out = cov.copy()
     out[ACCEL_BIAS, ACCEL_BIAS] += leak * np.outer(down, down)
     return out
+
+
+def _with_misfit(meas: DopplerMeasurements, misfit: float) -> DopplerMeasurements:
+    """``meas`` with the misfit spread added to every range rate's in quadrature."""
+    return DopplerMeasurements(meas.directions, meas.range_rate, np.hypot(meas.sigma, misfit),
+                               meas.frame, meas.window, meas.direction_cov)
 
 
 def _consensus(meas: DopplerMeasurements) -> np.ndarray:
