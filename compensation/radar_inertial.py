@@ -46,7 +46,8 @@ radar constrains their sum only; scatterers in one row or a narrow cone leave
 the velocity across them to the prior. The unconstrained attitude, gyro-bias
 and clock components are held at the prior and their spread carried into the
 others' covariance (:func:`solve_batch`, consider analysis), so the given
-attitude is not turned by a split the radar cannot make.
+attitude is not turned by a split the radar cannot make; unconstrained is judged
+again on the spreads scaled by the Doppler's reduced chi-square (model error).
 """
 
 from __future__ import annotations
@@ -632,8 +633,11 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
             kept - hat, 1.0)
         if chi2 > 1.0:           # spreads understated (model error): scale the radar's
             cw[:kept, :kept] *= chi2
-            x_new, cov = solve_batch(h, r, cw, p0, x, held)
             fisher = h.T @ np.linalg.solve(cw, h)
+            # what the scaled spreads leave unconstrained is held too: reported as kept at
+            # the prior, it must not move with the model error
+            held = held | held_mask(p0, fisher)
+            x_new, cov = solve_batch(h, r, cw, p0, x, held)
         x = x_new
         motions = integrate(x)
     cov = _tilt_leak(cov, r0, g)

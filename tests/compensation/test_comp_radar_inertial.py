@@ -20,7 +20,12 @@ from scipy.spatial.transform import Rotation
 
 from compensation.geometry import direction
 from compensation.multiframe import integrate_record
-from compensation.observability import STATE_NAMES, ObservabilityWarning, observability
+from compensation.observability import (
+    HELD_WHEN_UNCONSTRAINED,
+    STATE_NAMES,
+    ObservabilityWarning,
+    observability,
+)
 from compensation.radar_inertial import (
     MAX_MEASUREMENTS,
     TRACK_COMMON_SIGMA,
@@ -315,3 +320,41 @@ def test_understated_spreads_velocity_followed_over_the_frames():
                       for m, mt in zip(res.motions, true_motion, strict=True)])
     assert np.all(np.abs(z) <= Z_BOUND), np.round(z, 2)
     assert np.max(drift) <= FRAME_VELOCITY_TOL, np.round(np.array(drift) * 1e3, 2)
+
+
+#: Spread of an unmodelled velocity error common to a block's scatterers [m/s] (rotor
+#: vibration the IMU log does not resolve): the Doppler's chi-square far above one.
+BLOCK_VELOCITY_ERROR = 0.01
+#: A first guess of the clock offset whose prior spread the Doppler narrows before, but
+#: not after, its spreads are scaled by the chi-square [s].
+WIDE_CLOCK_SIGMA = 0.02
+#: A held component moves by less than this fraction of its stated spread.
+HELD_MOVE_FRACTION = 1e-6
+
+
+def test_unconstrained_after_chi_square_scaling_is_held():
+    """A model error common to each block's scatterers: the components the scaled spreads
+    leave unconstrained, the clock offset among them, stay at the first guess (they are
+    reported as kept at the prior) and their spread covers their error, over seeds."""
+    for seed in range(3):
+        (t, gyro, accel), measure, guess, truth, sig, _ = _record(900 + seed, "spread")
+        rng = np.random.default_rng(seed)
+
+        def with_model_error(motions, measure=measure, rng=rng):
+            m = measure(motions)
+            block = np.unique(np.column_stack([m.frame, m.window[:, 0]]), axis=0,
+                              return_inverse=True)[1].ravel()
+            err = rng.normal(0.0, BLOCK_VELOCITY_ERROR, (block.max() + 1, 3))
+            return DopplerMeasurements(m.directions, m.range_rate - np.einsum(
+                "mi,mi->m", m.directions, err[block]), m.sigma, m.frame, m.window)
+
+        res = estimate_radar_inertial(t, gyro, accel, FRAMES, with_model_error, imu_errors=IMU,
+                                      prior_sigma=sig, iterations=2, lever_arm=LEVER,
+                                      clock_offset_sigma=WIDE_CLOCK_SIGMA, **guess)
+        assert res.chi2 > 1.0
+        assert "clock_offset" in res.unconstrained
+        for name in set(res.unconstrained) & set(HELD_WHEN_UNCONSTRAINED):
+            i = STATE_NAMES.index(name)
+            assert abs(res.state[i]) <= HELD_MOVE_FRACTION * res.sigma[i], name
+        i = STATE_NAMES.index("clock_offset")
+        assert abs(res.state[i] - truth[i]) <= Z_BOUND * res.sigma[i]
