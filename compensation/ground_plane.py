@@ -134,11 +134,11 @@ class GroundPlane:
     spread_scale : float
         Factor (>= 1) on the points' covariance that made it cover the spread of the
         leave-one-group-out fits (the jackknife over frames); 1 without groups.
-    looks : tuple of GroundLook
+    looks : tuple of compensation.ground_looks.GroundLook
         The frames' points and the attitudes that turned them into W (the dense
-        points of :func:`ground_tilt`, which another integration turns
-        integration,
-        :func:`compensation.ground_refit.refit_ground`); empty otherwise.
+        points of :func:`ground_tilt`, which
+        :func:`compensation.ground_refit.refit_ground` turns with another
+        integration); empty otherwise.
     """
 
     tilt: np.ndarray
@@ -487,7 +487,9 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
     record, so the same scatterers share the same cells in every frame: with frames
     as groups that part of the error shows in no spread. The gyro bias turns the later frames'
     attitude: its spread over the frames' mean time since the first chirp is added
-    to the tilt's.
+    to the tilt's. The dense points are kept with the attitudes that turned them
+    (:attr:`GroundPlane.looks`), to be fitted again with another integration
+    (:func:`compensation.ground_refit.refit_ground`).
 
     Parameters
     ----------
@@ -532,50 +534,69 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
                                 range_axis=range_axis, gates=gates, channel_slot=slots)
             looks.append(GroundLook(int(k), pose, np.asarray(motions[k].attitude[pose]), p,
                                     c * pick.size))
-        return fit_looks(tuple(looks), motions, gyro_bias_sigma, warn, range_axis, gates)
-    found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
-                           wavelength=wavelength, range_axis=range_axis, gates=gates,
-                           **options) for rc, m in zip(rcs, motions, strict=True)]
-    found = [world_directions(p, rot, c) for p, c in found]
-    points = np.concatenate([p for p, _ in found])
-    groups = np.concatenate([np.full(len(p), k) for k, (p, _) in enumerate(found)])
-    fit = fit_ground_plane(points, np.concatenate([c for _, c in found]),
-                           groups=groups.astype(int), warn=False)
-    return _finish(fit, motions, gyro_bias_sigma, warn, range_axis, gates)
+        fit = fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
+                        range_axis=range_axis, gates=gates)
+    else:
+        found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
+                               wavelength=wavelength, range_axis=range_axis, gates=gates,
+                               **options) for rc, m in zip(rcs, motions, strict=True)]
+        found = [world_directions(p, rot, c) for p, c in found]
+        points = np.concatenate([p for p, _ in found])
+        groups = np.concatenate([np.full(len(p), k) for k, (p, _) in enumerate(found)])
+        fit = _finish(fit_ground_plane(points, np.concatenate([c for _, c in found]),
+                                       groups=groups.astype(int), warn=False),
+                      motions, gyro_bias_sigma, range_axis, gates)
+    if warn:
+        for text in fit.warnings:
+            warnings.warn(text, GroundPlaneWarning, stacklevel=2)
+    return fit
 
 
-def _finish(fit: GroundPlane, motions, gyro_bias_sigma: float, warn: bool, range_axis,
-            gates) -> GroundPlane:
-    """The fit with its window's note when empty and the gyro bias's turn over the frames'
-    mean time since the first chirp added to its covariance; warned when ``warn``."""
-    r_axis = np.asarray(range_axis, dtype=float)
-    g = np.asarray(gates, dtype=int)
+def _finish(fit: GroundPlane, motions, gyro_bias_sigma: float, range_axis=None,
+            gates=None) -> GroundPlane:
+    """The fit with its window's note when empty (``range_axis``, ``gates``) and the gyro
+    bias's turn over the frames' mean time since the first chirp added to its covariance."""
     if fit.points == 0:
+        r_axis = np.zeros(0) if range_axis is None else np.asarray(range_axis, dtype=float)
+        g = np.zeros(0, dtype=int) if gates is None else np.asarray(gates, dtype=int)
         where = (f"{r_axis[g].min():.2f}-{r_axis[g].max():.2f} m" if g.size
                  else "(no cell)")
         fit = replace(fit, warnings=(f"ground plane: no ground return in the range window "
                                      f"{where}; no tilt from the ground",))
     t0 = float(motions[0].time[0])
     span = float(np.mean([np.mean(m.time) for m in motions]) - t0)
-    fit = replace(fit, tilt_covariance=fit.tilt_covariance
-                  + np.eye(2) * (float(gyro_bias_sigma) * span) ** 2)
-    if warn:
-        for text in fit.warnings:
-            warnings.warn(text, GroundPlaneWarning, stacklevel=3)
-    return fit
+    return replace(fit, tilt_covariance=fit.tilt_covariance
+                   + np.eye(2) * (float(gyro_bias_sigma) * span) ** 2)
 
 
-def fit_looks(looks, motions, gyro_bias_sigma: float, warn: bool, range_axis,
-               gates) -> GroundPlane:
-    """:func:`fit_ground_plane` of the looks' points (:class:`compensation.ground_looks.
-    GroundLook`), every azimuth sector a group (:func:`sector_groups`), finished by
-    :func:`_finish` (``motions``: the record's, ``gyro_bias_sigma`` [rad/s]), the looks
-    kept in :attr:`GroundPlane.looks`."""
+def fit_looks(looks, motions, *, gyro_bias_sigma: float = 0.0, range_axis=None,
+              gates=None) -> GroundPlane:
+    """Plane fit of the ground points of looks and the roll and pitch correction it gives.
+
+    Parameters
+    ----------
+    looks : sequence of compensation.ground_looks.GroundLook
+        Every frame's points in W and their covariances.
+    motions : sequence of PlatformMotion
+        The record's motion (its first chirp the time the tilt is of).
+    gyro_bias_sigma : float
+        Spread of the gyro bias left in the attitudes of the looks [rad/s]: its turn
+        over the frames' mean time since the first chirp is added to the covariance.
+    range_axis, gates : array_like, optional
+        The ground's range window (named in the warning when no point was found).
+
+    Returns
+    -------
+    GroundPlane
+        :func:`fit_ground_plane` of every look's points, every azimuth sector about
+        the nadir a group of the jackknife (:func:`sector_groups`); the looks kept in
+        :attr:`GroundPlane.looks`. Not warned (its warnings in the result).
+    """
+    looks = tuple(looks)
     points = np.concatenate([k.points for k in looks])
     fit = fit_ground_plane(points, np.concatenate([k.covariance for k in looks]),
                            groups=sector_groups(points), warn=False)
-    return replace(_finish(fit, motions, gyro_bias_sigma, warn, range_axis, gates),
-                   looks=looks)
+    return replace(_finish(fit, motions, gyro_bias_sigma, range_axis, gates), looks=looks)
 
 
 #: Mahalanobis distance of the ground's tilt from a given attitude above which the two

@@ -59,7 +59,7 @@ def refit_ground(fit: GroundPlane, motions, *, gyro_bias_sigma: float = 0.0) -> 
         att = np.asarray(motions[k.frame].attitude[k.pose], dtype=float)
         points, cov = k.turned(att)
         looks.append(replace(k, attitude=att, points=points, covariance=cov))
-    return fit_looks(tuple(looks), motions, gyro_bias_sigma, False, np.zeros(0), np.zeros(0))
+    return fit_looks(looks, motions, gyro_bias_sigma=gyro_bias_sigma)
 
 
 class GroundRetilt:

@@ -85,7 +85,7 @@ def _record(seed: int):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_refit_recovers_the_first_ramps_tilt(seed):
     looks, drift, exact, t = _record(seed)
-    old = fit_looks(looks, drift, 0.0, False, np.zeros(0), np.zeros(0))
+    old = fit_looks(looks, drift)
     # the drift averaged into one plane: phi0 - b mean(t), beyond the stated spread
     mean_drift = BIAS * np.mean(t)
     assert np.all(np.abs(old.tilt - (PHI0 - mean_drift)) <= COVER_SIGMAS * old.tilt_sigma)
@@ -100,7 +100,7 @@ def test_refit_recovers_the_first_ramps_tilt(seed):
 
 def test_retilt_gives_the_initial_attitude():
     looks, drift, exact, _ = _record(0)
-    old = fit_looks(looks, drift, 0.0, False, np.zeros(0), np.zeros(0))
+    old = fit_looks(looks, drift)
     retilt = GroundRetilt(old, np.eye(3))
     assert retilt.fit is old
     att, cov = retilt(exact, old.tilt_covariance)
@@ -112,7 +112,7 @@ def test_retilt_gives_the_initial_attitude():
 
 def test_refit_needs_looks():
     looks, drift, exact, _ = _record(0)
-    old = fit_looks(looks, drift, 0.0, False, np.zeros(0), np.zeros(0))
+    old = fit_looks(looks, drift)
     from dataclasses import replace
 
     with pytest.raises(ValueError, match="no looks"):
