@@ -108,9 +108,8 @@ class Scatterer:
         Direction [rad] in W, or for a mounted radar in its nominal frame N
         (:mod:`compensation.mounting`).
     elevation_sigma : float or None
-        Spread of ``elevation`` [rad] where it was measured by phase comparison
-        across a vertical baseline too short to resolve it as a beam
-        (:func:`compensation.elevation.measure_elevation`); None otherwise.
+        Spread of ``elevation`` [rad] by phase comparison across a vertical baseline too
+        short for a beam (:func:`compensation.elevation.measure_elevation`); None otherwise.
     """
 
     gate: int
@@ -379,11 +378,8 @@ def _peak(rc, positions, m: PlatformMotion, s: Scatterer, options, half: float, 
 
 
 def _apertures(positions, wavelength: float) -> tuple[bool, bool]:
-    """Whether the array resolves azimuth (extent along x) and elevation (along y).
-
-    An extent below :data:`MIN_APERTURE_WAVELENGTHS` wavelengths gives a beam too
-    wide for a peak on the local grid.
-    """
+    """Whether the array resolves azimuth (extent along x) and elevation (along y): an
+    extent below :data:`MIN_APERTURE_WAVELENGTHS` wavelengths gives a beam too wide."""
     p = np.asarray(positions, dtype=float)
     lim = MIN_APERTURE_WAVELENGTHS * wavelength
     return bool(np.ptp(p[:, 0]) >= lim), bool(np.ptp(p[:, 1]) >= lim)
@@ -507,7 +503,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
                    offset_search: float = OFFSET_SEARCH_HALF_WIDTH,
                    detect_grid=None, detect_gates=None, imu_errors: ImuErrors | None = None,
                    attitude_given: bool = True, blocks: int = DOPPLER_BLOCKS,
-                   tilt_covariance=None, attitude_track=None, mounting=None,
+                   tilt_covariance=None, attitude_track=None, mounting=None, ground=None,
                    **options) -> CalibrationResult:
     """Estimate the clock offset, gyro bias and velocity of a record from its radar data.
 
@@ -556,10 +552,12 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         (:func:`compensation.radar_inertial.estimate_radar_inertial`).
     blocks : int
         Doppler blocks per frame (:func:`doppler_measurements`).
-    tilt_covariance, attitude_track : array_like, optional
+    tilt_covariance, attitude_track, ground : optional
         Covariance of the initial roll and pitch when measured [rad^2]; a flight
         controller's attitude at every frame's first time ``[frame, 3, 3]``
-        (:func:`compensation.radar_inertial.estimate_radar_inertial`).
+        (:func:`compensation.radar_inertial.estimate_radar_inertial`); ``(motions,
+        tilt_covariance) -> (initial attitude, tilt covariance)``, the ground's tilt at
+        the clock and gyro bias found (:class:`compensation.ground_refit.GroundRetilt`).
     mounting : array_like, shape ``[3, 3]``, optional
         ``R_BA`` of a mounted radar (A vectors to B vectors): the scatterers are
         detected and their beams formed in its nominal frame N (their directions,
@@ -661,7 +659,9 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             gb, bias = GyroBias(fused - bias, cov, fit.residual_rms), fused
             motions = integrate()
     ri = None
-    if "velocity" in estimate:
+    if "velocity" in estimate:   # the ground's tilt again at the clock and gyro bias found
+        att0, tilt_cov = ((motions[0].attitude[0], tilt_covariance) if ground is None
+                          else ground(motions, tilt_covariance))
         def radar_inertial(offset: float, offset_sigma, first=motions[0]):
             return estimate_radar_inertial(
                 imu_time, gyro, accel, frames,
@@ -669,10 +669,10 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
                                                 wavelength=lam, blocks=blocks,
                                                 mounting=mounting),
                 imu_errors=errors, initial_velocity=first.velocity[0],
-                initial_attitude=first.attitude[0], initial_position=first.position[0],
+                initial_attitude=att0, initial_position=first.position[0],
                 time_offset=offset, gyro_bias=bias, clock_offset_sigma=offset_sigma,
                 gyro_bias_cov=None if gb is None else gb.covariance,
-                tilt_covariance=tilt_covariance, attitude_track=attitude_track,
+                tilt_covariance=tilt_cov, attitude_track=attitude_track,
                 attitude_given=attitude_given, reference_time=frames[0][0],
                 **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
 

@@ -43,13 +43,19 @@ from scipy.spatial.transform import Rotation
 from ._checks import finite_array
 from .calibration import DIRECTION_SIGMA, UNRESOLVED_DIRECTION_SIGMA, detect_scatterers
 from .geometry import direction
-from .ground_dense import DENSE_ANGLE_SIGMA, DENSE_RANGE_SIGMA_CELLS, dense_ground_directions
+from .ground_dense import (
+    DENSE_ANGLE_SIGMA,
+    DENSE_RANGE_SIGMA_CELLS,
+    SNAPSHOT_CHIRP,
+    dense_ground_directions,
+)
+from .ground_looks import GroundLook
 from .mounting import mounting_rotation, radar_frame_motion, world_directions
 from .observability import ObservabilityWarning
 from .strapdown import PlatformMotion
 
-__all__ = ["ASSUMPTION", "GroundPlane", "GroundPlaneWarning", "fit_ground_plane", "ground_check",
-           "ground_points", "ground_tilt", "point_covariance"]
+__all__ = ["ASSUMPTION", "GroundPlane", "GroundPlaneWarning", "fit_ground_plane", "fit_looks",
+           "ground_check", "ground_points", "ground_tilt", "point_covariance"]
 
 #: What the ground tilt assumes (in every report).
 ASSUMPTION = ("level flat ground in view: a ground sloped by s biases roll and pitch by s; "
@@ -128,6 +134,11 @@ class GroundPlane:
     spread_scale : float
         Factor (>= 1) on the points' covariance that made it cover the spread of the
         leave-one-group-out fits (the jackknife over frames); 1 without groups.
+    looks : tuple of compensation.ground_looks.GroundLook
+        The frames' points and the attitudes that turned them into W (the dense
+        points of :func:`ground_tilt`, which
+        :func:`compensation.ground_refit.refit_ground` turns with another
+        integration); empty otherwise.
     """
 
     tilt: np.ndarray
@@ -140,6 +151,7 @@ class GroundPlane:
     rms: float
     warnings: tuple[str, ...] = field(default_factory=tuple)
     spread_scale: float = 1.0
+    looks: tuple = field(default=(), repr=False, compare=False)
 
     @property
     def usable(self) -> bool:
@@ -475,7 +487,9 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
     record, so the same scatterers share the same cells in every frame: with frames
     as groups that part of the error shows in no spread. The gyro bias turns the later frames'
     attitude: its spread over the frames' mean time since the first chirp is added
-    to the tilt's.
+    to the tilt's. The dense points are kept with the attitudes that turned them
+    (:attr:`GroundPlane.looks`), to be fitted again with another integration
+    (:func:`compensation.ground_refit.refit_ground`).
 
     Parameters
     ----------
@@ -510,14 +524,18 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
     if rot is None:         # the down-looking radar: every ground cell's plane waves
         pick = np.unique(np.linspace(0, len(rcs) - 1, min(DENSE_FRAMES, len(rcs))).round()
                          ).astype(int)
-        found = [dense_points(rcs[k], element_positions, motions[k], wavelength=wavelength,
-                              range_axis=range_axis, gates=gates,
-                              channel_slot=options.get("channel_slot")) for k in pick]
-        points = np.concatenate([p for p, _ in found])
-        groups = sector_groups(points)
+        slots = options.get("channel_slot")
+        pose = (1 if slots is None else int(np.max(slots)) + 1) * SNAPSHOT_CHIRP
         # a hover repeats one look: the same scatterers mix in the same cells in every
         # frame, so the frames together hold one frame's information on that error
-        found = [(p, c * pick.size) for p, c in found]
+        looks = []
+        for k in pick:
+            p, c = dense_points(rcs[k], element_positions, motions[k], wavelength=wavelength,
+                                range_axis=range_axis, gates=gates, channel_slot=slots)
+            looks.append(GroundLook(int(k), pose, np.asarray(motions[k].attitude[pose]), p,
+                                    c * pick.size))
+        fit = fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
+                        range_axis=range_axis, gates=gates)
     else:
         found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
                                wavelength=wavelength, range_axis=range_axis, gates=gates,
@@ -525,23 +543,60 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
         found = [world_directions(p, rot, c) for p, c in found]
         points = np.concatenate([p for p, _ in found])
         groups = np.concatenate([np.full(len(p), k) for k, (p, _) in enumerate(found)])
-    fit = fit_ground_plane(points, np.concatenate([c for _, c in found]),
-                           groups=groups.astype(int), warn=False)
-    r_axis = np.asarray(range_axis, dtype=float)
-    g = np.asarray(gates, dtype=int)
+        fit = _finish(fit_ground_plane(points, np.concatenate([c for _, c in found]),
+                                       groups=groups.astype(int), warn=False),
+                      motions, gyro_bias_sigma, range_axis, gates)
+    if warn:
+        for text in fit.warnings:
+            warnings.warn(text, GroundPlaneWarning, stacklevel=2)
+    return fit
+
+
+def _finish(fit: GroundPlane, motions, gyro_bias_sigma: float, range_axis=None,
+            gates=None) -> GroundPlane:
+    """The fit with its window's note when empty (``range_axis``, ``gates``) and the gyro
+    bias's turn over the frames' mean time since the first chirp added to its covariance."""
     if fit.points == 0:
+        r_axis = np.zeros(0) if range_axis is None else np.asarray(range_axis, dtype=float)
+        g = np.zeros(0, dtype=int) if gates is None else np.asarray(gates, dtype=int)
         where = (f"{r_axis[g].min():.2f}-{r_axis[g].max():.2f} m" if g.size
                  else "(no cell)")
         fit = replace(fit, warnings=(f"ground plane: no ground return in the range window "
                                      f"{where}; no tilt from the ground",))
     t0 = float(motions[0].time[0])
     span = float(np.mean([np.mean(m.time) for m in motions]) - t0)
-    fit = replace(fit, tilt_covariance=fit.tilt_covariance
-                  + np.eye(2) * (float(gyro_bias_sigma) * span) ** 2)
-    if warn:
-        for text in fit.warnings:
-            warnings.warn(text, GroundPlaneWarning, stacklevel=2)
-    return fit
+    return replace(fit, tilt_covariance=fit.tilt_covariance
+                   + np.eye(2) * (float(gyro_bias_sigma) * span) ** 2)
+
+
+def fit_looks(looks, motions, *, gyro_bias_sigma: float = 0.0, range_axis=None,
+              gates=None) -> GroundPlane:
+    """Plane fit of the ground points of looks and the roll and pitch correction it gives.
+
+    Parameters
+    ----------
+    looks : sequence of compensation.ground_looks.GroundLook
+        Every frame's points in W and their covariances.
+    motions : sequence of PlatformMotion
+        The record's motion (its first chirp the time the tilt is of).
+    gyro_bias_sigma : float
+        Spread of the gyro bias left in the attitudes of the looks [rad/s]: its turn
+        over the frames' mean time since the first chirp is added to the covariance.
+    range_axis, gates : array_like, optional
+        The ground's range window (named in the warning when no point was found).
+
+    Returns
+    -------
+    GroundPlane
+        :func:`fit_ground_plane` of every look's points, every azimuth sector about
+        the nadir a group of the jackknife (:func:`sector_groups`); the looks kept in
+        :attr:`GroundPlane.looks`. Not warned (its warnings in the result).
+    """
+    looks = tuple(looks)
+    points = np.concatenate([k.points for k in looks])
+    fit = fit_ground_plane(points, np.concatenate([k.covariance for k in looks]),
+                           groups=sector_groups(points), warn=False)
+    return replace(_finish(fit, motions, gyro_bias_sigma, range_axis, gates), looks=looks)
 
 
 #: Mahalanobis distance of the ground's tilt from a given attitude above which the two

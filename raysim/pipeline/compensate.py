@@ -98,7 +98,7 @@ from raysim.io.compensate_io import (
 from raysim.io.store_guard import remove_debris, writer_lock
 from raysim.pipeline.chains import project
 from raysim.pipeline.compensate_size import gated_range_compress, output_bytes
-from raysim.pipeline.estimate import estimate_record, ground_tilt_of_record
+from raysim.pipeline.estimate import estimate_record, ground_retilt, ground_tilt_of_record
 from raysim.pipeline.self_calibration import calibrate_record
 from raysim.processing.maps import range_compress
 from raysim.vocabulary import parse_chain
@@ -339,10 +339,11 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
     ground = ground_tilt_of_record(inp, imu, rcs, time_t, r_axis, gates, 0.0 if auto
                                    else time_offset, options, warn=False,
                                    mounting=mounting_deg) if velocity == "radar" else None
-    tilt_cov = None
+    tilt_cov = retilt = None
     if ground is not None and not given and ground.usable:   # roll and pitch from the ground
         from scipy.spatial.transform import Rotation
 
+        retilt = ground_retilt(ground, options)    # again at the clock and gyro bias found
         options["initial_attitude"] = (Rotation.from_rotvec([*ground.tilt, 0.0]).as_matrix()
                                        @ options["initial_attitude"])
         tilt_cov, given = ground.tilt_covariance, True
@@ -354,7 +355,7 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            time_offset=0.0 if auto else time_offset,
                            grid_shape=inp.grid_shape, detect_gates=gates,
                            attitude_given=given, tilt_covariance=tilt_cov,
-                           attitude_track=attitude_track, mounting=None
+                           attitude_track=attitude_track, ground=retilt, mounting=None
                            if is_default_mounting(mounting_deg)
                            else mounting_matrix(mounting_deg), **options)
     report = cal.report
@@ -369,6 +370,8 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
         import warnings
 
         from compensation.ground_plane import GroundPlaneWarning, ground_check
+
+        ground = ground if retilt is None else retilt.fit
 
         report["ground_plane"] = {**ground.report(), "role": (
             "initial roll and pitch" if tilt_cov is not None else "check of the given attitude"

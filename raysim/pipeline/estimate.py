@@ -10,7 +10,8 @@ import numpy as np
 
 from raysim.scenario import Scenario
 
-__all__ = ["VELOCITY_MODES", "estimate_motion", "estimate_record", "ground_tilt_of_record",
+__all__ = ["VELOCITY_MODES", "estimate_motion", "estimate_record", "ground_retilt",
+           "ground_tilt_of_record",
            "scenario_motion", "split_frames"]
 
 #: An interval above this multiple of the median chirp interval starts a new frame.
@@ -233,18 +234,12 @@ def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_
     compensation.ground_plane.GroundPlane
     """
     from compensation.ground_plane import ground_tilt
-    from raysim.pipeline.self_calibration import imu_errors
 
     motions = estimate_record(imu[:, 0], imu[:, 1:4], imu[:, 4:7], frame_times,
                               time_offset=time_offset, **options)
-    grade = options.get("imu_grade")
-    if grade is None:
-        from compensation.calibration import DEFAULT_IMU_ERRORS as errors
-    else:
-        errors = imu_errors(grade)
     kw = dict(wavelength=inp.config.center_wavelength, range_axis=r_axis,
               gates=np.arange(int(gates[-1]) + 1, r_axis.size),
-              gyro_bias_sigma=errors.gyro_bias_sigma, warn=warn,
+              gyro_bias_sigma=_gyro_bias_sigma(options), warn=warn,
               channel_slot=inp.tx_slot if inp.num_slots > 1 else None,
               grid_shape=inp.grid_shape,
               method="lattice" if inp.grid_shape is not None else "direct")
@@ -253,3 +248,39 @@ def ground_tilt_of_record(inp, imu: np.ndarray, rcs: list, frame_times: list, r_
     return ground_tilt(rcs, inp.element_positions, motions, **kw,
                        mounting=None if is_default_mounting(mounting) else
                        mounting_matrix(mounting))
+
+
+def _gyro_bias_sigma(options: dict) -> float:
+    """Spread of the gyro bias of ``options``' ``imu_grade`` (default the widest) [rad/s]."""
+    from raysim.pipeline.self_calibration import imu_errors
+
+    grade = options.get("imu_grade")
+    if grade is None:
+        from compensation.calibration import DEFAULT_IMU_ERRORS as errors
+    else:
+        errors = imu_errors(grade)
+    return float(errors.gyro_bias_sigma)
+
+
+def ground_retilt(ground, options: dict):
+    """The ground's tilt again at the clock and gyro bias a calibration finds.
+
+    Parameters
+    ----------
+    ground : compensation.ground_plane.GroundPlane
+        The fit of :func:`ground_tilt_of_record` with ``options``.
+    options : dict
+        Those of that fit (``initial_attitude``: the attitude its tilt corrects,
+        ``imu_grade``).
+
+    Returns
+    -------
+    compensation.ground_refit.GroundRetilt or None
+        For :func:`compensation.calibration.self_calibrate` (``ground=``); None when the
+        fit kept no points to turn (a mounted radar's).
+    """
+    from compensation.ground_refit import GroundRetilt
+
+    if not ground.looks:
+        return None
+    return GroundRetilt(ground, options["initial_attitude"], _gyro_bias_sigma(options))
