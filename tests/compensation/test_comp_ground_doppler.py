@@ -155,3 +155,21 @@ def test_ground_scatterers_checks_its_input():
         ground_scatterers(rcs[0], arr.virtual_positions, rest, gates=[rcs[0].shape[2]], **kw)
     with pytest.raises(ValueError, match="count"):
         ground_scatterers(rcs[0], arr.virtual_positions, rest, gates=[3], count=-1, **kw)
+
+
+def test_ground_doppler_needs_the_radar_velocity_and_the_window(tmp_path, capsys):
+    """The CLI refuses --ground-doppler without --velocity radar (exit status 2, naming
+    both); the stage refuses it without the compensated cells it lies beyond."""
+    from raysim.cli import main
+    from raysim.pipeline.self_calibration import calibrate_record
+
+    args = ["compensate", str(tmp_path / "cube.npz"), "--imu", str(tmp_path / "imu.csv"),
+            "--out", str(tmp_path / "o.zarr"), "--ground-doppler", "--velocity", "hover"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "--ground-doppler" in err and "--velocity radar" in err
+    arr, _, rcs, times, imu = _record()
+    with pytest.raises(ValueError, match="detect_gates"):
+        calibrate_record(rcs, times, arr.virtual_positions, imu.time, imu.gyro, imu.accel,
+                         wavelength=CFG.center_wavelength, range_axis=CFG.range_axis(),
+                         ground_doppler=True)
