@@ -243,6 +243,7 @@ def _calibration_text(report: dict) -> str:
         lines.append(f"  Doppler measurements used: {ri['measurements']} "
                      f"({ri['rejected']} rejected), chi2 {ri['chi2']:.2f}")
     lines.append(f"  scatterers used: {report['scatterers']}")
+    lines.extend(f"  {note}" for note in report.get("notes", ()))
     gp = report.get("ground_plane")
     if gp:
         tilt = ", ".join(f"{a:.3f} +- {b:.3f}" for a, b in zip(

@@ -167,7 +167,12 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
                             np.concatenate([m.velocity for m in ms]),
                             np.concatenate([m.angular_rate for m in ms]), ms[0].lever_arm,
                             ms[0].warnings)
-    return SelfCalibration(motion, res, res.report())
+    report = res.report()
+    if ground_doppler and "velocity" in estimate and not any(
+            "ground scatterers" in n for n in report["notes"]):
+        report["notes"].append("velocity: Doppler of 0 ground scatterers (no dense ground point "
+                               "beyond the compensated cells fitted well enough)")
+    return SelfCalibration(motion, res, report)
 
 
 def calibrate_frames(frames: Sequence[RadarFrame], imu_time, gyro, accel, *,

@@ -173,3 +173,22 @@ def test_ground_doppler_needs_the_radar_velocity_and_the_window(tmp_path, capsys
         calibrate_record(rcs, times, arr.virtual_positions, imu.time, imu.gyro, imu.accel,
                          wavelength=CFG.center_wavelength, range_axis=CFG.range_axis(),
                          ground_doppler=True)
+
+
+def test_no_ground_beyond_the_window_is_reported():
+    """With the window reaching the last cell there is no ground to add: the report says
+    so instead of leaving the user to guess."""
+    from raysim.pipeline.self_calibration import calibrate_record
+
+    arr, traj, rcs, times, imu = _record()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cal = calibrate_record(rcs, times, arr.virtual_positions, imu.time, imu.gyro,
+                               imu.accel, wavelength=CFG.center_wavelength,
+                               range_axis=CFG.range_axis(), estimate=("velocity",),
+                               scatterers=_targets(), channel_slot=arr.tx_slot,
+                               detect_gates=np.arange(CFG.range_axis().size),
+                               ground_doppler=True, trajectory=traj, lever_arm=LEVER,
+                               imu_grade="consumer_mems")
+    assert any(n.startswith("velocity: Doppler of 0 ground scatterers")
+               for n in cal.report["notes"]), cal.report["notes"]
