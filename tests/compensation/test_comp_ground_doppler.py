@@ -192,3 +192,27 @@ def test_no_ground_beyond_the_window_is_reported():
                                imu_grade="consumer_mems")
     assert any(n.startswith("velocity: Doppler of 0 ground scatterers")
                for n in cal.report["notes"]), cal.report["notes"]
+
+
+def test_ground_measurements_stay_within_the_estimate_s_limit():
+    """Where the detected scatterers' measurements leave room for fewer ground scatterers
+    than found, the first ones only are added: the total stays within MAX_MEASUREMENTS."""
+    from compensation.radar_inertial import MAX_MEASUREMENTS, DopplerMeasurements
+
+    arr, traj, rcs, times, _ = _record()
+    rest = _held(traj, times[0])
+    opts = dict(wavelength=CFG.center_wavelength, range_axis=CFG.range_axis())
+    ground = ground_scatterers(rcs[0], arr.virtual_positions, rest, gates=_ground_gates(),
+                               channel_slot=arr.tx_slot, **opts)
+    one = doppler_measurements(rcs[:1], arr.virtual_positions, [rest], _targets()[:1],
+                               dict(opts, channel_slot=arr.tx_slot, method="direct"),
+                               wavelength=CFG.center_wavelength)
+    blocks = one.frame.size
+    room = len(ground) - 1                     # room for all but one of them
+    reps = (MAX_MEASUREMENTS - room * blocks) // blocks
+    full = DopplerMeasurements(*(np.concatenate([a] * reps) for a in (
+        one.directions, one.range_rate, one.sigma, one.frame, one.window,
+        one.direction_cov)))
+    both = ground_measurements(full, rcs[:1], arr.virtual_positions, [rest], ground,
+                               wavelength=CFG.center_wavelength, channel_slot=arr.tx_slot)
+    assert both.frame.size == full.frame.size + room * blocks <= MAX_MEASUREMENTS
