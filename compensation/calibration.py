@@ -33,6 +33,7 @@ from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
 from .elevation import measure_elevation, vertical_baseline
 from .exact import rigid_body_projection
 from .geometry import direction
+from .ground_doppler import ground_measurements, ground_scatterers
 from .gyro_bias import GyroBias, fit_gyro_bias
 from .ingestion import check_frame_times
 from .mounting import mounting_rotation, radar_frame_motion, world_directions
@@ -172,10 +173,9 @@ class CalibrationResult:
     def report(self) -> dict:
         """Estimates with one-sigma uncertainties as plain numbers (SI units).
 
-        With the radar-inertial estimate, the clock offset, gyro bias and
-        initial velocity are its (those applied), ``radar_inertial`` holds its
-        whole state, spreads and unconstrained components, and ``warnings``
-        its observability warnings.
+        With the radar-inertial estimate, the clock offset, gyro bias and initial velocity
+        are its (those applied), ``radar_inertial`` holds its whole state, spreads and
+        unconstrained components, and ``warnings`` its observability warnings.
         """
         ri = self.radar_inertial
         out = {"time_offset_s": self.time_offset,
@@ -459,20 +459,17 @@ def doppler_measurements(rcs, positions, motions, scatterers, options, *, wavele
     u = np.stack([sc.direction for sc in scatterers])
     dcov = np.stack([_direction_cov(sc, positions, wavelength) for sc in scatterers])
     u, dcov = world_directions(u, mounting, dcov)     # the Doppler model's frame
-    d, r, s, fr, win = [], [], [], [], []
+    rs, win, n = [], [], len(scatterers)
     for k, m in enumerate(motions):
         t = _loop_motion(m, y.shape[2]).time
         for blk in np.array_split(np.arange(t.size), nb):
-            for j in range(len(scatterers)):
-                vr, sig = slow_time_velocity(y[k, j, blk], t[blk], wavelength)
-                d.append(u[j])
-                r.append(vr)
-                s.append(max(sig, MIN_RANGE_RATE_SIGMA))
-                fr.append(k)
-                win.append((t[blk][0], t[blk][-1]))
-    per = np.tile(np.arange(len(scatterers)), len(motions) * nb)
-    return DopplerMeasurements(np.array(d), np.array(r), np.array(s), np.array(fr),
-                               np.array(win), dcov[per])
+            rs.extend(slow_time_velocity(y[k, j, blk], t[blk], wavelength) for j in range(n))
+            win.extend([(t[blk][0], t[blk][-1])] * n)
+    per = np.tile(np.arange(n), len(motions) * nb)            # scatterer of each measurement
+    r, s = np.reshape(rs, (-1, 2)).T
+    return DopplerMeasurements(u[per], r, np.maximum(s, MIN_RANGE_RATE_SIGMA),
+                               np.repeat(np.arange(len(motions)), nb * n), np.array(win),
+                               dcov[per])
 
 
 def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
@@ -504,7 +501,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
                    detect_grid=None, detect_gates=None, imu_errors: ImuErrors | None = None,
                    attitude_given: bool = True, blocks: int = DOPPLER_BLOCKS,
                    tilt_covariance=None, attitude_track=None, mounting=None, ground=None,
-                   **options) -> CalibrationResult:
+                   ground_gates=None, **options) -> CalibrationResult:
     """Estimate the clock offset, gyro bias and velocity of a record from its radar data.
 
     Parameters
@@ -564,6 +561,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         and ``scatterers``' and ``detect_grid``'s, are N's), each direction turned
         into W for the velocity, gyro-bias and Doppler models
         (:mod:`compensation.mounting`); default down-looking (N is W).
+    ground_gates : array_like of int, optional
+        Ground clutter bins joining the velocity's Doppler (:mod:`compensation.ground_doppler`).
     **options
         For :func:`compensation.integrate_imu` (``lever_arm``,
         ``initial_attitude``, ``initial_position``, ``velocity``,
@@ -598,7 +597,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     tau = float(finite_array("time_offset", time_offset, shape=()))
     errors = DEFAULT_IMU_ERRORS if imu_errors is None else imu_errors
     bias = np.zeros(3)
-    clock = gb = None
+    clock, gb, clutter = None, None, ()
 
     def integrate():
         return integrate_record(imu_time, gyro - bias, accel, frames, time_offset=tau,
@@ -665,9 +664,10 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         def radar_inertial(offset: float, offset_sigma, first=motions[0]):
             return estimate_radar_inertial(
                 imu_time, gyro, accel, frames,
-                lambda ms: doppler_measurements(rcs, positions, ms, scatterers, proj,
-                                                wavelength=lam, blocks=blocks,
-                                                mounting=mounting),
+                lambda ms: ground_measurements(doppler_measurements(
+                    rcs, positions, ms, scatterers, proj, wavelength=lam, blocks=blocks,
+                    mounting=mounting), rcs, positions, ms, clutter, wavelength=lam,
+                    channel_slot=proj.get("channel_slot"), mounting=mounting),
                 imu_errors=errors, initial_velocity=first.velocity[0],
                 initial_attitude=att0, initial_position=first.position[0],
                 time_offset=offset, gyro_bias=bias, clock_offset_sigma=offset_sigma,
@@ -675,7 +675,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
                 tilt_covariance=tilt_cov, attitude_track=attitude_track,
                 attitude_given=attitude_given, reference_time=frames[0][0],
                 **{k: v for k, v in options.items() if k in _INTEGRATION_KEYS})
-
+        clutter = ground_scatterers(rcs[0], positions, seen(motions)[0], gates=ground_gates, **proj)
         ri = radar_inertial(tau, None if clock is None else clock.offset_sigma)
         if clock is not None:
             # the fits above saw the per-frame velocities' motion, its acceleration error bends
@@ -690,7 +690,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         cov0 = ri.initial_velocity_covariance
     else:
         cov0 = np.full((3, 3), np.nan)
-    notes = []
+    notes = [f"velocity: Doppler of {len(clutter)} ground scatterers (at rest)"] if clutter else []
     if "gyro_bias" in estimate and gb is None:
         notes.append("gyro_bias: not estimated (needs two frames or more and an array that "
                      "resolves azimuth and elevation)")

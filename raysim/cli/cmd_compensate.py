@@ -197,6 +197,10 @@ def register(subparsers) -> None:
                    "those scatterers' common Doppler (a velocity error along the line of sight), "
                    "'displacement' estimates the residual displacement vector per chirp and "
                    "corrects every beam at its own direction")
+    p.add_argument("--ground-doppler", action="store_true",
+                   help="with --velocity radar, the ground clutter beyond the range window also "
+                   "measures the velocity by its Doppler (the ground assumed at rest): it "
+                   "constrains the velocity across a narrow cone of targets")
     p.set_defaults(func=run)
 
 
@@ -239,6 +243,7 @@ def _calibration_text(report: dict) -> str:
         lines.append(f"  Doppler measurements used: {ri['measurements']} "
                      f"({ri['rejected']} rejected), chi2 {ri['chi2']:.2f}")
     lines.append(f"  scatterers used: {report['scatterers']}")
+    lines.extend(f"  {note}" for note in report.get("notes", ()))
     gp = report.get("ground_plane")
     if gp:
         tilt = ", ".join(f"{a:.3f} +- {b:.3f}" for a, b in zip(
@@ -258,6 +263,9 @@ def run(args) -> int:
                          f"{args.imu_positional!r} were both given")
     if spec.name == "paper" and args.direction_deg is None:
         raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target direction)")
+    if args.ground_doppler and args.velocity != "radar":
+        raise ValueError(f"--ground-doppler measures the velocity: needs --velocity radar, got "
+                         f"--velocity {args.velocity}")
     attitude = None if args.initial_attitude_deg is None else args.initial_attitude_deg.strip()
     result = compensate(
         args.cube, args.imu if args.imu is not None else args.imu_positional, out=args.out,
@@ -278,7 +286,7 @@ def run(args) -> int:
         max_gap=args.max_gap, imu_topic=args.imu_topic, imu_instance=args.imu_instance,
         board=args.board, antenna_positions=args.antenna_positions,
         mounting_deg=args.mounting_deg, progress=not args.no_progress,
-        autofocus=args.autofocus or False)
+        autofocus=args.autofocus or False, ground_doppler=args.ground_doppler)
     for note in result.notes:
         print(f"note: {note}", file=sys.stderr)
     if result.imu_source is not None:

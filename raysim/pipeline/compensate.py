@@ -304,7 +304,7 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
 
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
              velocity, initial_velocity, initial_attitude_deg, imu_grade, attitude_track=None,
-             mounting_deg=None):
+             mounting_deg=None, ground_doppler: bool = False):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
 
     ``rcs`` receives the range-compressed frames when they are computed for the
@@ -349,30 +349,28 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
         tilt_cov, given = ground.tilt_covariance, True
     if inp.num_slots > 1:
         options["channel_slot"] = inp.tx_slot
+    mount = None if is_default_mounting(mounting_deg) else mounting_matrix(mounting_deg)
     cal = calibrate_record(rcs, time_t, inp.element_positions, imu[:, 0], imu[:, 1:4],
                            imu[:, 4:7], wavelength=inp.config.center_wavelength,
                            range_axis=r_axis, estimate=estimate,
                            time_offset=0.0 if auto else time_offset,
                            grid_shape=inp.grid_shape, detect_gates=gates,
                            attitude_given=given, tilt_covariance=tilt_cov,
-                           attitude_track=attitude_track, ground=retilt, mounting=None
-                           if is_default_mounting(mounting_deg)
-                           else mounting_matrix(mounting_deg), **options)
+                           attitude_track=attitude_track, ground=retilt,
+                           ground_doppler=ground_doppler, mounting=mount, **options)
     report = cal.report
     from compensation.azimuth_shift import calibration_azimuth_check
 
     report["warnings"] = [*report.get("warnings", ()), *calibration_azimuth_check(   # warned
         cal.result, rcs, inp.element_positions, [t[:, inp.tx_slot] for t in inp.slot_times],
         wavelength=inp.config.center_wavelength, range_axis=r_axis, grid_shape=inp.grid_shape,
-        channel_slot=options.get("channel_slot"), mounting=None
-        if is_default_mounting(mounting_deg) else mounting_matrix(mounting_deg))]
+        channel_slot=options.get("channel_slot"), mounting=mount)]
     if ground is not None:   # without an attitude its failures, with one a disagreement
         import warnings
 
         from compensation.ground_plane import GroundPlaneWarning, ground_check
 
         ground = ground if retilt is None else retilt.fit
-
         report["ground_plane"] = {**ground.report(), "role": (
             "initial roll and pitch" if tilt_cov is not None else "check of the given attitude"
             if initial_attitude_deg is not None else "not used")}
@@ -429,7 +427,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                direction_deg=None, max_gap: float | None = None, imu_topic: str | None = None,
                imu_instance: int | None = None, board: str | None = None,
                antenna_positions=None, mounting_deg=None, progress: bool = False,
-               autofocus: bool | str = False) -> CompensateResult:
+               autofocus: bool | str = False, ground_doppler: bool = False) -> CompensateResult:
     """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
 
     Parameters
@@ -539,6 +537,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         estimates the residual displacement vector per chirp and corrects every
         beam at its own direction (:mod:`compensation.autofocus_displacement`).
         Not with the chain ``none``.
+    ground_doppler : bool
+        With ``velocity="radar"``, the ground clutter beyond the compensated cells also
+        measures the velocity by its Doppler, assumed at rest (:mod:`compensation.ground_doppler`).
 
     Returns
     -------
@@ -625,7 +626,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
                 initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track,
-                mounting_deg=mounting_deg)
+                mounting_deg=mounting_deg, ground_doppler=ground_doppler)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None

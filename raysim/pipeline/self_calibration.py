@@ -83,7 +83,7 @@ def _slot_times(frame: RadarFrame) -> np.ndarray:
 def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, imu_time,
                      gyro, accel, *, wavelength: float, range_axis, time_offset: float = 0.0,
                      estimate=None, trajectory=None, attitude_given: bool | None = None,
-                     **options) -> SelfCalibration:
+                     ground_doppler: bool = False, **options) -> SelfCalibration:
     """Estimate velocity, clock offset and gyro bias of a record of range-compressed frames.
 
     Parameters
@@ -115,6 +115,10 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
         Whether the initial attitude is an estimate rather than the nominal
         hover attitude; default: a trajectory or ``initial_attitude`` is given.
         Without it the tilt stays at the prior, with a warning.
+    ground_doppler : bool
+        The ground clutter in the bins beyond the last of ``detect_gates`` joins the
+        velocity's Doppler measurements, assumed at rest (``ground_gates`` of
+        :func:`compensation.calibration.self_calibrate`).
     **options
         For :func:`compensation.calibration.self_calibrate` (``lever_arm``,
         ``channel_slot``, ``grid_shape``, ``detect_gates``, ``mounting`` (``R_BA``
@@ -143,6 +147,12 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
         attitude_given = trajectory is not None or options.get("initial_attitude") is not None
     if options.get("imu_grade") is not None and options.get("imu_errors") is None:
         options["imu_errors"] = imu_errors(options["imu_grade"])
+    if ground_doppler:
+        if options.get("detect_gates") is None:
+            raise ValueError("ground_doppler: needs detect_gates, the compensated bins the "
+                             "ground lies beyond")
+        options["ground_gates"] = np.arange(int(np.max(options["detect_gates"])) + 1,
+                                            len(range_axis))
     if estimate is None:
         estimate = ESTIMATES if len(rcs) > 1 else tuple(e for e in ESTIMATES
                                                         if e != "gyro_bias")
@@ -157,7 +167,12 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
                             np.concatenate([m.velocity for m in ms]),
                             np.concatenate([m.angular_rate for m in ms]), ms[0].lever_arm,
                             ms[0].warnings)
-    return SelfCalibration(motion, res, res.report())
+    report = res.report()
+    if ground_doppler and "velocity" in estimate and not any(
+            "ground scatterers" in n for n in report["notes"]):
+        report["notes"].append("velocity: Doppler of 0 ground scatterers (no dense ground point "
+                               "beyond the compensated cells fitted well enough)")
+    return SelfCalibration(motion, res, report)
 
 
 def calibrate_frames(frames: Sequence[RadarFrame], imu_time, gyro, accel, *,
