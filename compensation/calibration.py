@@ -24,11 +24,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
 from ._checks import finite_array, positive
-from .clock_offset import ClockOffset, fit_time_shift, phase_misfit
+from .clock_averaged import fit_clock
+from .clock_offset import ClockOffset, phase_misfit
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
 from .elevation import measure_elevation, vertical_baseline
 from .exact import rigid_body_projection
@@ -503,7 +505,7 @@ def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
 def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_time, gyro,
                    accel, *, wavelength: float, range_axis, scatterers=None,
                    estimate: Sequence[str] = ESTIMATES, time_offset: float = 0.0,
-                   iterations: int = ITERATIONS, drift: bool = False,
+                   iterations: int = ITERATIONS, drift: bool = False, imu_interval: float = 0.0,
                    offset_search: float = OFFSET_SEARCH_HALF_WIDTH,
                    detect_grid=None, detect_gates=None, imu_errors: ImuErrors | None = None,
                    attitude_given: bool = True, blocks: int = DOPPLER_BLOCKS,
@@ -546,6 +548,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     drift : bool
         Also estimate the clock drift in the clock-offset fit (reported; the
         radar-inertial estimate has the drift in its state and applies it).
+    imu_interval : float
+        Averaging interval of each IMU sample [s] (:mod:`compensation.clock_averaged`); 0 none.
     imu_errors : ImuErrors, optional
         Noise densities and bias spreads of the IMU, the process noise and
         priors of the radar-inertial estimate and the gyro-bias fit's prior;
@@ -631,14 +635,13 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         dv = np.stack([f.velocity for f in fits])
         return apply_velocity(ms, mids, dv, t_ref), fits
 
+    clock_fit = partial(fit_clock, drift=drift, imu_time=imu_time, interval=imu_interval)
     if "time_offset" in estimate and offset_search > 0:
         grid = tau + np.arange(-offset_search, offset_search + OFFSET_SEARCH_STEP / 2,
                                OFFSET_SEARCH_STEP)
-        cost = []
-        few = slice(0, SEARCH_FRAMES)
+        cost, few = [], slice(0, SEARCH_FRAMES)
         for cand in grid:
-            ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand,
-                                  **options)
+            ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand, **options)
             y = _beams(rcs[few], positions, seen(ms), scatterers, proj)
             cost.append(phase_misfit(_clock_tracks(y, seen(ms), scatterers, lam)))
         tau = float(grid[int(np.argmin(cost))])
@@ -646,8 +649,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):
         if "time_offset" in estimate:
             y = _beams(rcs, positions, seen(motions), scatterers, proj)
-            clock = fit_time_shift(_clock_tracks(y, seen(motions), scatterers, lam),
-                                   drift=drift)
+            clock = clock_fit(_clock_tracks(y, seen(motions), scatterers, lam), time_offset=tau)
             tau += clock.offset
             motions = integrate()
         if "gyro_bias" in estimate and len(frames) >= 2 and all(_apertures(positions, lam)):
@@ -680,12 +682,10 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         if clock is not None:
             # the fits above saw the per-frame velocities' motion, its acceleration error bends
             # the phase tracks like an offset: fit again, estimate again where it moves
-            ms = seen(ri.motions)
-            refit = fit_time_shift(_clock_tracks(_beams(rcs, positions, ms, scatterers, proj),
-                                                 ms, scatterers, lam), drift=drift)
+            y = _beams(rcs, positions, ms := seen(ri.motions), scatterers, proj)
+            refit = clock_fit(_clock_tracks(y, ms, scatterers, lam), time_offset=ri.time_offset)
             if abs(refit.offset) > refit.offset_sigma:
-                clock, ri = refit, radar_inertial(ri.time_offset + refit.offset,
-                                                  refit.offset_sigma)
+                clock, ri = refit, radar_inertial(ri.time_offset + refit.offset, refit.offset_sigma)
         motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias
         cov0 = ri.initial_velocity_covariance
     else:
