@@ -30,7 +30,7 @@ import numpy as np
 
 from ._checks import finite_array, positive
 from .clock_averaged import fit_clock
-from .clock_offset import ClockOffset, phase_misfit
+from .clock_offset import ClockOffset, phase_misfit, phase_tracks
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
 from .elevation import measure_elevation, vertical_baseline
 from .exact import rigid_body_projection
@@ -138,8 +138,8 @@ class CalibrationResult:
         IMU clock minus radar clock used for the final integration [s].
     clock : ClockOffset or None
         Last clock-offset update (``offset`` is the remaining correction,
-        ``offset_sigma`` the uncertainty of ``time_offset``); ``None`` when
-        not estimated.
+        ``total_sigma`` the uncertainty of ``time_offset``: the fit's and the log
+        stamps'); ``None`` when not estimated.
     gyro_bias : ndarray, shape ``[3]``
         Gyro bias removed from the samples [rad/s] (body frame).
     gyro : GyroBias or None
@@ -181,8 +181,9 @@ class CalibrationResult:
         its observability warnings.
         """
         ri = self.radar_inertial
+        stamp = 0.0 if self.clock is None else self.clock.stamp_sigma     # the log's stamps
         out = {"time_offset_s": self.time_offset,
-               "time_offset_sigma_s": None if self.clock is None else self.clock.offset_sigma,
+               "time_offset_sigma_s": None if self.clock is None else self.clock.total_sigma,
                "gyro_bias_rad_s": self.gyro_bias.tolist(),
                "gyro_bias_sigma_rad_s": None if self.gyro is None else self.gyro.sigma.tolist(),
                "initial_velocity_mps": self.initial_velocity.tolist(),
@@ -196,7 +197,7 @@ class CalibrationResult:
             out["clock_drift"] = self.clock.drift
             out["clock_drift_sigma"] = self.clock.drift_sigma
         if ri is not None:
-            out["time_offset_sigma_s"] = float(ri.sigma[12])
+            out["time_offset_sigma_s"] = float(np.hypot(ri.sigma[12], stamp))
             out["gyro_bias_sigma_rad_s"] = ri.sigma[9:12].tolist()
             out["clock_drift"], out["clock_drift_sigma"] = float(ri.state[13]), float(ri.sigma[13])
             out["radar_inertial"] = ri.report()
@@ -340,22 +341,6 @@ def _beams(rcs, positions, motions, scatterers, options) -> np.ndarray:
 def _loop_motion(m: PlatformMotion, n_chirps: int) -> PlatformMotion:
     """One pose per chirp loop (the first slot) of a per-slot motion."""
     return m.select(slice(0, None, m.num_chirps // n_chirps))
-
-
-def _clock_tracks(y, motions, scatterers, wavelength: float) -> list:
-    tracks = []
-    for k, m in enumerate(motions):
-        mo = _loop_motion(m, y.shape[2])
-        for j, s in enumerate(scatterers):
-            yk = y[k, j]
-            t = mo.time
-            # derotate the residual Doppler so the phase unwraps chirp to chirp
-            f0 = np.fft.fftfreq(t.size * 16, d=float(np.median(np.diff(t))))[
-                int(np.argmax(np.abs(np.fft.fft(yk, t.size * 16))))]
-            z = yk * np.exp(-2j * np.pi * f0 * (t - t[0]))
-            rate = -(4 * np.pi / wavelength) * (mo.radar_velocity @ s.direction)
-            tracks.append((t, np.unwrap(np.angle(z)), rate, np.abs(yk) ** 2))
-    return tracks
 
 
 def _peak(rc, positions, m: PlatformMotion, s: Scatterer, options, half: float, step: float
@@ -643,13 +628,13 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         for cand in grid:
             ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand, **options)
             y = _beams(rcs[few], positions, seen(ms), scatterers, proj)
-            cost.append(phase_misfit(_clock_tracks(y, seen(ms), scatterers, lam)))
+            cost.append(phase_misfit(phase_tracks(y, seen(ms), scatterers, lam)))
         tau = float(grid[int(np.argmin(cost))])
         motions = integrate()
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):
         if "time_offset" in estimate:
             y = _beams(rcs, positions, seen(motions), scatterers, proj)
-            clock = clock_fit(_clock_tracks(y, seen(motions), scatterers, lam), time_offset=tau)
+            clock = clock_fit(phase_tracks(y, seen(motions), scatterers, lam), time_offset=tau)
             tau += clock.offset
             motions = integrate()
         if "gyro_bias" in estimate and len(frames) >= 2 and all(_apertures(positions, lam)):
@@ -683,7 +668,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             # the fits above saw the per-frame velocities' motion, its acceleration error bends
             # the phase tracks like an offset: fit again, estimate again where it moves
             y = _beams(rcs, positions, ms := seen(ri.motions), scatterers, proj)
-            refit = clock_fit(_clock_tracks(y, ms, scatterers, lam), time_offset=ri.time_offset)
+            refit = clock_fit(phase_tracks(y, ms, scatterers, lam), time_offset=ri.time_offset)
             if abs(refit.offset) > refit.offset_sigma:
                 clock, ri = refit, radar_inertial(ri.time_offset + refit.offset, refit.offset_sigma)
         motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias

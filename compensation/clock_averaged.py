@@ -35,8 +35,9 @@ What it cannot observe
   convention (the interval's middle, :mod:`raysim.io.flight_logs`) is taken as
   given; a log whose average is centred elsewhere (e.g. the plain mean of ``m``
   instantaneous samples, centred half an internal sample later) shifts the
-  offset by that much. :data:`PLACEMENT_SIGMA_FRACTION` of the interval is added
-  to the spread for it.
+  offset by that much, whatever estimates it from that log.
+  :data:`PLACEMENT_SIGMA_FRACTION` of the interval is stated for it
+  (``ClockOffset.stamp_sigma``), apart from the fit's own spread.
 * Translational vibration within an interval: the log's velocity is exact only
   in the mean over an interval; the spline's value at the middle misses the
   curvature of the velocity within it (second order in ``f T``).
@@ -118,8 +119,9 @@ def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
         ``delta`` to add to the offset used; its spread the larger of the
         Gauss-Markov one and the cluster-robust sandwich over frames (tracks of
         one frame share the platform's error; Cameron & Miller, J. Human
-        Resources 50(2), 2015, eq. 11), with :data:`PLACEMENT_SIGMA_FRACTION`
-        of ``T`` added in quadrature. No drift is fitted.
+        Resources 50(2), 2015, eq. 11); ``stamp_sigma``
+        :data:`PLACEMENT_SIGMA_FRACTION` of ``T`` (``total_sigma`` both). No drift
+        is fitted.
 
     Raises
     ------
@@ -164,8 +166,8 @@ def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
     if clusters.size > 1:
         score = np.array([g[frame == f] @ res[frame == f] for f in clusters])
         var = max(var, float(score @ score) / gg ** 2 * clusters.size / (clusters.size - 1))
-    sigma = float(np.hypot(np.sqrt(var), PLACEMENT_SIGMA_FRACTION * interval))
-    return ClockOffset(delta, sigma)
+    return ClockOffset(delta, float(np.sqrt(var)),
+                       stamp_sigma=PLACEMENT_SIGMA_FRACTION * interval)
 
 
 def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
