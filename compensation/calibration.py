@@ -668,7 +668,10 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             # the fits above saw the per-frame velocities' motion, its acceleration error bends
             # the phase tracks like an offset: fit again, estimate again where it moves
             y = _beams(rcs, positions, ms := seen(ri.motions), scatterers, proj)
-            refit = clock_fit(phase_tracks(y, ms, scatterers, lam), time_offset=ri.time_offset)
+            t0 = frames[0][0] + ri.time_offset   # the log placed with the estimate's drift
+            t_imu = t0 + (np.asarray(imu_time, dtype=float) - t0) / (1.0 + float(ri.state[13]))
+            refit = clock_fit(phase_tracks(y, ms, scatterers, lam), time_offset=ri.time_offset,
+                              imu_time=t_imu)
             if abs(refit.offset) > refit.offset_sigma:
                 clock, ri = refit, radar_inertial(ri.time_offset + refit.offset, refit.offset_sigma)
         motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias
