@@ -41,6 +41,10 @@ What it cannot observe
 * Translational vibration within an interval: the log's velocity is exact only
   in the mean over an interval; the spline's value at the middle misses the
   curvature of the velocity within it (second order in ``f T``).
+* An accelerometer-bias error tilts ``z`` over the intervals of a frame; with 2-3
+  intervals a frame there is no room for a slope per track, so it is left in (on
+  the 250 Hz test flights the refit after the radar-inertial estimate, biases
+  corrected, moved the offset by at most 3 us, seeds 0 and 2).
 * A track shorter than one interval gives nothing; a frame shorter than two gives
   no constant-free information (the per-track constant takes it).
 """
