@@ -18,6 +18,12 @@ nuisance: only the part of ``r(t)`` that is not a line informs ``delta``. Rotor
 vibration (tens to hundreds of hertz) bends the radar velocity within a frame
 and makes the offset observable to a fraction of a millisecond; a platform
 that moves at constant velocity gives no information (the uncertainty says so).
+
+A log of interval averages (a flight controller's 200-250 Hz boxcar) does not
+resolve that vibration: what the spline through its averages misses correlates
+with the spline's bending and moves this fit by up to 0.5 ms;
+:mod:`compensation.clock_averaged` compares the radar with such a log over its
+intervals instead.
 """
 
 from __future__ import annotations
