@@ -24,11 +24,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
 from ._checks import finite_array, positive
-from .clock_offset import ClockOffset, fit_time_shift, phase_misfit
+from .clock_averaged import fit_clock
+from .clock_offset import ClockOffset, phase_misfit, phase_tracks
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
 from .elevation import measure_elevation, vertical_baseline
 from .exact import rigid_body_projection
@@ -136,8 +138,8 @@ class CalibrationResult:
         IMU clock minus radar clock used for the final integration [s].
     clock : ClockOffset or None
         Last clock-offset update (``offset`` is the remaining correction,
-        ``offset_sigma`` the uncertainty of ``time_offset``); ``None`` when
-        not estimated.
+        ``total_sigma`` the uncertainty of ``time_offset``: the fit's and the log
+        stamps'); ``None`` when not estimated.
     gyro_bias : ndarray, shape ``[3]``
         Gyro bias removed from the samples [rad/s] (body frame).
     gyro : GyroBias or None
@@ -178,8 +180,9 @@ class CalibrationResult:
         unconstrained components, and ``warnings`` its observability warnings.
         """
         ri = self.radar_inertial
+        stamp = 0.0 if self.clock is None else self.clock.stamp_sigma     # the log's stamps
         out = {"time_offset_s": self.time_offset,
-               "time_offset_sigma_s": None if self.clock is None else self.clock.offset_sigma,
+               "time_offset_sigma_s": None if self.clock is None else self.clock.total_sigma,
                "gyro_bias_rad_s": self.gyro_bias.tolist(),
                "gyro_bias_sigma_rad_s": None if self.gyro is None else self.gyro.sigma.tolist(),
                "initial_velocity_mps": self.initial_velocity.tolist(),
@@ -193,7 +196,7 @@ class CalibrationResult:
             out["clock_drift"] = self.clock.drift
             out["clock_drift_sigma"] = self.clock.drift_sigma
         if ri is not None:
-            out["time_offset_sigma_s"] = float(ri.sigma[12])
+            out["time_offset_sigma_s"] = float(np.hypot(ri.sigma[12], stamp))
             out["gyro_bias_sigma_rad_s"] = ri.sigma[9:12].tolist()
             out["clock_drift"], out["clock_drift_sigma"] = float(ri.state[13]), float(ri.sigma[13])
             out["radar_inertial"] = ri.report()
@@ -339,22 +342,6 @@ def _loop_motion(m: PlatformMotion, n_chirps: int) -> PlatformMotion:
     return m.select(slice(0, None, m.num_chirps // n_chirps))
 
 
-def _clock_tracks(y, motions, scatterers, wavelength: float) -> list:
-    tracks = []
-    for k, m in enumerate(motions):
-        mo = _loop_motion(m, y.shape[2])
-        for j, s in enumerate(scatterers):
-            yk = y[k, j]
-            t = mo.time
-            # derotate the residual Doppler so the phase unwraps chirp to chirp
-            f0 = np.fft.fftfreq(t.size * 16, d=float(np.median(np.diff(t))))[
-                int(np.argmax(np.abs(np.fft.fft(yk, t.size * 16))))]
-            z = yk * np.exp(-2j * np.pi * f0 * (t - t[0]))
-            rate = -(4 * np.pi / wavelength) * (mo.radar_velocity @ s.direction)
-            tracks.append((t, np.unwrap(np.angle(z)), rate, np.abs(yk) ** 2))
-    return tracks
-
-
 def _peak(rc, positions, m: PlatformMotion, s: Scatterer, options, half: float, step: float
           ) -> tuple[float, float] | None:
     """Interpolated (az, el) [rad] of the power peak on a local grid around ``s``.
@@ -496,7 +483,7 @@ def _direction_cov(s: Scatterer, positions, wavelength: float) -> np.ndarray:
 def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_time, gyro,
                    accel, *, wavelength: float, range_axis, scatterers=None,
                    estimate: Sequence[str] = ESTIMATES, time_offset: float = 0.0,
-                   iterations: int = ITERATIONS, drift: bool = False,
+                   iterations: int = ITERATIONS, drift: bool = False, imu_interval: float = 0.0,
                    offset_search: float = OFFSET_SEARCH_HALF_WIDTH,
                    detect_grid=None, detect_gates=None, imu_errors: ImuErrors | None = None,
                    attitude_given: bool = True, blocks: int = DOPPLER_BLOCKS,
@@ -539,6 +526,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     drift : bool
         Also estimate the clock drift in the clock-offset fit (reported; the
         radar-inertial estimate has the drift in its state and applies it).
+    imu_interval : float
+        Averaging interval of each IMU sample [s] (:mod:`compensation.clock_averaged`); 0 none.
     imu_errors : ImuErrors, optional
         Noise densities and bias spreads of the IMU, the process noise and
         priors of the radar-inertial estimate and the gyro-bias fit's prior;
@@ -628,23 +617,21 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         dv = np.stack([f.velocity for f in fits])
         return apply_velocity(ms, mids, dv, t_ref), fits
 
+    clock_fit = partial(fit_clock, drift=drift, imu_time=imu_time, interval=imu_interval)
     if "time_offset" in estimate and offset_search > 0:
         grid = tau + np.arange(-offset_search, offset_search + OFFSET_SEARCH_STEP / 2,
                                OFFSET_SEARCH_STEP)
-        cost = []
-        few = slice(0, SEARCH_FRAMES)
+        cost, few = [], slice(0, SEARCH_FRAMES)
         for cand in grid:
-            ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand,
-                                  **options)
+            ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand, **options)
             y = _beams(rcs[few], positions, seen(ms), scatterers, proj)
-            cost.append(phase_misfit(_clock_tracks(y, seen(ms), scatterers, lam)))
+            cost.append(phase_misfit(phase_tracks(y, seen(ms), scatterers, lam)))
         tau = float(grid[int(np.argmin(cost))])
         motions = integrate()
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):
         if "time_offset" in estimate:
             y = _beams(rcs, positions, seen(motions), scatterers, proj)
-            clock = fit_time_shift(_clock_tracks(y, seen(motions), scatterers, lam),
-                                   drift=drift)
+            clock = clock_fit(phase_tracks(y, seen(motions), scatterers, lam), time_offset=tau)
             tau += clock.offset
             motions = integrate()
         if "gyro_bias" in estimate and len(frames) >= 2 and all(_apertures(positions, lam)):
@@ -680,12 +667,13 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         if clock is not None:
             # the fits above saw the per-frame velocities' motion, its acceleration error bends
             # the phase tracks like an offset: fit again, estimate again where it moves
-            ms = seen(ri.motions)
-            refit = fit_time_shift(_clock_tracks(_beams(rcs, positions, ms, scatterers, proj),
-                                                 ms, scatterers, lam), drift=drift)
+            y = _beams(rcs, positions, ms := seen(ri.motions), scatterers, proj)
+            t0 = frames[0][0] + ri.time_offset   # the log placed with the estimate's drift
+            t_imu = t0 + (np.asarray(imu_time, dtype=float) - t0) / (1.0 + float(ri.state[13]))
+            refit = clock_fit(phase_tracks(y, ms, scatterers, lam), time_offset=ri.time_offset,
+                              imu_time=t_imu)
             if abs(refit.offset) > refit.offset_sigma:
-                clock, ri = refit, radar_inertial(ri.time_offset + refit.offset,
-                                                  refit.offset_sigma)
+                clock, ri = refit, radar_inertial(ri.time_offset + refit.offset, refit.offset_sigma)
         motions, tau, bias = list(ri.motions), ri.time_offset, ri.gyro_bias
         cov0 = ri.initial_velocity_covariance
     else:

@@ -18,6 +18,12 @@ nuisance: only the part of ``r(t)`` that is not a line informs ``delta``. Rotor
 vibration (tens to hundreds of hertz) bends the radar velocity within a frame
 and makes the offset observable to a fraction of a millisecond; a platform
 that moves at constant velocity gives no information (the uncertainty says so).
+
+A log of interval averages (a flight controller's 200-250 Hz boxcar) does not
+resolve that vibration: what the spline through its averages misses correlates
+with the spline's bending and moves this fit by up to 0.5 ms;
+:mod:`compensation.clock_averaged` compares the radar with such a log over its
+intervals instead.
 """
 
 from __future__ import annotations
@@ -49,6 +55,10 @@ class ClockOffset:
         Its one-sigma spread [s/s] (``inf`` when not fitted).
     reference_time : float
         ``t_ref`` [s].
+    stamp_sigma : float
+        Spread the log's time stamps add to any offset estimated from that log [s],
+        not in ``offset_sigma`` (the placement of an average within its interval,
+        :mod:`compensation.clock_averaged`); 0 for instantaneous samples.
     """
 
     offset: float
@@ -56,6 +66,12 @@ class ClockOffset:
     drift: float = 0.0
     drift_sigma: float = float("inf")
     reference_time: float = 0.0
+    stamp_sigma: float = 0.0
+
+    @property
+    def total_sigma(self) -> float:
+        """``offset_sigma`` and ``stamp_sigma`` in quadrature [s]."""
+        return float(np.hypot(self.offset_sigma, self.stamp_sigma))
 
 
 def _detrend(t: np.ndarray, w: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -174,3 +190,40 @@ def phase_misfit(tracks) -> float:
     if weight == 0:
         raise ValueError("tracks: no track with at least 4 chirps and a positive weight")
     return total / weight
+
+
+def phase_tracks(y, motions, scatterers, wavelength: float) -> list:
+    """Residual phase tracks of stationary scatterers, the input of :func:`fit_time_shift`.
+
+    Parameters
+    ----------
+    y : ndarray, shape ``[frame, scatterer, chirp]``
+        Compensated beam of each scatterer at every chirp loop.
+    motions : sequence of PlatformMotion
+        The motion of each frame the beams were compensated with (every slot; the
+        first slot of each loop stamps the track).
+    scatterers : sequence
+        Each with a unit ``direction [3]`` in the motion's frame.
+    wavelength : float
+        [m].
+
+    Returns
+    -------
+    list of (times, phase, rate, weight)
+        One per frame and scatterer, frame major: chirp times [s], the unwrapped
+        phase [rad] (its residual Doppler removed so that it unwraps chirp to
+        chirp), the predicted phase rate ``-(4 pi / lambda) u . v_R`` [rad/s] and
+        ``|y|^2``.
+    """
+    tracks = []
+    for k, m in enumerate(motions):
+        mo = m.select(slice(0, None, m.num_chirps // y.shape[2]))
+        t = mo.time
+        for j, s in enumerate(scatterers):
+            yk = y[k, j]
+            f0 = np.fft.fftfreq(t.size * 16, d=float(np.median(np.diff(t))))[
+                int(np.argmax(np.abs(np.fft.fft(yk, t.size * 16))))]
+            z = yk * np.exp(-2j * np.pi * f0 * (t - t[0]))
+            rate = -(4 * np.pi / wavelength) * (mo.radar_velocity @ s.direction)
+            tracks.append((t, np.unwrap(np.angle(z)), rate, np.abs(yk) ** 2))
+    return tracks

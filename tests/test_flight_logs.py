@@ -135,6 +135,8 @@ def test_ulog_averages_are_read_at_their_intervals_middle(tmp_path):
     np.testing.assert_allclose(back.accel[:, 0], slope * back.time, rtol=FLOAT32_RTOL)
     inst = read_px4_ulog(write_px4_ulog(tmp_path / "i.ulg", s))
     np.testing.assert_allclose(inst.time, stamps, rtol=0, atol=STAMP_TOL_S)
+    # the averaging interval travels with the samples (the clock fit compares over it)
+    assert back.interval == pytest.approx(1 / rate, abs=1e-6) and inst.interval == 0.0
 
 
 def test_ulog_accelerometer_relative_stamp_is_interpolated(tmp_path):

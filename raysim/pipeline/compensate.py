@@ -200,8 +200,9 @@ def _frames_text(frames) -> str | None:
                      f"(LO, HI) of frame numbers")
 
 
-def _imu_table(imu, inp, source: str, topic=None, instance=None) -> tuple[np.ndarray, str]:
-    """The IMU log as a table ``[sample, 7]`` (time, gyro, accel; SI, FRD) and its source."""
+def _imu_table(imu, inp, source: str, topic=None, instance=None) -> tuple[np.ndarray, str, float]:
+    """The IMU log as a table ``[sample, 7]`` (time, gyro, accel; SI, FRD), its source and
+    the averaging interval of its samples [s] (0: instantaneous or not stated)."""
     from raysim.io.flight_logs import read_imu_log
 
     if imu is None:
@@ -210,7 +211,7 @@ def _imu_table(imu, inp, source: str, topic=None, instance=None) -> tuple[np.nda
         if topic is not None or instance is not None:
             raise ValueError("--imu-topic / --imu-instance select a source of an IMU log file; "
                              f"{source!r} carries its own IMU record (give --imu FILE)")
-        return inp.imu, f"{source} (IMU log of the store)"
+        return inp.imu, f"{source} (IMU log of the store)", 0.0
     if isinstance(imu, (str, os.PathLike)):
         path = os.fspath(imu)
         if not os.path.exists(path):
@@ -219,7 +220,7 @@ def _imu_table(imu, inp, source: str, topic=None, instance=None) -> tuple[np.nda
             s = read_imu_log(path, topic=topic, instance=instance)
         except ImportError as exc:   # an optional reader (pymavlink for .bin) is missing
             raise ValueError(f"IMU file {path!r}: {exc}") from None
-        return np.column_stack([s.time, s.gyro, s.accel]), s.source
+        return np.column_stack([s.time, s.gyro, s.accel]), s.source, s.interval
     if topic is not None or instance is not None:
         raise ValueError("--imu-topic / --imu-instance select a source of an IMU log file, not "
                          "of a table")
@@ -227,7 +228,7 @@ def _imu_table(imu, inp, source: str, topic=None, instance=None) -> tuple[np.nda
     if table.ndim != 2 or table.shape[1] != 7:
         raise ValueError(f"imu: got an array of shape {table.shape}, expected a file path or "
                          f"a table [sample, 7] (time, gyro xyz, accel xyz)")
-    return table, "table"
+    return table, "table", 0.0
 
 
 def _imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarray, tuple]:
@@ -304,7 +305,7 @@ def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
 
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
              velocity, initial_velocity, initial_attitude_deg, imu_grade, attitude_track=None,
-             mounting_deg=None, ground_doppler: bool = False):
+             mounting_deg=None, ground_doppler: bool = False, imu_interval: float = 0.0):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
 
     ``rcs`` receives the range-compressed frames when they are computed for the
@@ -329,8 +330,7 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
         return motions, None, float(time_offset)
     # Every selected frame takes part (the gyro bias, a drift over frames, needs two or
     # more); stationary scatterers are detected on the selected range cells of frame 0.
-    estimate = (("time_offset",) if auto else ()) + (
-        ("velocity",) if velocity == "radar" else ())
+    estimate = (("time_offset",) if auto else ()) + (("velocity",) if velocity == "radar" else ())
     if len(inp.frames) > 1:
         estimate += ("gyro_bias",)
     rcs.extend(range_compress(np.asarray(inp.read(k)))[..., : r_axis.size]
@@ -356,7 +356,7 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            time_offset=0.0 if auto else time_offset,
                            grid_shape=inp.grid_shape, detect_gates=gates,
                            attitude_given=given, tilt_covariance=tilt_cov,
-                           attitude_track=attitude_track, ground=retilt,
+                           attitude_track=attitude_track, ground=retilt, imu_interval=imu_interval,
                            ground_doppler=ground_doppler, mounting=mount, **options)
     report = cal.report
     from compensation.azimuth_shift import calibration_azimuth_check
@@ -609,7 +609,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         rcs: list = []                     # range-compressed frames, kept when calibrating
         window_notes: tuple = ()
         if spec.compensated:
-            table, imu_source = _imu_table(imu, inp, source, imu_topic, imu_instance)
+            table, imu_source, interval = _imu_table(imu, inp, source, imu_topic, imu_instance)
             table, window_notes = _imu_window(table, inp, time_offset, max_gap)
             if window_notes:
                 import warnings
@@ -626,7 +626,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
                 initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track,
-                mounting_deg=mounting_deg, ground_doppler=ground_doppler)
+                mounting_deg=mounting_deg, ground_doppler=ground_doppler, imu_interval=interval)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None

@@ -127,6 +127,10 @@ class ImuSamples:
         Where the samples come from (preset name, file path).
     rate : float or None
         Nominal output rate on the IMU clock [Hz] (None when unknown).
+    interval : float
+        Averaging interval of each sample [s] (a flight controller's boxcar or
+        integrated output, each sample stamped at its interval's middle); 0 for
+        instantaneous samples.
     """
 
     time: np.ndarray
@@ -136,6 +140,7 @@ class ImuSamples:
     truth: ImuErrorState | None = None
     source: str = ""
     rate: float | None = None
+    interval: float = 0.0
 
     def __post_init__(self) -> None:
         t = np.asarray(self.time, dtype=float)

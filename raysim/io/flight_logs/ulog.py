@@ -242,7 +242,11 @@ def read_px4_ulog(path: str | os.PathLike, instance: int | None = None,
     others = ", ".join(f"{c[0]}[{c[1]}] {c[2]:.4g} Hz" for c in found if c[:2] != (name, k))
     source = (f"{path} (PX4 ULog {name} instance {k}, {rate:.4g} Hz, {time_base(time)}"
               + (f"; also present: {others}" if others else "") + ")")
-    return ImuSamples(time, gyro, accel, spec=None, truth=None, source=source, rate=rate)
+    d = next(x.data for x in log.data_list if (x.name, x.multi_id) == (name, k))
+    dt = {"sensor_combined": "gyro_integral_dt", "vehicle_imu": "delta_angle_dt"}.get(name)
+    interval = 1e-6 * float(np.median(_interval(d, dt, time.size))) if dt else 0.0
+    return ImuSamples(time, gyro, accel, spec=None, truth=None, source=source, rate=rate,
+                      interval=interval)
 
 
 def _message(kind: bytes, payload: bytes) -> bytes:

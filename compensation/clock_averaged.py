@@ -1,0 +1,193 @@
+"""IMU-radar clock offset from a log of averaged samples (a flight controller's boxcar).
+
+A flight controller logs its IMU at 200-250 Hz, each sample the average of the
+rates over its interval ``[x_k - T/2, x_k + T/2]`` (``T`` the interval, ``x_k``
+its middle). The log cannot resolve the 100-200 Hz rotor vibration; the radar
+sees all of it. :func:`compensation.clock_offset.fit_time_shift` regresses the
+residual phase on the predicted phase rate chirp by chirp, so the vibration the
+log misses (mostly the rotation's, through the lever arm) is model error that
+correlates with the regressor: on the 250 Hz flights it moved the offset by up
+to 0.5 ms, with an offset and its sign that change from flight to flight.
+
+What the log gives exactly is the mean of the rate over each interval. The
+radar gives its phase-centre velocity along ``u`` at every chirp, so both are
+compared over the same intervals, like with like. With the track's residual
+phase ``phi(t)`` and predicted phase rate ``r(t)`` (the rate the IMU shows, a
+spline through the averages, :func:`compensation.strapdown.integrate_imu`), the
+radar's mean phase rate over an interval is ``(phi(b+) - phi(b-)) / T +
+mean(r)`` and the log's average is the spline's value at the middle,
+``r(x_k)``, so
+
+    z_k = (phi(b+) - phi(b-)) / T + mean_k(r) - r(x_k) = c + delta g_k,
+
+``g_k = (V(b+) - V(b-)) / T`` the mean phase acceleration the radar sees over the
+interval (``V = phi' + r`` its phase rate, a local cubic fit of the track at
+each end) and ``c`` a constant per track (its velocity error; the residual
+Doppler removed when the track was unwrapped). Only intervals that lie within
+the frame count. The vibration the log misses averages out of ``z`` the same
+way it does out of the log, so the fit has no model error of that kind, and
+``g`` is the full vibration, which makes the offset observable to tens of
+microseconds.
+
+What it cannot observe
+----------------------
+* The placement of the averaging window within the interval: the log's stamp
+  convention (the interval's middle, :mod:`raysim.io.flight_logs`) is taken as
+  given; a log whose average is centred elsewhere (e.g. the plain mean of ``m``
+  instantaneous samples, centred half an internal sample later) shifts the
+  offset by that much, whatever estimates it from that log.
+  :data:`PLACEMENT_SIGMA_FRACTION` of the interval is stated for it
+  (``ClockOffset.stamp_sigma``), apart from the fit's own spread.
+* Translational vibration within an interval: the log's velocity is exact only
+  in the mean over an interval; the spline's value at the middle misses the
+  curvature of the velocity within it (second order in ``f T``).
+* An accelerometer-bias error tilts ``z`` over the intervals of a frame; with 2-3
+  intervals a frame there is no room for a slope per track, so it is left in (on
+  the 250 Hz test flights the refit after the radar-inertial estimate, biases
+  corrected, moved the offset by at most 3 us, seeds 0 and 2).
+* A track shorter than one interval gives nothing; a frame shorter than two gives
+  no constant-free information (the per-track constant takes it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from ._checks import finite_array, positive
+from .clock_offset import ClockOffset, fit_time_shift
+
+#: Chirps each side of a boundary in the local cubic fit of the phase rate [1].
+RATE_FIT_HALF_WIDTH = 6
+#: Share of the averaging interval added (in quadrature) to the offset's spread for the
+#: placement of the average within its interval, which the log does not state [1]
+#: (the plain mean of 8 instantaneous samples is centred 1/16 of the interval late).
+PLACEMENT_SIGMA_FRACTION = 1.0 / 16.0
+
+
+def _rate(t: np.ndarray, phi: np.ndarray, tq: float) -> float:
+    """Derivative at ``tq`` of a local cubic fit of ``phi(t)`` [rad/s]."""
+    i = int(np.searchsorted(t, tq))
+    lo = max(min(i - RATE_FIT_HALF_WIDTH, t.size - 2 * RATE_FIT_HALF_WIDTH), 0)
+    hi = min(lo + 2 * RATE_FIT_HALF_WIDTH, t.size)
+    c = np.polynomial.polynomial.polyfit(t[lo:hi] - tq, phi[lo:hi], 3)
+    return float(c[1])
+
+
+def interval_rows(t, phi, r, knots, interval: float) -> tuple[np.ndarray, np.ndarray]:
+    """``z [k]`` [rad/s] and ``g [k]`` [rad/s^2] of one track over the log intervals within it.
+
+    Parameters
+    ----------
+    t : ndarray, shape ``[chirp]``
+        Chirp times [s, radar clock], increasing.
+    phi : ndarray, shape ``[chirp]``
+        Unwrapped residual phase [rad].
+    r : ndarray, shape ``[chirp]``
+        Predicted phase rate [rad/s].
+    knots : ndarray, shape ``[sample]``
+        Middles of the log's averaging intervals on the radar clock [s].
+    interval : float
+        Averaging interval ``T`` [s].
+    """
+    x = knots[(knots - interval / 2 >= t[0]) & (knots + interval / 2 <= t[-1])]
+    if x.size == 0 or t.size < 2 * RATE_FIT_HALF_WIDTH:
+        return np.empty(0), np.empty(0)
+    ps, rs = CubicSpline(t, phi), CubicSpline(t, r)
+    z, g = [], []
+    for xk in x:
+        bm, bp = xk - interval / 2, xk + interval / 2
+        z.append((ps(bp) - ps(bm)) / interval + rs.integrate(bm, bp) / interval - rs(xk))
+        vm, vp = _rate(t, phi, bm) + rs(bm), _rate(t, phi, bp) + rs(bp)
+        g.append((vp - vm) / interval)
+    return np.asarray(z, dtype=float), np.asarray(g, dtype=float)
+
+
+def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
+    """Time shift of a log of interval averages, from the radar's mean rates over them.
+
+    Parameters
+    ----------
+    tracks : sequence of (times, phase, rate, weight)
+        As for :func:`compensation.clock_offset.fit_time_shift` (the weights
+        are not used: the residuals are model error, not thermal noise).
+    knots : array_like, shape ``[sample]``
+        Middles of the log's averaging intervals on the radar clock (IMU
+        sample times less the offset used) [s].
+    interval : float
+        Averaging interval of each sample ``T`` [s].
+
+    Returns
+    -------
+    ClockOffset
+        ``delta`` to add to the offset used; its spread the larger of the
+        Gauss-Markov one and the cluster-robust sandwich over frames (tracks of
+        one frame share the platform's error; Cameron & Miller, J. Human
+        Resources 50(2), 2015, eq. 11); ``stamp_sigma``
+        :data:`PLACEMENT_SIGMA_FRACTION` of ``T`` (``total_sigma`` both). No drift
+        is fitted.
+
+    Raises
+    ------
+    ValueError
+        Bad knots or interval, or fewer than two intervals within a track
+        anywhere (nothing left after each track's constant).
+    """
+    knots = np.sort(finite_array("knots", knots, ndim=1))
+    interval = positive("interval", interval)
+    zs, gs, group, frame = [], [], [], []
+    starts: dict = {}
+    for i, item in enumerate(tracks):
+        try:
+            t, phi, r, _ = (np.asarray(v, dtype=float) for v in item)
+        except (TypeError, ValueError):
+            raise ValueError(f"tracks[{i}] must be (times, phase, rate, weight) arrays, "
+                             f"got {item!r}") from None
+        if phi.shape != t.shape or r.shape != t.shape or t.ndim != 1:
+            raise ValueError(f"tracks[{i}]: phase and rate must have the shape of times "
+                             f"{t.shape}, got {phi.shape} and {r.shape}")
+        z, g = interval_rows(t, phi, r, knots, interval)
+        if z.size < 2:
+            continue
+        # remove the track's constant: its velocity error and unwrapping Doppler
+        zs.append(z - z.mean())
+        gs.append(g - g.mean())
+        group.append(np.full(z.size, i))
+        frame.append(np.full(z.size, starts.setdefault(round(float(t[0]), 9), len(starts))))
+    if not zs:
+        raise ValueError(f"tracks: no track spans two averaging intervals of {interval:g} s; "
+                         "the clock offset is unobservable from these intervals")
+    z, g, frame = np.concatenate(zs), np.concatenate(gs), np.concatenate(frame)
+    gg = float(g @ g)
+    if gg <= 0:
+        raise ValueError("the radar's phase acceleration is the same over every interval: "
+                         "the clock offset is unobservable")
+    delta = float(g @ z) / gg
+    res = z - delta * g
+    dof = max(z.size - len(zs) - 1, 1)
+    var = float(res @ res) / dof / gg
+    clusters = np.unique(frame)
+    if clusters.size > 1:
+        score = np.array([g[frame == f] @ res[frame == f] for f in clusters])
+        var = max(var, float(score @ score) / gg ** 2 * clusters.size / (clusters.size - 1))
+    return ClockOffset(delta, float(np.sqrt(var)),
+                       stamp_sigma=PLACEMENT_SIGMA_FRACTION * interval)
+
+
+def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
+              drift: bool = False) -> ClockOffset:
+    """The clock-offset fit for the log: over its intervals when averaged, else per chirp.
+
+    ``imu_time [sample]`` [s, IMU clock] and ``time_offset`` [s] (the one the
+    tracks were compensated with) place the intervals on the radar clock;
+    ``interval`` is the averaging interval [s], 0 for instantaneous samples
+    (:func:`compensation.clock_offset.fit_time_shift`, ``drift`` as there).
+    """
+    interval = float(finite_array("interval", interval, shape=()))
+    if interval < 0:
+        raise ValueError(f"interval: got {interval!r} s, expected the averaging interval of "
+                         "each IMU sample, >= 0 (0: instantaneous samples)")
+    if interval > 0:
+        knots = np.asarray(imu_time, dtype=float) - float(time_offset)
+        return fit_time_shift_averaged(tracks, knots, interval)
+    return fit_time_shift(tracks, drift=drift)

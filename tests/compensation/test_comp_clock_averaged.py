@@ -1,0 +1,116 @@
+"""Clock offset of a log of interval averages (compensation.clock_averaged).
+
+A radar sees rotor vibration (124-171 Hz) the 250 Hz log holds only as the means
+over its 4 ms intervals; the IMU's velocity is the cubic spline through those
+means (:func:`compensation.strapdown.integrate_imu`). Closed forms: the mean of
+``cos(w t + p)`` over ``[a, b]`` is ``(sin(w b + p) - sin(w a + p)) / (w (b - a))``;
+the compensated phase is the spline's antiderivative.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.interpolate import CubicSpline
+
+from compensation.clock_averaged import (
+    PLACEMENT_SIGMA_FRACTION,
+    fit_clock,
+    fit_time_shift_averaged,
+)
+from compensation.clock_offset import fit_time_shift
+
+#: Wavelength [m], averaging interval [s], true IMU-minus-radar offset [s].
+WAVELENGTH, INTERVAL, OFFSET = 3.9e-3, 4e-3, 6.5e-3
+#: Error allowed where the model is exact: the local cubic fits of the rate at the
+#: interval ends and the quadrature of the phase [s].
+EXACT_TOL_S = 2e-6
+#: Least error of the per-chirp fit on the same tracks (the vibration the log misses
+#: correlates with the spline's bending) [s]: what the interval fit removes.
+PER_CHIRP_MIN_ERROR_S = 0.1e-3
+#: Velocity tones per axis: sway, manoeuvre and rotor vibration through a lever arm.
+FREQS_HZ = np.array([[2.1, 23.0, 131.0, 167.0], [1.3, 31.0, 143.0, 159.0],
+                     [0.9, 17.0, 124.0, 171.0]])
+AMPS_MPS = np.array([0.05, 0.01, 0.004, 0.003])
+DIRECTIONS = np.array([[0.42, 0.0, 0.907], [-0.21, -0.08, 0.974], [0.14, 0.09, 0.987],
+                       [0.0, 0.1, 0.995], [-0.4, 0.05, 0.915]])
+FRAME_STARTS = 0.5 + 0.05 * np.arange(6)
+CHIRPS, CHIRP_STEP = 64, 2.1e-4
+
+
+def _phases(seed: int = 0) -> np.ndarray:
+    return np.random.default_rng(seed).uniform(0, 2 * np.pi, FREQS_HZ.shape)
+
+
+def _velocity(t, ph) -> np.ndarray:
+    """``[time, 3]`` [m/s]."""
+    w = 2 * np.pi * FREQS_HZ
+    return np.stack([(AMPS_MPS * np.cos(w[i] * t[:, None] + ph[i])).sum(-1) for i in range(3)],
+                    -1)
+
+
+def _mean_velocity(a, b, ph) -> np.ndarray:
+    """Mean over ``[a, b]`` ``[interval, 3]`` [m/s] (closed form)."""
+    w = 2 * np.pi * FREQS_HZ
+    return np.stack([(AMPS_MPS * (np.sin(w[i] * b[:, None] + ph[i]) - np.sin(w[i] * a[:, None]
+                                                                           + ph[i]))
+                      / (w[i] * (b - a)[:, None])).sum(-1) for i in range(3)], -1)
+
+
+def _record(tau: float, ph):
+    """IMU sample times [s, IMU clock] and the tracks compensated with the offset ``tau``."""
+    k = 4 * np.pi / WAVELENGTH
+    imu_t = np.arange(0.45, 0.85, INTERVAL) + OFFSET
+    logged = _mean_velocity(imu_t - OFFSET - INTERVAL / 2, imu_t - OFFSET + INTERVAL / 2, ph)
+    spline = CubicSpline(imu_t - tau, logged)
+    anti = spline.antiderivative()
+    u = DIRECTIONS / np.linalg.norm(DIRECTIONS, axis=1, keepdims=True)
+    tracks = []
+    for t0 in FRAME_STARTS:
+        t = t0 + np.arange(CHIRPS) * CHIRP_STEP
+        fine = np.linspace(t[0], t[-1], 8001)
+        for d in u:
+            rate = k * _velocity(fine, ph) @ d
+            true = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1])
+                                                    * np.diff(fine))])
+            removed = k * (anti(t) - anti(t[0])) @ d
+            tracks.append((t, np.interp(t, fine, true) - removed, k * spline(t) @ d,
+                           np.ones_like(t)))
+    return imu_t, tracks
+
+
+def test_the_interval_fit_finds_the_offset_the_per_chirp_fit_misses():
+    ph = _phases()
+    imu_t, tracks = _record(OFFSET, ph)
+    est = fit_time_shift_averaged(tracks, imu_t - OFFSET, INTERVAL)
+    assert abs(est.offset) <= EXACT_TOL_S
+    assert est.stamp_sigma == PLACEMENT_SIGMA_FRACTION * INTERVAL
+    assert est.total_sigma >= est.stamp_sigma
+    # the per-chirp fit on the same tracks: moved by the vibration the log misses
+    assert abs(fit_time_shift(tracks).offset) >= PER_CHIRP_MIN_ERROR_S
+
+
+@pytest.mark.parametrize("start_error", [-0.5e-3, 0.3e-3])
+def test_two_passes_converge_from_half_a_millisecond(start_error):
+    ph = _phases()
+    tau = OFFSET + start_error
+    for _ in range(2):
+        imu_t, tracks = _record(tau, ph)
+        est = fit_clock(tracks, imu_time=imu_t, time_offset=tau, interval=INTERVAL)
+        tau += est.offset
+        assert abs(tau - OFFSET) <= 3 * est.offset_sigma      # the fit's own spread covers it
+    assert abs(tau - OFFSET) <= EXACT_TOL_S
+
+
+def test_bad_input_is_named():
+    ph = _phases()
+    imu_t, tracks = _record(OFFSET, ph)
+    with pytest.raises(ValueError, match="interval"):
+        fit_clock(tracks, imu_time=imu_t, time_offset=OFFSET, interval=-1e-3)
+    with pytest.raises(ValueError, match="interval"):
+        fit_time_shift_averaged(tracks, imu_t - OFFSET, 0.0)
+    with pytest.raises(ValueError, match="two averaging intervals"):
+        fit_time_shift_averaged(tracks, imu_t - OFFSET, 0.01)
+    with pytest.raises(ValueError, match="tracks\\[0\\]"):
+        fit_time_shift_averaged([(tracks[0][0], tracks[0][1][:3], tracks[0][2], None)],
+                                imu_t - OFFSET, INTERVAL)
