@@ -51,6 +51,8 @@ What it cannot observe
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.interpolate import CubicSpline
 
@@ -59,9 +61,10 @@ from .clock_offset import ClockOffset, fit_time_shift
 
 #: Chirps each side of a boundary in the local cubic fit of the phase rate [1].
 RATE_FIT_HALF_WIDTH = 6
-#: Share of the averaging interval added (in quadrature) to the offset's spread for the
-#: placement of the average within its interval, which the log does not state [1]
-#: (the plain mean of 8 instantaneous samples is centred 1/16 of the interval late).
+#: Share of the averaging interval (of the sample period for instantaneous samples) added
+#: in quadrature to the offset's spread for the placement of the samples in time, which
+#: the log does not state [1] (the plain mean of 8 instantaneous samples is centred 1/16
+#: of the interval late).
 PLACEMENT_SIGMA_FRACTION = 1.0 / 16.0
 
 
@@ -181,7 +184,10 @@ def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
     ``imu_time [sample]`` [s, IMU clock] and ``time_offset`` [s] (the one the
     tracks were compensated with) place the intervals on the radar clock;
     ``interval`` is the averaging interval [s], 0 for instantaneous samples
-    (:func:`compensation.clock_offset.fit_time_shift`, ``drift`` as there).
+    (:func:`compensation.clock_offset.fit_time_shift`, ``drift`` as there). The
+    placement of the samples in time is stated apart (``stamp_sigma``):
+    :data:`PLACEMENT_SIGMA_FRACTION` of the interval, or of the sample period (the
+    median step of ``imu_time``) for instantaneous samples.
     """
     interval = float(finite_array("interval", interval, shape=()))
     if interval < 0:
@@ -190,4 +196,9 @@ def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
     if interval > 0:
         knots = np.asarray(imu_time, dtype=float) - float(time_offset)
         return fit_time_shift_averaged(tracks, knots, interval)
-    return fit_time_shift(tracks, drift=drift)
+    # Instantaneous samples: where within its sample period each was taken (the sensor's
+    # filter delay, the driver's stamp) is not stated either; the same share of the period.
+    t = np.asarray(imu_time, dtype=float)
+    period = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    return replace(fit_time_shift(tracks, drift=drift),
+                   stamp_sigma=PLACEMENT_SIGMA_FRACTION * period)

@@ -114,3 +114,18 @@ def test_bad_input_is_named():
     with pytest.raises(ValueError, match="tracks\\[0\\]"):
         fit_time_shift_averaged([(tracks[0][0], tracks[0][1][:3], tracks[0][2], None)],
                                 imu_t - OFFSET, INTERVAL)
+
+
+def test_instantaneous_samples_state_their_placement_over_the_sample_period():
+    """A log of instantaneous samples keeps the per-chirp fit, and states the placement
+    of its samples in time as the same share of its sample period (a 1 kHz log: 1/16 ms),
+    apart from the fit's spread; the report's sigma holds both in quadrature."""
+    ph = _phases()
+    imu_t, tracks = _record(OFFSET, ph)
+    period = 1e-3
+    fine = np.arange(imu_t[0], imu_t[-1], period)
+    est = fit_clock(tracks, imu_time=fine, time_offset=OFFSET, interval=0.0)
+    ref = fit_time_shift(tracks)
+    assert est.offset == ref.offset and est.offset_sigma == ref.offset_sigma
+    assert est.stamp_sigma == pytest.approx(PLACEMENT_SIGMA_FRACTION * period, rel=1e-9)
+    assert est.total_sigma == pytest.approx(np.hypot(ref.offset_sigma, est.stamp_sigma))
