@@ -11,6 +11,13 @@ so a scatterer in the world direction ``u`` appears at
 free initial direction per scatterer) gives ``b``. One scatterer observes the
 two components across its line of sight; directions the record does not
 observe keep a zero-mean prior (estimate zero, the prior's spread).
+
+The residual is taken along each scatterer's azimuth and elevation (the
+tangent plane of its direction), each divided by its spread: an array that
+resolves azimuth only (a line array, the xWR18xx with its half-wavelength
+elevation baseline) measures the azimuth drift to a fraction of its beam and
+no elevation drift, so only the bias components the azimuth drift sees are
+estimated.
 """
 
 from __future__ import annotations
@@ -41,7 +48,7 @@ class GyroBias:
     covariance : ndarray, shape ``[3, 3]``
         Its covariance [rad^2/s^2].
     residual_rms : float
-        RMS of the direction residual [rad].
+        RMS of the angle residual [rad] (each angle over its relative spread).
     """
 
     bias: np.ndarray
@@ -62,8 +69,20 @@ def _skew(u: np.ndarray) -> np.ndarray:
                      np.stack([-u[..., 1], u[..., 0], z], -1)], -2)
 
 
+def _tangent_axes(u: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """Unit azimuth and elevation directions ``[2, 3]`` at the unit direction ``u [3]``
+    (in the frame of the directions), the angles taken in the frame ``frame^T u``
+    (:func:`compensation.geometry.direction`: ``(cos el sin az, sin el, cos el cos az)``)."""
+    x, y, z = frame.T @ u
+    az, el = np.arctan2(x, z), np.arcsin(np.clip(y, -1.0, 1.0))
+    axes = np.array([[np.cos(az), 0.0, -np.sin(az)],
+                     [-np.sin(el) * np.sin(az), np.cos(el), -np.sin(el) * np.cos(az)]])
+    return axes @ frame.T
+
+
 def fit_gyro_bias(times, directions, attitude, *, sigma: float | None = None,
-                  prior_sigma: float = BIAS_PRIOR_SIGMA) -> GyroBias:
+                  prior_sigma: float = BIAS_PRIOR_SIGMA, spread=(1.0, 1.0),
+                  frame=None) -> GyroBias:
     """Least-squares gyro bias from scatterer directions measured frame after frame.
 
     Parameters
@@ -77,11 +96,19 @@ def fit_gyro_bias(times, directions, attitude, *, sigma: float | None = None,
     attitude : array_like, shape ``[frame, 3, 3]``
         ``R_WB`` at each measurement [1].
     sigma : float, optional
-        One-sigma spread of one direction component [rad]; default from the
-        residual.
+        One-sigma spread [rad] of an angle of relative spread 1 (``spread``);
+        default from the residual.
     prior_sigma : float
         Spread of the zero-mean prior [rad/s] of a bias direction that is not
         observed (:data:`OBSERVABLE_RCOND`).
+    spread : array_like, shape ``[2]`` or ``[detection, 2]``
+        Relative spread of each detection's azimuth and elevation [1]
+        (``sigma`` times it in rad); ``inf`` for an angle the directions do not
+        measure (e.g. ``(1, inf)`` for an array that resolves azimuth only):
+        its drift is left out.
+    frame : array_like, shape ``[3, 3]``, optional
+        Rotation turning the frame of the angles into W (``R_BA`` of a mounted
+        radar, :mod:`compensation.mounting`); default W.
 
     Returns
     -------
@@ -90,7 +117,7 @@ def fit_gyro_bias(times, directions, attitude, *, sigma: float | None = None,
     Raises
     ------
     ValueError
-        Fewer than two frames, or shapes that disagree.
+        Fewer than two frames, shapes that disagree, or a spread not positive.
     """
     t = finite_array("times", times, ndim=1)
     u = np.asarray(directions, dtype=float)
@@ -101,17 +128,27 @@ def fit_gyro_bias(times, directions, attitude, *, sigma: float | None = None,
     if t.size < 2:
         raise ValueError(f"times must hold at least 2 frames to see a drift, got {t.size}")
     prior = positive("prior_sigma", prior_sigma)
-    rows, ys = [], []
+    rel = np.asarray(spread, dtype=float)
+    if rel.shape not in ((2,), (u.shape[1], 2)) or np.isnan(rel).any() or np.any(rel <= 0):
+        raise ValueError(f"spread must be positive (inf for an angle not measured) with shape "
+                         f"[2] or [detection={u.shape[1]}, 2], got {spread!r}")
+    rel = np.broadcast_to(rel, (u.shape[1], 2))
+    rot = np.eye(3) if frame is None else finite_array("frame", frame, shape=(3, 3))
+    rows, ys, free = [], [], 0
     for j in range(u.shape[1]):
         ok = np.all(np.isfinite(u[:, j]), axis=1)
-        if ok.sum() < 2:
+        seen_axes = np.isfinite(rel[j])
+        if ok.sum() < 2 or not seen_axes.any():
             continue
         uj = u[ok, j]
         mean_u = uj.mean(axis=0)
         mean_u /= np.linalg.norm(mean_u)
-        a = -_skew(mean_u) @ att[ok] * (t[ok] - t[0])[:, None, None]   # [frame, 3, 3]
+        # the measured angles only, each in units of its spread
+        w = (_tangent_axes(mean_u, rot) / rel[j][:, None])[seen_axes]   # [axis, 3]
+        a = w @ (-_skew(mean_u) @ att[ok]) * (t[ok] - t[0])[:, None, None]   # [frame, axis, 3]
         rows.append((a - a.mean(axis=0)).reshape(-1, 3))
-        ys.append((uj - uj.mean(axis=0)).ravel())
+        ys.append(((uj - uj.mean(axis=0)) @ w.T).ravel())
+        free += int(seen_axes.sum())    # the scatterer's initial angles
     if not rows:
         raise ValueError("directions: no scatterer measured in at least 2 frames")
     a = np.vstack(rows)
@@ -121,7 +158,7 @@ def fit_gyro_bias(times, directions, attitude, *, sigma: float | None = None,
     proj = vec[:, seen].T @ (a.T @ y)
     coef = vec[:, seen] @ (proj / lam[seen])
     res = y - a @ coef
-    dof = max(y.size - 2 * len(rows) - int(seen.sum()), 1)
+    dof = max(y.size - free - int(seen.sum()), 1)
     s2 = float(np.sum(res ** 2) / dof) if sigma is None else positive("sigma", sigma) ** 2
     cov = (vec[:, seen] * (s2 / lam[seen])) @ vec[:, seen].T
     cov += (vec[:, ~seen] * prior ** 2) @ vec[:, ~seen].T
