@@ -185,7 +185,7 @@ def fit_gyro_bias(times, directions, attitude, *, sigma: float | None = None,
     s2 = float(np.sum(res ** 2) / dof) if sigma is None else positive("sigma", sigma) ** 2
     cov = (vec[:, seen] * (s2 / lam[seen])) @ vec[:, seen].T
     # the scale and cross-axis error on the record's rotation: slope of theta over the frames
-    theta = Rotation.from_matrix(np.swapaxes(att[0], 0, 1) @ att).as_rotvec()    # [frame, 3]
+    theta = Rotation.from_matrix(att[0].T @ att).as_rotvec()     # [frame, 3], body
     slope = (t - t.mean()) @ theta / np.sum((t - t.mean()) ** 2)
     drift = float(np.sum(slope ** 2)) * float(scale_sigma) ** 2
     cov += drift * vec[:, seen] @ vec[:, seen].T
