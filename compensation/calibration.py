@@ -513,8 +513,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         (default all).
     estimate : sequence of str
         Subset of :data:`ESTIMATES`. The gyro bias needs two frames and an
-        array that resolves azimuth and elevation; otherwise it is skipped
-        (``gyro`` of the result is ``None``).
+        array that resolves azimuth or elevation (the drift of the angles it
+        resolves); otherwise it is skipped (``gyro`` of the result is ``None``).
     time_offset : float
         First guess of IMU clock minus radar clock [s].
     offset_search : float
@@ -634,13 +634,13 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             clock = clock_fit(phase_tracks(y, seen(motions), scatterers, lam), time_offset=tau)
             tau += clock.offset
             motions = integrate()
-        if "gyro_bias" in estimate and len(frames) >= 2 and all(_apertures(positions, lam)):
+        if "gyro_bias" in estimate and len(frames) >= 2 and any(has := _apertures(positions, lam)):
             if "velocity" in estimate:     # parallax of a translation error is no rotation
                 motions, _ = radar_velocity(motions)
             dirs = world_directions(_directions(rcs, positions, seen(motions), scatterers,
                                                 proj), mounting)
             att = np.stack([m.attitude[m.num_chirps // 2] for m in motions])
-            fit = fit_gyro_bias(mids, dirs, att)
+            fit = fit_gyro_bias(mids, dirs, att, spread=np.where(has, 1.0, np.inf), frame=mounting)
             fused, cov = _with_prior(bias + fit.bias, fit.covariance, errors.gyro_bias_sigma)
             gb, bias = GyroBias(fused - bias, cov, fit.residual_rms), fused
             motions = integrate()
@@ -681,7 +681,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     notes = [f"velocity: Doppler of {len(clutter)} ground scatterers (at rest)"] if clutter else []
     if "gyro_bias" in estimate and gb is None:
         notes.append("gyro_bias: not estimated (needs two frames or more and an array that "
-                     "resolves azimuth and elevation)")
+                     "resolves azimuth or elevation)")
     v0 = motions[0].velocity[0]
     return CalibrationResult(tuple(motions), tau, clock, bias, gb, tuple(corrections),
                              np.asarray(v0, dtype=float), cov0, scatterers, tuple(notes), ri)

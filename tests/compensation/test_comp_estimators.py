@@ -149,11 +149,15 @@ def test_time_shift_unobservable_without_bending():
 
 
 def _drift_dirs(bias, dirs_w, times, att):
-    """Apparent directions ``u - [u]_x R b (t - t0)`` of stationary scatterers."""
+    """Apparent directions ``u - [u]_x phi(t)`` of stationary scatterers, the world-frame
+    attitude error ``phi = int R b ds`` (trapezoid rule over the frames)."""
+    rb = np.asarray(att) @ bias
+    phi = np.vstack([np.zeros(3), np.cumsum(0.5 * (rb[1:] + rb[:-1])
+                                            * np.diff(times)[:, None], axis=0)])
     out = np.empty((times.size, len(dirs_w), 3))
-    for k, (t, r) in enumerate(zip(times, att, strict=True)):
+    for k in range(times.size):
         for j, u in enumerate(dirs_w):
-            out[k, j] = u - _skew(u) @ r @ bias * (t - times[0])
+            out[k, j] = u - _skew(u) @ phi[k]
     return out
 
 
