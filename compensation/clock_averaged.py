@@ -57,7 +57,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ._checks import finite_array, positive
-from .clock_offset import ClockOffset, fit_time_shift
+from .clock_offset import ClockOffset, fit_time_shift, track_arrays
 
 #: Chirps each side of a boundary in the local cubic fit of the phase rate [1].
 RATE_FIT_HALF_WIDTH = 6
@@ -141,11 +141,7 @@ def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
     zs, gs, group, frame = [], [], [], []
     starts: dict = {}
     for i, item in enumerate(tracks):
-        try:
-            t, phi, r, _ = (np.asarray(v, dtype=float) for v in item)
-        except (TypeError, ValueError):
-            raise ValueError(f"tracks[{i}] must be (times, phase, rate, weight) arrays, "
-                             f"got {item!r}") from None
+        t, phi, r, _ = track_arrays(i, item)
         if phi.shape != t.shape or r.shape != t.shape or t.ndim != 1:
             raise ValueError(f"tracks[{i}]: phase and rate must have the shape of times "
                              f"{t.shape}, got {phi.shape} and {r.shape}")

@@ -82,6 +82,17 @@ def _detrend(t: np.ndarray, w: np.ndarray, x: np.ndarray) -> np.ndarray:
     return (xs - basis @ coef) / np.sqrt(w)[:, None]
 
 
+def track_arrays(i: int, item) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(times, phase, rate, weight)`` of ``tracks[i]`` as float arrays; a ValueError
+    naming the track otherwise."""
+    try:
+        t, phi, r, w = (np.asarray(v, dtype=float) for v in item)
+    except (TypeError, ValueError):
+        raise ValueError(f"tracks[{i}] must be (times, phase, rate, weight) arrays, "
+                         f"got {item!r}") from None
+    return t, phi, r, w
+
+
 def fit_time_shift(tracks, *, drift: bool = False, reference_time: float | None = None
                    ) -> ClockOffset:
     """Least-squares time shift from residual phases against predicted phase rates.
@@ -114,11 +125,7 @@ def fit_time_shift(tracks, *, drift: bool = False, reference_time: float | None 
     """
     rows, ys, ws = [], [], []
     for i, item in enumerate(tracks):
-        try:
-            t, phi, r, w = (np.asarray(v, dtype=float) for v in item)
-        except (TypeError, ValueError):
-            raise ValueError(f"tracks[{i}] must be (times, phase, rate, weight) arrays, "
-                             f"got {item!r}") from None
+        t, phi, r, w = track_arrays(i, item)
         n = t.size
         for name, v in (("phase", phi), ("rate", r), ("weight", w)):
             if v.shape != (n,) or not np.all(np.isfinite(v)):
