@@ -114,3 +114,23 @@ def test_default_range_window_fits_a_short_range_radar():
         QUICK.with_values(range_window=(5.0, 40.0)).for_scenario(sc)
     assert QUICK.with_values(range_window=(5.0, 20.0)).for_scenario(sc).range_window == (5.0,
                                                                                          20.0)
+
+
+def test_scene_report_traces_on_the_variant_the_environment_names(tmp_path, monkeypatch):
+    """`raysim scene-report` leaves the Mitsuba variant to RAYSIM_RT_VARIANT (the README's
+    switch to the GPU), the CPU where it is unset; the report itself is stubbed."""
+    import raysim.studies.scene_report as sr
+    from raysim.echoes.rt import backend
+
+    asked = []
+    monkeypatch.setattr(backend, "configure",
+                        lambda variant=None, **kw: asked.append(backend.resolve_variant(variant)))
+    monkeypatch.setattr(sr, "write_scene_report", lambda *a, **kw: {})
+    for env, expected in ((None, backend.CPU_VARIANT), ("gpu", backend.GPU_VARIANT)):
+        if env is None:
+            monkeypatch.delenv("RAYSIM_RT_VARIANT", raising=False)
+        else:
+            monkeypatch.setenv("RAYSIM_RT_VARIANT", env)
+        assert main(["scene-report", "--scenes", "flat_reflectors", "--quick", "--out",
+                     str(tmp_path / str(env)), "--no-progress"]) == 0
+        assert asked[-1] == expected

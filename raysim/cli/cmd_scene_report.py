@@ -199,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
     from raysim.echoes.rt import backend
 
     if args.scenes or any(sc.scene.kind != "points" for sc in scenarios) or not scenarios:
-        backend.configure("cpu", threads=args.threads)
+        backend.configure(None, threads=args.threads)   # RAYSIM_RT_VARIANT, else the CPU
     summary = write_scene_report(args.out, scenes=args.scenes, settings=settings,
                                  progress=not args.no_progress, chains=chains,
                                  scenarios=scenarios)
