@@ -297,7 +297,8 @@ def fit_ground_plane(points, covariance, *, groups=None, seed: int = 0,
     if p.shape[0] < MIN_GROUND_POINTS:
         notes.append(f"ground plane: {p.shape[0]} ground point(s) in the range window, at "
                      f"least {MIN_GROUND_POINTS} needed; no tilt from the ground (the ground "
-                     f"may lie outside the window)")
+                     f"may lie outside the window, or its cells hold more scatterers than a "
+                     f"few plane waves separate: dense clutter)")
         out = GroundPlane(nan2, np.full((2, 2), np.nan), float("nan"), np.full(3, np.nan),
                           p.shape[0], 0, float("nan"), float("nan"), tuple(notes))
     else:
