@@ -125,10 +125,15 @@ def _fifo(d: dict) -> tuple[np.ndarray, np.ndarray]:
 
 def _interval(d: dict, field: str, n: int) -> np.ndarray:
     """``*_integral_dt`` [us] of each sample, ``[sample]``; 0 (an instantaneous sample)
-    where the field is absent."""
-    dt = np.asarray(d.get(field, np.zeros(n)), dtype=float)
+    where the field is absent. Older PX4 firmware logs it as float32 seconds (0.004 at
+    250 Hz), newer as integer microseconds: a float field whose median is below one
+    (no IMU averages over less than a microsecond) is read as seconds."""
+    raw = np.asarray(d.get(field, np.zeros(n)))
+    dt = raw.astype(float)
     if np.any(dt < 0) or not np.all(np.isfinite(dt)):
         raise ValueError(f"{field} negative or not finite")
+    if np.issubdtype(raw.dtype, np.floating) and dt.size and 0 < np.median(dt) < 1.0:
+        dt = dt * 1e6
     return dt
 
 
