@@ -201,8 +201,19 @@ class CalibrationResult:
             out["clock_drift"], out["clock_drift_sigma"] = float(ri.state[13]), float(ri.sigma[13])
             out["radar_inertial"] = ri.report()
             out["unconstrained"] = list(ri.unconstrained)
+            out["held_at"] = {n: self._prior_of(n) for n in ri.unconstrained}
             out["warnings"] = list(ri.warnings)
         return out
+
+    def _prior_of(self, name: str) -> str:
+        """Where the prior of a state component the Doppler leaves unconstrained came from."""
+        if self.clock is not None and (name == "clock_offset" or name == "clock_drift"
+                                       and np.isfinite(self.clock.drift_sigma)):
+            return "clock fit"
+        if name.startswith("gyro_bias") and self.gyro is not None and np.isfinite(
+                self.gyro.sigma["xyz".index(name[-1])]):
+            return "gyro-bias fit"
+        return "IMU grade"
 
 
 def detect_scatterers(rc, element_positions, motion: PlatformMotion, *, wavelength: float,

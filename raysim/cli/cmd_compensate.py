@@ -238,8 +238,12 @@ def _calibration_text(report: dict) -> str:
                for n in ("accel_bias_x", "accel_bias_y", "accel_bias_z")]
         lines.append("  tilt correction [deg] (N, E) " + ", ".join(tilt))
         lines.append("  accelerometer bias [mg] (x, y, z) " + ", ".join(acc))
-        lines.append("  unconstrained (kept at the IMU prior): "
-                     + (", ".join(ri["unconstrained"]) or "none"))
+        held = report.get("held_at", {})
+        for source in dict.fromkeys(held.values()):
+            lines.append(f"  unconstrained by the radar (kept at the {source}'s value): "
+                         + ", ".join(n for n in ri["unconstrained"] if held[n] == source))
+        if not ri["unconstrained"]:
+            lines.append("  unconstrained by the radar: none")
         lines.append(f"  Doppler measurements used: {ri['measurements']} "
                      f"({ri['rejected']} rejected), chi2 {ri['chi2']:.2f}")
     lines.append(f"  scatterers used: {report['scatterers']}")

@@ -49,7 +49,7 @@ def test_compensate_estimates_offset_and_velocity(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "self-calibration" in printed and "time offset" in printed
     # the radar-inertial state: what the scene leaves unconstrained, printed and stored
-    assert "unconstrained (kept at the IMU prior):" in printed
+    assert "unconstrained by the radar (kept at the " in printed
     with np.load(out) as z:
         report = json.loads(str(z["self_calibration"]))
         gate = int(np.argmin(np.abs(z["range_m"] - 12.0)))
@@ -57,6 +57,10 @@ def test_compensate_estimates_offset_and_velocity(tmp_path, capsys):
     assert abs(report["time_offset_s"] - OFFSET_S) <= OFFSET_TOL_S
     assert report["scatterers"] >= 2
     ri = report["radar_inertial"]
+    # each component the Doppler leaves alone names the prior it kept: the clock's is
+    # the phase-track fit's (it ran), not the IMU grade's
+    assert set(report["held_at"]) == set(ri["unconstrained"])
+    assert report["held_at"]["clock_offset"] == "clock fit"
     assert len(ri["state"]) == len(ri["sigma"]) == len(ri["state_names"]) == 14
     assert set(report["unconstrained"]) <= set(ri["state_names"])
     pv = metrics.pseudo_velocity(slow, cfg.chirp_interval, cfg.center_wavelength)
