@@ -1,7 +1,8 @@
 """``raysim flight``: write a simulated drone flight as the files of a real one.
 
-Writes ``flight.ulg`` (PX4 ULog), ``adc_data.bin`` (DCA1000 capture) and
-``radar.cfg`` (mmWave SDK configuration) of a point target seen from a
+Writes ``flight.ulg`` (PX4 ULog), ``adc_data.bin`` (DCA1000 capture),
+``radar.cfg`` (mmWave SDK configuration) and ``truth.json`` (what was simulated,
+for ``raysim score``) of a point target seen from a
 hovering drone (:func:`raysim.pipeline.flight.write_flight`) and prints the one
 ``raysim compensate`` command that compensates them with what a user has (IMU
 grade, lever arm, the flight controller's attitude at the first ramp or
@@ -146,7 +147,9 @@ def run(args) -> int:
                      decimate_tolerance=args.decimate_tolerance,
                      progress=not args.no_progress)
     out = f"{args.folder.rstrip('/')}/compensated.zarr"
-    print(f"wrote {f.imu_log}, {f.capture}, {f.radar_config}")
+    print(f"wrote {f.imu_log}, {f.capture}, {f.radar_config}, {f.capture.parent / 'truth.json'}"
+          f" (score a compensated store against it: raysim score {shlex.quote(args.folder)} "
+          f"{shlex.quote(out)})")
     if f.gaps:
         print("logger gaps (start, length) [s, IMU clock]: " + ", ".join(
             f"({s:.3f}, {n:.3f})" for s, n in f.gaps), file=sys.stderr)

@@ -36,7 +36,9 @@ FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_per
 #: unless ``decimate_tolerance`` says otherwise.
 FLIGHT_SYNTHESIS_EPS = 1e-5
 #: The files :func:`write_flight` writes in its folder.
-FLIGHT_FILES = ("adc_data.bin", "radar.cfg", "flight.ulg")
+#: Name and format tag of the flight's truth (:meth:`FlightFiles.truth`).
+TRUTH_FILE, TRUTH_FORMAT = "truth.json", "raysim-flight-truth-1"
+FLIGHT_FILES = ("adc_data.bin", "radar.cfg", "flight.ulg", TRUTH_FILE)
 #: Largest ADC value of the written capture (the IF cube is scaled to it) [counts].
 FULL_SCALE_COUNTS = 8000.0
 #: The board of a flight unless told: xWR18xx, 3 TX (TX1 raised lambda/2) x 4 RX.
@@ -124,6 +126,25 @@ class FlightFiles:
     def __post_init__(self) -> None:
         if not self.targets:
             object.__setattr__(self, "targets", (tuple(self.target),))
+
+    def truth(self) -> dict:
+        """Every field as JSON-ready values, paths relative to the flight's folder
+        (:func:`raysim.pipeline.flight_truth.read_truth` reads them back)."""
+        import json
+        from dataclasses import fields
+
+        folder = Path(self.capture).parent
+        out = {"format": TRUTH_FORMAT}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, Path):
+                v = v.relative_to(folder).as_posix()
+            elif isinstance(v, np.ndarray):
+                v = v.tolist()
+            elif isinstance(v, tuple):
+                v = json.loads(json.dumps(v))          # nested tuples as lists
+            out[f.name] = v
+        return out
 
     def _extra(self) -> tuple:
         """Options every command of this flight needs beyond today's: board, mounting, gaps."""
@@ -420,7 +441,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
         attitude=attitude, capture=(start, end - 0.05))
     ulog = write_px4_ulog(folder / "flight.ulg", samples, att, averaged=bool(imu_boxcar))
     starts = start + np.arange(frames) * cfg.frame_interval
-    return FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,
+    flight = FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,
                        float(time_offset), np.asarray(traj.velocity(starts), dtype=float),
                        np.rad2deg(np.asarray(traj.euler(starts), dtype=float)),
                        np.asarray(traj.position(starts), dtype=float), lever, tgts[0],
@@ -429,6 +450,10 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
                        float(clock_drift_ppm), None if att is None else np.array(
                            [att.euler_deg(time_offset + (1 + 1e-6 * clock_drift_ppm) * t)
                             for t in starts]))
+    from raysim.io.files import atomic_write_json
+
+    atomic_write_json(folder / TRUTH_FILE, flight.truth(), indent=1)
+    return flight
 
 
 def _targets(value, cfg) -> list:

@@ -1,0 +1,111 @@
+"""The truth of a simulated flight, kept beside its files, and the score of a compensation.
+
+``raysim flight`` writes ``truth.json`` (:meth:`FlightFiles.truth`) next to the
+capture, the log and the cfg: everything :class:`raysim.pipeline.flight.FlightFiles`
+holds (targets, clock offset and drift, per-frame velocity, attitude and position,
+lever arm, board, mounting, log rate, gaps), so that a compensation run later, by
+any tool, can be scored against what was simulated: :func:`score_flight` measures
+every target in every frame of a compensated store
+(:func:`raysim.pipeline.flight.measure_targets`) against the stated limits
+:data:`LIMITS`.
+
+The file is JSON (``format`` :data:`TRUTH_FORMAT`); paths are stored relative to
+the flight's folder, so a folder moved or copied keeps its truth.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from raysim.pipeline.flight import TRUTH_FILE, TRUTH_FORMAT, FlightFiles
+
+__all__ = ["LIMITS", "TRUTH_FILE", "TRUTH_FORMAT", "read_truth", "score_flight"]
+
+#: Stated limits of a compensated flight, on every target and frame:
+#: ``beam_angle_error_deg`` [deg], ``|beam_pseudo_velocity_bins|`` [bin],
+#: ``doppler_leakage_db`` [dB], and ``|offset_error_ms|`` [ms] of the store's clock offset.
+LIMITS = {"beam_angle_error_deg": 0.2, "beam_pseudo_velocity_bins": 0.05,
+          "doppler_leakage_db": -35.0, "offset_error_ms": 0.5}
+_ARRAYS = ("frame_starts", "initial_velocity", "initial_attitude_deg", "initial_position",
+           "lever_arm", "log_attitude_deg")
+_PATHS = ("capture", "radar_config", "imu_log")
+
+
+def read_truth(folder: str | Path):
+    """The ``FlightFiles`` of a flight folder written by ``raysim flight``.
+
+    Raises
+    ------
+    ValueError
+        The folder has no :data:`TRUTH_FILE`, or it is not a flight truth of this format.
+    """
+    folder = Path(folder)
+    path = folder / TRUTH_FILE
+    if not path.is_file():
+        raise ValueError(f"{str(folder)!r} holds no {TRUTH_FILE}: expected the folder of a "
+                         f"flight written by `raysim flight`")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{str(path)!r} is not readable JSON ({exc}); expected a flight "
+                         f"truth written by `raysim flight`") from None
+    if not isinstance(data, dict) or data.get("format") != TRUTH_FORMAT:
+        got = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise ValueError(f"{str(path)!r} has format {got!r}; expected {TRUTH_FORMAT!r}")
+    kw = {k: v for k, v in data.items() if k != "format"}
+    for k in _PATHS:
+        kw[k] = folder / kw[k]
+    for k in _ARRAYS:
+        if kw.get(k) is not None:
+            kw[k] = np.asarray(kw[k], dtype=float)
+    for k in ("target", "mounting_deg"):
+        kw[k] = tuple(kw[k])
+    kw["targets"] = tuple(tuple(t) for t in kw["targets"])
+    kw["gaps"] = tuple(tuple(g) for g in kw["gaps"])
+    try:
+        return FlightFiles(**kw)
+    except TypeError as exc:
+        raise ValueError(f"{str(path)!r} does not hold a flight's truth ({exc})") from None
+
+
+def score_flight(folder: str | Path, store, first: int = 0) -> dict:
+    """Score a compensated store of a flight against the flight's truth and :data:`LIMITS`.
+
+    Parameters
+    ----------
+    folder : path
+        The flight's folder (with :data:`TRUTH_FILE`).
+    store : path or xarray.Dataset
+        The compensated store (``raysim compensate --out``) with a ``range`` axis
+        covering every target and an ``azimuth`` axis around each.
+    first : int
+        Flight frame of the store's first frame (``--frames K:...``).
+
+    Returns
+    -------
+    dict
+        ``targets [target, frame, 3]`` (angle error [deg], pseudo-velocity [bin],
+        leakage [dB]), ``worst`` (per metric of :data:`LIMITS`; ``offset_error_ms``
+        None where the store has no clock offset), ``limits`` and ``passed``
+        (per metric, and ``all``).
+    """
+    from raysim.io.zarr_store import open_store
+    from raysim.pipeline.flight import measure_targets
+
+    flight = read_truth(folder)
+    ds = store if hasattr(store, "data_vars") else open_store(store)
+    m = measure_targets(ds, flight, first=first)                # [target, frame, 3]
+    offset = ds.attrs.get("time_offset_s")
+    worst = {"beam_angle_error_deg": float(m[..., 0].max()),
+             "beam_pseudo_velocity_bins": float(np.abs(m[..., 1]).max()),
+             "doppler_leakage_db": float(m[..., 2].max()),
+             "offset_error_ms": None if offset is None
+             else 1e3 * (float(offset) - flight.time_offset)}
+    passed = {k: None if v is None else bool(
+        abs(v) <= LIMITS[k] if k != "doppler_leakage_db" else v <= LIMITS[k])
+        for k, v in worst.items()}
+    passed["all"] = all(v is not False for v in passed.values())
+    return {"targets": m.tolist(), "worst": worst, "limits": dict(LIMITS), "passed": passed}

@@ -1,0 +1,97 @@
+"""A flight's truth beside its files, and ``raysim score`` of a compensated store against it."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from raysim.cli import main
+from raysim.pipeline.flight import write_flight
+from raysim.pipeline.flight_truth import LIMITS, TRUTH_FILE, read_truth, score_flight
+
+#: One target off boresight, two frames (seconds to write and compensate).
+TARGET = (6.0, 12.0, 0.0)
+#: Azimuth the truth's target is moved by in the wrong-truth check [deg]; a score must
+#: see it as an angle error within :data:`MOVED_TOL_DEG`.
+MOVE_DEG = 1.0
+MOVED_TOL_DEG = 0.1
+
+
+@pytest.fixture(scope="module")
+def scored(tmp_path_factory):
+    """(flight folder, store) of a written flight compensated with its given command."""
+    root = tmp_path_factory.mktemp("score")
+    flight = write_flight(root / "f", target=TARGET, frames=2, seed=1)
+    store = root / "f" / "compensated.zarr"
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(flight.command(store, "--range-m", "5.5:6.5", "--az-deg", "6:18:0.25",
+                                   "--el-deg", "0:0:1", "--no-progress")) == 0
+    return flight, root / "f", store
+
+
+def test_the_truth_file_gives_back_the_flight(scored):
+    flight, folder, _ = scored
+    back = read_truth(folder)
+    for name in flight.__dataclass_fields__:
+        a, b = getattr(flight, name), getattr(back, name)
+        if isinstance(a, np.ndarray):
+            np.testing.assert_array_equal(a, b)          # JSON keeps every float digit
+        else:
+            assert a == b, name
+
+
+def test_a_moved_folder_keeps_its_truth(scored, tmp_path):
+    _, folder, _ = scored
+    moved = tmp_path / "moved"
+    shutil.copytree(folder, moved, ignore=shutil.ignore_patterns("*.zarr"))
+    back = read_truth(moved)
+    assert back.capture == moved / "adc_data.bin" and back.capture.is_file()
+
+
+def test_score_holds_on_the_compensated_flight(scored, capsys):
+    _, folder, store = scored
+    assert main(["score", str(folder), str(store), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["passed"]["all"] and s["limits"] == LIMITS
+    assert np.asarray(s["targets"]).shape == (1, 2, 3)
+    assert s["worst"]["offset_error_ms"] == pytest.approx(0.0, abs=1e-9)   # given offset
+
+
+def test_score_sees_a_wrong_truth(scored, tmp_path, capsys):
+    """The same store scored against a truth whose target is moved in azimuth: the angle
+    error is the move and the exit status 1 (a score that cannot fail would pass it)."""
+    _, folder, store = scored
+    wrong = tmp_path / "wrong"
+    shutil.copytree(folder, wrong, ignore=shutil.ignore_patterns("*.zarr"))
+    data = json.loads((wrong / TRUTH_FILE).read_text())
+    for t in (data["targets"][0], data["target"]):
+        t[1] += MOVE_DEG
+    (wrong / TRUTH_FILE).write_text(json.dumps(data))
+    s = score_flight(wrong, store)
+    assert s["worst"]["beam_angle_error_deg"] == pytest.approx(MOVE_DEG, abs=MOVED_TOL_DEG)
+    assert not s["passed"]["beam_angle_error_deg"] and not s["passed"]["all"]
+    assert main(["score", str(wrong), str(store)]) == 1
+    assert "beam_angle_error_deg" in capsys.readouterr().out
+
+
+def test_score_refuses_a_folder_without_truth(scored, tmp_path, capsys):
+    _, _, store = scored
+    assert main(["score", str(tmp_path), str(store)]) == 2
+    assert TRUTH_FILE in capsys.readouterr().err
+    (tmp_path / TRUTH_FILE).write_text(json.dumps({"format": "something-else"}))
+    assert main(["score", str(tmp_path), str(store)]) == 2
+    assert "something-else" in capsys.readouterr().err
+
+
+def test_flight_keeps_a_truth_file_it_did_not_write(tmp_path, capsys):
+    (tmp_path / "f").mkdir()
+    mine = tmp_path / "f" / TRUTH_FILE
+    mine.write_text("my notes\n")
+    assert main(["flight", str(tmp_path / "f"), "--frames", "1", "--no-progress"]) == 2
+    assert "truth.json" in capsys.readouterr().err
+    assert mine.read_text() == "my notes\n"
