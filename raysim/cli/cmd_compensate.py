@@ -297,6 +297,10 @@ def run(args) -> int:
         print(f"IMU log: {result.imu_source}")
     for w in result.warnings:
         print(f"warning: {result.chain}: {w}", file=sys.stderr)
+    if not args.autofocus and any(w.startswith("imu rate:") for w in result.warnings):
+        print("note: --autofocus displacement estimates the vibration this log does not "
+              "resolve from the stationary scatterers (docs/compensation.md, \"Radar "
+              "autofocus\")", file=sys.stderr)
     if result.calibration is not None:
         print(_calibration_text(result.calibration))
     for k, rep in enumerate(result.autofocus or ()):

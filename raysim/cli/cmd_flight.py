@@ -34,6 +34,11 @@ exit status: 0 written, 2 invalid input (the message names the option and the va
 """
 
 
+#: Logged IMU rate below which the printed commands add the radar autofocus [Hz]: 2.5
+#: times the hover jitter's highest rotor line (160 Hz).
+UNRESOLVED_RATE_HZ = 400.0
+
+
 def register(subparsers) -> None:
     """Add the ``flight`` subcommand."""
     from raysim.cli.options import add_decimation_options
@@ -156,6 +161,8 @@ def run(args) -> int:
     r = [t[0] for t in f.targets]
     el = "0:0:1" if all(t[2] == 0 for t in f.targets) else "-5:5:5"
     cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg", el)
+    if f.imu_boxcar or f.imu_rate < UNRESOLVED_RATE_HZ:     # the log cannot see the rotors
+        cells += ("--autofocus", "displacement")
     if is_default_mounting(args.mounting_deg):
         print("compensate with (velocity and clock offset estimated from the radar):")
         print("  raysim " + shlex.join(f.calibrating_command(out, *cells,

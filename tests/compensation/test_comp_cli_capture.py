@@ -222,3 +222,22 @@ def test_flight_command_prints_a_working_compensate(tmp_path, capsys):
     assert open_store(tmp_path / "fl" / "compensated.zarr")["beams"].shape[:2] == (1, 64)
     assert main(["flight", str(tmp_path / "fl2"), "--target", "11,20"]) == 2
     assert "--target" in capsys.readouterr().err
+
+
+def test_flight_with_a_low_rate_log_prints_the_autofocus(tmp_path, capsys):
+    """A 250 Hz boxcar log does not resolve the rotor lines: the printed commands carry the
+    radar autofocus, and compensate without it says what would estimate that vibration."""
+    import shlex
+
+    assert main(["flight", str(tmp_path / "fl"), "--frames", "1", "--imu", "ideal",
+                 "--imu-rate", "250", "--imu-boxcar", "--no-progress"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    commands = [shlex.split(x.strip()) for x in lines if x.strip().startswith("raysim compensate")]
+    assert len(commands) == 2
+    for c in commands:
+        assert c[c.index("--autofocus") + 1] == "displacement"
+    given = commands[-1][1:]
+    i = given.index("--autofocus")
+    assert main(given[:i] + given[i + 2:] + ["--az-deg", "15:25:1", "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert "imu rate:" in err and "note: --autofocus displacement" in err
