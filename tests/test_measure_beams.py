@@ -12,6 +12,9 @@ from raysim.vocabulary import metric_unit
 TONE_BINS_TOL = 0.01
 #: Azimuth error of the parabola through a Gaussian (exact in dB) beam [deg].
 PEAK_TOL_DEG = 1e-9
+#: The target's peak beside a stronger scatterer 8 deg away, whose Gaussian beam's tail
+#: (1e-6 of its peak there) bends the parabola [deg].
+SEARCH_TOL_DEG = 1e-3
 #: Two equal tones: leakage against -3.01 dB, allowing the Hann window's spill (< -40 dB).
 HALF_POWER_TOL_DB = 0.02
 
@@ -57,3 +60,19 @@ def test_edge_peak_and_bad_shape_are_refused():
     with pytest.raises(ValueError, match=r"\[chirp, range, azimuth\]"):
         beam_metrics(cube[0], az, 0.0, chirp_interval=1e-4, wavelength=3.9e-3,
                      velocity_resolution=0.3)
+
+
+def test_search_window_keeps_a_stronger_scatterer_elsewhere_out():
+    """A target at +4 deg and a scatterer ten times stronger at -4 deg in the same cells
+    (the ground under the radar): the whole grid takes the stronger one (8 deg off); a
+    search within 3 deg of the truth finds the target, exactly (Gaussian beams); a window
+    holding no beam is refused."""
+    kw = dict(chirp_interval=1e-4, wavelength=3.9e-3, velocity_resolution=0.3)
+    target, az = _cube(0.0, 4.0)
+    ground, _ = _cube(0.0, -4.0)
+    cube = target + 10.0 * ground
+    assert beam_metrics(cube, az, 4.0, **kw)["beam_angle_error_deg"] > 7.0
+    near = beam_metrics(cube, az, 4.0, search_deg=3.0, **kw)["beam_angle_error_deg"]
+    assert near < SEARCH_TOL_DEG
+    with pytest.raises(ValueError, match="no beam within"):
+        beam_metrics(cube, az, 40.0, search_deg=1.0, **kw)

@@ -29,7 +29,8 @@ BEAM_METRICS = ("beam_angle_error_deg", "beam_pseudo_velocity_bins", "doppler_le
 
 def beam_metrics(beams: np.ndarray, azimuth_deg: np.ndarray, true_azimuth_deg: float, *,
                  chirp_interval: float, wavelength: float,
-                 velocity_resolution: float) -> dict[str, float]:
+                 velocity_resolution: float,
+                 search_deg: float | None = None) -> dict[str, float]:
     """The metrics of :data:`BEAM_METRICS` of one frame's beams.
 
     Parameters
@@ -46,6 +47,10 @@ def beam_metrics(beams: np.ndarray, azimuth_deg: np.ndarray, true_azimuth_deg: f
         Carrier wavelength [m].
     velocity_resolution : float
         Doppler velocity bin [m/s].
+    search_deg : float, optional
+        Look for the peak only within this many degrees of ``true_azimuth_deg`` (a
+        stronger scatterer elsewhere in the cells, e.g. the ground under the radar, is
+        then not taken for the target); None: the whole grid.
 
     Raises
     ------
@@ -58,7 +63,12 @@ def beam_metrics(beams: np.ndarray, azimuth_deg: np.ndarray, true_azimuth_deg: f
         raise ValueError(f"beams must be [chirp, range, azimuth], got shape {b.shape}")
     az_axis = np.asarray(azimuth_deg, dtype=float)
     zero = np.abs(b.astype(np.complex128).sum(axis=0)) ** 2     # [range, azimuth]
-    g, a = np.unravel_index(np.argmax(zero), zero.shape)
+    near = (np.ones(az_axis.size, bool) if search_deg is None
+            else np.abs(az_axis - true_azimuth_deg) <= search_deg)
+    if not near.any():
+        raise ValueError(f"no beam within {search_deg} deg of the true azimuth "
+                         f"{true_azimuth_deg:.2f} deg; expected the grid to cover it")
+    g, a = np.unravel_index(np.argmax(np.where(near, zero, -np.inf)), zero.shape)
     if not 0 < a < zero.shape[1] - 1:
         raise ValueError(f"the beam peak lies on the edge of the azimuth grid "
                          f"({az_axis[a]:.2f} deg); expected it inside")

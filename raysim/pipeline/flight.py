@@ -561,13 +561,19 @@ def measure_store(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
 #: Half width of the range cells measured around each target [m] (the targets of
 #: :data:`DEFAULT5_TARGETS` are at least 1 m apart).
 TARGET_RANGE_HALF_WIDTH_M = 0.45
+#: Half width of the azimuths searched for each target's peak [deg]: its main lobe
+#: (the 8-channel azimuth aperture's -3 dB half width is about 6.4 deg at
+#: boresight), so the ground under the radar in the same cells, 26 deg away and
+#: stronger, is not taken for a target at 30 deg.
+TARGET_AZIMUTH_HALF_WIDTH_DEG = 8.0
 
 
 def measure_targets(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
     """The beam metrics of every target in every frame of a compensated store.
 
     Each target is measured on the range cells within
-    :data:`TARGET_RANGE_HALF_WIDTH_M` of its range, at the store's elevation
+    :data:`TARGET_RANGE_HALF_WIDTH_M` of its range and its peak looked for within
+    :data:`TARGET_AZIMUTH_HALF_WIDTH_DEG` of its azimuth, at the store's elevation
     nearest its apparent elevation, against its apparent azimuth
     (:meth:`FlightFiles.apparent_direction` of frame ``first``).
 
@@ -597,7 +603,8 @@ def measure_targets(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
         for b in ds["beams"].values[..., e][:, :, cells]:          # [chirp, range, azimuth]
             m = beam_metrics(b, ds.azimuth.values, az_true, chirp_interval=cfg.chirp_interval,
                              wavelength=cfg.center_wavelength,
-                             velocity_resolution=cfg.velocity_resolution)
+                             velocity_resolution=cfg.velocity_resolution,
+                             search_deg=TARGET_AZIMUTH_HALF_WIDTH_DEG)
             rows.append([m[k] for k in BEAM_METRICS])
         out.append(rows)
     return np.array(out)
