@@ -58,9 +58,9 @@ ESTIMATES = ("time_offset", "gyro_bias", "velocity")
 DIRECTION_HALF_WIDTH = float(np.deg2rad(3.0))
 #: Step of that grid [rad].
 DIRECTION_STEP = float(np.deg2rad(0.5))
-#: Smallest aperture along x (y) that resolves azimuth (elevation) [wavelengths]
-#: (a 3 dB beam of about 25 deg).
-MIN_APERTURE_WAVELENGTHS = 2.0
+#: Smallest virtual-array extent along x (y) resolving azimuth (elevation) [wavelengths]:
+#: four half-wavelength elements (the IWR6843AOP's grid), a 3 dB beam of about 25 deg.
+MIN_APERTURE_WAVELENGTHS = 1.5
 #: Smallest range-rate spread given to the ego-velocity fit [m/s] (a noise-free
 #: simulation leaves only rounding in the phase).
 MIN_RANGE_RATE_SIGMA = 1e-6
