@@ -126,7 +126,7 @@ def run(args) -> int:
     from raysim.cli.options import check_output
     from raysim.pipeline.flight import write_flight
     from raysim.platform.imu_spec import PRESETS
-    from raysim.platform.mounting import is_default_mounting, mounting_deg
+    from raysim.platform.mounting import mounting_deg
 
     check_output(args.folder, "dir", "folder")
     if args.imu not in PRESETS:
@@ -163,10 +163,8 @@ def run(args) -> int:
     cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg", el)
     if f.imu_boxcar or f.imu_rate < UNRESOLVED_RATE_HZ:     # the log cannot see the rotors
         cells += ("--autofocus", "displacement")
-    if is_default_mounting(args.mounting_deg):
-        print("compensate with (velocity and clock offset estimated from the radar):")
-        print("  raysim " + shlex.join(f.calibrating_command(out, *cells,
-                                                             attitude=args.attitude)))
+    print("compensate with (velocity and clock offset estimated from the radar):")
+    print("  raysim " + shlex.join(f.calibrating_command(out, *cells, attitude=args.attitude)))
     print("or with the simulated clock offset and initial velocity given:")
     print("  raysim " + shlex.join(f.command(out, *cells)))
     return 0

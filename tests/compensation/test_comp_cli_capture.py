@@ -241,3 +241,18 @@ def test_flight_with_a_low_rate_log_prints_the_autofocus(tmp_path, capsys):
     assert main(given[:i] + given[i + 2:] + ["--az-deg", "15:25:1", "--no-progress"]) == 0
     err = capsys.readouterr().err
     assert "imu rate:" in err and "note: --autofocus displacement" in err
+
+
+def test_flight_of_a_mounted_radar_prints_the_self_calibrating_command(tmp_path, capsys):
+    """An oblique radar's flight prints the command that estimates velocity and clock from
+    the radar, with its mounting (tests/test_flight_mounted_selfcal.py runs it)."""
+    import shlex
+
+    assert main(["flight", str(tmp_path / "fl"), "--frames", "1", "--imu", "ideal",
+                 "--mounting-deg", "oblique", "--target", "7,10,0", "--no-progress"]) == 0
+    lines = [shlex.split(x.strip()) for x in capsys.readouterr().out.splitlines()
+             if x.strip().startswith("raysim compensate")]
+    calibrating = [c for c in lines if "--time-offset" in c
+                   and c[c.index("--time-offset") + 1] == "auto"]
+    assert len(lines) == 2 and len(calibrating) == 1
+    assert "--mounting-deg" in calibrating[0] and "radar" in calibrating[0]
