@@ -14,11 +14,13 @@ import pytest
 from scipy.interpolate import CubicSpline
 
 from compensation.clock_averaged import (
+    PER_CHIRP_SIGMA_FRACTION,
     PLACEMENT_SIGMA_FRACTION,
     fit_clock,
     fit_time_shift_averaged,
 )
 from compensation.clock_offset import fit_time_shift
+from compensation.guards import CompensationWarning
 
 #: Wavelength [m], averaging interval [s], true IMU-minus-radar offset [s].
 WAVELENGTH, INTERVAL, OFFSET = 3.9e-3, 4e-3, 6.5e-3
@@ -57,11 +59,11 @@ def _mean_velocity(a, b, ph) -> np.ndarray:
                       / (w[i] * (b - a)[:, None])).sum(-1) for i in range(3)], -1)
 
 
-def _record(tau: float, ph):
+def _record(tau: float, ph, interval: float = INTERVAL):
     """IMU sample times [s, IMU clock] and the tracks compensated with the offset ``tau``."""
     k = 4 * np.pi / WAVELENGTH
-    imu_t = np.arange(0.45, 0.85, INTERVAL) + OFFSET
-    logged = _mean_velocity(imu_t - OFFSET - INTERVAL / 2, imu_t - OFFSET + INTERVAL / 2, ph)
+    imu_t = np.arange(0.45, 0.85, interval) + OFFSET
+    logged = _mean_velocity(imu_t - OFFSET - interval / 2, imu_t - OFFSET + interval / 2, ph)
     spline = CubicSpline(imu_t - tau, logged)
     anti = spline.antiderivative()
     u = DIRECTIONS / np.linalg.norm(DIRECTIONS, axis=1, keepdims=True)
@@ -129,3 +131,22 @@ def test_instantaneous_samples_state_their_placement_over_the_sample_period():
     assert est.offset == ref.offset and est.offset_sigma == ref.offset_sigma
     assert est.stamp_sigma == pytest.approx(PLACEMENT_SIGMA_FRACTION * period, rel=1e-9)
     assert est.total_sigma == pytest.approx(np.hypot(ref.offset_sigma, est.stamp_sigma))
+
+
+#: Averaging interval longer than half the frames (13.4 ms) [s]: no frame spans two.
+LONG_INTERVAL = 8e-3
+#: Stated spreads within which the fallback's offset must lie of the truth.
+FALLBACK_SIGMAS = 3.0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_frames_shorter_than_two_intervals_fall_back_to_the_per_chirp_fit(seed):
+    """No frame spans two 8 ms intervals: the offset is the per-chirp fit's (it used to
+    stop the command), warned, with 1/8 of the interval stated for the averaging's bias;
+    the error lies within three of the stated spreads."""
+    imu_t, tracks = _record(OFFSET, _phases(seed), LONG_INTERVAL)
+    with pytest.warns(CompensationWarning, match="per chirp"):
+        est = fit_clock(tracks, imu_time=imu_t, time_offset=OFFSET, interval=LONG_INTERVAL)
+    assert est.stamp_sigma == PER_CHIRP_SIGMA_FRACTION * LONG_INTERVAL
+    assert est.offset == fit_time_shift(tracks).offset
+    assert abs(est.offset) <= FALLBACK_SIGMAS * est.total_sigma
