@@ -35,9 +35,9 @@ FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_per
 #: are the oracle's tone sum, the interpolation gets ``DECIMATION_EPS_SHARE`` of it (1e-6)
 #: unless ``decimate_tolerance`` says otherwise.
 FLIGHT_SYNTHESIS_EPS = 1e-5
-#: The files :func:`write_flight` writes in its folder.
 #: Name and format tag of the flight's truth (:meth:`FlightFiles.truth`).
 TRUTH_FILE, TRUTH_FORMAT = "truth.json", "raysim-flight-truth-1"
+#: The files :func:`write_flight` writes in its folder.
 FLIGHT_FILES = ("adc_data.bin", "radar.cfg", "flight.ulg", TRUTH_FILE)
 #: Largest ADC value of the written capture (the IF cube is scaled to it) [counts].
 FULL_SCALE_COUNTS = 8000.0
