@@ -29,8 +29,8 @@ from functools import partial
 import numpy as np
 
 from ._checks import finite_array, positive
-from .clock_averaged import fit_clock
-from .clock_offset import ClockOffset, phase_misfit, phase_tracks
+from .clock_averaged import clock_misfit, fit_clock
+from .clock_offset import ClockOffset, phase_tracks
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
 from .elevation import measure_elevation, vertical_baseline
 from .exact import rigid_body_projection
@@ -635,8 +635,9 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         cost, few = [], slice(0, SEARCH_FRAMES)
         for cand in grid:
             ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand, **options)
-            y = _beams(rcs[few], positions, seen(ms), scatterers, proj)
-            cost.append(phase_misfit(phase_tracks(y, seen(ms), scatterers, lam)))
+            y = _beams(rcs[few], positions, ms := seen(ms), scatterers, proj)
+            cost.append(clock_misfit(phase_tracks(y, ms, scatterers, lam), imu_time, cand,
+                                     imu_interval))
         tau = float(grid[int(np.argmin(cost))])
         motions = integrate()
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):

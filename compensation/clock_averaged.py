@@ -61,7 +61,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ._checks import finite_array, positive
-from .clock_offset import ClockOffset, fit_time_shift, track_arrays
+from .clock_offset import ClockOffset, fit_time_shift, phase_misfit, track_arrays
 from .guards import CompensationWarning
 
 #: Share of the averaging interval stated for the placement when no frame spans two
@@ -75,6 +75,8 @@ RATE_FIT_HALF_WIDTH = 6
 #: the log does not state [1] (the plain mean of 8 instantaneous samples is centred 1/16
 #: of the interval late).
 PLACEMENT_SIGMA_FRACTION = 1.0 / 16.0
+#: Steps per half interval of the search for a placement spanning two intervals [1].
+LAG_STEPS = 50
 
 
 def _rate(t: np.ndarray, phi: np.ndarray, tq: float) -> float:
@@ -86,14 +88,42 @@ def _rate(t: np.ndarray, phi: np.ndarray, tq: float) -> float:
     return float(c[1])
 
 
-def _intervals_within(t: np.ndarray, knots: np.ndarray, interval: float) -> int:
+def _within(t: np.ndarray, knots: np.ndarray, interval: float, lag: float) -> np.ndarray:
+    """Which intervals, placed ``lag`` earlier than ``knots``, lie within the chirp times
+    ``t``, their middles' ``knots`` too [sample]."""
+    x = knots - lag
+    return ((x - interval / 2 >= t[0]) & (x + interval / 2 <= t[-1]) & (knots >= t[0])
+            & (knots <= t[-1]))
+
+
+def _intervals_within(t: np.ndarray, knots: np.ndarray, interval: float,
+                      lag: float = 0.0) -> int:
     """How many whole averaging intervals lie within the chirp times ``t`` [1]."""
     if t.size < 2 * RATE_FIT_HALF_WIDTH:
         return 0
-    return int(np.count_nonzero((knots - interval / 2 >= t[0]) & (knots + interval / 2 <= t[-1])))
+    return int(np.count_nonzero(_within(t, knots, interval, lag)))
 
 
-def interval_rows(t, phi, r, knots, interval: float) -> tuple[np.ndarray, np.ndarray]:
+def placement_lag(tracks, knots, interval: float) -> float | None:
+    """Smallest shift [s] of the intervals' placement at which a track spans two, or None.
+
+    Where the frames span two intervals only at another offset than the one the
+    tracks were compensated with (a 200 Hz log's 5 ms intervals against a 13 ms
+    frame: about a third of the offsets), the radar's mean rate over the intervals
+    so placed is compared with the log's averages (the predicted rate at the
+    knots used): the fit is linearised about the shifted placement instead.
+    """
+    knots = np.sort(finite_array("knots", knots, ndim=1))
+    times = [track_arrays(i, item)[0] for i, item in enumerate(tracks)]
+    steps = np.arange(0.0, interval / 2 + interval / LAG_STEPS / 2, interval / LAG_STEPS)
+    for lag in np.ravel(np.column_stack([steps, -steps])):
+        if any(_intervals_within(t, knots, interval, lag) >= 2 for t in times):
+            return float(lag)
+    return None
+
+
+def interval_rows(t, phi, r, knots, interval: float,
+                  lag: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """``z [k]`` [rad/s] and ``g [k]`` [rad/s^2] of one track over the log intervals within it.
 
     Parameters
@@ -108,21 +138,77 @@ def interval_rows(t, phi, r, knots, interval: float) -> tuple[np.ndarray, np.nda
         Middles of the log's averaging intervals on the radar clock [s].
     interval : float
         Averaging interval ``T`` [s].
+    lag : float
+        The radar's intervals are placed ``lag`` earlier than ``knots`` [s] (the
+        log's values still read at ``knots``): ``z = c + (delta - lag) g``.
     """
-    x = knots[(knots - interval / 2 >= t[0]) & (knots + interval / 2 <= t[-1])]
-    if x.size == 0 or t.size < 2 * RATE_FIT_HALF_WIDTH:
+    keep = _within(t, knots, interval, lag)
+    if not keep.any() or t.size < 2 * RATE_FIT_HALF_WIDTH:
         return np.empty(0), np.empty(0)
     ps, rs = CubicSpline(t, phi), CubicSpline(t, r)
     z, g = [], []
-    for xk in x:
-        bm, bp = xk - interval / 2, xk + interval / 2
+    for xk in knots[keep]:
+        bm, bp = xk - lag - interval / 2, xk - lag + interval / 2
         z.append((ps(bp) - ps(bm)) / interval + rs.integrate(bm, bp) / interval - rs(xk))
         vm, vp = _rate(t, phi, bm) + rs(bm), _rate(t, phi, bp) + rs(bp)
         g.append((vp - vm) / interval)
     return np.asarray(z, dtype=float), np.asarray(g, dtype=float)
 
 
-def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
+def _constant_free_rows(tracks, knots, interval: float, lag: float):
+    """``z`` and ``g`` of every track spanning two intervals, less each track's mean, and
+    the frame (first chirp time) of each row; the number of tracks."""
+    zs, gs, frame = [], [], []
+    starts: dict = {}
+    for i, item in enumerate(tracks):
+        t, phi, r, _ = track_arrays(i, item)
+        if phi.shape != t.shape or r.shape != t.shape or t.ndim != 1:
+            raise ValueError(f"tracks[{i}]: phase and rate must have the shape of times "
+                             f"{t.shape}, got {phi.shape} and {r.shape}")
+        z, g = interval_rows(t, phi, r, knots, interval, lag)
+        if z.size < 2:
+            continue
+        # remove the track's constant: its velocity error and unwrapping Doppler
+        zs.append(z - z.mean())
+        gs.append(g - g.mean())
+        frame.append(np.full(z.size, starts.setdefault(round(float(t[0]), 9), len(starts))))
+    if not zs:
+        raise ValueError(f"tracks: no track spans two averaging intervals of {interval:g} s; "
+                         "the clock offset is unobservable from these intervals")
+    return np.concatenate(zs), np.concatenate(gs), np.concatenate(frame), len(zs)
+
+
+def interval_misfit(tracks, knots, interval: float, lag: float = 0.0) -> float:
+    """Mean square of the radar's mean phase rate over the log's intervals less the log's,
+    about a constant per track [rad^2/s^2]: the cost of a coarse offset search.
+
+    Unlike :func:`compensation.clock_offset.phase_misfit` it compares like with like
+    (interval means), so the vibration a 200 Hz log aliases does not move its minimum.
+    Arguments as for :func:`fit_time_shift_averaged`; ``lag`` as for
+    :func:`interval_rows`. Raises a ValueError where no track spans two intervals.
+    """
+    z, _, _, tracks_used = _constant_free_rows(tracks, np.sort(np.asarray(knots, dtype=float)),
+                                               interval, lag)
+    return float(z @ z) / max(z.size - tracks_used, 1)
+
+
+def clock_misfit(tracks, imu_time, time_offset: float, interval: float = 0.0) -> float:
+    """Cost of the coarse offset search at ``time_offset`` [s] (the tracks' offset).
+
+    :func:`interval_misfit` for a log of averages (at the nearest placement spanning
+    two intervals, :func:`placement_lag`); the per-chirp
+    :func:`compensation.clock_offset.phase_misfit` for instantaneous samples or frames
+    shorter than two intervals. Not comparable between the two kinds.
+    """
+    if interval > 0:
+        knots = np.asarray(imu_time, dtype=float) - float(time_offset)
+        lag = placement_lag(tracks, knots, interval)
+        if lag is not None:
+            return interval_misfit(tracks, knots, interval, lag)
+    return phase_misfit(tracks)
+
+
+def fit_time_shift_averaged(tracks, knots, interval: float, lag: float = 0.0) -> ClockOffset:
     """Time shift of a log of interval averages, from the radar's mean rates over them.
 
     Parameters
@@ -135,6 +221,9 @@ def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
         sample times less the offset used) [s].
     interval : float
         Averaging interval of each sample ``T`` [s].
+    lag : float
+        Shift of the radar's intervals [s] (:func:`interval_rows`; the fit is
+        linearised about the offset used plus ``lag``).
 
     Returns
     -------
@@ -154,38 +243,20 @@ def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
     """
     knots = np.sort(finite_array("knots", knots, ndim=1))
     interval = positive("interval", interval)
-    zs, gs, group, frame = [], [], [], []
-    starts: dict = {}
-    for i, item in enumerate(tracks):
-        t, phi, r, _ = track_arrays(i, item)
-        if phi.shape != t.shape or r.shape != t.shape or t.ndim != 1:
-            raise ValueError(f"tracks[{i}]: phase and rate must have the shape of times "
-                             f"{t.shape}, got {phi.shape} and {r.shape}")
-        z, g = interval_rows(t, phi, r, knots, interval)
-        if z.size < 2:
-            continue
-        # remove the track's constant: its velocity error and unwrapping Doppler
-        zs.append(z - z.mean())
-        gs.append(g - g.mean())
-        group.append(np.full(z.size, i))
-        frame.append(np.full(z.size, starts.setdefault(round(float(t[0]), 9), len(starts))))
-    if not zs:
-        raise ValueError(f"tracks: no track spans two averaging intervals of {interval:g} s; "
-                         "the clock offset is unobservable from these intervals")
-    z, g, frame = np.concatenate(zs), np.concatenate(gs), np.concatenate(frame)
+    z, g, frame, tracks_used = _constant_free_rows(tracks, knots, interval, float(lag))
     gg = float(g @ g)
     if gg <= 0:
         raise ValueError("the radar's phase acceleration is the same over every interval: "
                          "the clock offset is unobservable")
     delta = float(g @ z) / gg
     res = z - delta * g
-    dof = max(z.size - len(zs) - 1, 1)
+    dof = max(z.size - tracks_used - 1, 1)
     var = float(res @ res) / dof / gg
     clusters = np.unique(frame)
     if clusters.size > 1:
         score = np.array([g[frame == f] @ res[frame == f] for f in clusters])
         var = max(var, float(score @ score) / gg ** 2 * clusters.size / (clusters.size - 1))
-    return ClockOffset(delta, float(np.sqrt(var)),
+    return ClockOffset(delta + float(lag), float(np.sqrt(var)),
                        stamp_sigma=PLACEMENT_SIGMA_FRACTION * interval)
 
 
@@ -207,15 +278,16 @@ def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
                          "each IMU sample, >= 0 (0: instantaneous samples)")
     if interval > 0:
         knots = np.asarray(imu_time, dtype=float) - float(time_offset)
-        if any(_intervals_within(track_arrays(i, item)[0], knots, interval) >= 2
-               for i, item in enumerate(tracks)):
-            return fit_time_shift_averaged(tracks, knots, interval)
-        # Frames shorter than two intervals (a 200 Hz log's 5 ms against an 8 ms frame):
+        lag = placement_lag(tracks, knots, interval)
+        if lag is not None:
+            return fit_time_shift_averaged(tracks, knots, interval, lag)
+        # Frames shorter than two intervals (an 8 ms interval against a 13 ms frame):
         # the per-chirp fit, its bias by the averaging stated as a share of the interval.
         warnings.warn(f"clock: no frame spans two of the log's {1e3 * interval:.3g} ms "
                       f"averaging intervals; the offset is fitted per chirp against the "
                       f"averages and its spread states {PER_CHIRP_SIGMA_FRACTION:g} of the "
-                      f"interval for their bias", CompensationWarning, stacklevel=2)
+                      f"interval for their bias (the offset from a time sync, --time-offset, "
+                      f"docs/recordings.md, avoids it)", CompensationWarning, stacklevel=2)
         return replace(fit_time_shift(tracks, drift=drift),
                        stamp_sigma=PER_CHIRP_SIGMA_FRACTION * interval)
     # Instantaneous samples: where within its sample period each was taken (the sensor's
