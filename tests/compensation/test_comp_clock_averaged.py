@@ -9,6 +9,8 @@ the compensated phase is the spline's antiderivative.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
@@ -16,10 +18,11 @@ from scipy.interpolate import CubicSpline
 from compensation.clock_averaged import (
     PER_CHIRP_SIGMA_FRACTION,
     PLACEMENT_SIGMA_FRACTION,
+    clock_misfit,
     fit_clock,
     fit_time_shift_averaged,
 )
-from compensation.clock_offset import fit_time_shift
+from compensation.clock_offset import fit_time_shift, phase_misfit
 from compensation.guards import CompensationWarning
 
 #: Wavelength [m], averaging interval [s], true IMU-minus-radar offset [s].
@@ -150,3 +153,46 @@ def test_frames_shorter_than_two_intervals_fall_back_to_the_per_chirp_fit(seed):
     assert est.stamp_sigma == PER_CHIRP_SIGMA_FRACTION * LONG_INTERVAL
     assert est.offset == fit_time_shift(tracks).offset
     assert abs(est.offset) <= FALLBACK_SIGMAS * est.total_sigma
+
+
+#: A 200 Hz log's averaging interval [s]: a 13.2 ms frame spans two only at about two
+#: thirds of the offsets (all frames 50 ms apart share that placement).
+INTERVAL_200HZ = 5e-3
+#: Start error at which no frame spans two 5 ms intervals [s].
+UNSPANNED_START_S = -1.0e-3
+#: Grid of the coarse offset search about the truth [s] (the calibration's step).
+COARSE_GRID_S = np.arange(-6e-3, 6.1e-3, 0.5e-3)
+#: Least error of the per-chirp misfit's minimum on the seed-2 tracks [s]: the aliased
+#: vibration moves it by a whole vibration period.
+PHASE_MISFIT_MIN_ERROR_S = 2e-3
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_frame_that_spans_two_intervals_only_at_a_nearby_offset_is_fitted_there(seed):
+    """At the start offset no frame spans two 5 ms intervals (the per-chirp fallback
+    moved it by 0.5-0.9 ms the wrong way): the intervals placed at the nearest offset
+    where they fit give the offset to within the fit's three sigma, then exactly."""
+    ph, tau = _phases(seed), OFFSET + UNSPANNED_START_S
+    for one_pass in range(2):
+        imu_t, tracks = _record(tau, ph, INTERVAL_200HZ)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CompensationWarning)    # no per-chirp fallback
+            est = fit_clock(tracks, imu_time=imu_t, time_offset=tau, interval=INTERVAL_200HZ)
+        tau += est.offset
+        assert abs(tau - OFFSET) <= 3 * est.offset_sigma + (EXACT_TOL_S if one_pass else 0.0)
+    assert abs(tau - OFFSET) <= EXACT_TOL_S
+
+
+def test_the_coarse_search_over_interval_means_is_not_moved_by_aliased_vibration():
+    """The 124-171 Hz vibration through a 200 Hz log: the per-chirp phase misfit's
+    minimum lies a vibration period off; the interval-mean misfit's at the truth."""
+    ph = _phases(2)
+    interval_cost, phase_cost = [], []
+    for d in COARSE_GRID_S:
+        imu_t, tracks = _record(OFFSET + d, ph, INTERVAL_200HZ)
+        interval_cost.append(clock_misfit(tracks, imu_t, OFFSET + d, INTERVAL_200HZ))
+        phase_cost.append(phase_misfit(tracks))
+    assert COARSE_GRID_S[int(np.argmin(interval_cost))] == pytest.approx(0.0, abs=EXACT_TOL_S)
+    assert abs(COARSE_GRID_S[int(np.argmin(phase_cost))]) >= PHASE_MISFIT_MIN_ERROR_S
+    # instantaneous samples keep the per-chirp misfit
+    assert clock_misfit(tracks, imu_t, OFFSET, 0.0) == phase_misfit(tracks)
