@@ -18,7 +18,9 @@ from scipy.interpolate import CubicSpline
 from compensation.clock_averaged import (
     PER_CHIRP_SIGMA_FRACTION,
     PLACEMENT_SIGMA_FRACTION,
+    Misfit,
     clock_misfit,
+    coarse_offset,
     fit_clock,
     fit_time_shift_averaged,
 )
@@ -185,14 +187,50 @@ def test_a_frame_that_spans_two_intervals_only_at_a_nearby_offset_is_fitted_ther
 
 def test_the_coarse_search_over_interval_means_is_not_moved_by_aliased_vibration():
     """The 124-171 Hz vibration through a 200 Hz log: the per-chirp phase misfit's
-    minimum lies a vibration period off; the interval-mean misfit's at the truth."""
+    minimum lies a vibration period off; the interval-mean misfit's at the truth, with
+    no other minimum as good (no ambiguity warned, the fit unchanged)."""
     ph = _phases(2)
     interval_cost, phase_cost = [], []
     for d in COARSE_GRID_S:
         imu_t, tracks = _record(OFFSET + d, ph, INTERVAL_200HZ)
         interval_cost.append(clock_misfit(tracks, imu_t, OFFSET + d, INTERVAL_200HZ))
         phase_cost.append(phase_misfit(tracks))
-    assert COARSE_GRID_S[int(np.argmin(interval_cost))] == pytest.approx(0.0, abs=EXACT_TOL_S)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CompensationWarning)
+        found, fit = coarse_offset(OFFSET + COARSE_GRID_S, interval_cost, fit_clock)
+    assert found == pytest.approx(OFFSET, abs=EXACT_TOL_S) and fit is fit_clock
     assert abs(COARSE_GRID_S[int(np.argmin(phase_cost))]) >= PHASE_MISFIT_MIN_ERROR_S
-    # instantaneous samples keep the per-chirp misfit
-    assert clock_misfit(tracks, imu_t, OFFSET, 0.0) == phase_misfit(tracks)
+    # instantaneous samples keep the per-chirp misfit (no degrees of freedom counted)
+    assert clock_misfit(tracks, imu_t, OFFSET, 0.0) == (phase_misfit(tracks), 0)
+
+
+#: Misfit ratios of a second minimum well inside and well outside Fisher's 95 % F
+#: quantile for 15 and 15 degrees of freedom (2.40) [1].
+RIVAL_RATIO_AMBIGUOUS, RIVAL_RATIO_CLEAR = 1.2, 4.0
+
+
+@pytest.mark.parametrize("ratio", [RIVAL_RATIO_AMBIGUOUS, RIVAL_RATIO_CLEAR])
+def test_a_second_minimum_as_good_as_the_best_is_warned_and_stated(ratio):
+    """Misfit over the grid: a parabola about +3 ms and a second well at -2.5 ms whose
+    floor is ``ratio`` times the best (15 degrees of freedom each): the best offset is
+    kept; an ambiguous rival is warned and its distance, 5.5 ms, joins the stated
+    spread in quadrature."""
+    grid = np.arange(-10e-3, 10.01e-3, 0.5e-3)
+    best, rival, floor = 3e-3, -2.5e-3, 6.0
+    cost = np.minimum(floor + 1e7 * (grid - best) ** 2, ratio * floor + 1e7 * (grid - rival) ** 2)
+    misfits = [Misfit(float(c), 15) for c in cost]
+    ph = _phases()
+    imu_t, tracks = _record(OFFSET, ph)
+    plain = fit_clock(tracks, imu_time=imu_t, time_offset=OFFSET, interval=INTERVAL)
+    if ratio == RIVAL_RATIO_CLEAR:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CompensationWarning)
+            found, fit = coarse_offset(grid, misfits, fit_clock)
+        assert found == pytest.approx(best) and fit is fit_clock
+        return
+    with pytest.warns(CompensationWarning, match="ambiguous.*time sync"):
+        found, fit = coarse_offset(grid, misfits, fit_clock)
+    assert found == pytest.approx(best)
+    est = fit(tracks, imu_time=imu_t, time_offset=OFFSET, interval=INTERVAL)
+    assert est.offset == plain.offset
+    assert est.stamp_sigma == pytest.approx(np.hypot(plain.stamp_sigma, best - rival))
