@@ -29,7 +29,7 @@ from functools import partial
 import numpy as np
 
 from ._checks import finite_array, positive
-from .clock_averaged import clock_misfit, coarse_offset, fit_clock
+from .clock_averaged import SEARCH_FRAMES_AVERAGED, clock_misfit, coarse_offset, fit_clock
 from .clock_offset import ClockOffset, phase_tracks
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
 from .elevation import measure_elevation, vertical_baseline
@@ -632,7 +632,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     if "time_offset" in estimate and offset_search > 0:
         grid = tau + np.arange(-offset_search, offset_search + OFFSET_SEARCH_STEP / 2,
                                OFFSET_SEARCH_STEP)
-        few = slice(0, SEARCH_FRAMES)
+        few = slice(0, SEARCH_FRAMES_AVERAGED if imu_interval > 0 else SEARCH_FRAMES)
         def misfit(cand):
             ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand, **options)
             y = _beams(rcs[few], positions, ms := seen(ms), scatterers, proj)

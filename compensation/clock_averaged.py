@@ -41,9 +41,10 @@ instead (the mean square of the constant-free ``z``), whose minimum the aliasing
 does not move. A 13.2 ms frame spans two 5 ms intervals at about two thirds of
 the offsets; elsewhere the intervals are placed at the nearest offset where they
 do (:func:`placement_lag`). Two intervals a track leave one constant-free row per
-scatterer and frame, so a second minimum can fit about as well: on one of four
-flights (seed 0) one 2.5 ms from the truth fitted better (6.05 against 6.91
-rad^2/s^2, 15 degrees of freedom each). Where another local minimum's misfit is
+scatterer and frame, so a second minimum can fit about as well: over three frames
+of one of six flights (seed 0) one 2.5 ms from the truth fitted better (6.05
+against 6.91 rad^2/s^2, 15 degrees of freedom each), hence
+:data:`SEARCH_FRAMES_AVERAGED`. Where another local minimum's misfit is
 within the :data:`AMBIGUITY_LEVEL` quantile of Fisher's F distribution of the
 best one's (both mean squares of residuals, with their degrees of freedom),
 :func:`coarse_offset` keeps the best, states the distance to the other as a
@@ -104,6 +105,10 @@ RATE_FIT_HALF_WIDTH = 6
 PLACEMENT_SIGMA_FRACTION = 1.0 / 16.0
 #: Steps per half interval of the search for a placement spanning two intervals [1].
 LAG_STEPS = 50
+#: Frames of the coarse search over an averaged log (the first ones) [1]: each gives one
+#: constant-free row per scatterer at 200 Hz (two 5 ms intervals a frame); with three a
+#: second minimum fitted about as well on two of six simulated flights, with four on one.
+SEARCH_FRAMES_AVERAGED = 4
 #: Quantile of F below which another minimum's misfit ratio leaves the offset ambiguous [1].
 AMBIGUITY_LEVEL = 0.95
 #: Least distance of another minimum from the best one to count as a second offset [s]:
@@ -354,8 +359,9 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
     grid : array_like, shape ``[offset]``
         Offsets tried, increasing [s].
     misfits : sequence of Misfit, length ``offset``
-        Cost of each (:func:`clock_misfit`); those of no
-        degrees of freedom (per-chirp misfits) are not tested for ambiguity.
+        Cost of each (:func:`clock_misfit`). Per-chirp misfits (no degrees of
+        freedom) are not tested for ambiguity, and are passed over where some
+        offsets have interval misfits.
     fit : callable
         The clock fit (:func:`fit_clock` with its log).
 
@@ -371,8 +377,11 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
     if grid.ndim != 1 or grid.size != len(misfits) or grid.size == 0:
         raise ValueError(f"grid of shape {grid.shape} and {len(misfits)} misfits: expected "
                          "one misfit per offset, at least one")
-    cost = np.array([m.cost for m in misfits], dtype=float)
     dof = np.array([m.dof for m in misfits])
+    # interval misfits [rad^2/s^2] and per-chirp ones [rad^2] do not compare: where the
+    # frames span two intervals at some offsets only, those offsets alone
+    cost = np.array([m.cost if m.dof > 0 or not dof.any() else np.inf for m in misfits],
+                    dtype=float)
     best = int(np.argmin(cost))
     if grid.size < 3 or dof[best] <= 0:
         return float(grid[best]), fit

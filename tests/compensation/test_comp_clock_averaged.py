@@ -234,3 +234,15 @@ def test_a_second_minimum_as_good_as_the_best_is_warned_and_stated(ratio):
     est = fit(tracks, imu_time=imu_t, time_offset=OFFSET, interval=INTERVAL)
     assert est.offset == plain.offset
     assert est.stamp_sigma == pytest.approx(np.hypot(plain.stamp_sigma, best - rival))
+
+
+def test_per_chirp_misfits_are_passed_over_where_interval_misfits_exist():
+    """Misfits of the two kinds do not compare (rad^2 against rad^2/s^2): the offsets
+    whose frames span two intervals alone are searched, those that do not are not."""
+    grid = np.array([-1e-3, 0.0, 1e-3, 2e-3])
+    misfits = [Misfit(1e-4, 0), Misfit(9.0, 15), Misfit(4.0, 15), Misfit(2e-4, 0)]
+    assert coarse_offset(grid, misfits, fit_clock) == (1e-3, fit_clock)
+    # per-chirp misfits alone: their least
+    assert coarse_offset(grid, [Misfit(c, 0) for c in (3.0, 1.0, 2.0, 4.0)], fit_clock)[0] == 0.0
+    with pytest.raises(ValueError, match="one misfit per offset"):
+        coarse_offset(grid, misfits[:3], fit_clock)
