@@ -29,8 +29,8 @@ from functools import partial
 import numpy as np
 
 from ._checks import finite_array, positive
-from .clock_averaged import fit_clock
-from .clock_offset import ClockOffset, phase_misfit, phase_tracks
+from .clock_averaged import SEARCH_FRAMES_AVERAGED, clock_misfit, coarse_offset, fit_clock
+from .clock_offset import ClockOffset, phase_tracks
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
 from .elevation import measure_elevation, vertical_baseline
 from .exact import rigid_body_projection
@@ -632,12 +632,12 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     if "time_offset" in estimate and offset_search > 0:
         grid = tau + np.arange(-offset_search, offset_search + OFFSET_SEARCH_STEP / 2,
                                OFFSET_SEARCH_STEP)
-        cost, few = [], slice(0, SEARCH_FRAMES)
-        for cand in grid:
+        few = slice(0, SEARCH_FRAMES_AVERAGED if imu_interval > 0 else SEARCH_FRAMES)
+        def misfit(cand):
             ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand, **options)
-            y = _beams(rcs[few], positions, seen(ms), scatterers, proj)
-            cost.append(phase_misfit(phase_tracks(y, seen(ms), scatterers, lam)))
-        tau = float(grid[int(np.argmin(cost))])
+            y = _beams(rcs[few], positions, ms := seen(ms), scatterers, proj)
+            return clock_misfit(phase_tracks(y, ms, scatterers, lam), imu_time, cand, imu_interval)
+        tau, clock_fit = coarse_offset(grid, [misfit(c) for c in grid], clock_fit)   # warned
         motions = integrate()
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):
         if "time_offset" in estimate:

@@ -29,6 +29,28 @@ way it does out of the log, so the fit has no model error of that kind, and
 ``g`` is the full vibration, which makes the offset observable to tens of
 microseconds.
 
+Coarse search
+-------------
+The linearised fits reach about a quarter of the vibration period (1 ms); a grid
+of misfits over +- 10 ms brings the offset within that reach first. The
+per-chirp phase misfit (:func:`compensation.clock_offset.phase_misfit`) compares
+the radar with the spline through the averages, and a 200 Hz log aliases the
+80-160 Hz vibration (folded to 40-100 Hz): on the simulated 200 Hz flights its
+minimum lay 6-10 ms from the truth. :func:`clock_misfit` compares interval means
+instead (the mean square of the constant-free ``z``), whose minimum the aliasing
+does not move. A 13.2 ms frame spans two 5 ms intervals at about two thirds of
+the offsets; elsewhere the intervals are placed at the nearest offset where they
+do (:func:`placement_lag`). Two intervals a track leave one constant-free row per
+scatterer and frame, so a second minimum can fit about as well: over three frames
+of one of six flights (seed 0) one 2.5 ms from the truth fitted better (6.05
+against 6.91 rad^2/s^2, 15 degrees of freedom each), hence
+:data:`SEARCH_FRAMES_AVERAGED`. Where another local minimum's misfit is
+within the :data:`AMBIGUITY_LEVEL` quantile of Fisher's F distribution of the
+best one's (both mean squares of residuals, with their degrees of freedom),
+:func:`coarse_offset` keeps the best, states the distance to the other as a
+spread of the offset and warns (a time sync, ``--time-offset``, removes it:
+docs/recordings.md).
+
 What it cannot observe
 ----------------------
 * The placement of the averaging window within the interval: the log's stamp
@@ -46,22 +68,28 @@ What it cannot observe
   the 250 Hz test flights the refit after the radar-inertial estimate, biases
   corrected, moved the offset by at most 3 us, seeds 0 and 2).
 * A track shorter than one interval gives nothing; a frame shorter than two gives
-  no constant-free information (the per-track constant takes it): where no frame
-  spans two (a 200 Hz log's 5 ms intervals against a shorter frame), :func:`fit_clock`
-  falls back to the per-chirp fit, warned, and states
+  no constant-free information (the per-track constant takes it). Where a frame
+  spans two only at another placement (a 200 Hz log's 5 ms intervals against a
+  13.2 ms frame) the fit is linearised about the nearest placement that does
+  (:func:`placement_lag`); where none does at any placement (an 8 ms interval),
+  :func:`fit_clock` falls back to the per-chirp fit, warned, and states
   :data:`PER_CHIRP_SIGMA_FRACTION` of the interval for the averaging's bias.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable, Sequence
 from dataclasses import replace
+from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+from scipy.stats import f as fisher_f
 
 from ._checks import finite_array, positive
-from .clock_offset import ClockOffset, fit_time_shift, track_arrays
+from .clock_offset import ClockOffset, fit_time_shift, phase_misfit, track_arrays
 from .guards import CompensationWarning
 
 #: Share of the averaging interval stated for the placement when no frame spans two
@@ -75,6 +103,17 @@ RATE_FIT_HALF_WIDTH = 6
 #: the log does not state [1] (the plain mean of 8 instantaneous samples is centred 1/16
 #: of the interval late).
 PLACEMENT_SIGMA_FRACTION = 1.0 / 16.0
+#: Steps per half interval of the search for a placement spanning two intervals [1].
+LAG_STEPS = 50
+#: Frames of the coarse search over an averaged log (the first ones) [1]: each gives one
+#: constant-free row per scatterer at 200 Hz (two 5 ms intervals a frame); with three a
+#: second minimum fitted about as well on two of six simulated flights, with four on one.
+SEARCH_FRAMES_AVERAGED = 4
+#: Quantile of F below which another minimum's misfit ratio leaves the offset ambiguous [1].
+AMBIGUITY_LEVEL = 0.95
+#: Least distance of another minimum from the best one to count as a second offset [s]:
+#: within it the linearised fits move the offset themselves (their reach).
+AMBIGUITY_MIN_SEPARATION = 1e-3
 
 
 def _rate(t: np.ndarray, phi: np.ndarray, tq: float) -> float:
@@ -86,14 +125,44 @@ def _rate(t: np.ndarray, phi: np.ndarray, tq: float) -> float:
     return float(c[1])
 
 
-def _intervals_within(t: np.ndarray, knots: np.ndarray, interval: float) -> int:
+def _within(t: np.ndarray, knots: np.ndarray, interval: float, lag: float) -> np.ndarray:
+    """Which intervals, placed ``lag`` earlier than ``knots``, lie within the chirp times
+    ``t``, their middles' ``knots`` too [sample]."""
+    x = knots - lag
+    return ((x - interval / 2 >= t[0]) & (x + interval / 2 <= t[-1]) & (knots >= t[0])
+            & (knots <= t[-1]))
+
+
+def _intervals_within(t: np.ndarray, knots: np.ndarray, interval: float,
+                      lag: float = 0.0) -> int:
     """How many whole averaging intervals lie within the chirp times ``t`` [1]."""
     if t.size < 2 * RATE_FIT_HALF_WIDTH:
         return 0
-    return int(np.count_nonzero((knots - interval / 2 >= t[0]) & (knots + interval / 2 <= t[-1])))
+    return int(np.count_nonzero(_within(t, knots, interval, lag)))
 
 
-def interval_rows(t, phi, r, knots, interval: float) -> tuple[np.ndarray, np.ndarray]:
+def placement_lag(tracks, knots, interval: float) -> float | None:
+    """Smallest shift [s] of the intervals' placement at which the most tracks span two,
+    or None where none does at any shift.
+
+    Where the frames span two intervals only at another offset than the one the
+    tracks were compensated with (a 200 Hz log's 5 ms intervals against a 13 ms
+    frame: about a third of the offsets), the radar's mean rate over the intervals
+    so placed is compared with the log's averages (the predicted rate at the
+    knots used): the fit is linearised about the shifted placement instead.
+    """
+    knots = np.sort(finite_array("knots", knots, ndim=1))
+    times = [track_arrays(i, item)[0] for i, item in enumerate(tracks)]
+    steps = np.arange(0.0, interval / 2 + interval / LAG_STEPS / 2, interval / LAG_STEPS)
+    lags = np.ravel(np.column_stack([steps, -steps]))
+    spanning = [sum(_intervals_within(t, knots, interval, lag) >= 2 for t in times)
+                for lag in lags]
+    # the most tracks (stamp jitter may leave a frame out), then the nearest placement
+    return float(lags[int(np.argmax(spanning))]) if max(spanning) > 0 else None
+
+
+def interval_rows(t, phi, r, knots, interval: float,
+                  lag: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """``z [k]`` [rad/s] and ``g [k]`` [rad/s^2] of one track over the log intervals within it.
 
     Parameters
@@ -108,21 +177,88 @@ def interval_rows(t, phi, r, knots, interval: float) -> tuple[np.ndarray, np.nda
         Middles of the log's averaging intervals on the radar clock [s].
     interval : float
         Averaging interval ``T`` [s].
+    lag : float
+        The radar's intervals are placed ``lag`` earlier than ``knots`` [s] (the
+        log's values still read at ``knots``): ``z = c + (delta - lag) g``.
     """
-    x = knots[(knots - interval / 2 >= t[0]) & (knots + interval / 2 <= t[-1])]
-    if x.size == 0 or t.size < 2 * RATE_FIT_HALF_WIDTH:
+    keep = _within(t, knots, interval, lag)
+    if not keep.any() or t.size < 2 * RATE_FIT_HALF_WIDTH:
         return np.empty(0), np.empty(0)
     ps, rs = CubicSpline(t, phi), CubicSpline(t, r)
     z, g = [], []
-    for xk in x:
-        bm, bp = xk - interval / 2, xk + interval / 2
+    for xk in knots[keep]:
+        bm, bp = xk - lag - interval / 2, xk - lag + interval / 2
         z.append((ps(bp) - ps(bm)) / interval + rs.integrate(bm, bp) / interval - rs(xk))
         vm, vp = _rate(t, phi, bm) + rs(bm), _rate(t, phi, bp) + rs(bp)
         g.append((vp - vm) / interval)
     return np.asarray(z, dtype=float), np.asarray(g, dtype=float)
 
 
-def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
+def _constant_free_rows(tracks, knots, interval: float, lag: float):
+    """``z`` and ``g`` of every track spanning two intervals, less each track's mean, and
+    the frame (first chirp time) of each row; the number of tracks."""
+    zs, gs, frame = [], [], []
+    starts: dict = {}
+    for i, item in enumerate(tracks):
+        t, phi, r, _ = track_arrays(i, item)
+        if phi.shape != t.shape or r.shape != t.shape or t.ndim != 1:
+            raise ValueError(f"tracks[{i}]: phase and rate must have the shape of times "
+                             f"{t.shape}, got {phi.shape} and {r.shape}")
+        z, g = interval_rows(t, phi, r, knots, interval, lag)
+        if z.size < 2:
+            continue
+        # remove the track's constant: its velocity error and unwrapping Doppler
+        zs.append(z - z.mean())
+        gs.append(g - g.mean())
+        frame.append(np.full(z.size, starts.setdefault(round(float(t[0]), 9), len(starts))))
+    if not zs:
+        raise ValueError(f"tracks: no track spans two averaging intervals of {interval:g} s; "
+                         "the clock offset is unobservable from these intervals")
+    return np.concatenate(zs), np.concatenate(gs), np.concatenate(frame), len(zs)
+
+
+class Misfit(NamedTuple):
+    """Cost of one offset of the coarse search and its degrees of freedom."""
+
+    #: Mean square [rad^2/s^2 for interval means, rad^2 per chirp].
+    cost: float
+    #: Rows less the constants fitted [1]; 0 for the per-chirp phase misfit (its
+    #: residuals correlate along a track: no count of independent rows).
+    dof: int
+
+
+def interval_misfit(tracks, knots, interval: float, lag: float = 0.0) -> Misfit:
+    """Mean square of the radar's mean phase rate over the log's intervals less the log's,
+    about a constant per track [rad^2/s^2]: the cost of a coarse offset search.
+
+    Unlike :func:`compensation.clock_offset.phase_misfit` it compares like with like
+    (interval means), so the vibration a 200 Hz log aliases does not move its minimum.
+    Arguments as for :func:`fit_time_shift_averaged`; ``lag`` as for
+    :func:`interval_rows`. Raises a ValueError where no track spans two intervals.
+    """
+    z, _, _, tracks_used = _constant_free_rows(tracks, np.sort(np.asarray(knots, dtype=float)),
+                                               interval, lag)
+    dof = z.size - tracks_used
+    return Misfit(float(z @ z) / max(dof, 1), dof)
+
+
+def clock_misfit(tracks, imu_time, time_offset: float, interval: float = 0.0) -> Misfit:
+    """Cost of the coarse offset search at ``time_offset`` [s] (the tracks' offset).
+
+    :func:`interval_misfit` for a log of averages (at the nearest placement spanning
+    two intervals, :func:`placement_lag`); the per-chirp
+    :func:`compensation.clock_offset.phase_misfit` for instantaneous samples or frames
+    shorter than two intervals. Not comparable between the two kinds.
+    """
+    if interval > 0:
+        knots = np.asarray(imu_time, dtype=float) - float(time_offset)
+        lag = placement_lag(tracks, knots, interval)
+        if lag is not None:
+            return interval_misfit(tracks, knots, interval, lag)
+    return Misfit(phase_misfit(tracks), 0)
+
+
+def fit_time_shift_averaged(tracks, knots, interval: float, lag: float = 0.0) -> ClockOffset:
     """Time shift of a log of interval averages, from the radar's mean rates over them.
 
     Parameters
@@ -135,6 +271,9 @@ def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
         sample times less the offset used) [s].
     interval : float
         Averaging interval of each sample ``T`` [s].
+    lag : float
+        Shift of the radar's intervals [s] (:func:`interval_rows`; the fit is
+        linearised about the offset used plus ``lag``).
 
     Returns
     -------
@@ -154,43 +293,25 @@ def fit_time_shift_averaged(tracks, knots, interval: float) -> ClockOffset:
     """
     knots = np.sort(finite_array("knots", knots, ndim=1))
     interval = positive("interval", interval)
-    zs, gs, group, frame = [], [], [], []
-    starts: dict = {}
-    for i, item in enumerate(tracks):
-        t, phi, r, _ = track_arrays(i, item)
-        if phi.shape != t.shape or r.shape != t.shape or t.ndim != 1:
-            raise ValueError(f"tracks[{i}]: phase and rate must have the shape of times "
-                             f"{t.shape}, got {phi.shape} and {r.shape}")
-        z, g = interval_rows(t, phi, r, knots, interval)
-        if z.size < 2:
-            continue
-        # remove the track's constant: its velocity error and unwrapping Doppler
-        zs.append(z - z.mean())
-        gs.append(g - g.mean())
-        group.append(np.full(z.size, i))
-        frame.append(np.full(z.size, starts.setdefault(round(float(t[0]), 9), len(starts))))
-    if not zs:
-        raise ValueError(f"tracks: no track spans two averaging intervals of {interval:g} s; "
-                         "the clock offset is unobservable from these intervals")
-    z, g, frame = np.concatenate(zs), np.concatenate(gs), np.concatenate(frame)
+    z, g, frame, tracks_used = _constant_free_rows(tracks, knots, interval, float(lag))
     gg = float(g @ g)
     if gg <= 0:
         raise ValueError("the radar's phase acceleration is the same over every interval: "
                          "the clock offset is unobservable")
     delta = float(g @ z) / gg
     res = z - delta * g
-    dof = max(z.size - len(zs) - 1, 1)
+    dof = max(z.size - tracks_used - 1, 1)
     var = float(res @ res) / dof / gg
     clusters = np.unique(frame)
     if clusters.size > 1:
         score = np.array([g[frame == f] @ res[frame == f] for f in clusters])
         var = max(var, float(score @ score) / gg ** 2 * clusters.size / (clusters.size - 1))
-    return ClockOffset(delta, float(np.sqrt(var)),
+    return ClockOffset(delta + float(lag), float(np.sqrt(var)),
                        stamp_sigma=PLACEMENT_SIGMA_FRACTION * interval)
 
 
 def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
-              drift: bool = False) -> ClockOffset:
+              drift: bool = False, ambiguity: float = 0.0) -> ClockOffset:
     """The clock-offset fit for the log: over its intervals when averaged, else per chirp.
 
     ``imu_time [sample]`` [s, IMU clock] and ``time_offset`` [s] (the one the
@@ -199,7 +320,9 @@ def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
     (:func:`compensation.clock_offset.fit_time_shift`, ``drift`` as there). The
     placement of the samples in time is stated apart (``stamp_sigma``):
     :data:`PLACEMENT_SIGMA_FRACTION` of the interval, or of the sample period (the
-    median step of ``imu_time``) for instantaneous samples.
+    median step of ``imu_time``) for instantaneous samples. ``ambiguity`` [s] joins it
+    in quadrature: the distance to another offset the data fit about as well
+    (:func:`coarse_offset`).
     """
     interval = float(finite_array("interval", interval, shape=()))
     if interval < 0:
@@ -207,20 +330,77 @@ def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
                          "each IMU sample, >= 0 (0: instantaneous samples)")
     if interval > 0:
         knots = np.asarray(imu_time, dtype=float) - float(time_offset)
-        if any(_intervals_within(track_arrays(i, item)[0], knots, interval) >= 2
-               for i, item in enumerate(tracks)):
-            return fit_time_shift_averaged(tracks, knots, interval)
-        # Frames shorter than two intervals (a 200 Hz log's 5 ms against an 8 ms frame):
+        lag = placement_lag(tracks, knots, interval)
+        if lag is not None:
+            fit = fit_time_shift_averaged(tracks, knots, interval, lag)
+            return replace(fit, stamp_sigma=float(np.hypot(fit.stamp_sigma, ambiguity)))
+        # Frames shorter than two intervals (an 8 ms interval against a 13 ms frame):
         # the per-chirp fit, its bias by the averaging stated as a share of the interval.
         warnings.warn(f"clock: no frame spans two of the log's {1e3 * interval:.3g} ms "
                       f"averaging intervals; the offset is fitted per chirp against the "
                       f"averages and its spread states {PER_CHIRP_SIGMA_FRACTION:g} of the "
-                      f"interval for their bias", CompensationWarning, stacklevel=2)
+                      f"interval for their bias (the offset from a time sync, --time-offset, "
+                      f"docs/recordings.md, avoids it)", CompensationWarning, stacklevel=2)
         return replace(fit_time_shift(tracks, drift=drift),
-                       stamp_sigma=PER_CHIRP_SIGMA_FRACTION * interval)
+                       stamp_sigma=float(np.hypot(PER_CHIRP_SIGMA_FRACTION * interval, ambiguity)))
     # Instantaneous samples: where within its sample period each was taken (the sensor's
     # filter delay, the driver's stamp) is not stated either; the same share of the period.
     t = np.asarray(imu_time, dtype=float)
     period = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     return replace(fit_time_shift(tracks, drift=drift),
-                   stamp_sigma=PLACEMENT_SIGMA_FRACTION * period)
+                   stamp_sigma=float(np.hypot(PLACEMENT_SIGMA_FRACTION * period, ambiguity)))
+
+
+def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float, Callable]:
+    """The grid offset of least misfit, and the clock fit stating an ambiguity if any.
+
+    Parameters
+    ----------
+    grid : array_like, shape ``[offset]``
+        Offsets tried, increasing [s].
+    misfits : sequence of Misfit, length ``offset``
+        Cost of each (:func:`clock_misfit`). Per-chirp misfits (no degrees of
+        freedom) are not tested for ambiguity, and are passed over where some
+        offsets have interval misfits.
+    fit : callable
+        The clock fit (:func:`fit_clock` with its log).
+
+    Returns
+    -------
+    offset : float
+        [s].
+    fit : callable
+        ``fit``, with ``ambiguity`` (the distance to the other offset [s]) where the
+        misfits do not tell the best offset from another local minimum (warned).
+    """
+    grid = np.asarray(grid, dtype=float)
+    if grid.ndim != 1 or grid.size != len(misfits) or grid.size == 0:
+        raise ValueError(f"grid of shape {grid.shape} and {len(misfits)} misfits: expected "
+                         "one misfit per offset, at least one")
+    dof = np.array([m.dof for m in misfits])
+    # interval misfits [rad^2/s^2] and per-chirp ones [rad^2] do not compare: where the
+    # frames span two intervals at some offsets only, those offsets alone
+    cost = np.array([m.cost if m.dof > 0 or not dof.any() else np.inf for m in misfits],
+                    dtype=float)
+    best = int(np.argmin(cost))
+    if grid.size < 3 or dof[best] <= 0:
+        return float(grid[best]), fit
+    padded = np.concatenate([[np.inf], cost, [np.inf]])
+    local = (cost <= padded[:-2]) & (cost <= padded[2:]) & (dof > 0)
+    far = np.abs(grid - grid[best]) > AMBIGUITY_MIN_SEPARATION
+    rivals = np.flatnonzero(local & far)
+    if rivals.size == 0:
+        return float(grid[best]), fit
+    other = int(rivals[np.argmin(cost[rivals])])
+    ratio = cost[other] / cost[best]
+    limit = float(fisher_f.ppf(AMBIGUITY_LEVEL, dof[other], dof[best]))
+    if ratio >= limit:
+        return float(grid[best]), fit
+    gap = abs(float(grid[other] - grid[best]))
+    warnings.warn(f"clock: the radar fits offsets {1e3 * grid[best]:+.2f} ms and "
+                  f"{1e3 * grid[other]:+.2f} ms about as well (misfit ratio {ratio:.2f}, "
+                  f"below {limit:.2f}, the {AMBIGUITY_LEVEL:g} quantile of F): the log's "
+                  f"averages leave the offset ambiguous; the first is kept and its spread "
+                  f"states {1e3 * gap:.2f} ms; give the offset from a time sync "
+                  f"(--time-offset, docs/recordings.md)", CompensationWarning, stacklevel=2)
+    return float(grid[best]), partial(fit, ambiguity=gap)

@@ -127,3 +127,24 @@ def test_single_point_target_offset_found_by_the_coarse_search():
     assert leak <= LEAKAGE_MAX_DB
     assert ang <= ANGLE_TOL_DEG
     assert abs(res.time_offset - OFFSET_S) <= OFFSET_TOL_S
+
+
+def test_the_clock_fits_warnings_reach_the_report():
+    """A log said to average over a whole frame: no frame spans two of its intervals,
+    so the clock is fitted per chirp, warned; the warning is in the report's
+    ``warnings`` (the store's), not only on stderr."""
+    import pytest
+
+    from compensation.guards import CompensationWarning
+
+    target = ((12.0, 20.0, -10.0),)
+    traj, frames, imu = _flight(seed=1, frames=1, targets=target)
+    gate = int(np.argmin(np.abs(CFG.range_axis() - target[0][0])))
+    whole_frame = CFG.num_chirps * CFG.chirp_interval
+    with pytest.warns(CompensationWarning, match="no frame spans two"):
+        cal = calibrate_frames(frames, imu.time, imu.gyro, imu.accel, trajectory=traj,
+                               estimate=("time_offset",), imu_grade="consumer_mems",
+                               scatterers=[Scatterer(gate, np.deg2rad(20.0),
+                                                     np.deg2rad(-10.0))],
+                               lever_arm=LEVER, imu_interval=whole_frame, offset_search=0.0)
+    assert any(w.startswith("clock: no frame spans two") for w in cal.report["warnings"])

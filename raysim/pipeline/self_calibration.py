@@ -11,6 +11,7 @@ result into the motion the chains use and a report with units.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -133,6 +134,7 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
     """
     from compensation import PlatformMotion
     from compensation.calibration import ESTIMATES, self_calibrate
+    from compensation.guards import CompensationWarning
 
     if len(rcs) < 1 or len(rcs) != len(frame_times):
         raise ValueError(f"rcs holds {len(rcs)} frames and frame_times {len(frame_times)}; "
@@ -156,10 +158,17 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
     if estimate is None:
         estimate = ESTIMATES if len(rcs) > 1 else tuple(e for e in ESTIMATES
                                                         if e != "gyro_bias")
-    res = self_calibrate(list(rcs), times, element_positions, imu_time, gyro, accel,
-                         wavelength=wavelength, range_axis=range_axis,
-                         estimate=tuple(estimate), time_offset=time_offset,
-                         reference_time=t0, attitude_given=bool(attitude_given), **options)
+    with warnings.catch_warnings(record=True) as caught:   # kept for the report, shown below
+        warnings.simplefilter("always")
+        res = self_calibrate(list(rcs), times, element_positions, imu_time, gyro, accel,
+                             wavelength=wavelength, range_axis=range_axis,
+                             estimate=tuple(estimate), time_offset=time_offset,
+                             reference_time=t0, attitude_given=bool(attitude_given), **options)
+    shown: dict = {}
+    for w in caught:
+        shown.setdefault((w.category, str(w.message)), w)
+    for w in shown.values():
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     ms = res.motions
     motion = PlatformMotion(np.concatenate([m.time for m in ms]),
                             np.concatenate([m.attitude for m in ms]),
@@ -168,6 +177,9 @@ def calibrate_record(rcs: Sequence, frame_times: Sequence, element_positions, im
                             np.concatenate([m.angular_rate for m in ms]), ms[0].lever_arm,
                             ms[0].warnings)
     report = res.report()
+    # the fits' own warnings (the clock's per-chirp fallback or ambiguity) join the report
+    report["warnings"] = list(dict.fromkeys([*report.get("warnings", ()), *(
+        text for cat, text in shown if issubclass(cat, CompensationWarning))]))
     if ground_doppler and "velocity" in estimate and not any(
             "ground scatterers" in n for n in report["notes"]):
         report["notes"].append("velocity: Doppler of 0 ground scatterers (no dense ground point "

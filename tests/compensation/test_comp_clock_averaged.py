@@ -9,6 +9,8 @@ the compensated phase is the spline's antiderivative.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
@@ -16,10 +18,13 @@ from scipy.interpolate import CubicSpline
 from compensation.clock_averaged import (
     PER_CHIRP_SIGMA_FRACTION,
     PLACEMENT_SIGMA_FRACTION,
+    Misfit,
+    clock_misfit,
+    coarse_offset,
     fit_clock,
     fit_time_shift_averaged,
 )
-from compensation.clock_offset import fit_time_shift
+from compensation.clock_offset import fit_time_shift, phase_misfit
 from compensation.guards import CompensationWarning
 
 #: Wavelength [m], averaging interval [s], true IMU-minus-radar offset [s].
@@ -150,3 +155,94 @@ def test_frames_shorter_than_two_intervals_fall_back_to_the_per_chirp_fit(seed):
     assert est.stamp_sigma == PER_CHIRP_SIGMA_FRACTION * LONG_INTERVAL
     assert est.offset == fit_time_shift(tracks).offset
     assert abs(est.offset) <= FALLBACK_SIGMAS * est.total_sigma
+
+
+#: A 200 Hz log's averaging interval [s]: a 13.2 ms frame spans two only at about two
+#: thirds of the offsets (all frames 50 ms apart share that placement).
+INTERVAL_200HZ = 5e-3
+#: Start error at which no frame spans two 5 ms intervals [s].
+UNSPANNED_START_S = -1.0e-3
+#: Grid of the coarse offset search about the truth [s] (the calibration's step).
+COARSE_GRID_S = np.arange(-6e-3, 6.1e-3, 0.5e-3)
+#: Least error of the per-chirp misfit's minimum on the seed-2 tracks [s]: the aliased
+#: vibration moves it by a whole vibration period.
+PHASE_MISFIT_MIN_ERROR_S = 2e-3
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_frame_that_spans_two_intervals_only_at_a_nearby_offset_is_fitted_there(seed):
+    """At the start offset no frame spans two 5 ms intervals (the per-chirp fallback
+    moved it by 0.5-0.9 ms the wrong way): the intervals placed at the nearest offset
+    where they fit give the offset to within the fit's three sigma, then exactly."""
+    ph, tau = _phases(seed), OFFSET + UNSPANNED_START_S
+    for one_pass in range(2):
+        imu_t, tracks = _record(tau, ph, INTERVAL_200HZ)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CompensationWarning)    # no per-chirp fallback
+            est = fit_clock(tracks, imu_time=imu_t, time_offset=tau, interval=INTERVAL_200HZ)
+        tau += est.offset
+        assert abs(tau - OFFSET) <= 3 * est.offset_sigma + (EXACT_TOL_S if one_pass else 0.0)
+    assert abs(tau - OFFSET) <= EXACT_TOL_S
+
+
+def test_the_coarse_search_over_interval_means_is_not_moved_by_aliased_vibration():
+    """The 124-171 Hz vibration through a 200 Hz log: the per-chirp phase misfit's
+    minimum lies a vibration period off; the interval-mean misfit's at the truth, with
+    no other minimum as good (no ambiguity warned, the fit unchanged)."""
+    ph = _phases(2)
+    interval_cost, phase_cost = [], []
+    for d in COARSE_GRID_S:
+        imu_t, tracks = _record(OFFSET + d, ph, INTERVAL_200HZ)
+        interval_cost.append(clock_misfit(tracks, imu_t, OFFSET + d, INTERVAL_200HZ))
+        phase_cost.append(phase_misfit(tracks))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CompensationWarning)
+        found, fit = coarse_offset(OFFSET + COARSE_GRID_S, interval_cost, fit_clock)
+    assert found == pytest.approx(OFFSET, abs=EXACT_TOL_S) and fit is fit_clock
+    assert abs(COARSE_GRID_S[int(np.argmin(phase_cost))]) >= PHASE_MISFIT_MIN_ERROR_S
+    # instantaneous samples keep the per-chirp misfit (no degrees of freedom counted)
+    assert clock_misfit(tracks, imu_t, OFFSET, 0.0) == (phase_misfit(tracks), 0)
+
+
+#: Misfit ratios of a second minimum well inside and well outside Fisher's 95 % F
+#: quantile for 15 and 15 degrees of freedom (2.40) [1].
+RIVAL_RATIO_AMBIGUOUS, RIVAL_RATIO_CLEAR = 1.2, 4.0
+
+
+@pytest.mark.parametrize("ratio", [RIVAL_RATIO_AMBIGUOUS, RIVAL_RATIO_CLEAR])
+def test_a_second_minimum_as_good_as_the_best_is_warned_and_stated(ratio):
+    """Misfit over the grid: a parabola about +3 ms and a second well at -2.5 ms whose
+    floor is ``ratio`` times the best (15 degrees of freedom each): the best offset is
+    kept; an ambiguous rival is warned and its distance, 5.5 ms, joins the stated
+    spread in quadrature."""
+    grid = np.arange(-10e-3, 10.01e-3, 0.5e-3)
+    best, rival, floor = 3e-3, -2.5e-3, 6.0
+    cost = np.minimum(floor + 1e7 * (grid - best) ** 2, ratio * floor + 1e7 * (grid - rival) ** 2)
+    misfits = [Misfit(float(c), 15) for c in cost]
+    ph = _phases()
+    imu_t, tracks = _record(OFFSET, ph)
+    plain = fit_clock(tracks, imu_time=imu_t, time_offset=OFFSET, interval=INTERVAL)
+    if ratio == RIVAL_RATIO_CLEAR:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CompensationWarning)
+            found, fit = coarse_offset(grid, misfits, fit_clock)
+        assert found == pytest.approx(best) and fit is fit_clock
+        return
+    with pytest.warns(CompensationWarning, match="ambiguous.*time sync"):
+        found, fit = coarse_offset(grid, misfits, fit_clock)
+    assert found == pytest.approx(best)
+    est = fit(tracks, imu_time=imu_t, time_offset=OFFSET, interval=INTERVAL)
+    assert est.offset == plain.offset
+    assert est.stamp_sigma == pytest.approx(np.hypot(plain.stamp_sigma, best - rival))
+
+
+def test_per_chirp_misfits_are_passed_over_where_interval_misfits_exist():
+    """Misfits of the two kinds do not compare (rad^2 against rad^2/s^2): the offsets
+    whose frames span two intervals alone are searched, those that do not are not."""
+    grid = np.array([-1e-3, 0.0, 1e-3, 2e-3])
+    misfits = [Misfit(1e-4, 0), Misfit(9.0, 15), Misfit(4.0, 15), Misfit(2e-4, 0)]
+    assert coarse_offset(grid, misfits, fit_clock) == (1e-3, fit_clock)
+    # per-chirp misfits alone: their least
+    assert coarse_offset(grid, [Misfit(c, 0) for c in (3.0, 1.0, 2.0, 4.0)], fit_clock)[0] == 0.0
+    with pytest.raises(ValueError, match="one misfit per offset"):
+        coarse_offset(grid, misfits[:3], fit_clock)
