@@ -12,8 +12,10 @@ size of the whole catalogue (tests/test_bad_input*.py, at least 100 cases).
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -495,3 +497,18 @@ def test_user_guide_compensate_example_runs_within_2_gb(tmp_path):
     assert "strongest return" in c.stderr
     with np.load(tmp_path / "beams.npz") as z:
         assert z["beams"].shape[1] >= 3 and 14.0 < float(np.mean(z["range_m"])) < 16.0
+
+
+class _ClosedPipe(io.StringIO):
+    """A standard output whose reader has gone (``raysim ... | head -1``)."""
+
+    def write(self, text):
+        raise BrokenPipeError(32, "Broken pipe")
+
+
+def test_a_reader_that_left_ends_the_command_quietly(monkeypatch, capsys):
+    from raysim.cli import PIPE_CLOSED, main
+
+    monkeypatch.setattr(sys, "stdout", _ClosedPipe())
+    assert main(["scenes", "list"]) == PIPE_CLOSED
+    assert "error" not in capsys.readouterr().err

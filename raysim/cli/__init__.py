@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import os
 import pkgutil
 import signal
 import sys
@@ -56,6 +57,10 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         print(f"raysim {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:     # the reader left (`| head`): no error, nothing more to say
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # exit flushes
+        return PIPE_CLOSED
     except OSError as exc:      # a file or folder the checks could not foresee
         name = f" {exc.filename!r}" if exc.filename else ""
         print(f"raysim {args.command}: error:{name} {exc.strerror or exc}", file=sys.stderr)
@@ -65,6 +70,9 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+#: Exit status when the reader of the output closed the pipe early (128 + SIGPIPE, as a
+#: shell reports a command killed by it).
+PIPE_CLOSED = 141
 #: Warnings the command line states as one line of its own (class names): they report a
 #: choice the program made, not a fault of the user's input or of the code.
 NOTE_WARNINGS = ("DecimationRefused",)
