@@ -95,3 +95,17 @@ def test_flight_keeps_a_truth_file_it_did_not_write(tmp_path, capsys):
     assert main(["flight", str(tmp_path / "f"), "--frames", "1", "--no-progress"]) == 2
     assert "truth.json" in capsys.readouterr().err
     assert mine.read_text() == "my notes\n"
+
+
+def test_score_of_a_later_frame_takes_it_from_the_store(scored, tmp_path):
+    """A store of frame 1 alone (``--frames 1:2``) is scored against frame 1's position:
+    the store's frame coordinate says so; a frame the flight lacks is refused."""
+    flight, folder, _ = scored
+    store = tmp_path / "k1.zarr"
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(flight.command(store, "--range-m", "5.5:6.5", "--az-deg", "6:18:0.25",
+                                   "--el-deg", "0:0:1", "--no-progress", frame=1)) == 0
+    auto = score_flight(folder, store)
+    assert auto == score_flight(folder, store, first=1) and auto["passed"]["all"]
+    with pytest.raises(ValueError, match="first frame 5"):
+        score_flight(folder, store, first=5)

@@ -32,8 +32,9 @@ def register(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("folder", help="the flight's folder (written by raysim flight)")
     p.add_argument("store", help="the compensated store (raysim compensate --out)")
-    p.add_argument("--first-frame", type=int, default=0, metavar="K",
-                   help="flight frame of the store's first frame (compensate --frames K:...)")
+    p.add_argument("--first-frame", type=int, default=None, metavar="K",
+                   help="flight frame of the store's first frame (default: the store's "
+                   "frame coordinate, which compensate --frames K:... sets)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=run)
 
@@ -44,7 +45,7 @@ def run(args) -> int:
 
     from raysim.pipeline.flight_truth import score_flight
 
-    if args.first_frame < 0:
+    if args.first_frame is not None and args.first_frame < 0:
         raise ValueError(f"--first-frame must be >= 0, got {args.first_frame}")
     if not Path(args.store).exists():
         raise ValueError(f"store {args.store!r} does not exist; expected the output of "

@@ -71,7 +71,7 @@ def read_truth(folder: str | Path):
         raise ValueError(f"{str(path)!r} does not hold a flight's truth ({exc})") from None
 
 
-def score_flight(folder: str | Path, store, first: int = 0) -> dict:
+def score_flight(folder: str | Path, store, first: int | None = None) -> dict:
     """Score a compensated store of a flight against the flight's truth and :data:`LIMITS`.
 
     Parameters
@@ -81,8 +81,10 @@ def score_flight(folder: str | Path, store, first: int = 0) -> dict:
     store : path or xarray.Dataset
         The compensated store (``raysim compensate --out``) with a ``range`` axis
         covering every target and an ``azimuth`` axis around each.
-    first : int
-        Flight frame of the store's first frame (``--frames K:...``).
+    first : int, optional
+        Flight frame of the store's first frame (``--frames K:...``); None: the store's
+        first ``frame`` coordinate (``raysim compensate`` writes the capture's frame
+        numbers there), 0 where it has none.
 
     Returns
     -------
@@ -97,6 +99,11 @@ def score_flight(folder: str | Path, store, first: int = 0) -> dict:
 
     flight = read_truth(folder)
     ds = store if hasattr(store, "data_vars") else open_store(store)
+    if first is None:
+        first = int(ds["frame"].values[0]) if "frame" in ds.coords else 0
+    if not 0 <= first < len(flight.frame_starts):
+        raise ValueError(f"first frame {first} is not a frame of the flight (0.."
+                         f"{len(flight.frame_starts) - 1})")
     m = measure_targets(ds, flight, first=first)                # [target, frame, 3]
     offset = ds.attrs.get("time_offset_s")
     worst = {"beam_angle_error_deg": float(m[..., 0].max()),
