@@ -328,6 +328,24 @@ def judge_imu_window(t: np.ndarray, window: tuple[float, float], *,
     return keep, fill, tuple(out)
 
 
+def frames_in_gaps(fill_time, spans, frames, step: float) -> tuple[str, ...]:
+    """``("imu gaps: frame(s) ... lie in a filled gap ...",)`` for the frames whose span
+    holds an interpolated sample, else ``()``.
+
+    ``fill_time [sample_new]`` [s, IMU clock] from :func:`judge_imu_window`; ``spans``
+    each frame's first and last slot time on the IMU clock [s]; ``frames`` their
+    numbers in the capture; ``step`` the median IMU interval [s], added on each side.
+    """
+    fill = np.asarray(fill_time, dtype=float)
+    hit = [int(k) for k, (a, b) in zip(frames, spans, strict=True)
+           if np.any((fill >= a - step) & (fill <= b + step))]
+    if not hit:
+        return ()
+    return (f"imu gaps: frame(s) {', '.join(map(str, hit))} lie in a filled gap: their "
+            f"motion is interpolated, not measured, and what the platform did there is not "
+            f"compensated",)
+
+
 def fill_imu_gaps(t: np.ndarray, values: np.ndarray, keep: np.ndarray,
                   fill_time: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Apply the plan of :func:`judge_imu_window` to a record.

@@ -84,6 +84,7 @@ Errors name the parameter by its ``raysim compensate`` option (``--frames``,
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -238,7 +239,7 @@ def _imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarra
     the given offset; the first guess 0 of ``"auto"``, whose search stays within
     the margin), plus :data:`compensation.ingestion.WINDOW_MARGIN` on each side.
     """
-    from compensation.ingestion import fill_imu_gaps, judge_imu_window
+    from compensation.ingestion import fill_imu_gaps, frames_in_gaps, judge_imu_window
 
     if max_gap is not None:
         max_gap = float(_vector(max_gap, 1, "--max-gap")[0])
@@ -255,6 +256,8 @@ def _imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarra
                                          what=f"the {len(inp.frames)} frame(s) selected")
     if keep.size == t.size and fill.size == 0:
         return table, notes
+    notes = (*notes, *frames_in_gaps(fill, [(s.min() + shift, s.max() + shift) for s in slots],
+                                     inp.frames, float(np.median(np.diff(t)))))
     tt, vals = fill_imu_gaps(t, table[:, 1:], keep, fill)
     return np.column_stack([tt, vals]), notes
 
@@ -366,8 +369,6 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
         wavelength=inp.config.center_wavelength, range_axis=r_axis, grid_shape=inp.grid_shape,
         channel_slot=options.get("channel_slot"), mounting=mount)]
     if ground is not None:   # without an attitude its failures, with one a disagreement
-        import warnings
-
         from compensation.ground_plane import GroundPlaneWarning, ground_check
 
         ground = ground if retilt is None else retilt.fit
@@ -612,8 +613,6 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             table, imu_source, interval = _imu_table(imu, inp, source, imu_topic, imu_instance)
             table, window_notes = _imu_window(table, inp, time_offset, max_gap)
             if window_notes:
-                import warnings
-
                 from compensation.guards import CompensationWarning
 
                 for text in window_notes:

@@ -256,3 +256,30 @@ def test_flight_of_a_mounted_radar_prints_the_self_calibrating_command(tmp_path,
                    and c[c.index("--time-offset") + 1] == "auto"]
     assert len(lines) == 2 and len(calibrating) == 1
     assert "--mounting-deg" in calibrating[0] and "radar" in calibrating[0]
+
+
+#: Span of a flight's frame: 64 loops of 3 slots of 70 us [s].
+FRAME_SPAN_S = 64 * 3 * 70e-6
+
+
+def test_frames_in_a_filled_logger_gap_are_named(tmp_path, capsys):
+    """A logger gap inside the capture, filled with --max-gap: the frames it spans are
+    named in the warnings (their motion is interpolated), the others are not."""
+    import shlex
+
+    from raysim.pipeline.flight_truth import read_truth
+
+    assert main(["flight", str(tmp_path / "fl"), "--frames", "4", "--imu", "ideal",
+                 "--target", "6,10,0", "--log-gaps", "1", "--gaps-in-capture",
+                 "--no-progress"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    given = shlex.split([x for x in lines if x.strip().startswith("raysim compensate")][-1])
+    assert main(given[1:] + ["--az-deg", "4:16:1", "--no-progress"]) == 0
+    flight = read_truth(tmp_path / "fl")
+    (start, length), = flight.gaps                           # [s, IMU clock]
+    t0 = flight.frame_starts + flight.time_offset            # frames on the IMU clock
+    inside = [k for k, t in enumerate(t0) if t < start + length and t + FRAME_SPAN_S > start]
+    named = [ln for ln in capsys.readouterr().err.splitlines() if "imu gaps: frame(s)" in ln]
+    assert inside and len(named) == 1
+    listed = named[0].split("frame(s) ")[1].split(" lie")[0].split(", ")
+    assert [int(k) for k in listed] == inside
