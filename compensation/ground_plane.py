@@ -43,6 +43,7 @@ from scipy.spatial.transform import Rotation
 from ._checks import finite_array
 from .calibration import DIRECTION_SIGMA, UNRESOLVED_DIRECTION_SIGMA, detect_scatterers
 from .geometry import direction
+from .ground_dbs import doppler_ground_directions
 from .ground_dense import (
     DENSE_ANGLE_SIGMA,
     DENSE_RANGE_SIGMA_CELLS,
@@ -139,6 +140,10 @@ class GroundPlane:
         points of :func:`ground_tilt`, which
         :func:`compensation.ground_refit.refit_ground` turns with another
         integration); empty otherwise.
+    source : str
+        The cells the points come from: ``"range"`` (one snapshot's range cells, or
+        a mounted radar's beam maxima) or ``"range+doppler"`` (with the range-Doppler
+        cells, :mod:`compensation.ground_dbs`).
     """
 
     tilt: np.ndarray
@@ -152,6 +157,7 @@ class GroundPlane:
     warnings: tuple[str, ...] = field(default_factory=tuple)
     spread_scale: float = 1.0
     looks: tuple = field(default=(), repr=False, compare=False)
+    source: str = "range"
 
     @property
     def usable(self) -> bool:
@@ -172,7 +178,7 @@ class GroundPlane:
                 "tilt_sigma_deg": np.rad2deg(self.tilt_sigma).tolist(),
                 "height_m": self.height, "points": self.points, "inliers": self.inliers,
                 "chi2": self.chi2, "rms_m": self.rms, "spread_scale": self.spread_scale,
-                "used": self.usable,
+                "point_cells": self.source, "used": self.usable,
                 "assumption": ASSUMPTION, "warnings": list(self.warnings)}
 
 
@@ -445,6 +451,12 @@ def dense_points(rc, element_positions, motion: PlatformMotion, *, wavelength: f
     r_axis = np.asarray(range_axis, dtype=float)
     r, u = dense_ground_directions(rc, element_positions, motion, wavelength=wavelength,
                                    range_axis=r_axis, gates=gates, channel_slot=channel_slot)
+    return _dense_covariance(r, u, r_axis)
+
+
+def _dense_covariance(r: np.ndarray, u: np.ndarray, r_axis: np.ndarray):
+    """Points ``r u`` ``[point, 3]`` and their covariances ``[point, 3, 3]`` with the dense
+    points' spreads (range cells ``r_axis`` [m])."""
     if r.size == 0:
         return np.zeros((0, 3)), np.zeros((0, 3, 3))
     az, el = np.arctan2(u[:, 0], u[:, 2]), np.arcsin(np.clip(u[:, 1], -1.0, 1.0))
@@ -537,6 +549,17 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
                                     c * pick.size))
         fit = fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
                         range_axis=range_axis, gates=gates)
+        if not fit.usable:   # dense clutter: the range-Doppler cells hold fewer scatterers
+            for k in pick:
+                r, u, at = doppler_ground_directions(
+                    rcs[k], element_positions, motions[k], wavelength=wavelength,
+                    range_axis=range_axis, gates=gates, channel_slot=slots)
+                p, c = _dense_covariance(r, u, np.asarray(range_axis, dtype=float))
+                looks.append(GroundLook(int(k), at, np.asarray(motions[k].attitude[at]), p,
+                                        c * pick.size))
+            fit = replace(fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
+                                    range_axis=range_axis, gates=gates),
+                          source="range+doppler")
     else:
         found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
                                wavelength=wavelength, range_axis=range_axis, gates=gates,

@@ -59,7 +59,8 @@ def refit_ground(fit: GroundPlane, motions, *, gyro_bias_sigma: float = 0.0) -> 
         att = np.asarray(motions[k.frame].attitude[k.pose], dtype=float)
         points, cov = k.turned(att)
         looks.append(replace(k, attitude=att, points=points, covariance=cov))
-    return fit_looks(looks, motions, gyro_bias_sigma=gyro_bias_sigma)
+    return replace(fit_looks(looks, motions, gyro_bias_sigma=gyro_bias_sigma),
+                   source=fit.source)
 
 
 class GroundRetilt:
