@@ -34,7 +34,8 @@ from scipy.signal import get_window
 from ._checks import finite_array
 from .ground_dense import TRACK_DU, aligned_snapshot, snapshot_points
 
-__all__ = ["DOPPLER_DYNAMIC_RANGE_DB", "doppler_ground_directions", "doppler_spectra"]
+__all__ = ["DOPPLER_BELOW_POINTS", "DOPPLER_DYNAMIC_RANGE_DB", "doppler_ground_directions",
+           "doppler_spectra", "unseen"]
 
 #: Window of the Doppler filter over the chirp loops (its sidelobes below the purity
 #: the plane-wave fit asks: -31 dB).
@@ -45,6 +46,25 @@ DOPPLER_DYNAMIC_RANGE_DB = 40.0
 #: Points of neighbouring Doppler cells closer than this in range [cells] (and
 #: :data:`compensation.ground_dense.TRACK_DU` in direction) are one scatterer.
 SAME_RANGE_CELLS = 1.0
+#: The range-Doppler cells are added where the range cells of one snapshot give fewer
+#: ground points than this over the frames (the flights' sparse field of 60 scatterers:
+#: 62-98; the dense fields of 200 and 600: 1-12, docs/self_calibration.md).
+DOPPLER_BELOW_POINTS = 30
+
+
+def unseen(points, known, cell: float) -> np.ndarray:
+    """Which ``points`` ``[point, 3]`` [m] are no scatterer of ``known`` ``[known, 3]`` [m]:
+    none of those lies within :data:`SAME_RANGE_CELLS` range cells (``cell`` [m]) and
+    :data:`compensation.ground_dense.TRACK_DU` in direction (the same scatterer found in
+    both counts once: its errors are one)."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    q = np.asarray(known, dtype=float).reshape(-1, 3)
+    if q.shape[0] == 0 or p.shape[0] == 0:
+        return np.ones(p.shape[0], dtype=bool)
+    rp, rq = np.linalg.norm(p, axis=1), np.linalg.norm(q, axis=1)
+    near = np.abs(rp[:, None] - rq[None, :]) < SAME_RANGE_CELLS * cell
+    close = np.linalg.norm(p[:, None, :] / rp[:, None, None] - q[None] / rq[:, None], axis=2)
+    return ~np.any(near & (close < TRACK_DU), axis=1)
 
 
 def doppler_spectra(rc, time, channel_slot=None) -> tuple[np.ndarray, int]:

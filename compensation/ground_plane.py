@@ -43,7 +43,7 @@ from scipy.spatial.transform import Rotation
 from ._checks import finite_array
 from .calibration import DIRECTION_SIGMA, UNRESOLVED_DIRECTION_SIGMA, detect_scatterers
 from .geometry import direction
-from .ground_dbs import doppler_ground_directions
+from .ground_dbs import DOPPLER_BELOW_POINTS, doppler_ground_directions, unseen
 from .ground_dense import (
     DENSE_ANGLE_SIGMA,
     DENSE_RANGE_SIGMA_CELLS,
@@ -549,14 +549,18 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
                                     c * pick.size))
         fit = fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
                         range_axis=range_axis, gates=gates)
-        if not fit.usable:   # dense clutter: the range-Doppler cells hold fewer scatterers
-            for k in pick:
+        if not fit.usable or fit.points < DOPPLER_BELOW_POINTS:
+            # dense clutter: the range-Doppler cells hold fewer scatterers than the range
+            # cells; a scatterer found in both counts once
+            r_axis = np.asarray(range_axis, dtype=float)
+            for k, look in zip(pick, tuple(looks), strict=True):
                 r, u, at = doppler_ground_directions(
                     rcs[k], element_positions, motions[k], wavelength=wavelength,
-                    range_axis=range_axis, gates=gates, channel_slot=slots)
-                p, c = _dense_covariance(r, u, np.asarray(range_axis, dtype=float))
-                looks.append(GroundLook(int(k), at, np.asarray(motions[k].attitude[at]), p,
-                                        c * pick.size))
+                    range_axis=r_axis, gates=gates, channel_slot=slots)
+                p, c = _dense_covariance(r, u, r_axis)
+                new = unseen(p, look.points, float(r_axis[1] - r_axis[0]))
+                looks.append(GroundLook(int(k), at, np.asarray(motions[k].attitude[at]),
+                                        p[new], c[new] * pick.size))
             fit = replace(fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
                                     range_axis=range_axis, gates=gates),
                           source="range+doppler")
