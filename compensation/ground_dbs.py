@@ -47,9 +47,9 @@ DOPPLER_DYNAMIC_RANGE_DB = 40.0
 #: :data:`compensation.ground_dense.TRACK_DU` in direction) are one scatterer.
 SAME_RANGE_CELLS = 1.0
 #: The range-Doppler cells are added where the range cells of one snapshot give fewer
-#: ground points than this over the frames (the flights' sparse field of 60 scatterers:
-#: 62-98; the dense fields of 200 and 600: 1-12, docs/self_calibration.md).
-DOPPLER_BELOW_POINTS = 30
+#: ground points than this a frame (the flights' sparse field of 60 scatterers: 62-98
+#: over six frames; the dense fields of 200 and 600: 1-12, docs/self_calibration.md).
+DOPPLER_BELOW_POINTS = 5
 
 
 def unseen(points, known, cell: float) -> np.ndarray:

@@ -549,7 +549,7 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
                                     c * pick.size))
         fit = fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
                         range_axis=range_axis, gates=gates)
-        if not fit.usable or fit.points < DOPPLER_BELOW_POINTS:
+        if not fit.usable or fit.points < DOPPLER_BELOW_POINTS * pick.size:
             # dense clutter: the range-Doppler cells hold fewer scatterers than the range
             # cells; a scatterer found in both counts once
             r_axis = np.asarray(range_axis, dtype=float)
