@@ -53,6 +53,7 @@ from .ground_dense import (
 from .ground_looks import GroundLook
 from .mounting import mounting_rotation, radar_frame_motion, world_directions
 from .observability import ObservabilityWarning
+from .radar_inertial import DEFAULT_TILT_SIGMA
 from .strapdown import PlatformMotion
 
 __all__ = ["ASSUMPTION", "GroundPlane", "GroundPlaneWarning", "fit_ground_plane", "fit_looks",
@@ -161,11 +162,13 @@ class GroundPlane:
 
     @property
     def usable(self) -> bool:
-        """Whether the fit gives a tilt (enough points on the plane, not a bad fit)."""
+        """Whether the fit gives a tilt (enough points on the plane, not a bad fit, a
+        spread below the prior's :data:`compensation.radar_inertial.DEFAULT_TILT_SIGMA`)."""
         return bool(np.all(np.isfinite(self.tilt)) and self.inliers >= MIN_GROUND_POINTS
                     and self.inliers >= MIN_INLIER_FRACTION * self.points
                     and bool(np.hypot(*self.tilt) <= MAX_NORMAL_ANGLE)
-                    and self.chi2 <= MAX_CHI2)
+                    and self.chi2 <= MAX_CHI2
+                    and bool(np.all(self.tilt_sigma < DEFAULT_TILT_SIGMA)))
 
     @property
     def tilt_sigma(self) -> np.ndarray:
@@ -353,6 +356,11 @@ def fit_ground_plane(points, covariance, *, groups=None, seed: int = 0,
             scale = _jackknife_scale(p, cov, groups, out.tilt_covariance, seed)
             out = replace(out, tilt_covariance=out.tilt_covariance * scale,
                           spread_scale=scale)
+        if np.any(out.tilt_sigma >= DEFAULT_TILT_SIGMA):
+            out = replace(out, warnings=(*out.warnings, (
+                f"ground plane: tilt spread {np.rad2deg(out.tilt_sigma.max()):.1f} deg, no "
+                f"less than the prior's {np.rad2deg(DEFAULT_TILT_SIGMA):.0f} deg (the points "
+                f"disagree: dense clutter); no tilt from the ground")))
     if warn:
         for text in out.warnings:
             warnings.warn(text, GroundPlaneWarning, stacklevel=2)

@@ -18,7 +18,8 @@ from scipy.spatial.transform import Rotation
 
 from compensation.ground_dbs import doppler_ground_directions, doppler_spectra
 from compensation.ground_dense import dense_ground_directions, range_kernel
-from compensation.ground_plane import MIN_GROUND_POINTS, ground_tilt
+from compensation.ground_plane import MIN_GROUND_POINTS, fit_ground_plane, ground_tilt
+from compensation.radar_inertial import DEFAULT_TILT_SIGMA
 from compensation.strapdown import static_motion
 
 #: Wavelength [m], range cell [m], cells (= samples of the range FFT), chirp loops.
@@ -119,3 +120,15 @@ def test_doppler_spectra_need_two_loops():
     with pytest.raises(ValueError, match="two or more chirps"):
         doppler_spectra(np.zeros((1, 12, 150), complex), np.arange(3) * SLOT_S,
                         np.repeat([0, 1, 2], 4))
+
+
+def test_a_tilt_vaguer_than_the_prior_is_refused():
+    """Points that fix the tilt worse than the radar-inertial prior (5 deg): a level
+    plane of 12 points over +-3 m with 1 m spreads (stated tilt spread about 11 deg)
+    gives no tilt, and says why."""
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(-3.0, 3.0, size=(12, 2))
+    p = np.column_stack([xy, np.full(12, HEIGHT)])
+    fit = fit_ground_plane(p, np.broadcast_to(np.eye(3), (12, 3, 3)), warn=False)
+    assert np.all(fit.tilt_sigma >= DEFAULT_TILT_SIGMA) and not fit.usable
+    assert any("prior's 5 deg" in w for w in fit.warnings)
