@@ -4,7 +4,9 @@ A down-looking radar over flat ground sees ground clutter: each clutter
 scatterer has a range ``r`` and a direction ``u``, a point ``p = r u``. A
 down-looking radar's points are the scatterers that every ground cell's plane
 waves give (:mod:`compensation.ground_dense`: range from the range kernel over
-the cells, direction from the whole array at one slot-aligned instant); a mounted
+the cells, direction from the whole array at one slot-aligned instant), over a
+dense ground also those of the range-Doppler cells (:mod:`compensation.ground_dbs`,
+where the range cells give too few); a mounted
 radar's are its beam maxima (azimuth from the array, elevation from the raised
 TX's phase comparison, :func:`compensation.elevation.measure_elevation`). Formed
 with the platform's estimated attitude ``R_est`` the points are in W as that
@@ -506,7 +508,14 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
     of level flat ground); the jackknife widens the stated spread to the one the
     groups show. A hovering platform moves far less than a range cell over a
     record, so the same scatterers share the same cells in every frame: with frames
-    as groups that part of the error shows in no spread. The gyro bias turns the later frames'
+    as groups that part of the error shows in no spread. Where the range cells give
+    fewer than :data:`compensation.ground_dbs.DOPPLER_BELOW_POINTS` points a frame, or
+    no usable plane (dense clutter: more scatterers a cell than three plane waves),
+    every picked frame's range-Doppler cells add their points
+    (:func:`compensation.ground_dbs.doppler_ground_directions`, less those of
+    scatterers the range cells found), each frame's another look turned by its middle
+    loop's attitude, and the fit is of them all (:attr:`GroundPlane.source`). The
+    gyro bias turns the later frames'
     attitude: its spread over the frames' mean time since the first chirp is added
     to the tilt's. The dense points are kept with the attitudes that turned them
     (:attr:`GroundPlane.looks`), to be fitted again with another integration
