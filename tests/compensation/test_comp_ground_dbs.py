@@ -18,7 +18,9 @@ from scipy.spatial.transform import Rotation
 
 from compensation.ground_dbs import doppler_ground_directions, doppler_spectra
 from compensation.ground_dense import dense_ground_directions, range_kernel
-from compensation.ground_plane import MIN_GROUND_POINTS, fit_ground_plane, ground_tilt
+from compensation.ground_looks import GroundLook
+from compensation.ground_plane import MIN_GROUND_POINTS, GroundPlane, fit_ground_plane, ground_tilt
+from compensation.ground_refit import GroundRetilt
 from compensation.radar_inertial import DEFAULT_TILT_SIGMA
 from compensation.strapdown import static_motion
 
@@ -132,3 +134,21 @@ def test_a_tilt_vaguer_than_the_prior_is_refused():
     fit = fit_ground_plane(p, np.broadcast_to(np.eye(3), (12, 3, 3)), warn=False)
     assert np.all(fit.tilt_sigma >= DEFAULT_TILT_SIGMA) and not fit.usable
     assert any("prior's 5 deg" in w for w in fit.warnings)
+
+
+def test_range_doppler_refit_states_no_less_than_the_first_fit():
+    """The calibration's refit turns the same points by a few tenths of a degree: for
+    range-Doppler points (few a jackknife sector) it states no less spread than the
+    first fit did; range-cell points keep the refit's own."""
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(-8.0, 8.0, size=(40, 2))
+    look = GroundLook(0, 0, np.eye(3), np.column_stack([xy, np.full(40, HEIGHT)]),
+                      np.broadcast_to(1e-4 * np.eye(3), (40, 3, 3)).copy())
+    first_cov = np.diag(np.deg2rad([2.0, 1.5]) ** 2)
+    motions = [static_motion(np.arange(LOOPS * 3) * SLOT_S)]
+    for source in ("range", "range+doppler"):
+        first = GroundPlane(np.zeros(2), first_cov, HEIGHT, np.array([0.0, 0.0, 1.0]), 40, 40,
+                            1.0, 0.01, looks=(look,), source=source)
+        _, cov = GroundRetilt(first, np.eye(3))(motions, first_cov)
+        covers = np.linalg.eigvalsh(cov - first_cov).min() >= -1e-12 * first_cov.max()
+        assert covers == (source == "range+doppler"), (source, np.rad2deg(np.sqrt(np.diag(cov))))
