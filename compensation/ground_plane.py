@@ -147,6 +147,9 @@ class GroundPlane:
         The cells the points come from: ``"range"`` (one snapshot's range cells, or
         a mounted radar's beam maxima) or ``"range+doppler"`` (with the range-Doppler
         cells, :mod:`compensation.ground_dbs`).
+    jackknifed : bool
+        Whether every leave-one-group-out fit gave a tilt (the jackknife ran); range-
+        Doppler points give a tilt only where it did.
     """
 
     tilt: np.ndarray
@@ -161,6 +164,7 @@ class GroundPlane:
     spread_scale: float = 1.0
     looks: tuple = field(default=(), repr=False, compare=False)
     source: str = "range"
+    jackknifed: bool = False
 
     @property
     def usable(self) -> bool:
@@ -170,7 +174,8 @@ class GroundPlane:
                     and self.inliers >= MIN_INLIER_FRACTION * self.points
                     and bool(np.hypot(*self.tilt) <= MAX_NORMAL_ANGLE)
                     and self.chi2 <= MAX_CHI2
-                    and bool(np.all(self.tilt_sigma < DEFAULT_TILT_SIGMA)))
+                    and bool(np.all(self.tilt_sigma < DEFAULT_TILT_SIGMA))
+                    and (self.source == "range" or self.jackknifed))
 
     @property
     def tilt_sigma(self) -> np.ndarray:
@@ -355,9 +360,9 @@ def fit_ground_plane(points, covariance, *, groups=None, seed: int = 0,
         out = GroundPlane(x[:2].copy(), c3[:2, :2].copy(), float(x[2]), normal, p.shape[0],
                           n_in, chi2, rms, tuple(notes))
         if groups is not None and np.all(np.isfinite(out.tilt)):
-            scale = _jackknife_scale(p, cov, groups, out.tilt_covariance, seed)
+            scale, ran = _jackknife_scale(p, cov, groups, out.tilt_covariance, seed)
             out = replace(out, tilt_covariance=out.tilt_covariance * scale,
-                          spread_scale=scale)
+                          spread_scale=scale, jackknifed=ran)
         if np.any(out.tilt_sigma >= DEFAULT_TILT_SIGMA):
             out = replace(out, warnings=(*out.warnings, (
                 f"ground plane: tilt spread {np.rad2deg(out.tilt_sigma.max()):.1f} deg, no "
@@ -370,27 +375,27 @@ def fit_ground_plane(points, covariance, *, groups=None, seed: int = 0,
 
 
 def _jackknife_scale(p: np.ndarray, cov: np.ndarray, groups: np.ndarray,
-                     tilt_cov: np.ndarray, seed: int) -> float:
+                     tilt_cov: np.ndarray, seed: int) -> tuple[float, bool]:
     """Least factor (>= 1) on ``tilt_cov`` ``[2, 2]`` that covers the delete-one-group
     jackknife covariance ``(K - 1) / K sum_k (t_k - t_mean)(t_k - t_mean)^T`` of the tilt:
-    the largest generalised eigenvalue of the two. 1 with fewer than
-    :data:`MIN_JACKKNIFE_GROUPS` groups or when a fit without a group gives no tilt
-    (the jackknife needs every one)."""
+    the largest generalised eigenvalue of the two, and whether it ran. 1 (not run) with
+    fewer than :data:`MIN_JACKKNIFE_GROUPS` groups or when a fit without a group gives
+    no tilt (the jackknife needs every one)."""
     labels = np.unique(groups)
     if labels.size < MIN_JACKKNIFE_GROUPS:
-        return 1.0
+        return 1.0, False
     tilts = []
     for g in labels:
         keep = groups != g
         if keep.sum() < MIN_GROUND_POINTS:
-            return 1.0
+            return 1.0, False
         t = fit_ground_plane(p[keep], cov[keep], seed=seed, warn=False).tilt
         if not np.all(np.isfinite(t)):
-            return 1.0
+            return 1.0, False
         tilts.append(t)
     d = np.asarray(tilts) - np.mean(tilts, axis=0)
     jack = (labels.size - 1) / labels.size * (d.T @ d)
-    return float(max(1.0, np.max(eigh(jack, tilt_cov, eigvals_only=True))))
+    return float(max(1.0, np.max(eigh(jack, tilt_cov, eigvals_only=True)))), True
 
 
 def ground_points(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
@@ -581,6 +586,11 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
             fit = replace(fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
                                     range_axis=range_axis, gates=gates),
                           source="range+doppler")
+            if np.all(np.isfinite(fit.tilt)) and not fit.jackknifed:
+                fit = replace(fit, warnings=(*fit.warnings, (
+                    f"ground plane: {fit.points} points of dense clutter, too few for the "
+                    f"jackknife over azimuth sectors to check their spread; no tilt from "
+                    f"the ground")))
     else:
         found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
                                wavelength=wavelength, range_axis=range_axis, gates=gates,
