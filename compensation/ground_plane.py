@@ -367,7 +367,7 @@ def fit_ground_plane(points, covariance, *, groups=None, seed: int = 0,
             out = replace(out, warnings=(*out.warnings, (
                 f"ground plane: tilt spread {np.rad2deg(out.tilt_sigma.max()):.1f} deg, no "
                 f"less than the prior's {np.rad2deg(DEFAULT_TILT_SIGMA):.0f} deg (the points "
-                f"disagree: dense clutter); no tilt from the ground")))
+                f"fix it no better than the prior); no tilt from the ground")))
     if warn:
         for text in out.warnings:
             warnings.warn(text, GroundPlaneWarning, stacklevel=2)
