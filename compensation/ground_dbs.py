@@ -18,8 +18,8 @@ strongest is kept.
 
 What it cannot do: split a ring the platform does not sweep. The Doppler
 resolution over a frame of ``T`` is ``lambda / (2 T)`` in ``v . u`` (0.14 m/s over
-the 13.4 ms of the flights' 64 loops), so a hover's sway of 0.2-0.3 m/s splits a
-ring into two to four cells, and a platform at rest into none; a cell still
+the 13.4 ms of the flights' 64 loops), so a hover's sway of 0.06-0.35 m/s splits a
+ring into one to four cells, and a platform at rest not at all; a cell still
 holding more scatterers than :data:`compensation.ground_dense.MAX_SOURCES` gives no
 point. The array turns within a frame (tens of deg/s over 13 ms: a few tenths of a
 degree): the directions are those at the frame's middle loop, whose attitude turns
@@ -135,6 +135,8 @@ def doppler_ground_directions(rc, element_positions, motion, *, wavelength: floa
     if r_axis.shape != (x.shape[-1],) or r_axis.size < 2:
         raise ValueError(f"range_axis must hold the {x.shape[-1]} cells of rc (two or more), "
                          f"got shape {r_axis.shape}")
+    if g.size and (g.min() < 0 or g.max() >= x.shape[-1]):
+        raise ValueError(f"gates must lie in 0..{x.shape[-1] - 1}, got {g.min()}..{g.max()}")
     slots = 1 if channel_slot is None else int(np.max(channel_slot)) + 1
     spec, mid = doppler_spectra(x, motion.time, channel_slot)
     pose = slots * mid

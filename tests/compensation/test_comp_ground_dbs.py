@@ -156,3 +156,12 @@ def test_range_doppler_refit_states_no_less_than_the_first_fit():
         _, cov = GroundRetilt(first, np.eye(3))(motions, first_cov)
         covers = np.linalg.eigvalsh(cov - first_cov).min() >= -1e-12 * first_cov.max()
         assert covers == (source == "range+doppler"), (source, np.rad2deg(np.sqrt(np.diag(cov))))
+
+
+def test_gates_must_lie_in_the_cells():
+    pos, slot = _array()
+    rc = np.zeros((LOOPS, len(pos), CELLS), complex)
+    with pytest.raises(ValueError, match="gates must lie in 0..149, got 140..150"):
+        doppler_ground_directions(rc, pos, static_motion(np.arange(LOOPS * 3) * SLOT_S),
+                                  wavelength=WAVELENGTH, range_axis=np.arange(CELLS) * CELL,
+                                  gates=np.arange(140, 151), channel_slot=slot)
