@@ -45,7 +45,8 @@ from ._checks import channel_slots, finite_array
 from .strapdown import PlatformMotion
 
 __all__ = ["DENSE_ANGLE_SIGMA", "DENSE_RANGE_SIGMA_CELLS", "aligned_snapshot",
-           "dense_ground_directions", "range_kernel", "steering"]
+           "dense_ground_directions", "direction_grid", "range_kernel", "snapshot_points",
+           "steering"]
 
 #: Most plane waves fitted to one range cell.
 MAX_SOURCES = 3
@@ -243,17 +244,76 @@ def dense_ground_directions(rc, element_positions, motion: PlatformMotion, *,
         raise ValueError(f"range_axis must hold the {x.shape[-1]} cells of rc (two or more), "
                          f"got shape {r_axis.shape}")
     n_fft = x.shape[-1] if fft_size is None else int(fft_size)
-    cell = float(r_axis[1] - r_axis[0])
     snap = aligned_snapshot(x, motion.time, channel_slot)[:, g]        # [channel, gate]
     slots = 1 if channel_slot is None else int(np.max(channel_slot)) + 1
     att = motion.attitude[slots * SNAPSHOT_CHIRP]
+    r, u = snapshot_points(snap, g, p, wavelength=wavelength, range_axis=r_axis,
+                           fft_size=n_fft, window=window)
+    if r.size == 0:
+        return empty
+    u_a = np.column_stack([u, np.sqrt(1.0 - np.sum(u ** 2, axis=1))])
+    return r, u_a @ att.T
+
+
+def direction_grid(element_positions, wavelength: float) -> tuple[np.ndarray, np.ndarray]:
+    """Starting directions ``[grid, 2]`` (direction cosines in A) of the plane waves' fit
+    and their conjugate steering vectors ``[grid, channel]``."""
     gx, gy = np.meshgrid(np.arange(-0.97, 0.971, GRID_STEP[0]),
                          np.arange(-0.95, 0.951, GRID_STEP[1]), indexing="ij")
     inside = gx ** 2 + gy ** 2 < 0.96
     grid = np.column_stack([gx[inside], gy[inside]])
-    table = steering(grid[:, 0], grid[:, 1], p, wavelength).conj()     # [grid, channel]
+    return grid, steering(grid[:, 0], grid[:, 1], element_positions, wavelength).conj()
+
+
+def snapshot_points(snap, gates, element_positions, *, wavelength: float, range_axis,
+                    fft_size: int, window: str = "hann", floor: float | None = None,
+                    with_power: bool = False) -> tuple[np.ndarray, ...]:
+    """Ranges and directions in A of the scatterers in the cells of one snapshot.
+
+    Every cell ``snap[:, j]`` is fitted as one to :data:`MAX_SOURCES` plane waves
+    (the fewest that leave less than ``1 - MIN_PURITY`` of its power), the same
+    direction in consecutive cells is joined into a track, and the track's
+    amplitudes fitted by the range kernel give the scatterer's range.
+
+    Parameters
+    ----------
+    snap : ndarray, shape ``[channel, gate]``
+        One instant of every channel in ``gates`` (or any linear filter of such
+        instants over slow time, the same for every cell: a Doppler cell).
+    gates : array_like of int, shape ``[gate]``
+        Consecutive cells of ``snap``'s columns.
+    element_positions : array_like, shape ``[channel, 3]``
+        Virtual positions in A [m] (``z = 0``).
+    wavelength : float
+        [m].
+    range_axis : array_like, shape ``[range]``
+        Range of every cell [m] (uniform).
+    fft_size : int
+        The range compression's FFT length.
+    window : str
+        Its window.
+    floor : float, optional
+        Least power of a cell fitted [the squared units of ``snap``]; default
+        :data:`DENSE_DYNAMIC_RANGE_DB` below the strongest cell of ``snap``.
+    with_power : bool
+        Also return every point's power (its track's, summed over the cells).
+
+    Returns
+    -------
+    (ndarray, ndarray[, ndarray])
+        Ranges ``[point]`` [m], direction cosines ``(u_x, u_y)`` in A ``[point, 2]``
+        [and powers ``[point]``].
+    """
+    snap = np.asarray(snap)
+    p = np.asarray(element_positions, dtype=float)
+    r_axis = np.asarray(range_axis, dtype=float)
+    g = np.asarray(gates, dtype=int)
+    n_fft = int(fft_size)
+    cell = float(r_axis[1] - r_axis[0])
+    grid, table = direction_grid(p, wavelength)
     power = np.sum(np.abs(snap) ** 2, axis=0)
-    floor = power.max() * 10 ** (-DENSE_DYNAMIC_RANGE_DB / 10)
+    if floor is None:
+        floor = power.max() * 10 ** (-DENSE_DYNAMIC_RANGE_DB / 10)
     cells = [(_cell_sources(snap[:, j], grid, table, p, wavelength) if power[j] >= floor
               else None) for j in range(g.size)]
     sources = [[] if c is None else list(zip(c[0], c[1], strict=True)) for c in cells]
@@ -292,10 +352,7 @@ def dense_ground_directions(rc, element_positions, motion: PlatformMotion, *,
                 continue
             w = np.abs(amp) ** 2
             u_mean = np.sum(np.array([t[1] for t in track]) * w[:, None], axis=0) / w.sum()
-            pts.append((r_axis[0] + rho * cell, u_mean))      # rho counts from cell 0
-    if not pts:
-        return empty
-    r = np.array([a for a, _ in pts])
-    u = np.array([b for _, b in pts])
-    u_a = np.column_stack([u, np.sqrt(1.0 - np.sum(u ** 2, axis=1))])
-    return r, u_a @ att.T
+            pts.append((r_axis[0] + rho * cell, u_mean, w.sum()))      # rho from cell 0
+    out = (np.array([a[0] for a in pts]).reshape(-1), np.array([a[1] for a in pts]).reshape(-1, 2),
+           np.array([a[2] for a in pts]).reshape(-1))
+    return out if with_power else out[:2]

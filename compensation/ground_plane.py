@@ -4,7 +4,9 @@ A down-looking radar over flat ground sees ground clutter: each clutter
 scatterer has a range ``r`` and a direction ``u``, a point ``p = r u``. A
 down-looking radar's points are the scatterers that every ground cell's plane
 waves give (:mod:`compensation.ground_dense`: range from the range kernel over
-the cells, direction from the whole array at one slot-aligned instant); a mounted
+the cells, direction from the whole array at one slot-aligned instant), over a
+dense ground also those of the range-Doppler cells (:mod:`compensation.ground_dbs`,
+where the range cells give too few); a mounted
 radar's are its beam maxima (azimuth from the array, elevation from the raised
 TX's phase comparison, :func:`compensation.elevation.measure_elevation`). Formed
 with the platform's estimated attitude ``R_est`` the points are in W as that
@@ -43,6 +45,7 @@ from scipy.spatial.transform import Rotation
 from ._checks import finite_array
 from .calibration import DIRECTION_SIGMA, UNRESOLVED_DIRECTION_SIGMA, detect_scatterers
 from .geometry import direction
+from .ground_dbs import DOPPLER_BELOW_POINTS, doppler_ground_directions, unseen
 from .ground_dense import (
     DENSE_ANGLE_SIGMA,
     DENSE_RANGE_SIGMA_CELLS,
@@ -52,6 +55,7 @@ from .ground_dense import (
 from .ground_looks import GroundLook
 from .mounting import mounting_rotation, radar_frame_motion, world_directions
 from .observability import ObservabilityWarning
+from .radar_inertial import DEFAULT_TILT_SIGMA
 from .strapdown import PlatformMotion
 
 __all__ = ["ASSUMPTION", "GroundPlane", "GroundPlaneWarning", "fit_ground_plane", "fit_looks",
@@ -139,6 +143,13 @@ class GroundPlane:
         points of :func:`ground_tilt`, which
         :func:`compensation.ground_refit.refit_ground` turns with another
         integration); empty otherwise.
+    source : str
+        The cells the points come from: ``"range"`` (one snapshot's range cells, or
+        a mounted radar's beam maxima) or ``"range+doppler"`` (with the range-Doppler
+        cells, :mod:`compensation.ground_dbs`).
+    jackknifed : bool
+        Whether every leave-one-group-out fit gave a tilt (the jackknife ran); range-
+        Doppler points give a tilt only where it did.
     """
 
     tilt: np.ndarray
@@ -152,14 +163,19 @@ class GroundPlane:
     warnings: tuple[str, ...] = field(default_factory=tuple)
     spread_scale: float = 1.0
     looks: tuple = field(default=(), repr=False, compare=False)
+    source: str = "range"
+    jackknifed: bool = False
 
     @property
     def usable(self) -> bool:
-        """Whether the fit gives a tilt (enough points on the plane, not a bad fit)."""
+        """Whether the fit gives a tilt (enough points on the plane, not a bad fit, a
+        spread below the prior's :data:`compensation.radar_inertial.DEFAULT_TILT_SIGMA`)."""
         return bool(np.all(np.isfinite(self.tilt)) and self.inliers >= MIN_GROUND_POINTS
                     and self.inliers >= MIN_INLIER_FRACTION * self.points
                     and bool(np.hypot(*self.tilt) <= MAX_NORMAL_ANGLE)
-                    and self.chi2 <= MAX_CHI2)
+                    and self.chi2 <= MAX_CHI2
+                    and bool(np.all(self.tilt_sigma < DEFAULT_TILT_SIGMA))
+                    and (self.source == "range" or self.jackknifed))
 
     @property
     def tilt_sigma(self) -> np.ndarray:
@@ -172,7 +188,7 @@ class GroundPlane:
                 "tilt_sigma_deg": np.rad2deg(self.tilt_sigma).tolist(),
                 "height_m": self.height, "points": self.points, "inliers": self.inliers,
                 "chi2": self.chi2, "rms_m": self.rms, "spread_scale": self.spread_scale,
-                "used": self.usable,
+                "point_cells": self.source, "used": self.usable,
                 "assumption": ASSUMPTION, "warnings": list(self.warnings)}
 
 
@@ -344,9 +360,14 @@ def fit_ground_plane(points, covariance, *, groups=None, seed: int = 0,
         out = GroundPlane(x[:2].copy(), c3[:2, :2].copy(), float(x[2]), normal, p.shape[0],
                           n_in, chi2, rms, tuple(notes))
         if groups is not None and np.all(np.isfinite(out.tilt)):
-            scale = _jackknife_scale(p, cov, groups, out.tilt_covariance, seed)
+            scale, ran = _jackknife_scale(p, cov, groups, out.tilt_covariance, seed)
             out = replace(out, tilt_covariance=out.tilt_covariance * scale,
-                          spread_scale=scale)
+                          spread_scale=scale, jackknifed=ran)
+        if np.any(out.tilt_sigma >= DEFAULT_TILT_SIGMA):
+            out = replace(out, warnings=(*out.warnings, (
+                f"ground plane: tilt spread {np.rad2deg(out.tilt_sigma.max()):.1f} deg, no "
+                f"less than the prior's {np.rad2deg(DEFAULT_TILT_SIGMA):.0f} deg (the points "
+                f"fix it no better than the prior); no tilt from the ground")))
     if warn:
         for text in out.warnings:
             warnings.warn(text, GroundPlaneWarning, stacklevel=2)
@@ -354,27 +375,27 @@ def fit_ground_plane(points, covariance, *, groups=None, seed: int = 0,
 
 
 def _jackknife_scale(p: np.ndarray, cov: np.ndarray, groups: np.ndarray,
-                     tilt_cov: np.ndarray, seed: int) -> float:
+                     tilt_cov: np.ndarray, seed: int) -> tuple[float, bool]:
     """Least factor (>= 1) on ``tilt_cov`` ``[2, 2]`` that covers the delete-one-group
     jackknife covariance ``(K - 1) / K sum_k (t_k - t_mean)(t_k - t_mean)^T`` of the tilt:
-    the largest generalised eigenvalue of the two. 1 with fewer than
-    :data:`MIN_JACKKNIFE_GROUPS` groups or when a fit without a group gives no tilt
-    (the jackknife needs every one)."""
+    the largest generalised eigenvalue of the two, and whether it ran. 1 (not run) with
+    fewer than :data:`MIN_JACKKNIFE_GROUPS` groups or when a fit without a group gives
+    no tilt (the jackknife needs every one)."""
     labels = np.unique(groups)
     if labels.size < MIN_JACKKNIFE_GROUPS:
-        return 1.0
+        return 1.0, False
     tilts = []
     for g in labels:
         keep = groups != g
         if keep.sum() < MIN_GROUND_POINTS:
-            return 1.0
+            return 1.0, False
         t = fit_ground_plane(p[keep], cov[keep], seed=seed, warn=False).tilt
         if not np.all(np.isfinite(t)):
-            return 1.0
+            return 1.0, False
         tilts.append(t)
     d = np.asarray(tilts) - np.mean(tilts, axis=0)
     jack = (labels.size - 1) / labels.size * (d.T @ d)
-    return float(max(1.0, np.max(eigh(jack, tilt_cov, eigvals_only=True))))
+    return float(max(1.0, np.max(eigh(jack, tilt_cov, eigvals_only=True)))), True
 
 
 def ground_points(rc, element_positions, motion: PlatformMotion, *, wavelength: float,
@@ -445,6 +466,12 @@ def dense_points(rc, element_positions, motion: PlatformMotion, *, wavelength: f
     r_axis = np.asarray(range_axis, dtype=float)
     r, u = dense_ground_directions(rc, element_positions, motion, wavelength=wavelength,
                                    range_axis=r_axis, gates=gates, channel_slot=channel_slot)
+    return _dense_covariance(r, u, r_axis)
+
+
+def _dense_covariance(r: np.ndarray, u: np.ndarray, r_axis: np.ndarray):
+    """Points ``r u`` ``[point, 3]`` and their covariances ``[point, 3, 3]`` with the dense
+    points' spreads (range cells ``r_axis`` [m])."""
     if r.size == 0:
         return np.zeros((0, 3)), np.zeros((0, 3, 3))
     az, el = np.arctan2(u[:, 0], u[:, 2]), np.arcsin(np.clip(u[:, 1], -1.0, 1.0))
@@ -486,7 +513,14 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
     of level flat ground); the jackknife widens the stated spread to the one the
     groups show. A hovering platform moves far less than a range cell over a
     record, so the same scatterers share the same cells in every frame: with frames
-    as groups that part of the error shows in no spread. The gyro bias turns the later frames'
+    as groups that part of the error shows in no spread. Where the range cells give
+    fewer than :data:`compensation.ground_dbs.DOPPLER_BELOW_POINTS` points a frame, or
+    no usable plane (dense clutter: more scatterers a cell than three plane waves),
+    every picked frame's range-Doppler cells add their points
+    (:func:`compensation.ground_dbs.doppler_ground_directions`, less those of
+    scatterers the range cells found), each frame's another look turned by its middle
+    loop's attitude, and the fit is of them all (:attr:`GroundPlane.source`). The
+    gyro bias turns the later frames'
     attitude: its spread over the frames' mean time since the first chirp is added
     to the tilt's. The dense points are kept with the attitudes that turned them
     (:attr:`GroundPlane.looks`), to be fitted again with another integration
@@ -537,6 +571,26 @@ def ground_tilt(rcs, element_positions, motions, *, wavelength: float, range_axi
                                     c * pick.size))
         fit = fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
                         range_axis=range_axis, gates=gates)
+        if not fit.usable or fit.points < DOPPLER_BELOW_POINTS * pick.size:
+            # dense clutter: the range-Doppler cells hold fewer scatterers than the range
+            # cells; a scatterer found in both counts once
+            r_axis = np.asarray(range_axis, dtype=float)
+            for k, look in zip(pick, tuple(looks), strict=True):
+                r, u, at = doppler_ground_directions(
+                    rcs[k], element_positions, motions[k], wavelength=wavelength,
+                    range_axis=r_axis, gates=gates, channel_slot=slots)
+                p, c = _dense_covariance(r, u, r_axis)
+                new = unseen(p, look.points, float(r_axis[1] - r_axis[0]))
+                looks.append(GroundLook(int(k), at, np.asarray(motions[k].attitude[at]),
+                                        p[new], c[new] * pick.size))
+            fit = replace(fit_looks(tuple(looks), motions, gyro_bias_sigma=gyro_bias_sigma,
+                                    range_axis=range_axis, gates=gates),
+                          source="range+doppler")
+            if np.all(np.isfinite(fit.tilt)) and not fit.jackknifed:
+                fit = replace(fit, warnings=(*fit.warnings, (
+                    f"ground plane: {fit.points} points of dense clutter, too few for the "
+                    f"jackknife over azimuth sectors to check their spread; no tilt from "
+                    f"the ground")))
     else:
         found = [ground_points(rc, element_positions, radar_frame_motion(m, rot),
                                wavelength=wavelength, range_axis=range_axis, gates=gates,
