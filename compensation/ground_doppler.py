@@ -55,7 +55,7 @@ from .ground_dense import (
     steering,
 )
 from .mounting import radar_frame_motion, world_directions
-from .radar_inertial import MAX_MEASUREMENTS, DopplerMeasurements
+from .radar_inertial import GROUND_GROUP, MAX_MEASUREMENTS, DopplerMeasurements
 from .strapdown import PlatformMotion
 
 __all__ = ["GROUND_DOPPLER_COUNT", "MIN_FIT_PURITY", "GroundScatterer", "ground_measurements",
@@ -232,7 +232,9 @@ def ground_measurements(meas: DopplerMeasurements, rcs, positions, motions,
         of a frame has no loop before it to align the slots with and is left out), its
         spread (no smaller than the least of ``meas``: a plane wave's amplitude is
         measured no better than the best beam), and its direction in W with the
-        covariance of :data:`compensation.ground_dense.DENSE_ANGLE_SIGMA` across it.
+        covariance of :data:`compensation.ground_dense.DENSE_ANGLE_SIGMA` across it, in
+        group :data:`compensation.batch_solve.GROUND_GROUP` (its spreads scaled by their
+        own reduced chi-square in the estimate).
         The first scatterers only where all would give more than
         :data:`compensation.radar_inertial.MAX_MEASUREMENTS` in all.
     """
@@ -282,4 +284,5 @@ def ground_measurements(meas: DopplerMeasurements, rcs, positions, motions,
                                np.concatenate([meas.range_rate, r]),
                                np.concatenate([meas.sigma, s]),
                                np.concatenate([meas.frame, fr]),
-                               np.vstack([meas.window, win]), np.concatenate([dcov, dc]))
+                               np.vstack([meas.window, win]), np.concatenate([dcov, dc]),
+                               np.concatenate([meas.group, np.full(len(r), GROUND_GROUP)]))

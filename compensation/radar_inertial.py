@@ -47,7 +47,9 @@ the velocity across them to the prior. The unconstrained attitude, gyro-bias
 and clock components are held at the prior and their spread carried into the
 others' covariance (:func:`solve_batch`, consider analysis), so the given
 attitude is not turned by a split the radar cannot make; unconstrained is judged
-again on the spreads scaled by the Doppler's reduced chi-square (model error).
+again on the spreads scaled by the Doppler's reduced chi-square (model error), one
+per group of measurements where the ground clutter joins the detected scatterers
+(:func:`compensation.batch_solve.group_scales`).
 """
 
 from __future__ import annotations
@@ -60,6 +62,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._checks import finite_array, positive
+from .batch_solve import DETECTED_GROUP, GROUND_GROUP, group_scales, solve_batch
 from .ego_velocity import MIN_CONSENSUS, block_misfit, fit_ego_velocity
 from .guards import CompensationWarning
 from .multiframe import integrate_record
@@ -72,8 +75,9 @@ from .observability import (
 )
 from .strapdown import STANDARD_GRAVITY, PlatformMotion
 
-__all__ = ["STATE_NAMES", "DopplerMeasurements", "ImuErrors", "ObservabilityWarning",
-           "RadarInertialResult", "estimate_radar_inertial", "prior_sigmas", "solve_batch"]
+__all__ = ["DETECTED_GROUP", "GROUND_GROUP", "STATE_NAMES", "DopplerMeasurements", "ImuErrors",
+           "ObservabilityWarning", "RadarInertialResult", "estimate_radar_inertial",
+           "prior_sigmas", "solve_batch"]
 
 #: Groups of :data:`STATE_NAMES` by slice.
 VELOCITY, ATTITUDE, ACCEL_BIAS, GYRO_BIAS = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
@@ -186,6 +190,10 @@ class DopplerMeasurements:
         one scatterer (an axis the array does not resolve has a large one);
         default none. Its effect ``-du . v`` on the range rate is constant
         over the record: correlated across the scatterer's blocks.
+    group : ndarray of int, shape ``[measurement]``, optional
+        Source of the measurement, :data:`DETECTED_GROUP` (default) or
+        :data:`GROUND_GROUP`: each group's spreads get their own scale
+        (:func:`compensation.batch_solve.group_scales`).
     """
 
     directions: np.ndarray
@@ -194,6 +202,7 @@ class DopplerMeasurements:
     frame: np.ndarray
     window: np.ndarray
     direction_cov: np.ndarray | None = None
+    group: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         u = finite_array("directions", self.directions, ndim=2)
@@ -212,13 +221,20 @@ class DopplerMeasurements:
         if self.direction_cov is not None:
             object.__setattr__(self, "direction_cov", finite_array(
                 "direction_cov", self.direction_cov, shape=(m, 3, 3)))
+        g = np.full(m, DETECTED_GROUP) if self.group is None else np.asarray(self.group)
+        if g.shape != (m,) or not np.all(np.isin(g, (DETECTED_GROUP, GROUND_GROUP))):
+            raise ValueError(f"group must hold {m} of {DETECTED_GROUP} (detected) or "
+                             f"{GROUND_GROUP} (ground), got shape {g.shape}, values "
+                             f"{np.unique(g).tolist()}")
+        object.__setattr__(self, "group", g.astype(int))
 
     def select(self, keep) -> DopplerMeasurements:
         """The measurements where ``keep`` (bool ``[measurement]``) is true."""
         k = np.asarray(keep, dtype=bool)
         return DopplerMeasurements(self.directions[k], self.range_rate[k], self.sigma[k],
                                    self.frame[k], self.window[k],
-                                   None if self.direction_cov is None else self.direction_cov[k])
+                                   None if self.direction_cov is None else self.direction_cov[k],
+                                   self.group[k])
 
 
 @dataclass(frozen=True)
@@ -250,8 +266,8 @@ class RadarInertialResult:
     gyro_bias : ndarray, shape ``[3]``
         Total gyro bias removed [rad/s] (the one given plus the correction).
     chi2 : float
-        Reduced chi-square of the measurements at the solution (above one: the
-        radar spreads were scaled up by it).
+        Reduced chi-square of the measurements at the solution (above one and one
+        group of measurements: the radar spreads were scaled up by it).
     measurements : int
         Doppler measurements used (inliers).
     rejected : int
@@ -262,6 +278,10 @@ class RadarInertialResult:
     misfit_sigma : float
         Spread of the Doppler model's misfit added to every range rate's
         [m/s] (:func:`compensation.ego_velocity.block_misfit`).
+    group_scale : tuple of float
+        Factor of the spreads' variance of each group of measurements (detected,
+        ground) [1], at least one: ``max(chi2, 1)`` with one group, their own
+        reduced chi-squares with both (:func:`compensation.batch_solve.group_scales`).
     """
 
     state: np.ndarray
@@ -279,6 +299,7 @@ class RadarInertialResult:
     rejected: int
     warnings: tuple[str, ...] = field(default_factory=tuple)
     misfit_sigma: float = 0.0
+    group_scale: tuple[float, ...] = ()
 
     @property
     def sigma(self) -> np.ndarray:
@@ -298,60 +319,8 @@ class RadarInertialResult:
                 "unconstrained": list(self.unconstrained),
                 "weak_directions": list(self.weak_directions), "chi2": self.chi2,
                 "measurements": self.measurements, "rejected": self.rejected,
-                "misfit_sigma": self.misfit_sigma,
+                "misfit_sigma": self.misfit_sigma, "group_scale": list(self.group_scale),
                 "warnings": list(self.warnings)}
-
-
-def solve_batch(h, residual, noise_cov, prior_cov, x_lin, consider=None
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """One Gauss-Newton step of prior plus linear measurements, some components held.
-
-    Minimises ``(x_lin + d)^T P0^-1 (x_lin + d) + (r - H d)^T C^-1 (r - H d)``
-    over the estimated components; the ``consider`` components stay at
-    ``x_lin`` and their prior spread is carried into the others' covariance
-    (Schmidt's consider analysis: ``P_aa = I_a^-1 + S P_cc S^T`` with the
-    sensitivity ``S = -I_a^-1 H_a^T C^-1 H_c``; Tapley, Schutz and Born,
-    Statistical Orbit Determination, 2004, sec. 6.2).
-
-    Parameters
-    ----------
-    h : array_like, shape ``[measurement, state]``
-    residual : array_like, shape ``[measurement]``
-        Measured minus predicted at ``x_lin``.
-    noise_cov : array_like, shape ``[measurement, measurement]``
-    prior_cov : array_like, shape ``[state, state]``
-        Prior covariance (zero mean); its cross terms between held and
-        estimated components are ignored.
-    x_lin : array_like, shape ``[state]``
-        Linearisation point.
-    consider : array_like of bool, shape ``[state]``, optional
-        Components held at ``x_lin`` (default none).
-
-    Returns
-    -------
-    (ndarray, ndarray)
-        The new state ``[state]`` and its covariance ``[state, state]``.
-    """
-    h = np.asarray(h, dtype=float)
-    p0 = np.asarray(prior_cov, dtype=float)
-    x0 = np.asarray(x_lin, dtype=float)
-    c = np.zeros(x0.size, dtype=bool) if consider is None else np.asarray(consider, dtype=bool)
-    a = ~c
-    ha, hc = h[:, a], h[:, c]
-    p0a_inv = np.linalg.inv(p0[np.ix_(a, a)])
-    ci_ha = np.linalg.solve(noise_cov, ha)
-    info = p0a_inv + ha.T @ ci_ha
-    paa = np.linalg.inv(info)
-    x = x0.copy()
-    x[a] = x0[a] + paa @ (ci_ha.T @ np.asarray(residual, dtype=float) - p0a_inv @ x0[a])
-    pcc = p0[np.ix_(c, c)]
-    sens = -paa @ (ci_ha.T @ hc)
-    cov = np.zeros_like(p0)
-    cov[np.ix_(a, a)] = paa + sens @ pcc @ sens.T
-    cov[np.ix_(a, c)] = sens @ pcc
-    cov[np.ix_(c, a)] = (sens @ pcc).T
-    cov[np.ix_(c, c)] = pcc
-    return x, 0.5 * (cov + cov.T)
 
 
 def _ls_slope(t: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -576,7 +545,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     x = np.zeros(14)
     cov = p0
     motions = integrate(x)
-    chi2, kept, rejected, fisher, misfit = 1.0, 0, 0, np.zeros((14, 14)), 0.0
+    chi2, kept, rejected, fisher, misfit, scale = 1.0, 0, 0, np.zeros((14, 14)), 0.0, ()
     keep = held = dvdx = h_track = None
     for _ in range(int(iterations)):
         meas = measure(motions)
@@ -631,8 +600,18 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         # the Doppler's reduced chi-square (the track's spreads are the controller's own)
         chi2 = float(res[:kept] @ np.linalg.solve(cw[:kept, :kept], res[:kept])) / max(
             kept - hat, 1.0)
-        if chi2 > 1.0:           # spreads understated (model error): scale the radar's
-            cw[:kept, :kept] *= chi2
+        both = np.unique(meas.group).size > 1
+        if both:                  # each group's spreads by its own reduced chi-square
+            scale = group_scales(h, r, cw, p0, x, meas.group, held)
+        else:
+            scale = np.ones(meas.group.max() + 1)
+            scale[meas.group[0]] = max(chi2, 1.0)
+        if np.any(scale > 1.0):   # spreads understated (model error): scale the radar's
+            if both:
+                root = np.sqrt(scale[meas.group])
+                cw[:kept, :kept] *= np.outer(root, root)
+            else:
+                cw[:kept, :kept] *= chi2
             fisher = h.T @ np.linalg.solve(cw, h)
             # what the scaled spreads leave unconstrained is held too: reported as kept at
             # the prior, it must not move with the model error
@@ -650,7 +629,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     att = Rotation.from_rotvec(x[ATTITUDE]).as_matrix() @ r0
     return RadarInertialResult(x, cov, p0, names, dirs, tuple(motions), v0 + x[VELOCITY], att,
                                tau0 + float(x[CLOCK_OFFSET]), bg0 + x[GYRO_BIAS], chi2, kept,
-                               rejected, notes, misfit)
+                               rejected, notes, misfit, tuple(float(v) for v in scale))
 
 
 def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
@@ -674,7 +653,7 @@ def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:
 def _with_misfit(meas: DopplerMeasurements, misfit: float) -> DopplerMeasurements:
     """``meas`` with the misfit spread added to every range rate's in quadrature."""
     return DopplerMeasurements(meas.directions, meas.range_rate, np.hypot(meas.sigma, misfit),
-                               meas.frame, meas.window, meas.direction_cov)
+                               meas.frame, meas.window, meas.direction_cov, meas.group)
 
 
 def _consensus(meas: DopplerMeasurements) -> np.ndarray:
