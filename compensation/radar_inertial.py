@@ -625,9 +625,12 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
             else:
                 cw[:kept, :kept] *= chi2
             fisher = h.T @ np.linalg.solve(cw, h)
-            # what the scaled spreads leave unconstrained is held too: reported as kept at
-            # the prior, it must not move with the model error
-            held = held | held_mask(p0, fisher)
+        # what the (scaled) spreads leave unconstrained is held too: reported as kept at
+        # the prior, it must not move with the model error (nor keep an earlier pass's
+        # move: it goes back to the first guess, the residuals with it)
+        newly = held_mask(p0, fisher) & ~held
+        if np.any(scale > 1.0) or np.any(newly):
+            held, r, x = held | newly, r + h[:, newly] @ x[newly], np.where(newly, 0.0, x)
             x_new, cov = solve_batch(h, r, cw, p0, x, held)
         x = x_new
         motions = integrate(x)
