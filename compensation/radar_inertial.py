@@ -63,6 +63,7 @@ from scipy.spatial.transform import Rotation
 
 from ._checks import finite_array, positive
 from .batch_solve import DETECTED_GROUP, GROUND_GROUP, group_scales, solve_batch
+from .block_velocity import block_covariance, block_velocity_variance
 from .ego_velocity import MIN_CONSENSUS, block_misfit, fit_ego_velocity
 from .guards import CompensationWarning
 from .multiframe import integrate_record
@@ -282,6 +283,9 @@ class RadarInertialResult:
         Factor of the spreads' variance of each group of measurements (detected,
         ground) [1], at least one: ``max(chi2, 1)`` with one group, their own
         reduced chi-squares with both (:func:`compensation.batch_solve.group_scales`).
+    block_velocity_sigma : tuple of float
+        Spread of the velocity error common to each block's rows along W's
+        axes [m/s] (:mod:`compensation.block_velocity`), at the last pass.
     """
 
     state: np.ndarray
@@ -300,6 +304,7 @@ class RadarInertialResult:
     warnings: tuple[str, ...] = field(default_factory=tuple)
     misfit_sigma: float = 0.0
     group_scale: tuple[float, ...] = ()
+    block_velocity_sigma: tuple[float, ...] = ()
 
     @property
     def sigma(self) -> np.ndarray:
@@ -320,6 +325,7 @@ class RadarInertialResult:
                 "weak_directions": list(self.weak_directions), "chi2": self.chi2,
                 "measurements": self.measurements, "rejected": self.rejected,
                 "misfit_sigma": self.misfit_sigma, "group_scale": list(self.group_scale),
+                "block_velocity_sigma_mps": list(self.block_velocity_sigma),
                 "warnings": list(self.warnings)}
 
 
@@ -546,6 +552,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     cov = p0
     motions = integrate(x)
     chi2, kept, rejected, fisher, misfit, scale = 1.0, 0, 0, np.zeros((14, 14)), 0.0, ()
+    block_q = np.zeros(3)
     keep = held = dvdx = h_track = None
     for _ in range(int(iterations)):
         meas = measure(motions)
@@ -588,6 +595,11 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
             c = np.block([[c, np.zeros((kept, n2))], [np.zeros((n2, kept)), c_track]])
         if held is None:            # the attitude, gyro and clock the scene leaves alone
             held = held_mask(p0, h.T @ np.linalg.solve(c, h))
+        # a velocity error common to each block's rows (vibration the log misses)
+        blocks = np.unique(np.column_stack([meas.frame, meas.window]), axis=0,
+                           return_inverse=True)[1].ravel()
+        block_q = block_velocity_variance(h, r, c, p0, x, u, blocks, held)
+        c = c + block_covariance(u, blocks, block_q, rows=r.size)
         wts = np.ones(r.size)
         for _ in range(HUBER_PASSES):             # iteratively reweighted (Huber)
             cw = c / np.sqrt(np.outer(wts, wts))
@@ -613,9 +625,12 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
             else:
                 cw[:kept, :kept] *= chi2
             fisher = h.T @ np.linalg.solve(cw, h)
-            # what the scaled spreads leave unconstrained is held too: reported as kept at
-            # the prior, it must not move with the model error
-            held = held | held_mask(p0, fisher)
+        # what the (scaled) spreads leave unconstrained is held too: reported as kept at
+        # the prior, it must not move with the model error (nor keep an earlier pass's
+        # move: it goes back to the first guess, the residuals with it)
+        newly = held_mask(p0, fisher) & ~held
+        if np.any(scale > 1.0) or np.any(newly):
+            held, r, x = held | newly, r + h[:, newly] @ x[newly], np.where(newly, 0.0, x)
             x_new, cov = solve_batch(h, r, cw, p0, x, held)
         x = x_new
         motions = integrate(x)
@@ -629,7 +644,8 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     att = Rotation.from_rotvec(x[ATTITUDE]).as_matrix() @ r0
     return RadarInertialResult(x, cov, p0, names, dirs, tuple(motions), v0 + x[VELOCITY], att,
                                tau0 + float(x[CLOCK_OFFSET]), bg0 + x[GYRO_BIAS], chi2, kept,
-                               rejected, notes, misfit, tuple(float(v) for v in scale))
+                               rejected, notes, misfit, tuple(float(v) for v in scale),
+                               tuple(float(v) for v in np.sqrt(block_q)))
 
 
 def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:

@@ -191,11 +191,16 @@ def test_a_self_calibration_warns_of_the_azimuth_its_doppler_residual_gives(flig
     """Self-calibrated (velocity and clock offset from the radar): three targets in a
     narrow cone leave the velocity across it uncertain; the stage measures the residual
     range rate the beams leave each scatterer and warns of the azimuth it gives, which is
-    the miss of that target."""
+    the miss of that target; without a warning no target misses the bound (with the
+    velocity error common to each block modelled, this seed's miss of 0.46 deg is gone)."""
     out = tmp_path / "c.zarr"
     assert main(flight.calibrating_command(out, *GRID)) == 0
     cal = json.loads(open_store(out).attrs["self_calibration"])
     said = [w for w in cal["warnings"] if w.startswith("azimuth:")]
+    if not said:
+        err, _ = _measure(flight, out)
+        assert np.all(np.abs(err) <= ANGLE_TOL_DEG), (err, cal["warnings"])
+        return
     assert len(said) == 1, cal["warnings"]
     hit = re.search(r"azimuth (-?[0-9.]+) deg, elevation (-?[0-9.]+) deg a range rate of "
                     r"([-+][0-9.]+) mm/s in frame (\d+).* by ([-+][0-9.]+) deg", said[0])

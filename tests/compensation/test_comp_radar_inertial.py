@@ -333,9 +333,11 @@ HELD_MOVE_FRACTION = 1e-6
 
 
 def test_unconstrained_after_chi_square_scaling_is_held():
-    """A model error common to each block's scatterers: the components the scaled spreads
-    leave unconstrained, the clock offset among them, stay at the first guess (they are
-    reported as kept at the prior) and their spread covers their error, over seeds."""
+    """A velocity error common to each block's scatterers (its spread estimated,
+    compensation.block_velocity, and scaled where the reduced chi-square still exceeds
+    one): the components left unconstrained, the clock offset among them, stay at the
+    first guess (they are reported as kept at the prior) and their spread covers their
+    error, over seeds."""
     for seed in range(3):
         (t, gyro, accel), measure, guess, truth, sig, _ = _record(900 + seed, "spread")
         rng = np.random.default_rng(seed)
@@ -351,7 +353,6 @@ def test_unconstrained_after_chi_square_scaling_is_held():
         res = estimate_radar_inertial(t, gyro, accel, FRAMES, with_model_error, imu_errors=IMU,
                                       prior_sigma=sig, iterations=2, lever_arm=LEVER,
                                       clock_offset_sigma=WIDE_CLOCK_SIGMA, **guess)
-        assert res.chi2 > 1.0
         assert "clock_offset" in res.unconstrained
         for name in set(res.unconstrained) & set(HELD_WHEN_UNCONSTRAINED):
             i = STATE_NAMES.index(name)
