@@ -34,11 +34,6 @@ exit status: 0 written, 2 invalid input (the message names the option and the va
 """
 
 
-#: Logged IMU rate below which the printed commands add the radar autofocus [Hz]: 2.5
-#: times the hover jitter's highest rotor line (160 Hz).
-UNRESOLVED_RATE_HZ = 400.0
-
-
 def register(subparsers) -> None:
     """Add the ``flight`` subcommand."""
     from raysim.cli.options import add_decimation_options
@@ -161,7 +156,12 @@ def run(args) -> int:
     r = [t[0] for t in f.targets]
     el = "0:0:1" if all(t[2] == 0 for t in f.targets) else "-5:5:5"
     cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg", el)
-    if f.imu_boxcar or f.imu_rate < UNRESOLVED_RATE_HZ:     # the log cannot see the rotors
+    # the rule compensate warns by: below 2.5 x the hover jitter's highest rotor line (or
+    # any boxcar average) the log cannot see the rotors, the radar autofocus estimates them
+    from compensation.ingestion import VIBRATION_RATE_FACTOR
+    from raysim.platform.motion import HoverJitterSpec
+
+    if f.imu_boxcar or f.imu_rate < VIBRATION_RATE_FACTOR * HoverJitterSpec().vibration_band[1]:
         cells += ("--autofocus", "displacement")
     print("compensate with (velocity and clock offset estimated from the radar):")
     print("  raysim " + shlex.join(f.calibrating_command(out, *cells, attitude=args.attitude)))
