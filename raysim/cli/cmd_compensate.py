@@ -252,6 +252,8 @@ def _calibration_text(report: dict) -> str:
     if gp:
         tilt = ", ".join(f"{a:.3f} +- {b:.3f}" for a, b in zip(
             gp["tilt_deg"], gp["tilt_sigma_deg"], strict=True))
+        if not all(map(np.isfinite, gp["tilt_deg"])):       # too few points to fit a plane
+            tilt = "not fitted"
         lines.append(f"  ground plane tilt [deg] (N, E) {tilt} ({gp['role']}; "
                      f"{gp['inliers']} of {gp['points']} points; assumes {gp['assumption']})")
     return "\n".join(lines)

@@ -126,7 +126,9 @@ def flight_log(trajectory, imu: str, *, rate: float, times, seed: int, time_offs
     rate : float
         Logged IMU rate [Hz].
     times : (float, float)
-        Truth times the record must cover [s]; it starts at truth time 0.
+        Truth times the record must cover [s]; it starts at truth time 0, or where
+        the IMU clock reads 0 if it runs behind (a negative ``time_offset``: a log's
+        stamps count from boot and are never negative).
     seed : int
         Seed of the IMU errors (and, offset, of the gaps).
     time_offset, clock_drift_ppm : float
@@ -157,21 +159,24 @@ def flight_log(trajectory, imu: str, *, rate: float, times, seed: int, time_offs
 
     if not (np.isfinite(rate) and rate > 0):
         raise ValueError(f"--imu-rate: got {rate!r}, expected a positive rate [Hz]")
+    clock = Imu("ideal", rate=rate, time_offset=time_offset, clock_drift_ppm=clock_drift_ppm)
+    # an IMU clock behind the radar's starts the log 1 us after its own zero, so that
+    # rounding to whole microseconds never gives a negative stamp
+    boot = 0.0 if float(clock.to_imu_time(0.0)) >= 0 else float(clock.to_true_time(0.0)) + 1e-6
     if boxcar:
         if not (np.isfinite(fast_rate) and fast_rate >= rate):
             raise ValueError(f"--imu-fast-rate: got {fast_rate!r}, expected a rate >= "
                              f"--imu-rate {rate:g} Hz")
         fast = imu_record(trajectory, imu, rate=fast_rate, times=times, seed=seed,
-                          time_offset=time_offset, clock_drift_ppm=clock_drift_ppm, start=0.0)
+                          time_offset=time_offset, clock_drift_ppm=clock_drift_ppm, start=boot)
         samples = boxcar_output(fast, rate)
     else:
         samples = imu_record(trajectory, imu, rate=rate, times=times, seed=seed,
                              time_offset=time_offset, clock_drift_ppm=clock_drift_ppm,
-                             start=0.0)
-    clock = Imu("ideal", rate=rate, time_offset=time_offset, clock_drift_ppm=clock_drift_ppm)
+                             start=boot)
     att = None
     if attitude:
-        t_true = np.arange(0.0, clock.to_true_time(samples.time[-1]), 1.0 / ATTITUDE_RATE)
+        t_true = np.arange(boot, clock.to_true_time(samples.time[-1]), 1.0 / ATTITUDE_RATE)
         from scipy.spatial.transform import Rotation
 
         est = Rotation.from_rotvec(controller_tilt_error(t_true, seed)) * trajectory.attitude(

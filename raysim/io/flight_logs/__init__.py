@@ -230,7 +230,7 @@ def microsecond_stamps(samples, writer: str, clock: str) -> np.ndarray:
     check_increasing(t, writer)                     # at least 2 samples, increasing
     if t[0] < 0:
         raise ValueError(f"{clock} are microseconds since boot and must be >= 0; the first "
-                         f"sample is at {t[0]!r} s")
+                         f"sample is at {float(t[0]):.6f} s")
     stamps = np.rint(t * 1e6).astype(np.int64)
     check_increasing(stamps.astype(float), f"{writer} (times rounded to 1 us)")
     return stamps

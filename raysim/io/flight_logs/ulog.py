@@ -320,7 +320,7 @@ def write_px4_ulog(path: str | os.PathLike, samples: ImuSamples, attitude=None, 
         check_increasing(t_att, "write_px4_ulog attitude")
         if t_att[0] < 0:
             raise ValueError(f"attitude times are microseconds since boot and must be >= 0; "
-                             f"the first is at {t_att[0]!r} s")
+                             f"the first is at {float(t_att[0]):.6f} s")
         body += _message(b"A", struct.pack("<BH", 0, 1) + ATTITUDE_TOPIC.encode())
         quat = attitude.rotation.as_quat()[:, [3, 0, 1, 2]]       # scipy x,y,z,w -> w,x,y,z
         for t, q in zip(np.rint(t_att * 1e6).astype(np.int64), quat, strict=True):
