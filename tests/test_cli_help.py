@@ -10,6 +10,7 @@ does), then checked: present, at most one ``(default:``, and not ending in
 from __future__ import annotations
 
 import argparse
+import re
 
 import pytest
 
@@ -78,3 +79,21 @@ def test_the_checks_catch_each_glitch():
     assert help_problems(p) == [
         "--a: no help", "--b: '(default:' twice: 'b (default: 3) (default: 3)'",
         "--c: ends in '(default: None)': 'c (default: None)'"]
+
+
+def epilog_problems(parser: argparse.ArgumentParser) -> list[str]:
+    """Example lines of ``parser``'s epilog where a continuation backslash was lost (an
+    option glued to the previous line's end after a run of spaces)."""
+    return [line for line in (parser.epilog or "").splitlines()
+            if re.search(r"\S {3,}--", line.split("#")[0])]
+
+
+@pytest.mark.parametrize("command", sorted(SUBPARSERS))
+def test_every_example_line_is_whole(command):
+    assert epilog_problems(SUBPARSERS[command]) == []
+
+
+def test_the_example_check_catches_a_lost_continuation():
+    p = argparse.ArgumentParser(epilog="  raysim x a.bin --board B       --imu f.ulg\n"
+                                       "  raysim x a.bin --out b.npz     # comment\n")
+    assert epilog_problems(p) == ["  raysim x a.bin --board B       --imu f.ulg"]

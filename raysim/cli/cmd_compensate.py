@@ -44,7 +44,7 @@ examples:
   raysim compensate cube.npz --imu imu.csv --velocity given --initial-velocity 0,0,0 \\
       --lever-arm 0,0,0.1 --out beams.npz
   raysim compensate cube.npz --imu flight.ulg --out beams.npz     # PX4 log
-  raysim compensate adc_data.bin --radar-config iwr6843.cfg --board IWR6843AOP \
+  raysim compensate adc_data.bin --radar-config iwr6843.cfg --board IWR6843AOP \\
       --imu flight.ulg --imu-topic sensor_combined --max-gap 0.2 --out beams.zarr
   raysim compensate cube.npz --imu rosbag2_folder --out beams.npz # ROS 2 bag
   raysim compensate rotation_y.zarr --chain paper --direction-deg 20,0 --out paper.npz
@@ -97,8 +97,9 @@ def _chain(text: str) -> ChainSpec:
 def register(subparsers) -> None:
     """Add the ``compensate`` subcommand."""
     p = subparsers.add_parser(
-        "compensate", help="motion-compensate a stored IF cube (Zarr store, NetCDF or .npz) "
-        "with an IMU log (CSV)",
+        "compensate", help="motion-compensate a radar cube (Zarr store, NetCDF, .npz or a DCA1000 "
+        "capture) "
+        "with an IMU or flight log (CSV, PX4 ULog, ArduPilot DataFlash, ROS 2 bag)",
         description=__doc__.split("\n\n")[0] + " Runs the exact rigid-body projection "
         "(or the paper's chain) on the selected range cells and angle grid.",
         epilog=EPILOG, formatter_class=_HelpFormatter)
