@@ -214,6 +214,44 @@ def test_a_self_calibration_warns_of_the_azimuth_its_doppler_residual_gives(flig
     assert abs(miss - shift) <= SHIFT_REL_TOL * abs(shift) + SHIFT_ABS_TOL_DEG, (miss, said)
 
 
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_self_calibration_off_by_a_velocity_warns_of_the_azimuth_it_misses(
+        flight, tmp_path, monkeypatch, sign):
+    """The self-calibrated motion with a velocity error of 10 mm/s added along the
+    boresight (a velocity the scene left uncertain, made certain): the stage measures
+    the residual range rate at its scatterers, warns of the azimuth it gives, and that
+    is the miss of the target it names against the same run without the error."""
+    import dataclasses
+
+    from raysim.pipeline import self_calibration
+
+    def calibrate(*args, **kw):
+        cal = self_calibration.calibrate_record(*args, **kw)
+        t0 = cal.result.motions[0].time[0]
+        moved = tuple(dataclasses.replace(
+            m, position=m.position + sign * VELOCITY_ERROR * (m.time - t0)[:, None],
+            velocity=m.velocity + sign * VELOCITY_ERROR) for m in cal.result.motions)
+        return dataclasses.replace(cal, result=dataclasses.replace(cal.result, motions=moved))
+
+    base = tmp_path / "b.zarr"
+    assert main(flight.calibrating_command(base, *GRID)) == 0
+    monkeypatch.setattr(stage, "calibrate_record", calibrate)
+    out = tmp_path / "v.zarr"
+    assert main(flight.calibrating_command(out, *GRID)) == 0
+    cal = json.loads(open_store(out).attrs["self_calibration"])
+    said = [w for w in cal["warnings"] if w.startswith("azimuth:")]
+    assert len(said) == 1, cal["warnings"]
+    hit = re.search(r"azimuth (-?[0-9.]+) deg, elevation (-?[0-9.]+) deg a range rate of "
+                    r"([-+][0-9.]+) mm/s in frame (\d+).* by ([-+][0-9.]+) deg", said[0])
+    az, _, _, frame, shift = (float(g) for g in hit.groups())
+    j = int(np.argmin([abs(flight.apparent_direction(0, i)[0] - az)
+                       for i in range(len(TARGETS))]))
+    err, _ = _measure(flight, out)
+    miss = err[j, int(frame)] - _measure(flight, base)[0][j, int(frame)]
+    assert abs(err[j, int(frame)]) > ANGLE_TOL_DEG, (err, said)
+    assert abs(miss - shift) <= SHIFT_REL_TOL * abs(shift) + SHIFT_ABS_TOL_DEG, (miss, said)
+
+
 def test_ground_clutter_in_a_target_cell_moves_it_with_the_true_motion(tmp_path, monkeypatch):
     """A forward radar 3 m over the ground sees it at the targets' ranges, 24-36 deg below
     them, where the array (one row raised by half a wavelength) hardly separates it: with
