@@ -14,6 +14,7 @@ offset and velocity given instead.
 from __future__ import annotations
 
 import argparse
+import math
 import shlex
 
 EPILOG = """\
@@ -114,6 +115,28 @@ def _triple(text: str, option: str) -> tuple:
     return v
 
 
+#: Finest step [deg] of the printed elevation grid (a target between its values is
+#: measured off its beam by at most half of it) and the most values it may have.
+ELEVATION_GRID_STEP_DEG = 0.1
+ELEVATION_GRID_MAX_VALUES = 41
+
+
+def elevation_grid(elevations) -> str:
+    """``LO:HI:STEP`` [deg] of a beam grid holding every target elevation: the step the
+    largest that divides their differences (in tenths of a degree), or where that gives
+    more than :data:`ELEVATION_GRID_MAX_VALUES` values, the finest step that does not
+    (a target between two values is then measured up to half a step off its beam)."""
+    tenths = sorted({int(round(e / ELEVATION_GRID_STEP_DEG)) for e in elevations})
+    lo, hi = tenths[0], tenths[-1]
+    if lo == hi:
+        return f"{lo * ELEVATION_GRID_STEP_DEG:g}:{hi * ELEVATION_GRID_STEP_DEG:g}:1"
+    step = math.gcd(*(t - lo for t in tenths)) or 1
+    if (hi - lo) // step + 1 > ELEVATION_GRID_MAX_VALUES:
+        step = -(-(hi - lo) // (ELEVATION_GRID_MAX_VALUES - 1))
+    d = ELEVATION_GRID_STEP_DEG
+    return f"{lo * d:g}:{hi * d:g}:{step * d:g}"
+
+
 def run(args) -> int:
     """Run ``raysim flight``; returns the exit code."""
     import sys
@@ -154,8 +177,8 @@ def run(args) -> int:
         print("logger gaps (start, length) [s, IMU clock]: " + ", ".join(
             f"({s:.3f}, {n:.3f})" for s, n in f.gaps), file=sys.stderr)
     r = [t[0] for t in f.targets]
-    el = "0:0:1" if all(t[2] == 0 for t in f.targets) else "-5:5:5"
-    cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg", el)
+    cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg",
+             elevation_grid([t[2] for t in f.targets]))
     # the rule compensate warns by: below 2.5 x the hover jitter's highest rotor line (or
     # any boxcar average) the log cannot see the rotors, the radar autofocus estimates them
     from compensation.ingestion import VIBRATION_RATE_FACTOR
