@@ -224,6 +224,30 @@ def test_flight_command_prints_a_working_compensate(tmp_path, capsys):
     assert "--target" in capsys.readouterr().err
 
 
+def test_flight_prints_an_elevation_grid_through_every_target(tmp_path, capsys):
+    """Targets at -10, 0, 5 and 10 deg elevation: the printed beam grid holds each of
+    them (a fixed -5:5:5 measured the one at 10 deg 5 deg off its beam, 0.8 deg off in
+    azimuth at 50 deg)."""
+    import shlex
+
+    from raysim.cli.cmd_flight import elevation_grid
+    from raysim.cli.options import span_grid
+
+    els = [10.0, -10.0, 5.0, 0.0]
+    assert main(["flight", str(tmp_path / "fl"), "--frames", "1", "--imu", "ideal",
+                 *(a for e in els for a in ("--target", f"8,{4 * e},{e}")),
+                 "--no-progress"]) == 0
+    for line in capsys.readouterr().out.splitlines():
+        if line.strip().startswith("raysim compensate"):
+            c = shlex.split(line.strip())
+            grid = span_grid(c[c.index("--el-deg") + 1], "--el-deg")
+            assert all(np.min(np.abs(grid - e)) <= 1e-9 for e in els), grid
+    for els, worst in (([3.7, -2.0], 0.0), ([0.0], 0.0), ([-30.0, 30.0, 0.3], 0.75)):
+        grid = span_grid(elevation_grid(els), "--el-deg")
+        assert grid.size <= 41                        # a beam grid a flight can afford
+        assert max(np.min(np.abs(grid - e)) for e in els) <= worst + 1e-9, (els, grid)
+
+
 def test_flight_with_a_low_rate_log_prints_the_autofocus(tmp_path, capsys):
     """A 250 Hz boxcar log does not resolve the rotor lines: the printed commands carry the
     radar autofocus, and compensate without it says what would estimate that vibration."""
