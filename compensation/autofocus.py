@@ -356,7 +356,8 @@ def check_selection(max_cells, iterations, min_snr_db, stationary_bins) -> tuple
 def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
                          wavelength: float | None = None, max_cells: int = 32,
                          min_snr_db: float = 20.0, stationary_bins: float = 2.0,
-                         iterations: int = 8, doppler: str = "keep") -> Autofocus:
+                         iterations: int = 8, doppler: str = "keep",
+                         sidelobe_db: float | None = None) -> Autofocus:
     """Estimate the residual per-chirp phase common to the cells (phase-gradient autofocus).
 
     Parameters
@@ -388,6 +389,11 @@ def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
         platform velocity error along ``u0``: it is estimated
         (:attr:`Autofocus.range_rate`) and its linear phase joins the
         estimate (a lateral velocity error, ``v . (u - u0)``, stays).
+    sidelobe_db : float, optional
+        Drop the cells this far [dB] or more below the strongest of their range gate
+        (the first cell axis): where the array's sidelobes come that close, a
+        sidelobe carries its scatterer's phase and Doppler at another beam's
+        direction (:mod:`compensation.sidelobes`). Left out: every cell kept.
 
     Returns
     -------
@@ -440,6 +446,10 @@ def estimate_phase_error(data, *, chirp_time=None, slot_times=None,
 
     noise = _noise_per_bin(x)
     sel = _candidates(x, cell_shape, noise * 10 ** (snr / 10), stationary_bins, max_cells)
+    if sidelobe_db is not None:
+        from .sidelobes import main_lobe_cells
+
+        sel = main_lobe_cells(x, sel, cell_shape, positive("sidelobe_db", sidelobe_db))
     q = _detrend_basis(n)
     if sel.size == 0:
         text = (f"autofocus: no stationary scatterer {snr:g} dB above the noise in "

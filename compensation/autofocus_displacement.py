@@ -12,9 +12,10 @@ direction ``u0``. :func:`estimate_displacement` estimates the vector ``d_n``:
 1. cells are selected as in :func:`compensation.autofocus.estimate_phase_error`
    (stationary local maxima ``min_snr_db`` above the noise, the ``max_cells``
    strongest), each with the direction ``u_c`` of its beam; cells
-   :data:`SIDELOBE_DB` or more below the strongest of their range gate are
+   ``sidelobe_db`` or more below the strongest of their range gate are
    dropped (a sidelobe carries its scatterer's phase at another beam's
-   direction; a weaker scatterer in the same gate goes with them);
+   direction; a weaker scatterer in the same gate goes with them;
+   :mod:`compensation.sidelobes` sets it from the array's pattern);
 2. each cell's Doppler peak is shifted to zero and its unwrapped phase
    history ``psi_c(n)`` is taken relative to its own constant and linear trend
    (a cell's constant is its position, its linear phase a velocity: the
@@ -70,6 +71,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._checks import finite_array, positive
+from .sidelobes import SIDELOBE_DB, main_lobe_cells
 from .autofocus import (
     CONVERGENCE_RAD,
     MIN_CHIRPS,
@@ -98,8 +100,6 @@ DEGENERATE_RATIO = 1e-6
 UNOBSERVED_RATIO = 0.5
 #: Fewest cells for a vector estimate (three components and their spread).
 MIN_CELLS = 4
-#: Cells this far below the strongest of their range gate are taken as its sidelobes [dB].
-SIDELOBE_DB = 10.0
 #: Default prior standard deviation of each displacement component [m] (the rotor band's
 #: residual displacement is sub-millimetre).
 PRIOR_M = 1e-3
@@ -227,18 +227,6 @@ def _cell_phases(g: np.ndarray, q: np.ndarray) -> np.ndarray:
     return _detrend(psi, q)
 
 
-def _main_lobes(x: np.ndarray, sel: np.ndarray, cell_shape: tuple) -> np.ndarray:
-    """The selected cells less those :data:`SIDELOBE_DB` or more below the strongest of their
-    range gate: a sidelobe carries its scatterer's phase at another beam's direction."""
-    if sel.size == 0:
-        return sel
-    p = np.mean(np.abs(x[:, sel]) ** 2, axis=0)
-    gate = np.unravel_index(sel, cell_shape)[0]
-    top = np.zeros(int(gate.max()) + 1)
-    np.maximum.at(top, gate, p)
-    return sel[p > top[gate] * 10 ** (-SIDELOBE_DB / 10)]
-
-
 def _fallback(beams, slot_times, options, text, lam, t, cells, it, ev, axes, prior):
     if cells:                       # none: the common estimate's own warning says so
         _warnings.warn(text, CompensationWarning, stacklevel=3)
@@ -252,8 +240,8 @@ def _fallback(beams, slot_times, options, text, lam, t, cells, it, ev, axes, pri
 def estimate_displacement(beams: BeamCube, *, slot_times=None, max_cells: int = 32,
                           min_snr_db: float = 20.0, stationary_bins: float = 2.0,
                           iterations: int = 8, prior_m: float = PRIOR_M,
-                          doppler: str = "keep", prior_mps: float = PRIOR_MPS
-                          ) -> DisplacementFocus:
+                          doppler: str = "keep", prior_mps: float = PRIOR_MPS,
+                          sidelobe_db: float = SIDELOBE_DB) -> DisplacementFocus:
     """Estimate the residual per-chirp displacement vector from the beams' stationary cells.
 
     Parameters
@@ -276,6 +264,9 @@ def estimate_displacement(beams: BeamCube, *, slot_times=None, max_cells: int = 
         its linear part (:attr:`DisplacementFocus.velocity`).
     prior_mps : float
         Prior standard deviation of each velocity component [m/s].
+    sidelobe_db : float
+        Cells this far [dB] or more below the strongest of their range gate are
+        dropped (:func:`compensation.sidelobes.sidelobe_margin_db` of the array).
 
     Returns
     -------
@@ -308,15 +299,16 @@ def estimate_displacement(beams: BeamCube, *, slot_times=None, max_cells: int = 
     prior_v = positive("prior_mps", prior_mps)
     if doppler not in ("keep", "stationary"):
         raise ValueError(f"doppler must be 'keep' or 'stationary', got {doppler!r}")
+    margin = positive("sidelobe_db", sidelobe_db)
     options = dict(max_cells=max_cells, min_snr_db=snr, stationary_bins=stationary_bins,
-                   iterations=iterations, doppler=doppler)
+                   iterations=iterations, doppler=doppler, sidelobe_db=margin)
     lam = float(beams.wavelength)
     k2 = 4 * np.pi / lam                                                 # 2 k [rad/m]
 
     noise = _noise_per_bin(x)
     sel = _candidates(x, cell_shape, noise * 10 ** (snr / 10), stationary_bins, max_cells)
     nan3 = np.full(3, np.nan)
-    sel = _main_lobes(x, sel, cell_shape)
+    sel = main_lobe_cells(x, sel, cell_shape, margin)
     if sel.size < MIN_CELLS:
         return _fallback(beams, slot_times, options,
                          f"autofocus: {sel.size} stationary cells (fewer than {MIN_CELLS}); "

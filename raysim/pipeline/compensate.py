@@ -599,8 +599,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             from compensation.geometry import direction
 
             if direction_deg is None:
-                raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target "
-                                 f"direction)")
+                raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target)")
             u = direction(*np.deg2rad(_vector(direction_deg, 2, "--direction-deg")))
         az = _angles(DEFAULT_ANGLES_DEG if azimuth_deg is None else azimuth_deg, "--az-deg")
         el = _angles(DEFAULT_ANGLES_DEG if elevation_deg is None else elevation_deg, "--el-deg")
@@ -663,13 +662,14 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             if sub is not None:   # dpca: its price travels with the beams (first warning)
                 beams = replace(beams, warnings=(price, *beams.warnings))
             if focus is not None:   # vibration the IMU log cannot see, from the beams
-                from compensation.autofocus import autofocus_beams
-                from compensation.autofocus_displacement import autofocus_displacement
+                from compensation import autofocus as af, autofocus_displacement as ad
+                from compensation.sidelobes import peak_sidelobe_db, sidelobe_margin_db
 
-                beams, est = (autofocus_displacement(beams, slot_times=inp.slot_times[k],
-                                                     doppler=doppler)
-                              if autofocus == "displacement" else autofocus_beams(
-                                  beams, slot_times=inp.slot_times[k], doppler=doppler))
+                opts = dict(slot_times=inp.slot_times[k], doppler=doppler,   # the array's
+                            sidelobe_db=sidelobe_margin_db(peak_sidelobe_db(   # sidelobes out
+                                inp.element_positions, beams.wavelength, az, el)))
+                beams, est = (ad.autofocus_displacement if autofocus == "displacement"
+                              else af.autofocus_beams)(beams, **opts)
                 focus.append(est.report())
             found.extend(w for w in beams.warnings if w not in found)
             results.append(beams)
