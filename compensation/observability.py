@@ -18,7 +18,7 @@ import numpy as np
 from ._checks import finite_array
 from .guards import CompensationWarning
 
-__all__ = ["HELD_WHEN_UNCONSTRAINED", "STATE_NAMES", "UNCONSTRAINED_RATIO",
+__all__ = ["HELD_WHEN_UNCONSTRAINED", "STATE_NAMES", "TILT_WARN_DEG", "UNCONSTRAINED_RATIO",
            "ObservabilityWarning", "geometry_warnings", "held_mask", "observability",
            "observability_warnings"]
 
@@ -35,6 +35,10 @@ GEOMETRY_CONDITION = 0.15
 MIN_DIRECTIONS = 3
 #: Directions closer than this are one scatterer for the geometry check [rad].
 SAME_DIRECTION = float(np.deg2rad(1.0))
+#: A given tilt (the flight controller's attitude, or roll and pitch from the ground
+#: plane) whose estimated spread exceeds this [deg] is warned: every beam's angle in the
+#: world carries it, and it is the angle a compensated target is held to.
+TILT_WARN_DEG = 0.2
 
 
 class ObservabilityWarning(CompensationWarning):
@@ -161,4 +165,9 @@ def observability_warnings(names, sigma, sig0, attitude_given: bool, directions
                    f"no better than the accelerometer bias is known: tilt_n +- {tilt[0]:.2g}, "
                    f"tilt_e +- {tilt[1]:.2g} deg (of the nominal attitude's "
                    f"{np.rad2deg(sig0[3]):.3g}); give the attitude")
+    elif np.rad2deg(np.max(sigma[3:5])) > TILT_WARN_DEG:
+        tilt = np.rad2deg(sigma[3:5])
+        out.append(f"attitude: roll and pitch known to tilt_n +- {tilt[0]:.2g}, tilt_e +- "
+                   f"{tilt[1]:.2g} deg only (over {TILT_WARN_DEG:g}; from the attitude given "
+                   f"or the ground plane): every beam's angle in the world carries it")
     return tuple(out)
