@@ -17,6 +17,8 @@ import argparse
 import math
 import shlex
 
+import numpy as np
+
 EPILOG = """\
 examples:
   raysim flight flight_dir                      # consumer MEMS IMU, 3 ms clock offset
@@ -121,11 +123,37 @@ ELEVATION_GRID_STEP_DEG = 0.1
 ELEVATION_GRID_MAX_VALUES = 41
 
 
-def elevation_grid(elevations) -> str:
+#: A board that resolves elevation gets a grid this fine [deg] and this much wider than
+#: its targets' elevations [deg] each side: the hovering platform's displacement moves a
+#: target's apparent elevation off its nominal one (5 cm at 4.5 m: 0.6 deg), and the
+#: IWR6843AOP's pattern, not separable in azimuth and elevation, moves the azimuth peak
+#: of a beam 0.7 deg off its target's elevation by up to 0.25 deg.
+ELEVATION_FINE_STEP_DEG, ELEVATION_FINE_MARGIN_DEG = 0.5, 1.5
+
+
+def _resolves_elevation(board: str) -> bool:
+    """Whether ``board``'s virtual array spans the elevation aperture the self-calibration
+    takes to resolve elevation (:data:`compensation.calibration.MIN_APERTURE_WAVELENGTHS`)."""
+    from compensation.calibration import MIN_APERTURE_WAVELENGTHS
+    from raysim.io.ti_boards import BOARDS
+
+    b = BOARDS[board]
+    y = [t[1] + q[1] for t in b.tx for q in b.rx]          # half wavelengths
+    return (max(y) - min(y)) / 2 >= MIN_APERTURE_WAVELENGTHS
+
+
+def elevation_grid(elevations, resolves: bool = False) -> str:
     """``LO:HI:STEP`` [deg] of a beam grid holding every target elevation: the step the
     largest that divides their differences (in tenths of a degree), or where that gives
     more than :data:`ELEVATION_GRID_MAX_VALUES` values, the finest step that does not
-    (a target between two values is then measured up to half a step off its beam)."""
+    (a target between two values is then measured up to half a step off its beam). For
+    a board that ``resolves`` elevation: :data:`ELEVATION_FINE_STEP_DEG` steps over the
+    elevations widened by :data:`ELEVATION_FINE_MARGIN_DEG`."""
+    if resolves:
+        step, pad = ELEVATION_FINE_STEP_DEG, ELEVATION_FINE_MARGIN_DEG
+        lo = np.floor((min(elevations) - pad) / step) * step
+        hi = np.ceil((max(elevations) + pad) / step) * step
+        return f"{lo:g}:{hi:g}:{step:g}"
     tenths = sorted({int(round(e / ELEVATION_GRID_STEP_DEG)) for e in elevations})
     lo, hi = tenths[0], tenths[-1]
     if lo == hi:
@@ -178,7 +206,7 @@ def run(args) -> int:
             f"({s:.3f}, {n:.3f})" for s, n in f.gaps), file=sys.stderr)
     r = [t[0] for t in f.targets]
     cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg",
-             elevation_grid([t[2] for t in f.targets]))
+             elevation_grid([t[2] for t in f.targets], _resolves_elevation(f.board)))
     # the rule compensate warns by: below 2.5 x the hover jitter's highest rotor line (or
     # any boxcar average) the log cannot see the rotors, the radar autofocus estimates them
     from compensation.ingestion import VIBRATION_RATE_FACTOR

@@ -246,6 +246,10 @@ def test_flight_prints_an_elevation_grid_through_every_target(tmp_path, capsys):
         grid = span_grid(elevation_grid(els), "--el-deg")
         assert grid.size <= 41                        # a beam grid a flight can afford
         assert max(np.min(np.abs(grid - e)) for e in els) <= worst + 1e-9, (els, grid)
+    # a board that resolves elevation: half-degree steps a degree and a half beyond (the
+    # displaced platform sees its targets off their nominal elevations)
+    grid = span_grid(elevation_grid([-5.0, 0.0, 5.0], resolves=True), "--el-deg")
+    assert grid.min() <= -6.5 and grid.max() >= 6.5 and np.allclose(np.diff(grid), 0.5)
 
 
 def test_flight_with_a_low_rate_log_prints_the_autofocus(tmp_path, capsys):
