@@ -71,7 +71,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._checks import finite_array, positive
-from .sidelobes import SIDELOBE_DB, main_lobe_cells
 from .autofocus import (
     CONVERGENCE_RAD,
     MIN_CHIRPS,
@@ -87,6 +86,7 @@ from .autofocus import (
 from .geometry import direction, grid_directions
 from .guards import CompensationWarning
 from .projection import BeamCube
+from .sidelobes import SIDELOBE_DB, main_lobe_cells
 
 __all__ = ["DisplacementFocus", "estimate_displacement", "correct_displacement",
            "autofocus_displacement", "SIDELOBE_DB", "DEGENERATE_RATIO", "UNOBSERVED_RATIO",

@@ -37,7 +37,7 @@ from .exact import rigid_body_projection
 from .geometry import direction
 from .ground_doppler import ground_measurements, ground_scatterers
 from .gyro_bias import GyroBias, fit_gyro_bias
-from .ingestion import check_frame_times
+from .ingestion import check_frame_times, folds_vibration
 from .mounting import mounting_rotation, radar_frame_motion, world_directions
 from .multiframe import apply_velocity, integrate_record
 from .radar_inertial import (
@@ -600,8 +600,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     clock, gb, clutter = None, None, ()
 
     def integrate():
-        return integrate_record(imu_time, gyro - bias, accel, frames, time_offset=tau,
-                                **options)
+        return integrate_record(imu_time, gyro - bias, accel, frames, time_offset=tau, **options)
 
     motions = integrate()
     if scatterers is None:
@@ -628,15 +627,17 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         dv = np.stack([f.velocity for f in fits])
         return apply_velocity(ms, mids, dv, t_ref), fits
 
-    clock_fit = partial(fit_clock, drift=drift, imu_time=imu_time, interval=imu_interval)
+    clock_fit = partial(fit_clock, drift=drift, imu_time=imu_time, interval=imu_interval,
+                        aliased=(al := folds_vibration(imu_time, gyro, imu_interval)))
     if "time_offset" in estimate and offset_search > 0:
         grid = tau + np.arange(-offset_search, offset_search + OFFSET_SEARCH_STEP / 2,
                                OFFSET_SEARCH_STEP)
-        few = slice(0, SEARCH_FRAMES_AVERAGED if imu_interval > 0 else SEARCH_FRAMES)
+        few = slice(0, SEARCH_FRAMES_AVERAGED if imu_interval > 0 or al else SEARCH_FRAMES)
         def misfit(cand):
             ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand, **options)
             y = _beams(rcs[few], positions, ms := seen(ms), scatterers, proj)
-            return clock_misfit(phase_tracks(y, ms, scatterers, lam), imu_time, cand, imu_interval)
+            return clock_misfit(phase_tracks(y, ms, scatterers, lam), imu_time, cand,
+                                imu_interval, al)
         tau, clock_fit = coarse_offset(grid, [misfit(c) for c in grid], clock_fit)   # warned
         motions = integrate()
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):

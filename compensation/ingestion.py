@@ -160,6 +160,14 @@ def imu_rate_warning(t: np.ndarray, gyro: np.ndarray, vibration_hz: float | None
             f"motion is compensated wrongly",)
 
 
+def folds_vibration(imu_time, gyro, interval: float) -> bool:
+    """Whether a log of instantaneous samples (``interval`` 0) is too slow for the vibration
+    its gyro shows (:func:`imu_rate_warning`): the clock-offset fit then reads the radar
+    at the samples' instants (:func:`compensation.clock_averaged.fit_clock`)."""
+    return interval == 0 and bool(imu_rate_warning(np.asarray(imu_time, dtype=float),
+                                                   np.asarray(gyro, dtype=float), None))
+
+
 def is_frame_list(times) -> bool:
     """True when ``times`` is a list or tuple of 1-D arrays (frames), not one array."""
     return isinstance(times, (list, tuple)) and len(times) > 0 and all(

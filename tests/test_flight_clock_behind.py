@@ -13,8 +13,6 @@ import contextlib
 import io
 import json
 
-import numpy as np
-
 from raysim.cli import main
 from raysim.cli.cmd_compensate import _calibration_text
 from raysim.io.flight_logs import read_imu_log

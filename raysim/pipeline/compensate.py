@@ -662,7 +662,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             if sub is not None:   # dpca: its price travels with the beams (first warning)
                 beams = replace(beams, warnings=(price, *beams.warnings))
             if focus is not None:   # vibration the IMU log cannot see, from the beams
-                from compensation import autofocus as af, autofocus_displacement as ad
+                from compensation import autofocus as af
+                from compensation import autofocus_displacement as ad
                 from compensation.sidelobes import peak_sidelobe_db, sidelobe_margin_db
 
                 opts = dict(slot_times=inp.slot_times[k], doppler=doppler,   # the array's
