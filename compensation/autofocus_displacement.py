@@ -43,6 +43,10 @@ What it cannot observe
   posterior sigma exceeds :data:`UNOBSERVED_RATIO` times the prior are named
   in :attr:`DisplacementFocus.unobserved` (the eigen-directions of ``F``) and
   held near zero by the prior.
+* Along an axis the virtual array has no extent (``array_spans``: an xWR16xx's
+  line of elements has none vertically) every elevation gives the same beam, so
+  the cells' elevations are not measured: that component of ``d`` (and of the
+  velocity) is held at zero and named.
 * Degenerate directions (fewer than :data:`MIN_CELLS` cells, or their
   directions spanning fewer than two dimensions, eigenvalue ratio below
   :data:`DEGENERATE_RATIO`): the vector is not estimated; the common phase
@@ -241,7 +245,8 @@ def estimate_displacement(beams: BeamCube, *, slot_times=None, max_cells: int = 
                           min_snr_db: float = 20.0, stationary_bins: float = 2.0,
                           iterations: int = 8, prior_m: float = PRIOR_M,
                           doppler: str = "keep", prior_mps: float = PRIOR_MPS,
-                          sidelobe_db: float = SIDELOBE_DB) -> DisplacementFocus:
+                          sidelobe_db: float = SIDELOBE_DB, array_spans=(True, True)
+                          ) -> DisplacementFocus:
     """Estimate the residual per-chirp displacement vector from the beams' stationary cells.
 
     Parameters
@@ -267,6 +272,12 @@ def estimate_displacement(beams: BeamCube, *, slot_times=None, max_cells: int = 
     sidelobe_db : float
         Cells this far [dB] or more below the strongest of their range gate are
         dropped (:func:`compensation.sidelobes.sidelobe_margin_db` of the array).
+    array_spans : (bool, bool)
+        Whether the virtual array has any extent along the azimuth axis ``x`` and the
+        elevation axis ``y``. Along an axis it lacks (a line of elements), the beams
+        are the same at every angle of that axis, so a cell's direction cosine there
+        is not measured: its component of ``d`` (and of ``v``) is held at the prior,
+        zero, and named unobserved.
 
     Returns
     -------
@@ -316,6 +327,10 @@ def estimate_displacement(beams: BeamCube, *, slot_times=None, max_cells: int = 
                          lam, t, int(sel.size), 0, nan3, np.eye(3), prior)
     _, ia, ie = np.unravel_index(sel, cell_shape)
     u = direction(np.asarray(beams.azimuth)[ia], np.asarray(beams.elevation)[ie])  # [cell, 3]
+    spans = np.asarray(array_spans, dtype=bool)
+    if spans.shape != (2,):
+        raise ValueError(f"array_spans must be two booleans (x, y), got {array_spans!r}")
+    u[:, :2] *= spans                     # an axis the array lacks: the cell's angle unknown
     g = x[:, sel].astype(np.complex128)
     s2 = noise / n                                                       # per sample
     var_c = s2 / (2 * np.mean(np.abs(g) ** 2, axis=0))                   # [cell] rad^2

@@ -29,8 +29,8 @@ import numpy as np
 from ._checks import finite_array, positive
 from .geometry import direction
 
-__all__ = ["SIDELOBE_DB", "SIDELOBE_GUARD_DB", "MIN_SIDELOBE_MARGIN_DB", "main_lobe_cells",
-           "peak_sidelobe_db", "sidelobe_margin_db"]
+__all__ = ["SIDELOBE_DB", "SIDELOBE_GUARD_DB", "MIN_SIDELOBE_MARGIN_DB", "array_margin_db",
+           "main_lobe_cells", "peak_sidelobe_db", "sidelobe_margin_db"]
 
 #: A selected cell is kept only within this many dB of the strongest cell of its range
 #: gate (where the array's sidelobes are lower still): cells further down are more likely
@@ -95,6 +95,12 @@ def sidelobe_margin_db(psl_db: float) -> float:
     """How far [dB] below its gate's strongest a cell may lie and be kept: :data:`SIDELOBE_DB`,
     or less where the array's sidelobes ``psl_db`` come closer than that and the guard."""
     return float(max(MIN_SIDELOBE_MARGIN_DB, min(SIDELOBE_DB, -psl_db - SIDELOBE_GUARD_DB)))
+
+
+def array_margin_db(element_positions, wavelength: float, azimuth, elevation) -> float:
+    """:func:`sidelobe_margin_db` of the array's :func:`peak_sidelobe_db` on the beam grid."""
+    return sidelobe_margin_db(peak_sidelobe_db(element_positions, wavelength, azimuth,
+                                               elevation))
 
 
 def main_lobe_cells(x: np.ndarray, sel: np.ndarray, cell_shape: tuple,

@@ -662,15 +662,15 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             if sub is not None:   # dpca: its price travels with the beams (first warning)
                 beams = replace(beams, warnings=(price, *beams.warnings))
             if focus is not None:   # vibration the IMU log cannot see, from the beams
-                from compensation import autofocus as af
-                from compensation import autofocus_displacement as ad
-                from compensation.sidelobes import peak_sidelobe_db, sidelobe_margin_db
+                from compensation import autofocus_displacement, sidelobes
+                from compensation.autofocus import autofocus_beams
 
-                opts = dict(slot_times=inp.slot_times[k], doppler=doppler,   # the array's
-                            sidelobe_db=sidelobe_margin_db(peak_sidelobe_db(   # sidelobes out
-                                inp.element_positions, beams.wavelength, az, el)))
-                beams, est = (ad.autofocus_displacement if autofocus == "displacement"
-                              else af.autofocus_beams)(beams, **opts)
+                p = inp.element_positions      # the array's sidelobes, and the axes it spans
+                opts = dict(slot_times=inp.slot_times[k], doppler=doppler,
+                            sidelobe_db=sidelobes.array_margin_db(p, beams.wavelength, az, el))
+                beams, est = (autofocus_displacement.autofocus_displacement(
+                    beams, **opts, array_spans=tuple(np.ptp(p[:, :2], axis=0) > 0))
+                    if autofocus == "displacement" else autofocus_beams(beams, **opts))
                 focus.append(est.report())
             found.extend(w for w in beams.warnings if w not in found)
             results.append(beams)

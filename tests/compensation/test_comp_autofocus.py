@@ -526,6 +526,28 @@ def test_displacement_names_what_the_directions_do_not_constrain():
     assert np.all(np.mean(np.abs(err) <= 3 * est.sigma[:, [0, 2]], axis=0) >= COVERAGE_3SIGMA)
 
 
+def test_displacement_along_an_axis_the_array_lacks_is_held():
+    """A line array (no extent along y: ``array_spans=(True, False)``) makes the same beam
+    at every elevation, so the cells' elevations say nothing: d and v along y are held at
+    zero and named, whatever elevation the cells were found at; x and z are estimated
+    as with the full array (an xWR16xx flight's cells at el +-5 gave v_y = -0.25 m/s)."""
+    from compensation.autofocus_displacement import estimate_displacement
+
+    t = np.arange(128) * 100e-6
+    d = _vector_vibration(t)
+    beams, _ = _ura_beams(d)
+    full = estimate_displacement(beams, doppler="stationary")
+    line = estimate_displacement(beams, doppler="stationary", array_spans=(True, False))
+    assert np.all(line.displacement[:, 1] == 0.0) and line.velocity[1] == 0.0
+    held = [np.abs([float(c) for c in u[9:-1].split(",")]) for u in line.unobserved]
+    assert any(np.allclose(h, [0.0, 1.0, 0.0], atol=0.01) for h in held), line.unobserved
+    assert not np.all(full.displacement[:, 1] == 0.0)
+    err = line.displacement[:, [0, 2]] - d[:, [0, 2]]
+    assert np.all(np.mean(np.abs(err) <= 3 * line.sigma[:, [0, 2]], axis=0) >= COVERAGE_3SIGMA)
+    with pytest.raises(ValueError, match="array_spans"):
+        estimate_displacement(beams, array_spans=(True,))
+
+
 def test_displacement_degenerate_directions_fall_back_to_the_common_phase():
     """All scatterers in one direction (one dimension of directions): warned, the common
     phase used, the beams corrected as the phase mode does."""
