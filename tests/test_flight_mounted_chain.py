@@ -26,7 +26,7 @@ from raysim.cli import main
 from raysim.io.mmwave_config import read_mmwave_config
 from raysim.io.zarr_store import open_store
 from raysim.measure.beams import beam_metrics
-from raysim.pipeline.flight import TARGET_RANGE_HALF_WIDTH_M, write_flight
+from raysim.pipeline.flight import TARGET_RANGE_HALF_WIDTH_CELLS, write_flight
 from raysim.platform.motion import hover_jitter
 from raysim.platform.mounting import mounting_matrix
 
@@ -78,7 +78,8 @@ def _measure(flight, out):
     err, pv = [], []
     for j, (r, _, _) in enumerate(flight.targets):
         az, el = flight.apparent_direction(0, j)
-        cells = np.flatnonzero(np.abs(ranges - r) <= TARGET_RANGE_HALF_WIDTH_M)
+        cells = np.flatnonzero(np.abs(ranges - r)
+                               <= TARGET_RANGE_HALF_WIDTH_CELLS * cfg.range_resolution)
         rows = [beam_metrics(b, ds.azimuth.values, -1e3, chirp_interval=cfg.chirp_interval,
                              wavelength=cfg.center_wavelength,
                              velocity_resolution=cfg.velocity_resolution)

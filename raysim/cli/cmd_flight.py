@@ -117,6 +117,9 @@ def _triple(text: str, option: str) -> tuple:
     return v
 
 
+#: How far [deg] past the widest target the printed azimuth grid reaches where
+#: compensate's default grid does not hold it (its main lobe).
+AZIMUTH_GRID_MARGIN_DEG = 10.0
 #: Finest step [deg] of the printed elevation grid (a target between its values is
 #: measured off its beam by at most half of it) and the most values it may have.
 ELEVATION_GRID_STEP_DEG = 0.1
@@ -207,6 +210,11 @@ def run(args) -> int:
     r = [t[0] for t in f.targets]
     cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg",
              elevation_grid([t[2] for t in f.targets], _resolves_elevation(f.board)))
+    from raysim.pipeline.compensate import DEFAULT_ANGLES_DEG
+
+    wide = max(abs(t[1]) for t in f.targets) + AZIMUTH_GRID_MARGIN_DEG
+    if wide > DEFAULT_ANGLES_DEG.max():       # past compensate's default grid
+        cells += ("--az-deg", f"{-math.ceil(wide):d}:{math.ceil(wide):d}:1")
     # the rule compensate warns by: below 2.5 x the hover jitter's highest rotor line (or
     # any boxcar average) the log cannot see the rotors, the radar autofocus estimates them
     from compensation.ingestion import VIBRATION_RATE_FACTOR

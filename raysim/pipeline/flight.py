@@ -558,9 +558,10 @@ def measure_store(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
     return np.array(out)
 
 
-#: Half width of the range cells measured around each target [m] (the targets of
-#: :data:`DEFAULT5_TARGETS` are at least 1 m apart).
-TARGET_RANGE_HALF_WIDTH_M = 0.45
+#: Half width of the range cells measured around each target [range resolutions]: its
+#: own cell and the neighbours a range between two cells straddles, not the next
+#: target's (targets 0.4 m apart at 15 cm resolution took each other's peak with 0.45 m).
+TARGET_RANGE_HALF_WIDTH_CELLS = 1.5
 #: Half width of the azimuths searched for each target's peak [deg]: its main lobe
 #: (the 8-channel azimuth aperture's -3 dB half width is about 6.4 deg at
 #: boresight), so the ground under the radar in the same cells, 26 deg away and
@@ -572,7 +573,8 @@ def measure_targets(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
     """The beam metrics of every target in every frame of a compensated store.
 
     Each target is measured on the range cells within
-    :data:`TARGET_RANGE_HALF_WIDTH_M` of its range and its peak looked for within
+    :data:`TARGET_RANGE_HALF_WIDTH_CELLS` range resolutions of its range and its peak
+    looked for within
     :data:`TARGET_AZIMUTH_HALF_WIDTH_DEG` of its azimuth, at the store's elevation
     nearest its apparent elevation, against its apparent azimuth
     (:meth:`FlightFiles.apparent_direction` of frame ``first``).
@@ -594,7 +596,8 @@ def measure_targets(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
     out = []
     for j, (r, _, _) in enumerate(flight.targets):
         az_true, el_true = flight.apparent_direction(first, j)
-        cells = np.flatnonzero(np.abs(ranges - r) <= TARGET_RANGE_HALF_WIDTH_M)
+        cells = np.flatnonzero(np.abs(ranges - r)
+                               <= TARGET_RANGE_HALF_WIDTH_CELLS * cfg.range_resolution)
         if cells.size == 0:
             raise ValueError(f"the store's range cells {ranges.min():.2f}..{ranges.max():.2f} "
                              f"m miss target {j} at {r:g} m")

@@ -224,7 +224,7 @@ def test_flight_command_prints_a_working_compensate(tmp_path, capsys):
     assert "--target" in capsys.readouterr().err
 
 
-def test_flight_prints_an_elevation_grid_through_every_target(tmp_path, capsys):
+def test_flight_prints_a_beam_grid_through_every_target(tmp_path, capsys):
     """Targets at -10, 0, 5 and 10 deg elevation: the printed beam grid holds each of
     them (a fixed -5:5:5 measured the one at 10 deg 5 deg off its beam, 0.8 deg off in
     azimuth at 50 deg)."""
@@ -246,6 +246,13 @@ def test_flight_prints_an_elevation_grid_through_every_target(tmp_path, capsys):
         grid = span_grid(elevation_grid(els), "--el-deg")
         assert grid.size <= 41                        # a beam grid a flight can afford
         assert max(np.min(np.abs(grid - e)) for e in els) <= worst + 1e-9, (els, grid)
+    # a target past compensate's default -60:60 azimuth grid: the printed grid reaches it
+    assert main(["flight", str(tmp_path / "wide"), "--frames", "1", "--imu", "ideal",
+                 "--target", "7,70,0", "--target", "6,-20,0", "--no-progress"]) == 0
+    for line in capsys.readouterr().out.splitlines():
+        if line.strip().startswith("raysim compensate"):
+            c = shlex.split(line.strip())
+            assert span_grid(c[c.index("--az-deg") + 1], "--az-deg").max() >= 70.0 + 5.0
     # a board that resolves elevation: half-degree steps a degree and a half beyond (the
     # displaced platform sees its targets off their nominal elevations)
     grid = span_grid(elevation_grid([-5.0, 0.0, 5.0], resolves=True), "--el-deg")
