@@ -100,6 +100,7 @@ from raysim.io.store_guard import remove_debris, writer_lock
 from raysim.pipeline.chains import project
 from raysim.pipeline.compensate_size import gated_range_compress, output_bytes
 from raysim.pipeline.estimate import estimate_record, ground_retilt, ground_tilt_of_record
+from raysim.pipeline.imu_inputs import imu_table, imu_window, log_attitude
 from raysim.pipeline.self_calibration import calibrate_record
 from raysim.processing.maps import range_compress
 from raysim.vocabulary import parse_chain
@@ -201,67 +202,6 @@ def _frames_text(frames) -> str | None:
                      f"(LO, HI) of frame numbers")
 
 
-def _imu_table(imu, inp, source: str, topic=None, instance=None) -> tuple[np.ndarray, str, float]:
-    """The IMU log as a table ``[sample, 7]`` (time, gyro, accel; SI, FRD), its source and
-    the averaging interval of its samples [s] (0: instantaneous or not stated)."""
-    from raysim.io.flight_logs import read_imu_log
-
-    if imu is None:
-        if inp.imu is None:
-            raise ValueError(f"{source!r} holds no IMU log; give an IMU log with --imu FILE")
-        if topic is not None or instance is not None:
-            raise ValueError("--imu-topic / --imu-instance select a source of an IMU log file; "
-                             f"{source!r} carries its own IMU record (give --imu FILE)")
-        return inp.imu, f"{source} (IMU log of the store)", 0.0
-    if isinstance(imu, (str, os.PathLike)):
-        path = os.fspath(imu)
-        if not os.path.exists(path):
-            raise ValueError(f"IMU file {path!r} does not exist")
-        try:
-            s = read_imu_log(path, topic=topic, instance=instance)
-        except ImportError as exc:   # an optional reader (pymavlink for .bin) is missing
-            raise ValueError(f"IMU file {path!r}: {exc}") from None
-        return np.column_stack([s.time, s.gyro, s.accel]), s.source, s.interval
-    if topic is not None or instance is not None:
-        raise ValueError("--imu-topic / --imu-instance select a source of an IMU log file, not "
-                         "of a table")
-    table = np.asarray(imu, dtype=float)
-    if table.ndim != 2 or table.shape[1] != 7:
-        raise ValueError(f"imu: got an array of shape {table.shape}, expected a file path or "
-                         f"a table [sample, 7] (time, gyro xyz, accel xyz)")
-    return table, "table", 0.0
-
-
-def _imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarray, tuple]:
-    """The IMU table judged over the window used (:func:`compensation.ingestion.judge_imu_window`).
-
-    The window is every selected chirp and slot on the IMU clock (radar time plus
-    the given offset; the first guess 0 of ``"auto"``, whose search stays within
-    the margin), plus :data:`compensation.ingestion.WINDOW_MARGIN` on each side.
-    """
-    from compensation.ingestion import fill_imu_gaps, frames_in_gaps, judge_imu_window
-
-    if max_gap is not None:
-        max_gap = float(_vector(max_gap, 1, "--max-gap")[0])
-        if max_gap <= 0:
-            raise ValueError(f"--max-gap: got {max_gap!r}, expected a positive number of "
-                             f"seconds")
-    t = table[:, 0]
-    if t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-        return table, ()         # the integration names the bad stamps
-    slots = np.asarray(inp.slot_times, dtype=float)
-    shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
-    window = (float(slots.min()) + shift, float(slots.max()) + shift)
-    keep, fill, notes = judge_imu_window(t, window, max_gap=max_gap,
-                                         what=f"the {len(inp.frames)} frame(s) selected")
-    if keep.size == t.size and fill.size == 0:
-        return table, notes
-    notes = (*notes, *frames_in_gaps(fill, [(s.min() + shift, s.max() + shift) for s in slots],
-                                     inp.frames, float(np.median(np.diff(t)))))
-    tt, vals = fill_imu_gaps(t, table[:, 1:], keep, fill)
-    return np.column_stack([tt, vals]), notes
-
-
 def _attitude(value):
     """``initial_attitude_deg``: ``"level"`` or (yaw, pitch, roll) [deg] -> ``R_WB`` [3, 3]
     (None: the nominal hover attitude, identity)."""
@@ -278,37 +218,10 @@ def _attitude(value):
     return Rotation.from_euler("ZYX", ypr).as_matrix()
 
 
-def _log_attitude(value, imu, inp, time_offset, topic, notes: list):
-    """``initial_attitude_deg``: as given, else the IMU log's attitude at the first ramp
-    (:mod:`raysim.io.flight_logs.attitude`), else level (0, 0, 0); the choice in ``notes``.
-    With it the log's attitude, times [s, IMU clock] and ``R_WB`` ``[sample, 3, 3]`` (None
-    when the attitude is given or the log holds none)."""
-    if value is not None:
-        return value, None
-    att = None
-    if isinstance(imu, (str, os.PathLike)):
-        from raysim.io.flight_logs.attitude import read_attitude_log
-
-        att = read_attitude_log(imu, topic=topic)
-    if att is None:
-        notes.append("initial attitude: the IMU log holds no attitude; the platform is "
-                      "assumed level, heading 0, at the first ramp (--initial-attitude-deg "
-                      "0,0,0); --velocity radar measures roll and pitch from the ground "
-                      "beyond the range window when in view")
-        return None, None             # the nominal attitude, no estimate (_attitude)
-    shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
-    t = float(np.min(inp.slot_times)) + shift             # the first ramp on the log's clock
-    ypr = att.euler_deg(t)
-    notes.append(f"initial attitude: yaw, pitch, roll {ypr[0]:.3f}, {ypr[1]:.3f}, "
-                 f"{ypr[2]:.3f} deg from {att.source} at {t:.6f} s (the first ramp on the "
-                 f"log's clock{', offset 0 taken' if isinstance(time_offset, str) else ''}); "
-                 f"--initial-attitude-deg overrides")
-    return ypr, (att.time, att.rotation.as_matrix())
-
-
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
              velocity, initial_velocity, initial_attitude_deg, imu_grade, attitude_track=None,
-             mounting_deg=None, ground_doppler: bool = False, imu_interval: float = 0.0):
+             mounting_deg=None, ground_doppler: bool = False, imu_interval: float = 0.0,
+             azimuth=None):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
 
     ``rcs`` receives the range-compressed frames when they are computed for the
@@ -353,11 +266,19 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
     if inp.num_slots > 1:
         options["channel_slot"] = inp.tx_slot
     mount = None if is_default_mounting(mounting_deg) else mounting_matrix(mounting_deg)
+    from compensation.calibration import DETECT_AXIS
+
+    # scatterers searched over the boards' +-60 deg, and as far as the beams asked for
+    wide = DETECT_AXIS
+    if azimuth is not None and (np.min(azimuth) < wide[0] or np.max(azimuth) > wide[-1]):
+        wide = np.arange(min(wide[0], np.min(azimuth)), max(wide[-1], np.max(azimuth)) + 1e-9,
+                         wide[1] - wide[0])
     cal = calibrate_record(rcs, time_t, inp.element_positions, imu[:, 0], imu[:, 1:4],
                            imu[:, 4:7], wavelength=inp.config.center_wavelength,
                            range_axis=r_axis, estimate=estimate,
                            time_offset=0.0 if auto else time_offset,
                            grid_shape=inp.grid_shape, detect_gates=gates,
+                           detect_grid=(wide, DETECT_AXIS),
                            attitude_given=given, tilt_covariance=tilt_cov,
                            attitude_track=attitude_track, ground=retilt, imu_interval=imu_interval,
                            ground_doppler=ground_doppler, mounting=mount, **options)
@@ -609,8 +530,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         rcs: list = []                     # range-compressed frames, kept when calibrating
         window_notes: tuple = ()
         if spec.compensated:
-            table, imu_source, interval = _imu_table(imu, inp, source, imu_topic, imu_instance)
-            table, window_notes = _imu_window(table, inp, time_offset, max_gap)
+            table, imu_source, interval = imu_table(imu, inp, source, imu_topic, imu_instance)
+            table, window_notes = imu_window(table, inp, time_offset, max_gap)
             if window_notes:
                 from compensation.guards import CompensationWarning
 
@@ -618,13 +539,14 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                     warnings.warn(text, CompensationWarning, stacklevel=2)
             lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
                      else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
-            attitude, track = _log_attitude(initial_attitude_deg, imu, inp, time_offset,
+            attitude, track = log_attitude(initial_attitude_deg, imu, inp, time_offset,
                                             imu_topic, notes)
             motions, calibration, offset = _motions(
                 inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
                 initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track,
-                mounting_deg=mounting_deg, ground_doppler=ground_doppler, imu_interval=interval)
+                mounting_deg=mounting_deg, ground_doppler=ground_doppler, imu_interval=interval,
+                azimuth=az)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None
