@@ -134,17 +134,6 @@ ELEVATION_GRID_MAX_VALUES = 41
 ELEVATION_FINE_STEP_DEG, ELEVATION_FINE_MARGIN_DEG = 0.5, 1.5
 
 
-def _resolves_elevation(board: str) -> bool:
-    """Whether ``board``'s virtual array spans the elevation aperture the self-calibration
-    takes to resolve elevation (:data:`compensation.calibration.MIN_APERTURE_WAVELENGTHS`)."""
-    from compensation.calibration import MIN_APERTURE_WAVELENGTHS
-    from raysim.io.ti_boards import BOARDS
-
-    b = BOARDS[board]
-    y = [t[1] + q[1] for t in b.tx for q in b.rx]          # half wavelengths
-    return (max(y) - min(y)) / 2 >= MIN_APERTURE_WAVELENGTHS
-
-
 def elevation_grid(elevations, resolves: bool = False) -> str:
     """``LO:HI:STEP`` [deg] of a beam grid holding every target elevation: the step the
     largest that divides their differences (in tenths of a degree), or where that gives
@@ -207,11 +196,12 @@ def run(args) -> int:
     if f.gaps:
         print("logger gaps (start, length) [s, IMU clock]: " + ", ".join(
             f"({s:.3f}, {n:.3f})" for s, n in f.gaps), file=sys.stderr)
+    from raysim.pipeline.compensate import DEFAULT_ANGLES_DEG
+    from raysim.pipeline.flight import board_resolves_elevation
+
     r = [t[0] for t in f.targets]
     cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg",
-             elevation_grid([t[2] for t in f.targets], _resolves_elevation(f.board)))
-    from raysim.pipeline.compensate import DEFAULT_ANGLES_DEG
-
+             elevation_grid([t[2] for t in f.targets], board_resolves_elevation(f.board)))
     wide = max(abs(t[1]) for t in f.targets) + AZIMUTH_GRID_MARGIN_DEG
     if wide > DEFAULT_ANGLES_DEG.max():       # past compensate's default grid
         cells += ("--az-deg", f"{-math.ceil(wide):d}:{math.ceil(wide):d}:1")

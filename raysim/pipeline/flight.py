@@ -27,7 +27,8 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["FlightFiles", "write_flight", "FLIGHT_RADAR", "measure_store",
-           "measure_targets", "calibrated_flight_table", "DEFAULT5_TARGETS", "DEFAULT_BOARD"]
+           "measure_targets", "calibrated_flight_table", "DEFAULT5_TARGETS", "DEFAULT_BOARD",
+           "board_resolves_elevation"]
 
 #: Waveform of the flight: TI 3 Tx x 4 Rx TDM (TX0, TX2, TX1), 64 loops, 150 samples.
 FLIGHT_RADAR = dict(num_chirps=64, sample_rate=2.5e6, idle_time=10e-6, frame_period=0.05)
@@ -246,6 +247,17 @@ class FlightFiles:
                 o["time_offset"], *att,
                 "--lever-arm", ",".join(repr(x) for x in o["lever_arm"]), "--out", str(out),
                 *self._extra(), *extra]
+
+
+def board_resolves_elevation(board: str) -> bool:
+    """Whether ``board``'s virtual array spans the elevation aperture the self-calibration
+    takes to resolve elevation (:data:`compensation.calibration.MIN_APERTURE_WAVELENGTHS`)."""
+    from compensation.calibration import MIN_APERTURE_WAVELENGTHS
+    from raysim.io.ti_boards import BOARDS
+
+    b = BOARDS[board]
+    y = [t[1] + q[1] for t in b.tx for q in b.rx]          # half wavelengths
+    return (max(y) - min(y)) / 2 >= MIN_APERTURE_WAVELENGTHS
 
 
 def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_mems",
