@@ -187,6 +187,16 @@ def test_the_imu_translation_misses_by_its_velocity_error(flight, tmp_path, monk
                   <= SHIFT_REL_TOL * np.abs(shift) + SHIFT_ABS_TOL_DEG), (err - base, shift)
 
 
+def _warned(flight, text: str) -> tuple[int, int, float]:
+    """The target an ``azimuth:`` warning names, its frame and the shift it states [deg]."""
+    hit = re.search(r"azimuth (-?[0-9.]+) deg, elevation (-?[0-9.]+) deg a range rate of "
+                    r"([-+][0-9.]+) mm/s in frame (\d+).* by ([-+][0-9.]+) deg", text)
+    az, _, _, frame, shift = (float(g) for g in hit.groups())
+    j = int(np.argmin([abs(flight.apparent_direction(0, i)[0] - az)
+                       for i in range(len(TARGETS))]))
+    return j, int(frame), shift
+
+
 def test_a_self_calibration_warns_of_the_azimuth_its_doppler_residual_gives(flight, tmp_path,
                                                                             monkeypatch):
     """Self-calibrated (velocity and clock offset from the radar): three targets in a
@@ -203,15 +213,11 @@ def test_a_self_calibration_warns_of_the_azimuth_its_doppler_residual_gives(flig
         assert np.all(np.abs(err) <= ANGLE_TOL_DEG), (err, cal["warnings"])
         return
     assert len(said) == 1, cal["warnings"]
-    hit = re.search(r"azimuth (-?[0-9.]+) deg, elevation (-?[0-9.]+) deg a range rate of "
-                    r"([-+][0-9.]+) mm/s in frame (\d+).* by ([-+][0-9.]+) deg", said[0])
-    az, _, _, frame, shift = (float(g) for g in hit.groups())
-    j = int(np.argmin([abs(flight.apparent_direction(0, i)[0] - az)
-                       for i in range(len(TARGETS))]))
+    j, frame, shift = _warned(flight, said[0])
     err, _ = _measure(flight, out)
     base, _, _ = _compensate(flight, tmp_path / "t.zarr", monkeypatch, lambda m, t: t)
-    miss = err[j, int(frame)] - base[j, int(frame)]
-    assert abs(err[j, int(frame)]) > ANGLE_TOL_DEG
+    miss = err[j, frame] - base[j, frame]
+    assert abs(err[j, frame]) > ANGLE_TOL_DEG
     assert abs(miss - shift) <= SHIFT_REL_TOL * abs(shift) + SHIFT_ABS_TOL_DEG, (miss, said)
 
 
@@ -242,14 +248,10 @@ def test_a_self_calibration_off_by_a_velocity_warns_of_the_azimuth_it_misses(
     cal = json.loads(open_store(out).attrs["self_calibration"])
     said = [w for w in cal["warnings"] if w.startswith("azimuth:")]
     assert len(said) == 1, cal["warnings"]
-    hit = re.search(r"azimuth (-?[0-9.]+) deg, elevation (-?[0-9.]+) deg a range rate of "
-                    r"([-+][0-9.]+) mm/s in frame (\d+).* by ([-+][0-9.]+) deg", said[0])
-    az, _, _, frame, shift = (float(g) for g in hit.groups())
-    j = int(np.argmin([abs(flight.apparent_direction(0, i)[0] - az)
-                       for i in range(len(TARGETS))]))
+    j, frame, shift = _warned(flight, said[0])
     err, _ = _measure(flight, out)
-    miss = err[j, int(frame)] - _measure(flight, base)[0][j, int(frame)]
-    assert abs(err[j, int(frame)]) > ANGLE_TOL_DEG, (err, said)
+    miss = err[j, frame] - _measure(flight, base)[0][j, frame]
+    assert abs(err[j, frame]) > ANGLE_TOL_DEG, (err, said)
     assert abs(miss - shift) <= SHIFT_REL_TOL * abs(shift) + SHIFT_ABS_TOL_DEG, (miss, said)
 
 
