@@ -21,7 +21,7 @@ import numpy as np
 
 from raysim.processing.metrics import parabolic_offset, pseudo_velocity
 
-__all__ = ["BEAM_METRICS", "beam_metrics"]
+__all__ = ["BEAM_METRICS", "beam_metrics", "zero_doppler_peak"]
 
 #: Metrics of :func:`beam_metrics`, in order (names of :data:`raysim.vocabulary.METRICS`).
 BEAM_METRICS = ("beam_angle_error_deg", "beam_pseudo_velocity_bins", "doppler_leakage_db")
@@ -59,6 +59,27 @@ def beam_metrics(beams: np.ndarray, azimuth_deg: np.ndarray, true_azimuth_deg: f
         interpolation possible), or the cube is not 3-D.
     """
     b = np.asarray(beams)
+    g, a, az = zero_doppler_peak(b, azimuth_deg, true_azimuth_deg, search_deg)
+    slow = b[:, g, a]
+    pv = pseudo_velocity(slow, chirp_interval, wavelength)
+    spec = np.abs(np.fft.fft(slow * np.hanning(slow.size))) ** 2
+    k = int(np.argmax(spec))
+    near = spec[[(k - 1) % spec.size, k, (k + 1) % spec.size]].sum()
+    leak = 10 * np.log10(max(spec.sum() - near, 1e-30 * spec.sum()) / spec.sum())
+    return {"beam_angle_error_deg": float(abs(az - true_azimuth_deg)),
+            "beam_pseudo_velocity_bins": float(pv / velocity_resolution),
+            "doppler_leakage_db": float(leak)}
+
+
+def zero_doppler_peak(beams: np.ndarray, azimuth_deg: np.ndarray, true_azimuth_deg: float,
+                      search_deg: float | None = None) -> tuple[int, int, float]:
+    """Range cell, azimuth index and interpolated azimuth [deg] of the zero-Doppler peak.
+
+    ``beams [chirp, range, azimuth]`` summed over chirps; the strongest cell within
+    ``search_deg`` of ``true_azimuth_deg`` (None: anywhere), its azimuth refined by a
+    parabola through the dB powers of its neighbours. Raises as :func:`beam_metrics`.
+    """
+    b = np.asarray(beams)
     if b.ndim != 3:
         raise ValueError(f"beams must be [chirp, range, azimuth], got shape {b.shape}")
     az_axis = np.asarray(azimuth_deg, dtype=float)
@@ -74,13 +95,4 @@ def beam_metrics(beams: np.ndarray, azimuth_deg: np.ndarray, true_azimuth_deg: f
                          f"({az_axis[a]:.2f} deg); expected it inside")
     step = float(az_axis[1] - az_axis[0])
     db = 10 * np.log10(zero[g])
-    az = az_axis[a] + step * parabolic_offset(*db[a - 1:a + 2])
-    slow = b[:, g, a]
-    pv = pseudo_velocity(slow, chirp_interval, wavelength)
-    spec = np.abs(np.fft.fft(slow * np.hanning(slow.size))) ** 2
-    k = int(np.argmax(spec))
-    near = spec[[(k - 1) % spec.size, k, (k + 1) % spec.size]].sum()
-    leak = 10 * np.log10(max(spec.sum() - near, 1e-30 * spec.sum()) / spec.sum())
-    return {"beam_angle_error_deg": float(abs(az - true_azimuth_deg)),
-            "beam_pseudo_velocity_bins": float(pv / velocity_resolution),
-            "doppler_leakage_db": float(leak)}
+    return int(g), int(a), float(az_axis[a] + step * parabolic_offset(*db[a - 1:a + 2]))
