@@ -158,6 +158,11 @@ def register(subparsers) -> None:
     p.add_argument("--time-offset", default="0", metavar="SECONDS|auto",
                    help="IMU clock minus radar clock [s]; 'auto': estimated from the radar "
                    "(residual slow-time phase of stationary scatterers against the IMU)")
+    p.add_argument("--time-offset-search", type=float, default=None, metavar="SECONDS",
+                   help="half-width of the --time-offset auto search about 0 [s] (left out: "
+                   "0.01); an offset beyond it is not found: widen it for a log whose clock "
+                   "is not synchronised to within 10 ms (its cost grows with it: 0.5 ms "
+                   "steps, four frames each)")
     p.add_argument("--velocity", choices=("hover", "given", "radar"), default="hover",
                    help="initial velocity: zero-mean over the record (hover), "
                    "--initial-velocity (given), or estimated from the Doppler of stationary "
@@ -223,8 +228,11 @@ def _calibration_text(report: dict) -> str:
     """One line per estimate, with its one-sigma uncertainty."""
     lines = ["self-calibration (estimate +- one sigma):"]
     if report.get("time_offset_sigma_s") is not None:
+        searched = report.get("time_offset_search_s")
         lines.append(f"  time offset {1e3 * report['time_offset_s']:.4f} +- "
-                     f"{1e3 * report['time_offset_sigma_s']:.4f} ms")
+                     f"{1e3 * report['time_offset_sigma_s']:.4f} ms" + (
+                         "" if searched is None else f" (searched +-{1e3 * searched:g} ms "
+                         f"about 0: --time-offset-search widens it)"))
     if report.get("frame_velocity_correction_mps") or report.get("radar_inertial"):
         v, s = report["initial_velocity_mps"], report["initial_velocity_sigma_mps"]
         lines.append("  initial velocity [m/s] (N, E, D) " + ", ".join(
@@ -283,6 +291,7 @@ def run(args) -> int:
         elevation_deg=span_grid(args.el_deg, "--el-deg"),
         lever_arm=None if args.lever_arm is None else _floats(args.lever_arm, 3, "--lever-arm"),
         time_offset=_time_offset(args.time_offset), velocity=args.velocity,
+        time_offset_search=args.time_offset_search,
         initial_velocity=None if args.initial_velocity is None
         else _floats(args.initial_velocity, 3, "--initial-velocity"),
         initial_attitude_deg=attitude if attitude in (None, "level")

@@ -221,7 +221,7 @@ def _attitude(value):
 def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_offset,
              velocity, initial_velocity, initial_attitude_deg, imu_grade, attitude_track=None,
              mounting_deg=None, ground_doppler: bool = False, imu_interval: float = 0.0,
-             azimuth=None):
+             azimuth=None, offset_search=None):
     """Per-frame motions, the self-calibration report (or None) and the offset applied [s].
 
     ``rcs`` receives the range-compressed frames when they are computed for the
@@ -281,8 +281,13 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            detect_grid=(wide, DETECT_AXIS),
                            attitude_given=given, tilt_covariance=tilt_cov,
                            attitude_track=attitude_track, ground=retilt, imu_interval=imu_interval,
-                           ground_doppler=ground_doppler, mounting=mount, **options)
+                           ground_doppler=ground_doppler, mounting=mount, **options,
+                           **({} if offset_search is None else {"offset_search": offset_search}))
     report = cal.report
+    if auto:
+        from compensation.calibration import OFFSET_SEARCH_HALF_WIDTH
+
+        report["time_offset_search_s"] = float(offset_search or OFFSET_SEARCH_HALF_WIDTH)
     from compensation.azimuth_shift import calibration_azimuth_check
 
     report["warnings"] = [*report.get("warnings", ()), *calibration_azimuth_check(   # warned
@@ -349,7 +354,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                direction_deg=None, max_gap: float | None = None, imu_topic: str | None = None,
                imu_instance: int | None = None, board: str | None = None,
                antenna_positions=None, mounting_deg=None, progress: bool = False,
-               autofocus: bool | str = False, ground_doppler: bool = False) -> CompensateResult:
+               autofocus: bool | str = False, ground_doppler: bool = False,
+               time_offset_search: float | None = None) -> CompensateResult:
     """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
 
     Parameters
@@ -394,6 +400,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     time_offset : float or "auto"
         IMU clock minus radar clock [s]; ``"auto"`` estimates it from the radar
         (residual slow-time phase of stationary scatterers against the IMU).
+    time_offset_search : float, optional
+        Half-width [s] of the ``"auto"`` search about 0 (default
+        :data:`compensation.calibration.OFFSET_SEARCH_HALF_WIDTH`, 10 ms): an
+        offset beyond it is not found. Its cost grows with it (0.5 ms steps).
     velocity : {"hover", "given", "radar"}
         Initial velocity: zero mean over the hover window, ``initial_velocity``,
         or estimated from the Doppler of stationary scatterers (per frame).
@@ -492,6 +502,14 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                              f"seconds or 'auto'")
     else:
         time_offset = float(_vector(time_offset, 1, "--time-offset")[0])
+    if time_offset_search is not None:
+        time_offset_search = float(_vector(time_offset_search, 1, "--time-offset-search")[0])
+        if not isinstance(time_offset, str):
+            raise ValueError(f"--time-offset-search: the half-width of the --time-offset auto "
+                             f"search; --time-offset is {time_offset!r}")
+        if time_offset_search <= 0:
+            raise ValueError(f"--time-offset-search: got {time_offset_search!r}, expected a "
+                             f"positive half-width [s] of the --time-offset auto search")
     from raysim.platform.mounting import is_default_mounting, mount_motion
     from raysim.platform.mounting import mounting_deg as ypr
 
@@ -546,7 +564,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
                 initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track,
                 mounting_deg=mounting_deg, ground_doppler=ground_doppler, imu_interval=interval,
-                azimuth=az)
+                azimuth=az, offset_search=time_offset_search)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None

@@ -21,6 +21,7 @@ Clocks: the radar clock is the truth time (the first ramp at ``start`` s,
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -231,6 +232,11 @@ class FlightFiles:
             opts["board"] = self.board
         if self._max_gap() is not None:
             opts["max_gap"] = self._max_gap()
+        from compensation.calibration import OFFSET_SEARCH_HALF_WIDTH
+
+        # an offset set near or past the default search: as a user who knows their sync asks
+        if abs(self.time_offset) > 0.8 * OFFSET_SEARCH_HALF_WIDTH:
+            opts["time_offset_search"] = math.ceil(1.5e3 * abs(self.time_offset)) / 1e3
         return opts
 
     def calibrating_command(self, out: str | Path, *extra: str,
@@ -246,7 +252,8 @@ class FlightFiles:
                 "--imu-grade", o["imu_grade"], "--velocity", o["velocity"], "--time-offset",
                 o["time_offset"], *att,
                 "--lever-arm", ",".join(repr(x) for x in o["lever_arm"]), "--out", str(out),
-                *self._extra(), *extra]
+                *(("--time-offset-search", repr(o["time_offset_search"]))
+                  if "time_offset_search" in o else ()), *self._extra(), *extra]
 
 
 def board_resolves_elevation(board: str) -> bool:
