@@ -223,7 +223,7 @@ def test_a_self_calibration_warns_of_the_azimuth_its_doppler_residual_gives(flig
 
 @pytest.mark.parametrize("sign", [1.0, -1.0])
 def test_a_self_calibration_off_by_a_velocity_warns_of_the_azimuth_it_misses(
-        flight, tmp_path, monkeypatch, sign):
+        flight, tmp_path, monkeypatch, capsys, sign):
     """The self-calibrated motion with a velocity error of 10 mm/s added along the
     boresight (a velocity the scene left uncertain, made certain): the stage measures
     the residual range rate at its scatterers, warns of the azimuth it gives, and that
@@ -253,6 +253,11 @@ def test_a_self_calibration_off_by_a_velocity_warns_of_the_azimuth_it_misses(
     miss = err[j, frame] - _measure(flight, base)[0][j, frame]
     assert abs(err[j, frame]) > ANGLE_TOL_DEG, (err, said)
     assert abs(miss - shift) <= SHIFT_REL_TOL * abs(shift) + SHIFT_ABS_TOL_DEG, (miss, said)
+    # the note names the radar autofocus, which removes that Doppler frame by frame
+    assert "note: --autofocus displacement removes a Doppler" in capsys.readouterr().err
+    focused = tmp_path / "a.zarr"
+    assert main(flight.calibrating_command(focused, *GRID, "--autofocus", "displacement")) == 0
+    assert np.all(np.abs(_measure(flight, focused)[0]) <= ANGLE_TOL_DEG)
 
 
 def test_ground_clutter_in_a_target_cell_moves_it_with_the_true_motion(tmp_path, monkeypatch):

@@ -313,6 +313,10 @@ def run(args) -> int:
         print("note: --autofocus displacement estimates the vibration this log does not "
               "resolve from the stationary scatterers (docs/compensation.md, \"Radar "
               "autofocus\")", file=sys.stderr)
+    elif not args.autofocus and any(w.startswith("azimuth:") for w in result.warnings):
+        print("note: --autofocus displacement removes a Doppler left common to the stationary "
+              "scatterers of each frame (the velocity error the azimuth warning measures; "
+              "docs/compensation.md, \"Radar autofocus\")", file=sys.stderr)
     if result.calibration is not None:
         print(_calibration_text(result.calibration))
     for k, rep in enumerate(result.autofocus or ()):
