@@ -568,6 +568,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         results, found, focus = [], list(window_notes), [] if autofocus else None
+        array: dict = {}
         if calibration is not None:   # what the scene leaves unconstrained (also warned)
             found.extend(w for w in calibration.get("warnings", ()) if w not in found)
         sub = None
@@ -604,12 +605,16 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             if focus is not None:   # vibration the IMU log cannot see, from the beams
                 from compensation import autofocus_displacement, sidelobes
                 from compensation.autofocus import autofocus_beams
+                from raysim.measure.point import angle_apertures
 
-                p = inp.element_positions      # the array's sidelobes, and the axes it spans
+                if not array:          # the array's sidelobes and the axes it spans, once
+                    p = inp.element_positions
+                    array.update(sidelobe_db=sidelobes.array_margin_db(
+                        p, beams.wavelength, az, el), spans=angle_apertures(p, beams.wavelength))
                 opts = dict(slot_times=inp.slot_times[k], doppler=doppler,
-                            sidelobe_db=sidelobes.array_margin_db(p, beams.wavelength, az, el))
+                            sidelobe_db=array["sidelobe_db"])
                 beams, est = (autofocus_displacement.autofocus_displacement(
-                    beams, **opts, array_spans=tuple(np.ptp(p[:, :2], axis=0) > 0))
+                    beams, **opts, array_spans=array["spans"])
                     if autofocus == "displacement" else autofocus_beams(beams, **opts))
                 focus.append(est.report())
             found.extend(w for w in beams.warnings if w not in found)

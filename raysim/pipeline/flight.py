@@ -613,8 +613,12 @@ def measure_targets(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
 
     ds = store if hasattr(store, "data_vars") else open_store(store)
     cfg = read_mmwave_config(flight.radar_config, board=flight.board).config
-    ranges = np.asarray(ds["range"].values, dtype=float)
-    els = np.asarray(ds["elevation"].values, dtype=float)
+    ranges, els = (np.asarray(ds[n].values, dtype=float) for n in ("range", "elevation"))
+    beams = ds["beams"].values                     # [frame, chirp, range, azimuth, elevation]
+    az = ds["azimuth"].values
+    opts = dict(chirp_interval=cfg.chirp_interval, wavelength=cfg.center_wavelength,
+                velocity_resolution=cfg.velocity_resolution,
+                search_deg=TARGET_AZIMUTH_HALF_WIDTH_DEG)
     out = []
     for j, (r, _, _) in enumerate(flight.targets):
         az_true, el_true = flight.apparent_direction(first, j)
@@ -627,16 +631,12 @@ def measure_targets(store, flight: FlightFiles, first: int = 0) -> np.ndarray:
         o = e + (1 if el_true > els[e] else -1)                   # the other side of it
         w = (el_true - els[e]) / (els[o] - els[e]) if 0 <= o < els.size else 0.0
         rows = []
-        for k, b in enumerate(ds["beams"].values[..., e][:, :, cells]):  # [chirp, range, az]
-            opts = dict(chirp_interval=cfg.chirp_interval, wavelength=cfg.center_wavelength,
-                        velocity_resolution=cfg.velocity_resolution,
-                        search_deg=TARGET_AZIMUTH_HALF_WIDTH_DEG)
-            m = beam_metrics(b, ds.azimuth.values, az_true, **opts)
-            if w > 0:
-                peaks = [zero_doppler_peak(x, ds.azimuth.values, az_true,
-                                           TARGET_AZIMUTH_HALF_WIDTH_DEG)[2]
-                         for x in (b, ds["beams"].values[k, ..., o][:, cells])]
-                m["beam_angle_error_deg"] = abs((1 - w) * peaks[0] + w * peaks[1] - az_true)
+        for k, b in enumerate(beams[..., e][:, :, cells]):       # [chirp, range, azimuth]
+            m = beam_metrics(b, az, az_true, **opts)
+            if w > 0:        # the peak's azimuth interpolated to the target's own elevation
+                p0, p1 = (zero_doppler_peak(x, az, az_true, opts["search_deg"])[2]
+                          for x in (b, beams[k, ..., o][:, cells]))
+                m["beam_angle_error_deg"] = abs((1 - w) * p0 + w * p1 - az_true)
             rows.append([m[q] for q in BEAM_METRICS])
         out.append(rows)
     return np.array(out)
