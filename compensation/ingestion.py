@@ -163,7 +163,9 @@ def imu_rate_warning(t: np.ndarray, gyro: np.ndarray, vibration_hz: float | None
 def folds_vibration(imu_time, gyro, interval: float) -> bool:
     """Whether a log of instantaneous samples (``interval`` 0) is too slow for the vibration
     its gyro shows (:func:`imu_rate_warning`): the clock-offset fit then reads the radar
-    at the samples' instants (:func:`compensation.clock_averaged.fit_clock`)."""
+    at the samples' instants (:func:`compensation.clock_averaged.fit_clock`).
+    ``imu_time [sample]`` [s, IMU clock], ``gyro [sample, 3]`` [rad/s], ``interval`` the
+    averaging interval of each sample [s]."""
     return interval == 0 and bool(imu_rate_warning(np.asarray(imu_time, dtype=float),
                                                    np.asarray(gyro, dtype=float), None))
 
