@@ -13,10 +13,11 @@ import numpy as np
 from raysim.cli.options import MAX_SPAN_VALUES, span_grid
 
 _EPILOG = """\
-MESH is a mesh file trimesh reads (PLY, OBJ, STL, GLB/glTF; metres, or --scale) or a canonical
-target: plate:A (square plate of side A), dihedral:AxB (right dihedral, faces A wide,
-fold B long), trihedral:A (triangular trihedral, edge A), sphere:R (radius R), or a
-car: car:sedan (detailed: wheel houses, bumpers, plates, mirrors, rims) or car:simple,
+MESH is a mesh file (PLY, OBJ, STL, OFF, GLB/glTF, 3MF, COLLADA .dae; read by trimesh; in the
+unit the file declares (3MF, COLLADA, glTF), else metres, or --scale) or a canonical target:
+plate:A (square plate of side A), dihedral:AxB (right dihedral, faces A wide, fold B long),
+trihedral:A (triangular trihedral, edge A), sphere:R (radius R), or a car: car:sedan
+(detailed: wheel houses, bumpers, plates, mirrors, rims) or car:simple,
 each part with its own material (--material is not used), seen at --range-m (default
 50 m) from az 0 (nose) through 90 (left side) to 180 (tail), el above the horizon.
 The radar sits at range * u(az, el), u = (cos el sin az, sin el, cos el cos az),
@@ -62,7 +63,8 @@ def register(subparsers) -> None:
                    help="SBR tube density per transverse axis (default 10)")
     p.add_argument("--scale", type=float, default=None, metavar="M_PER_UNIT",
                    help="metres per unit of a mesh file (0.001 for millimetres); left out: "
-                   "metres, and a file over 500 units across is refused as millimetres")
+                   "the unit the file declares (3MF, COLLADA, glTF), else metres, and a file over "
+                   "500 units across is refused as millimetres")
     p.add_argument("--diffraction", action="store_true",
                    help="add the edge diffraction (PTD fringe wave) of the mesh's sharp and "
                    "boundary edges; conductors only; its cost is printed on stderr")

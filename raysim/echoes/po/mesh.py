@@ -17,6 +17,7 @@ import numpy as np
 
 from raysim.echoes.rt.scenes import MATERIALS
 from raysim.echoes.rt.user_meshes import MM_EXTENT_M
+from raysim.io.mesh_files import declared_scale, read_mesh_file
 
 __all__ = ["TriangleMesh", "PoMaterial", "po_material", "PO_MATERIAL_NAMES", "fresnel",
            "LARGE_TARGET_M"]
@@ -64,17 +65,18 @@ class TriangleMesh:
     @classmethod
     def load(cls, path, scale: float | None = None, notes: list | None = None
              ) -> TriangleMesh:
-        """Read a mesh file trimesh understands (PLY, OBJ, STL, GLB/glTF).
+        """Read a mesh file (PLY, OBJ, STL, OFF, GLB/glTF, 3MF, COLLADA; trimesh).
 
         Parameters
         ----------
         path : path
             The file.
         scale : float, optional
-            Metres per file unit (0.001 for millimetres); default metres,
-            checked as ``[[scene.meshes]]`` does: a bounding box over
-            ``MM_EXTENT_M`` (500) units is refused as millimetres, one over
-            :data:`LARGE_TARGET_M` is reported in ``notes``.
+            Metres per file unit (0.001 for millimetres); default the unit the
+            file declares (3MF, COLLADA, glTF), else metres, checked as
+            ``[[scene.meshes]]`` does: a bounding box over ``MM_EXTENT_M`` (500)
+            units is refused as millimetres, one over :data:`LARGE_TARGET_M` is
+            reported in ``notes``.
         notes : list, optional
             Receives the report of a large target.
 
@@ -88,7 +90,14 @@ class TriangleMesh:
         if scale is not None and not (math.isfinite(scale) and scale > 0):
             raise ValueError(f"--scale: got {scale!r}, expected a positive number of metres "
                              f"per file unit (0.001 for millimetres)")
-        loaded = trimesh.load(str(path), force="mesh")
+        loaded = read_mesh_file(path)
+        if scale is None:
+            scale, unit = declared_scale(loaded, path)
+            if scale is not None and scale != 1.0 and notes is not None:
+                notes.append(f"mesh file {str(path)!r} declares its unit {unit!r}: read at "
+                             f"{scale:g} m per unit")
+        if isinstance(loaded, trimesh.Scene):
+            loaded = loaded.to_mesh()       # every node's geometry at its place
         if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
             raise ValueError(f"mesh file {str(path)!r}: no triangles found")
         v = np.asarray(loaded.vertices, dtype=float)

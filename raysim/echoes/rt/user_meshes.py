@@ -1,7 +1,7 @@
 r"""Users' own geometry: mesh files turned into a scene Sionna RT / Mitsuba loads.
 
-A user scene is one or several mesh files (OBJ, STL, PLY, glTF/GLB; read with
-``trimesh``), each with a radio material (or one per named part of a glTF or
+A user scene is one or several mesh files (OBJ, STL, PLY, OFF, glTF/GLB, 3MF,
+COLLADA; read with ``trimesh``), each with a radio material (or one per named part of a glTF or
 OBJ file) and a placement in the world frame W (docs/conventions.md):
 
 .. math::  p_W = T + R_{ZYX}(\psi, \theta, \phi)\, M_{up}\, (s\, p_{mesh})
@@ -18,8 +18,9 @@ sidecar into an output folder (each file atomically; the user's files are only
 read) and checks every mesh, saying what it fixed or refused
 (:class:`ConvertedScene.notes`):
 
-* **units**: a bounding box larger than :data:`MM_EXTENT_M` looks like
-  millimetres and is refused unless ``scale`` is given; one smaller than
+* **units**: the unit a file declares (3MF, COLLADA, glTF) is its scale unless
+  ``scale`` is given; in a file that declares none, a bounding box larger than
+  :data:`MM_EXTENT_M` looks like millimetres and is refused; one smaller than
   :data:`TINY_EXTENT_M` is warned about;
 * **normals**: face winding made consistent (outward for closed meshes) with
   ``trimesh.repair.fix_normals``; the number of flipped faces is reported
@@ -40,7 +41,7 @@ import hashlib
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -48,10 +49,9 @@ from scipy.spatial.transform import Rotation
 
 from raysim.echoes.rt.scenes import ENU_FROM_NED, MATERIALS
 from raysim.io.files import atomic_write_bytes, atomic_write_json, atomic_write_text
+from raysim.io.mesh_files import MESH_SUFFIXES, declared_scale, read_mesh_file
 from raysim.radar.config import SPEED_OF_LIGHT
 
-#: Mesh file suffixes read with trimesh.
-MESH_SUFFIXES = (".obj", ".stl", ".ply", ".gltf", ".glb")
 #: Largest bounding-box extent taken as metres [m]; beyond, the file is taken for millimetres.
 MM_EXTENT_M = 500.0
 #: Smallest plausible extent in metres [m] (below: a mesh in kilometres, or a typo in scale).
@@ -166,19 +166,17 @@ class ConvertedScene:
         return "\n".join([head] + [f"  - {n}" for n in self.notes])
 
 
-def _parts(spec: UserMesh) -> list[tuple[str, object]]:
-    """``(part name, trimesh.Trimesh)`` of a file, each in the file's own coordinates."""
+def _parts(spec: UserMesh) -> tuple[list[tuple[str, object]], float | None]:
+    """``(part name, trimesh.Trimesh)`` of a file, each in the file's own coordinates,
+    and the file's scale: the one given, else the unit the file declares, else ``None``."""
     import trimesh
 
-    try:
-        loaded = trimesh.load(spec.file, process=False, **(
-            {"split_object": True, "group_material": False}
-            if spec.file.suffix.lower() == ".obj" else {}))
-    except Exception as exc:  # trimesh raises many types for a bad file
-        raise ValueError(f"mesh file {str(spec.file)!r} is not a readable mesh: "
-                         f"{type(exc).__name__}: {exc}") from None
+    loaded = read_mesh_file(spec.file, process=False, **(
+        {"split_object": True, "group_material": False}
+        if spec.file.suffix.lower() == ".obj" else {}))
+    scale = declared_scale(loaded, spec.file)[0] if spec.scale is None else spec.scale
     if isinstance(loaded, trimesh.Trimesh):
-        return [(spec.file.stem, loaded)]
+        return [(spec.file.stem, loaded)], scale
     if not isinstance(loaded, trimesh.Scene):
         raise ValueError(f"mesh file {str(spec.file)!r} holds no triangle mesh "
                          f"(got {type(loaded).__name__})")
@@ -190,7 +188,7 @@ def _parts(spec: UserMesh) -> list[tuple[str, object]]:
             parts.append((str(node), mesh.copy().apply_transform(transform)))
     if not parts:
         raise ValueError(f"mesh file {str(spec.file)!r} holds no triangles")
-    return parts
+    return parts, scale
 
 
 def _check_part(label: str, mesh, spec: UserMesh, wavelength: float, range_m: float,
@@ -291,7 +289,10 @@ def convert_meshes(meshes, out_dir: str | os.PathLike, *, frequency: float = 77e
     shapes, used = [], set()
     total = 0
     for i, spec in enumerate(meshes):
-        parts = _parts(spec)
+        parts, scale = _parts(spec)
+        if scale != spec.scale:
+            notes.append(f"{spec.file.name}: declares its unit; read at {scale:g} m per unit")
+            spec = replace(spec, scale=scale)
         names = {p for p, _ in parts}
         unknown = set(spec.materials) - names
         if unknown:

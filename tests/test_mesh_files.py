@@ -1,0 +1,111 @@
+"""Users' mesh files in the formats CAD and modelling tools export, in the unit they declare.
+
+A 3MF file is in millimetres unless it says otherwise and a COLLADA file states
+its unit in ``<asset><unit meter=...>``; read as metres, a 40 mm plate would be a
+40 m one. The plate's normal-incidence RCS ``4 pi A^2 / lambda^2`` (Knott, Shaeffer
+& Tuley, *Radar Cross Section*, 2nd ed., table 6.1) checks the unit end to end.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from raysim.echoes.po import targets as T
+from raysim.echoes.rt.user_meshes import UserMesh, convert_meshes
+from raysim.io.mesh_files import declared_scale, read_mesh_file
+
+LAM = 299_792_458.0 / 77e9
+#: PO of a flat plate at normal incidence against the closed form [dB] (as tests/test_po_rcs.py).
+CLOSED_FORM_DB = 1.0
+SIDE_M = 0.04
+
+
+def _plate(unit_per_metre: float):
+    import trimesh
+
+    plate = T.square_plate(SIDE_M)
+    return trimesh.Trimesh(plate.vertices * unit_per_metre, plate.faces, process=False)
+
+
+def _write_3mf_mm(path):
+    path.write_bytes(_plate(1000.0).export(file_type="3mf"))   # 3MF's unit: millimetre
+    return path
+
+
+def _write_dae_cm(path):
+    text = _plate(100.0).export(file_type="dae").decode()
+    assert "<unit" not in text and "<up_axis>" in text
+    path.write_text(text.replace("<up_axis>", '<unit meter="0.01" name="centimeter"/>\n'
+                                              "    <up_axis>", 1))
+    return path
+
+
+@pytest.mark.parametrize("writer", [_write_3mf_mm, _write_dae_cm], ids=["3mf-mm", "dae-cm"])
+def test_rcs_of_a_plate_file_in_its_declared_unit(tmp_path, capsys, writer):
+    from raysim.cli import main
+
+    path = writer(tmp_path / ("plate.3mf" if writer is _write_3mf_mm else "plate.dae"))
+    assert main(["rcs", str(path), "--az-deg", "0", "--el-deg", "0", "--json",
+                 "--max-bounces", "1", "--no-progress"]) == 0
+    captured = capsys.readouterr()
+    got = json.loads(captured.out)["rcs_dbsm"][0][0]
+    assert abs(got - 10 * math.log10(T.plate_rcs(SIDE_M, LAM))) < CLOSED_FORM_DB
+    assert "declares its unit" in captured.err
+
+
+def test_a_given_scale_overrides_the_declared_unit(tmp_path, capsys):
+    from raysim.cli import main
+
+    path = _write_3mf_mm(tmp_path / "plate.3mf")
+    # the user says the numbers are tenths of a millimetre: a 4 mm plate, 40 dB less
+    assert main(["rcs", str(path), "--az-deg", "0", "--el-deg", "0", "--json",
+                 "--max-bounces", "1", "--no-progress", "--scale", "0.0001"]) == 0
+    got = json.loads(capsys.readouterr().out)["rcs_dbsm"][0][0]
+    assert abs(got - 10 * math.log10(T.plate_rcs(SIDE_M / 10, LAM))) < CLOSED_FORM_DB
+
+
+def test_scene_mesh_in_millimetres_is_placed_in_metres(tmp_path):
+    import trimesh
+
+    path = _write_3mf_mm(tmp_path / "plate.3mf")
+    out = convert_meshes([UserMesh(file=path, material="metal")], tmp_path / "scene")
+    assert any("declares its unit" in n for n in out.notes)
+    ply = next((tmp_path / "scene" / "meshes").glob("*.ply"))
+    extents = trimesh.load(ply, process=False).extents
+    np.testing.assert_allclose(sorted(extents)[1:], [SIDE_M, SIDE_M], rtol=1e-6)
+
+
+def test_unreadable_files_name_the_file_and_what_was_expected(tmp_path, monkeypatch):
+    import trimesh
+
+    bad = tmp_path / "car.glb"
+    bad.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(ValueError, match=r"car\.glb' is not a readable mesh"):
+        read_mesh_file(bad)
+    step = tmp_path / "car.step"
+    step.write_text("ISO-10303-21;\n")
+    with pytest.raises(ValueError, match=r"expected one of .*\.3mf, \.dae, got suffix '\.step'"):
+        read_mesh_file(step)
+    with pytest.raises(ValueError, match="does not exist"):
+        read_mesh_file(tmp_path / "missing.ply")
+
+    def needs_a_package(*args, **kwargs):
+        raise ImportError("missing `pip install pycollada`")
+
+    dae = _write_dae_cm(tmp_path / "plate.dae")
+    monkeypatch.setattr(trimesh, "load", needs_a_package)
+    with pytest.raises(ValueError, match=r"plate\.dae': its reader needs a package .*pycollada"):
+        read_mesh_file(dae)
+
+
+def test_declared_scale_refuses_a_unit_it_does_not_know(tmp_path):
+    class Loaded:
+        units = "cubits of the realm"
+
+    with pytest.raises(ValueError, match="declares the unit 'cubits of the realm'"):
+        declared_scale(Loaded(), tmp_path / "x.3mf")
+    assert declared_scale(_plate(1.0), tmp_path / "x.stl") == (None, None)
