@@ -46,7 +46,7 @@ examples:
   raysim compensate cube.npz --imu flight.ulg --out beams.npz     # PX4 log
   raysim compensate adc_data.bin --radar-config iwr6843.cfg --board IWR6843AOP \\
       --imu flight.ulg --imu-topic sensor_combined --max-gap 0.2 --out beams.zarr
-  raysim compensate cube.npz --imu rosbag2_folder --out beams.npz # ROS 2 bag
+  raysim compensate cube.npz --imu rosbag2_folder --out beams.npz # ROS 2 bag (or a ROS 1 .bag)
   raysim compensate rotation_y.zarr --chain paper --direction-deg 20,0 --out paper.npz
   raysim compensate rotation_y.zarr --chain paper:published --direction-deg 20,0 \\
       --out published.npz
@@ -99,7 +99,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "compensate", help="motion-compensate a radar cube (Zarr store, NetCDF, .npz or a DCA1000 "
         "capture) "
-        "with an IMU or flight log (CSV, PX4 ULog, ArduPilot DataFlash, ROS 2 bag)",
+        "with an IMU or flight log (CSV, PX4 ULog, ArduPilot DataFlash, ROS 1 or 2 bag)",
         description=__doc__.split("\n\n")[0] + " Runs the exact rigid-body projection "
         "(or the paper's chain) on the selected range cells and angle grid.",
         epilog=EPILOG, formatter_class=_HelpFormatter)
@@ -109,10 +109,11 @@ def register(subparsers) -> None:
                    help="IMU log, same as --imu")
     p.add_argument("--imu", default=None, metavar="FILE",
                    help="IMU log: CSV (units in the header), PX4 .ulg, ArduPilot .bin or a "
-                   "ROS 2 bag (folder, .mcap, .db3); left out: the IMU log of the frame store")
+                   "ROS 2 bag (folder, .mcap, .db3) or ROS 1 .bag; left out: the IMU log of "
+                   "the frame store")
     p.add_argument("--imu-topic", default=None, metavar="NAME",
                    help="source inside the IMU log: PX4 topic (sensor_gyro_fifo, vehicle_imu, "
-                   "sensor_combined), ArduPilot message (ISBD, GYR, IMU) or ROS 2 topic; "
+                   "sensor_combined), ArduPilot message (ISBD, GYR, IMU) or ROS topic; "
                    "left out: the complete source with the highest rate")
     p.add_argument("--imu-instance", type=int, default=None, metavar="K",
                    help="instance of that source (PX4 multi-id, ArduPilot I); left out: the "

@@ -42,7 +42,7 @@ pose of their own ramp (exact, dpca and paper chains).
 
 IMU log (``imu``): a file of any format of
 :func:`raysim.io.flight_logs.read_imu_log` (the project's IMU CSV, PX4 ULog,
-ArduPilot DataFlash ``.bin``, ROS 2 bag; FLU turned into FRD), or a table
+ArduPilot DataFlash ``.bin``, ROS 1 or 2 bag; FLU turned into FRD), or a table
 ``[sample, 7]`` (time [s, IMU clock], angular rate [rad/s], specific force
 [m/s^2], body frame FRD). ``time_offset`` is IMU clock minus radar clock. It
 may be left out when the frame store holds an IMU log. The source inside a log
@@ -438,7 +438,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
     imu_topic : str, optional
         Source inside the IMU log: a PX4 topic (``sensor_gyro_fifo``,
         ``vehicle_imu``, ``sensor_combined``), an ArduPilot message (``IMU``,
-        ``GYR``, ``ISBD``) or a ROS 2 topic; default the best present.
+        ``GYR``, ``ISBD``) or a ROS topic; default the best present.
     imu_instance : int, optional
         Instance of that source (PX4 multi-id, ArduPilot ``I``); default the
         best present.

@@ -3,7 +3,7 @@ it gives at the first ramp.
 
 :func:`raysim.pipeline.compensate.compensate` reads its IMU input through these: a
 log file (:func:`raysim.io.flight_logs.read_imu_log`: CSV, PX4 ULog, ArduPilot
-DataFlash, ROS 2 bag), the IMU record of a frame store, or a table; the gaps of the
+DataFlash, ROS 1 or 2 bag), the IMU record of a frame store, or a table; the gaps of the
 log are judged over the chirps selected (:mod:`compensation.ingestion`), and the
 flight controller's attitude, where the log has one, sets the initial attitude.
 """

@@ -1,4 +1,4 @@
-"""`raysim compensate`: a stored cube plus an IMU log (CSV, PX4 ULog, ROS 2 bag), exact chain."""
+"""`raysim compensate`: a stored cube plus an IMU log (CSV, PX4 ULog, ROS bags), exact chain."""
 
 from __future__ import annotations
 
@@ -19,6 +19,8 @@ def _write_imu(fmt: str, tmp_path, s):
     """The IMU log in format ``fmt``; returns (CLI arguments, IMU clock minus radar clock)."""
     from dataclasses import replace
 
+    from ros1_bags import write_ros1_imu
+
     from raysim.io import write_imu_csv
     from raysim.io.flight_logs.rosbag import write_ros2_imu
     from raysim.io.flight_logs.ulog import write_px4_ulog
@@ -36,10 +38,13 @@ def _write_imu(fmt: str, tmp_path, s):
         return ["--imu", str(write_px4_ulog(tmp_path / "f.ulg", booted))], BOOT_S
     if fmt == "ros2-mcap":
         return ["--imu", str(write_ros2_imu(tmp_path / "bag", booted, storage="mcap"))], BOOT_S
+    if fmt == "ros1-bag":
+        return ["--imu", str(write_ros1_imu(tmp_path / "f.bag", booted))], BOOT_S
     raise AssertionError(fmt)
 
 
-@pytest.mark.parametrize("fmt", ["legacy-csv", "write_imu_csv", "ulog", "ros2-mcap"])
+@pytest.mark.parametrize("fmt", ["legacy-csv", "write_imu_csv", "ulog", "ros2-mcap",
+                                 "ros1-bag"])
 def test_compensate_cube_and_imu_log(tmp_path, fmt):
     cfg = RadarConfig(num_chirps=64, sample_rate=2.5e6)
     arr = upa(6, 6, wavelength=cfg.wavelength)

@@ -16,7 +16,8 @@ source                 module                      time base
 ``.bin`` (ArduPilot)   :mod:`.dataflash`           ``TimeUS`` (``TimeMS`` in 2014-15
                                                    firmware): since boot
 ROS 2 bag (folder,     :mod:`.rosbag`              ``header.stamp`` (sec + nanosec),
-``.mcap``, ``.db3``)                               the publisher's clock (ROS time)
+``.mcap``, ``.db3``);                              the publisher's clock (ROS time)
+ROS 1 ``.bag``
 =====================  ==========================  ================================
 
 Sources inside a log: each reader lists the IMU sources the file holds (PX4
@@ -51,14 +52,16 @@ import numpy as np
 
 from raysim.platform.imu import ImuSamples
 
-__all__ = ["FLIGHT_LOG_SUFFIXES", "ENU_TO_NED", "flu_to_frd", "read_imu_log", "time_base",
-           "choose_source"]
+__all__ = ["FLIGHT_LOG_SUFFIXES", "ROS_BAG_SUFFIXES", "ENU_TO_NED", "flu_to_frd", "read_imu_log",
+           "time_base", "choose_source"]
 
 #: Unix time [s] of 2000-01-01 and 2100-01-01: a first stamp between them is epoch time.
 EPOCH_RANGE_S = (946_684_800.0, 4_102_444_800.0)
 
 #: File suffixes recognised by :func:`read_imu_log` (a ROS 2 bag may also be a folder).
-FLIGHT_LOG_SUFFIXES = (".csv", ".ulg", ".bin", ".mcap", ".db3")
+FLIGHT_LOG_SUFFIXES = (".csv", ".ulg", ".bin", ".mcap", ".db3", ".bag")
+#: Suffixes of ROS bag files (a rosbag2 folder is given as the folder).
+ROS_BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 
 #: FLU -> FRD: a rotation of 180 deg about the common x axis, diag(1, -1, -1).
 _FLU_TO_FRD = np.diag([1.0, -1.0, -1.0])
@@ -144,8 +147,8 @@ def read_imu_log(path: str | os.PathLike, **kwargs) -> ImuSamples:
         ``.csv`` (:func:`raysim.io.imu_log.read_imu_csv`), ``.ulg`` (PX4 ULog,
         :func:`.ulog.read_px4_ulog`), ``.bin`` (ArduPilot DataFlash,
         :func:`.dataflash.read_dataflash_imu`; needs ``raysim[ardupilot]``), or a
-        ROS 2 bag: its folder, or a ``.mcap`` / ``.db3`` file inside one
-        (:func:`.rosbag.read_ros2_imu`).
+        ROS 2 bag: its folder, or a ``.mcap`` / ``.db3`` file inside one, or a
+        ROS 1 ``.bag`` (:func:`.rosbag.read_ros_imu`).
     **kwargs
         Passed to the source's reader: ``topic=`` (PX4 topic, ArduPilot
         message, ROS topic) and ``instance=`` (PX4 / ArduPilot); None values
@@ -167,13 +170,13 @@ def read_imu_log(path: str | os.PathLike, **kwargs) -> ImuSamples:
     if not p.exists():
         raise ValueError(f"IMU log {str(p)!r} does not exist")
     suffix = p.suffix.lower()
-    if p.is_dir() or suffix in (".mcap", ".db3"):
-        from raysim.io.flight_logs.rosbag import read_ros2_imu
+    if p.is_dir() or suffix in ROS_BAG_SUFFIXES:
+        from raysim.io.flight_logs.rosbag import read_ros_imu
 
         if "instance" in kwargs:
             raise ValueError(f"IMU log {str(p)!r}: a ROS 2 bag has topics, not instances; got "
                              f"instance={kwargs['instance']!r} (choose with topic=)")
-        return read_ros2_imu(p, **kwargs)
+        return read_ros_imu(p, **kwargs)
     if suffix == ".csv":
         from raysim.io.imu_log import read_imu_csv
 

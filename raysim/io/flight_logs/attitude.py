@@ -33,7 +33,13 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from raysim.io.flight_logs import ENU_TO_NED, check_increasing, median_rate, time_base
+from raysim.io.flight_logs import (
+    ENU_TO_NED,
+    ROS_BAG_SUFFIXES,
+    check_increasing,
+    median_rate,
+    time_base,
+)
 
 __all__ = ["AttitudeLog", "read_attitude_log"]
 
@@ -141,17 +147,10 @@ def _dataflash(path: Path) -> AttitudeLog | None:
 
 
 def _ros(path: Path, topic: str | None) -> AttitudeLog | None:
-    from rosbags.highlevel import AnyReader
-
-    from raysim.io.flight_logs.rosbag import IMU_MSGTYPE, _typestore
+    from raysim.io.flight_logs.rosbag import IMU_MSGTYPE, open_bag
 
     odom = "nav_msgs/msg/Odometry"
-    bag = path if path.is_dir() or not (path.parent / "metadata.yaml").is_file() else path.parent
-    try:
-        reader = AnyReader([bag], default_typestore=_typestore())
-        reader.open()
-    except Exception as exc:  # rosbags raises its own error types per storage
-        raise ValueError(f"{str(path)!r} is not a readable ROS 2 bag: {exc}") from None
+    reader = open_bag(path)
     try:
         found = {}
         for kind in (IMU_MSGTYPE, odom):
@@ -185,7 +184,8 @@ def _ros(path: Path, topic: str | None) -> AttitudeLog | None:
     r_enu_flu = Rotation.from_quat(q).as_matrix()
     r_ned_frd = ENU_TO_NED @ r_enu_flu @ _FLU_TO_FRD       # R_WB in NED / FRD
     return _make(t, Rotation.from_matrix(r_ned_frd), str(path),
-                 f"ROS 2 {kind} {', '.join(topics)} orientation, ENU/FLU turned into NED/FRD")
+                 f"{'ROS 1' if path.suffix.lower() == '.bag' else 'ROS 2'} {kind} "
+                 f"{', '.join(topics)} orientation, ENU/FLU turned into NED/FRD")
 
 
 def read_attitude_log(path: str | os.PathLike, topic: str | None = None) -> AttitudeLog | None:
@@ -194,7 +194,8 @@ def read_attitude_log(path: str | os.PathLike, topic: str | None = None) -> Atti
     Parameters
     ----------
     path : str or path-like
-        ``.ulg``, ``.bin``, a ROS 2 bag (folder, ``.mcap``, ``.db3``) or ``.csv``
+        ``.ulg``, ``.bin``, a ROS 2 bag (folder, ``.mcap``, ``.db3``), a ROS 1
+        ``.bag`` or ``.csv``
         (the project's IMU CSV holds no attitude: None).
     topic : str, optional
         ROS 2: the ``sensor_msgs/msg/Imu`` topic whose orientation to read
@@ -206,7 +207,7 @@ def read_attitude_log(path: str | os.PathLike, topic: str | None = None) -> Atti
     """
     p = Path(path)
     suffix = p.suffix.lower()
-    if p.is_dir() or suffix in (".mcap", ".db3"):
+    if p.is_dir() or suffix in ROS_BAG_SUFFIXES:
         return _ros(p, topic)
     if suffix == ".ulg":
         return _ulog(p)

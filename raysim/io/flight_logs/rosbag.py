@@ -1,4 +1,6 @@
-"""ROS 2 bags: ``sensor_msgs/msg/Imu`` messages, read and written with ``rosbags``.
+"""ROS bags: ``sensor_msgs/msg/Imu`` messages, read (ROS 1, ROS 2) and written (ROS 2).
+
+Both with ``rosbags``.
 
 Fields used: ``header.stamp`` (``sec`` + ``nanosec``), ``angular_velocity``
 [rad/s] and ``linear_acceleration`` [m/s^2] (``geometry_msgs/Vector3``).
@@ -17,10 +19,12 @@ turned into FRD by :func:`raysim.io.flight_logs.flu_to_frd`, ``(x, -y, -z)``.
 A ``frame_id`` other than the body frame is not rotated (no TF lookup).
 
 Bags: a rosbag2 folder (``metadata.yaml`` with a ``.db3`` SQLite3 or ``.mcap``
-file), one of its storage files, or a standalone ``.mcap`` file (an MCAP file
+file), one of its storage files, a standalone ``.mcap`` file (an MCAP file
 carries its own schemas and channels, so no ``metadata.yaml`` is needed; a
 ``.db3`` file without its folder's ``metadata.yaml`` is refused with a message
-saying so). The result's ``source`` names the topic, the rate and the time base
+saying so), or a ROS 1 ``.bag`` file (its connections carry their message
+definitions; ``sensor_msgs/Imu`` has the same fields, its ``time`` stamps are
+read as ``sec`` + ``nanosec``). The result's ``source`` names the topic, the rate and the time base
 (:func:`raysim.io.flight_logs.time_base`: ROS time is usually Unix time).
 """
 
@@ -40,9 +44,9 @@ from raysim.io.flight_logs import (
 )
 from raysim.platform.imu import ImuSamples
 
-__all__ = ["IMU_MSGTYPE", "read_ros2_imu", "write_ros2_imu"]
+__all__ = ["IMU_MSGTYPE", "open_bag", "read_ros_imu", "write_ros2_imu"]
 
-#: ROS 2 message type of IMU samples.
+#: Message type of IMU samples (``rosbags`` names ROS 1's ``sensor_msgs/Imu`` the same).
 IMU_MSGTYPE = "sensor_msgs/msg/Imu"
 
 
@@ -52,14 +56,40 @@ def _typestore():
     return get_typestore(Stores.ROS2_HUMBLE)
 
 
-def read_ros2_imu(path: str | os.PathLike, topic: str | None = None,
-                  epoch_ns: int = 0) -> ImuSamples:
-    """Read the ``sensor_msgs/msg/Imu`` messages of one topic of a ROS 2 bag.
+def open_bag(path: Path):
+    """An open ``rosbags`` ``AnyReader`` of a bag given as in the module docstring.
+
+    Raises
+    ------
+    ValueError
+        A ``.db3`` file without its folder, or a file ``rosbags`` cannot read.
+    """
+    from rosbags.highlevel import AnyReader
+
+    bag = path if path.is_dir() else path.parent
+    if not path.is_dir() and not (path.parent / "metadata.yaml").is_file():
+        if path.suffix.lower() not in (".mcap", ".bag"):
+            raise ValueError(f"{str(path)!r}: a rosbag2 {path.suffix} storage file needs its "
+                             f"bag folder's metadata.yaml beside it (none in "
+                             f"{str(path.parent)!r}); give the bag folder, or record to MCAP")
+        bag = path            # an MCAP file or a ROS 1 bag holds its own message definitions
+    try:
+        reader = AnyReader([bag], default_typestore=_typestore())
+        reader.open()
+    except Exception as exc:  # rosbags raises its own error types per storage
+        raise ValueError(f"{str(path)!r} is not a readable ROS bag: {exc}") from None
+    return reader
+
+
+def read_ros_imu(path: str | os.PathLike, topic: str | None = None,
+                 epoch_ns: int = 0) -> ImuSamples:
+    """Read the ``sensor_msgs/msg/Imu`` messages of one topic of a ROS 1 or ROS 2 bag.
 
     Parameters
     ----------
     path : str or path-like
-        Bag folder, or a ``.mcap`` / ``.db3`` file inside one.
+        ROS 2 bag folder, a ``.mcap`` / ``.db3`` file inside one, a standalone
+        ``.mcap`` file, or a ROS 1 ``.bag`` file.
     topic : str or None
         IMU topic; None takes the only ``sensor_msgs/msg/Imu`` topic.
     epoch_ns : int
@@ -77,21 +107,9 @@ def read_ros2_imu(path: str | os.PathLike, topic: str | None = None,
         Not a bag, no IMU topic or several without ``topic``, an unknown
         topic, or header stamps that do not increase.
     """
-    from rosbags.highlevel import AnyReader
-
     path = Path(path)
-    bag = path if path.is_dir() else path.parent
-    if not path.is_dir() and not (path.parent / "metadata.yaml").is_file():
-        if path.suffix.lower() != ".mcap":
-            raise ValueError(f"{str(path)!r}: a rosbag2 {path.suffix} storage file needs its "
-                             f"bag folder's metadata.yaml beside it (none in "
-                             f"{str(path.parent)!r}); give the bag folder, or record to MCAP")
-        bag = path                  # a standalone MCAP file holds its own schemas
-    try:
-        reader = AnyReader([bag], default_typestore=_typestore())
-        reader.open()
-    except Exception as exc:  # rosbags raises its own error types per storage
-        raise ValueError(f"{str(path)!r} is not a readable ROS 2 bag: {exc}") from None
+    reader = open_bag(path)
+    ros = "ROS 1" if path.suffix.lower() == ".bag" else "ROS 2"
     try:
         imu_topics = sorted({c.topic for c in reader.connections if c.msgtype == IMU_MSGTYPE})
         if topic is None:
@@ -119,7 +137,7 @@ def read_ros2_imu(path: str | os.PathLike, topic: str | None = None,
     accel_frd = flu_to_frd(np.asarray(accel, dtype=float).reshape(-1, 3))
     rate = median_rate(time)
     return ImuSamples(time, gyro_frd, accel_frd, spec=None, truth=None,
-                      source=f"{path} (ROS 2 {topic}, {rate:.4g} Hz, "
+                      source=f"{path} ({ros} {topic}, {rate:.4g} Hz, "
                       f"{time_base(time + epoch_ns * 1e-9)})", rate=rate)
 
 
