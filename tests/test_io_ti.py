@@ -222,7 +222,7 @@ def test_truncated_capture_names_sizes(tmp_path):
 @pytest.mark.parametrize("kwargs, match", [
     ({"num_rx": 0}, r"num_rx must be in 1\.\.4, got 0"),
     ({"num_rx": 5}, r"num_rx must be in 1\.\.4, got 5"),
-    ({"num_tx": 4}, r"num_tx must be in 1\.\.3"),
+    ({"num_tx": 5}, r"num_tx must be in 1\.\.4"),
     ({"num_loops": 0}, "num_loops"),
     ({"num_samples": 7}, "even"),
     ({"num_samples": 2.0}, "num_samples must be an integer"),

@@ -205,9 +205,17 @@ def _build(*, rx_mask, tx_mask, adc_bits_code, adc_fmt_code, profiles: dict, chi
     tx_on = _bits("txChannelEn", tx_mask)
     if not rx or max(rx) > 3:
         raise ValueError(f"{where}rxChannelEn {rx_mask!r} must enable receivers among RX0..RX3")
-    if not tx_on or max(tx_on) > 2:
+    # the boards known here have three transmitters; a device with more (AWR2944: four)
+    # is read with its antenna positions given, which then say how many there are
+    positions_given = antenna_positions is not None or tx_positions is not None
+    if tx_on and max(tx_on) > 3:
         raise ValueError(f"{where}txChannelEn {tx_mask!r} must enable transmitters among "
-                         f"TX0..TX2")
+                         f"TX0..TX3 (TI single-chip devices have at most four)")
+    if not tx_on or (max(tx_on) > 2 and not positions_given):
+        raise ValueError(f"{where}txChannelEn {tx_mask!r} must enable transmitters among "
+                         f"TX0..TX2 (the boards known here have three); a device with more "
+                         f"(AWR2944, AWR2544: four) is read with its antenna positions "
+                         f"(--antenna-positions FILE)")
     if adc_bits_code not in ADC_BITS:
         raise ValueError(f"{where}numADCBits must be one of {sorted(ADC_BITS)} (12/14/16 bit),"
                          f" got {adc_bits_code!r}")

@@ -104,7 +104,7 @@ class Dca1000Format:
         Enabled receivers, 1..4.
     num_tx : int
         TDM transmit slots per loop (chirps from ``chirpStartIdx`` to
-        ``chirpEndIdx``), 1..3.
+        ``chirpEndIdx``), 1..4 (TI single-chip devices have three or four TX).
     num_loops : int
         Loops per frame (``numLoops``): the length of the cube ``chirp`` axis.
     layout : {"2lane", "4lane"}
@@ -134,7 +134,7 @@ class Dca1000Format:
     def __post_init__(self) -> None:
         _positive_int("num_samples", self.num_samples)
         _positive_int("num_rx", self.num_rx, 1, 4)
-        _positive_int("num_tx", self.num_tx, 1, 3)
+        _positive_int("num_tx", self.num_tx, 1, 4)
         _positive_int("num_loops", self.num_loops)
         if self.layout not in LAYOUTS:
             raise ValueError(f"layout must be one of {LAYOUTS}, got {self.layout!r}")
