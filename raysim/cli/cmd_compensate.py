@@ -230,10 +230,12 @@ def _calibration_text(report: dict) -> str:
     lines = ["self-calibration (estimate +- one sigma):"]
     if report.get("time_offset_sigma_s") is not None:
         searched = report.get("time_offset_search_s")
+        outside = searched is not None and abs(report["time_offset_s"]) > searched
         lines.append(f"  time offset {1e3 * report['time_offset_s']:.4f} +- "
                      f"{1e3 * report['time_offset_sigma_s']:.4f} ms" + (
                          "" if searched is None else f" (searched +-{1e3 * searched:g} ms "
-                         f"about 0: --time-offset-search widens it)"))
+                         f"about 0{', the fit then left that window' if outside else ''}: "
+                         f"--time-offset-search widens it)"))
     if report.get("frame_velocity_correction_mps") or report.get("radar_inertial"):
         v, s = report["initial_velocity_mps"], report["initial_velocity_sigma_mps"]
         lines.append("  initial velocity [m/s] (N, E, D) " + ", ".join(
