@@ -133,6 +133,9 @@ def register(subparsers) -> None:
     p.add_argument("--layout", choices=("2lane", "4lane"), default=None,
                    help="LVDS lanes of a DCA1000 capture (default: the Studio JSON's lane "
                    "mask, 2 lanes for an SDK .cfg)")
+    p.add_argument("--drop-incomplete", action="store_true",
+                   help="read the whole frames of a DCA1000 capture that ends inside a frame "
+                   "(stopped by hand); the trailing bytes are dropped with a warning")
     p.add_argument("--board", default=None, metavar="BOARD",
                    help="TI board of a DCA1000 capture, for its antenna layout: xWR14xx, "
                    "xWR16xx, xWR18xx, IWR6843ISK, IWR6843AOP or IWR6843ODS; needed when the "
@@ -288,7 +291,7 @@ def run(args) -> int:
     result = compensate(
         args.cube, args.imu if args.imu is not None else args.imu_positional, out=args.out,
         chain=spec, frames=args.frames, frame=args.frame, radar_config=args.radar_config,
-        layout=args.layout, capture_t0=args.capture_t0,
+        layout=args.layout, capture_t0=args.capture_t0, drop_incomplete=args.drop_incomplete,
         range_m=None if args.range_m is None else span_option(args.range_m, "--range-m", False),
         azimuth_deg=span_grid(args.az_deg, "--az-deg"),
         elevation_deg=span_grid(args.el_deg, "--el-deg"),

@@ -124,8 +124,8 @@ def frame_selection(text: str | None, total: int, option: str = "--frames") -> l
 
 
 def _load_capture(path: str, radar_config: str, frames: str | None, layout: str | None,
-                  t0: float, board: str | None = None,
-                  antenna_positions=None) -> CompensateInput:
+                  t0: float, board: str | None = None, antenna_positions=None,
+                  drop_incomplete: bool = False) -> CompensateInput:
     from raysim.io.mmwave_config import read_mmwave_config
     from raysim.io.ti_dca1000 import check_capture_fits, read_dca1000
 
@@ -142,16 +142,18 @@ def _load_capture(path: str, radar_config: str, frames: str | None, layout: str 
                            antenna_positions=antenna_positions)
     fmt = m.fmt
     try:
-        total = check_capture_fits(path, fmt, m.num_frames)
+        total = check_capture_fits(path, fmt, m.num_frames, drop_incomplete)
     except ValueError as exc:
         raise ValueError(f"{exc} (--radar-config {radar_config!r})") from None
+    dropped = os.path.getsize(path) - total * fmt.bytes_per_frame      # --drop-incomplete
     sel = frame_selection(frames, total)
     sign = (None if m.channel_sign is None or np.all(m.channel_sign == 1)
             else m.channel_sign.astype(np.float32)[:, None])
 
     def read(k: int) -> np.ndarray:
         f = sel[k]
-        cube = read_dca1000(path, fmt, frames=slice(f, f + 1)).cube[0]
+        cube = read_dca1000(path, fmt, frames=slice(f, f + 1),
+                            drop_incomplete=drop_incomplete).cube[0]
         return cube if sign is None else cube * sign    # the board's RX feed signs
 
     times = np.concatenate([fmt.chirp_times(1, f) for f in sel])
@@ -160,7 +162,7 @@ def _load_capture(path: str, radar_config: str, frames: str | None, layout: str 
                            source={"capture": os.path.abspath(path),
                                    "radar_config": os.path.abspath(radar_config),
                                    "tx_order": list(m.tx_order), "layout": fmt.layout,
-                                   "board": m.board})
+                                   "board": m.board, "dropped_bytes": dropped})
 
 
 def _load_store(path: str, frames: str | None, frame: int) -> CompensateInput:
@@ -233,7 +235,7 @@ def _load_npz(path: str) -> CompensateInput:
 def load_input(path: str, *, radar_config: str | None = None, frames: str | None = None,
                frame: int = 0, layout: str | None = None,
                capture_t0: float = 0.0, board: str | None = None,
-               antenna_positions=None) -> CompensateInput:
+               antenna_positions=None, drop_incomplete: bool = False) -> CompensateInput:
     """Open the input of the compensate stage (``raysim compensate``).
 
     Parameters
@@ -259,6 +261,8 @@ def load_input(path: str, *, radar_config: str | None = None, frames: str | None
         RX feed signs (applied to the channels) and LVDS lanes.
     antenna_positions : str or path-like, optional
         Antenna file of a capture (:func:`raysim.io.ti_boards.read_antenna_positions`).
+    drop_incomplete : bool
+        Read the whole frames of a capture that ends inside a frame (warned).
 
     Raises
     ------
@@ -269,7 +273,9 @@ def load_input(path: str, *, radar_config: str | None = None, frames: str | None
 
     if radar_config is not None or path.endswith(".bin"):
         return _load_capture(path, radar_config, frames, layout, capture_t0, board,
-                             antenna_positions)
+                             antenna_positions, drop_incomplete)
+    if drop_incomplete:
+        raise ValueError(f"--drop-incomplete applies to a raw capture; {path!r} is a cube")
     if board is not None or antenna_positions is not None:
         raise ValueError("--board / --antenna-positions describe a raw capture's antennas; "
                          f"{path!r} carries its own element positions")

@@ -288,7 +288,7 @@ def _count_frames(n_words: int, fmt: Dca1000Format, drop_incomplete: bool, where
 
 
 def check_capture_fits(path: str | os.PathLike, fmt: Dca1000Format,
-                       num_frames: int = 0) -> int:
+                       num_frames: int = 0, drop_incomplete: bool = False) -> int:
     """Refuse a capture whose size or content does not fit the lanes and format; its frames.
 
     Checks, each refusal naming the sizes:
@@ -313,6 +313,9 @@ def check_capture_fits(path: str | os.PathLike, fmt: Dca1000Format,
     fmt : Dca1000Format
     num_frames : int
         Frames the configuration asks for (0: until stopped, not checked).
+    drop_incomplete : bool
+        Accept a capture that ends inside a frame (stopped by hand) and count
+        its whole frames; still refused where the other layout fits it whole.
 
     Returns
     -------
@@ -334,10 +337,13 @@ def check_capture_fits(path: str | os.PathLike, fmt: Dca1000Format,
     hint = (f"; it is {o_total} whole frame(s) of the {other.layout} layout "
             f"({other.bytes_per_frame} bytes: {other.describe_frame()})"
             if o_total and not o_extra and other.bytes_per_frame != fmt.bytes_per_frame else "")
-    if extra or total == 0:
+    if total == 0 or (extra and (hint or not drop_incomplete)):
+        remedy = ("" if hint or total == 0 or drop_incomplete else
+                  f"; a capture stopped inside a frame keeps its {total} whole frame(s) with "
+                  f"--drop-incomplete")
         raise ValueError(f"{path}: the capture holds {size} bytes, not a whole number of "
                          f"frames of {fmt.bytes_per_frame} bytes ({fmt.layout}: "
-                         f"{fmt.describe_frame()}){hint}")
+                         f"{fmt.describe_frame()}){hint}{remedy}")
     if (num_frames > 0 and total != num_frames and o_total == num_frames and not o_extra
             and other.bytes_per_frame != fmt.bytes_per_frame):
         raise ValueError(f"{path}: the capture holds {size} bytes = {num_frames} frames of the "

@@ -355,7 +355,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                imu_instance: int | None = None, board: str | None = None,
                antenna_positions=None, mounting_deg=None, progress: bool = False,
                autofocus: bool | str = False, ground_doppler: bool = False,
-               time_offset_search: float | None = None) -> CompensateResult:
+               time_offset_search: float | None = None,
+               drop_incomplete: bool = False) -> CompensateResult:
     """Motion-compensate a stored IF cube or a raw capture with an IMU log and write the beams.
 
     Parameters
@@ -386,6 +387,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         mmWave SDK ``.cfg`` or Studio ``.json`` of a capture.
     layout : {"2lane", "4lane"}, optional
         LVDS lanes of a capture (default from the configuration).
+    drop_incomplete : bool
+        Read the whole frames of a capture that ends inside a frame (stopped by
+        hand), the rest dropped with a warning; default refused.
     capture_t0 : float
         Radar-clock time of the first ramp of a capture [s].
     range_m : (float, float), optional
@@ -525,7 +529,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         inp = load_input(source, radar_config=None if radar_config is None
                          else os.fspath(radar_config), frames=_frames_text(frames), frame=frame,
                          layout=layout, capture_t0=capture_t0, board=board,
-                         antenna_positions=antenna_positions)
+                         antenna_positions=antenna_positions, drop_incomplete=drop_incomplete)
+        if inp.source.get("dropped_bytes"):
+            notes.append(f"capture {source!r} ends inside a frame: its last "
+                         f"{inp.source['dropped_bytes']} bytes are dropped (--drop-incomplete)")
         if mounting_deg is None and inp.mounting_deg is not None:   # a store's own
             mounting_deg = inp.mounting_deg
             mounted = not is_default_mounting(mounting_deg)
