@@ -180,7 +180,8 @@ class CalibrationResult:
         unconstrained components, and ``warnings`` its observability warnings.
         """
         ri = self.radar_inertial
-        stamp = 0.0 if self.clock is None else self.clock.stamp_sigma     # the log's stamps
+        stamp, clock = ((0.0, 0.0) if self.clock is None       # the log's stamps, the fit's
+                        else (self.clock.stamp_sigma, self.clock.total_sigma))
         out = {"time_offset_s": self.time_offset,
                "time_offset_sigma_s": None if self.clock is None else self.clock.total_sigma,
                "gyro_bias_rad_s": self.gyro_bias.tolist(),
@@ -196,12 +197,9 @@ class CalibrationResult:
             out["clock_drift"] = self.clock.drift
             out["clock_drift_sigma"] = self.clock.drift_sigma
         if ri is not None:
-            # the radar-inertial fit's offset is stated no tighter than the clock fit it
-            # started from: against a log averaged over intervals longer than a frame, two
-            # of its runs started 22 ms apart ended 23 ms apart, each stating under 4 ms
-            out["time_offset_sigma_s"] = float(max(
-                np.hypot(ri.sigma[12], stamp), 0.0 if self.clock is None
-                else self.clock.total_sigma))
+            # no tighter than the clock fit it started from (a log averaged over intervals
+            # longer than a frame: runs started 22 ms apart ended 23 ms apart, each +-4 ms)
+            out["time_offset_sigma_s"] = float(max(np.hypot(ri.sigma[12], stamp), clock))
             out["gyro_bias_sigma_rad_s"] = ri.sigma[9:12].tolist()
             out["clock_drift"], out["clock_drift_sigma"] = float(ri.state[13]), float(ri.sigma[13])
             out["radar_inertial"] = ri.report()
@@ -545,9 +543,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     imu_interval : float
         Averaging interval of each IMU sample [s] (:mod:`compensation.clock_averaged`); 0 none.
     imu_errors : ImuErrors, optional
-        Noise densities and bias spreads of the IMU, the process noise and
-        priors of the radar-inertial estimate and the gyro-bias fit's prior;
-        default :data:`DEFAULT_IMU_ERRORS`.
+        Noise densities and bias spreads of the IMU, the process noise and priors of the
+        radar-inertial estimate and the gyro-bias fit's prior; :data:`DEFAULT_IMU_ERRORS`.
     attitude_given : bool
         Whether ``initial_attitude`` is an estimate (a flight controller's,
         levelled) rather than the nominal hover attitude
@@ -569,18 +566,16 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
     ground_gates : array_like of int, optional
         Ground clutter bins joining the velocity's Doppler (:mod:`compensation.ground_doppler`).
     **options
-        For :func:`compensation.integrate_imu` (``lever_arm``,
-        ``initial_attitude``, ``initial_position``, ``velocity``,
-        ``initial_velocity``, ``hover_window``, ``imu_grade`` ...) and
-        :func:`compensation.rigid_body_projection` (``grid_shape``,
-        ``channel_slot``, ``method``, ``focus``).
+        For :func:`compensation.integrate_imu` (``lever_arm``, ``initial_attitude``,
+        ``initial_position``, ``velocity``, ``initial_velocity``, ``hover_window``,
+        ``imu_grade`` ...) and :func:`compensation.rigid_body_projection`
+        (``grid_shape``, ``channel_slot``, ``method``, ``focus``).
 
     Returns
     -------
     CalibrationResult
     """
-    bad = [e for e in estimate if e not in ESTIMATES]
-    if bad:
+    if bad := [e for e in estimate if e not in ESTIMATES]:
         raise ValueError(f"estimate: got {bad}, expected names of {ESTIMATES}")
     if len(rcs) != len(frame_times) or len(rcs) < 1:
         raise ValueError(f"rcs holds {len(rcs)} frames and frame_times {len(frame_times)}; "
