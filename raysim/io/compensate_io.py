@@ -213,18 +213,22 @@ def _load_npz(path: str) -> CompensateInput:
                              f"{list(_NPZ_NEED)}")
         c = {k: z[k] for k in z.files}
     data = c["data"]
-    if data.ndim != 3 or not np.iscomplexobj(data):
-        raise ValueError(f"cube 'data' must be complex [chirp, channel, sample], got "
-                         f"{data.dtype} {data.shape}")
+    if data.ndim != 3 or not (np.iscomplexobj(data) or np.issubdtype(data.dtype, np.number)):
+        raise ValueError(f"cube 'data' must be [chirp, channel, sample] samples, complex (I/Q) "
+                         f"or real (real-only ADC), got {data.dtype} {data.shape}")
     tc, fs = float(c["chirp_duration"]), float(c["sample_rate"])
     t = np.asarray(c["chirp_times"], dtype=float)
+    if t.shape != (data.shape[0],):
+        raise ValueError(f"cube file {path!r}: chirp_times has shape {t.shape}, expected one "
+                         f"time per chirp of 'data' ({data.shape[0]},)")
     slot = np.asarray(c.get("tx_slot", np.zeros(data.shape[1], dtype=int)), dtype=int)
     n_slot = int(slot.max()) + 1 if slot.size else 1
     slot_interval = float(c.get("slot_interval", tc))
     cfg = RadarConfig(carrier_frequency=float(c["carrier_frequency"]),
                       bandwidth=float(c["bandwidth"]), chirp_duration=tc, sample_rate=fs,
                       num_chirps=int(data.shape[0]), num_tx_slots=n_slot,
-                      idle_time=max(slot_interval - tc, 0.0))
+                      idle_time=max(slot_interval - tc, 0.0),
+                      complex_sampling=bool(np.iscomplexobj(data)))
     grid = tuple(int(v) for v in c["grid_shape"]) if "grid_shape" in c else None
     lever = np.asarray(c["lever_arm"], dtype=float) if "lever_arm" in c else None
     return CompensateInput([0], lambda k: data, slot_times(t[None], n_slot, slot_interval),

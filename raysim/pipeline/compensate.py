@@ -23,13 +23,13 @@ file with these keys:
 =====================  =========================  =================================
 key                    shape                      meaning
 =====================  =========================  =================================
-``data``               ``[chirp, channel, sample]``  complex IF samples
+``data``               ``[chirp, channel, sample]``  IF samples: complex (I/Q) or real
 ``chirp_times``        ``[chirp]``                chirp start times, radar clock [s]
 ``element_positions``  ``[channel, 3]``           virtual positions p_tx + p_rx in A [m]
 ``carrier_frequency``  scalar                     f_c [Hz]
 ``bandwidth``          scalar                     B [Hz]
 ``chirp_duration``     scalar                     T_c [s]
-``sample_rate``        scalar                     f_s [Hz] (complex sampling)
+``sample_rate``        scalar                     f_s [Hz]
 ``grid_shape``         ``[2]`` (optional)         (nx, ny), x major, y minor
 ``lever_arm``          ``[3]`` (optional)         r_IR in B [m]
 ``tx_slot``            ``[channel]`` (optional)   TDM slot of each channel

@@ -227,3 +227,49 @@ def test_compensate_help_has_examples(capsys):
                  "--chain paper:published --direction-deg 20,0",
                  "--chain none --out none.npz"):
         assert line in text, line
+
+
+def test_a_real_sampled_cube_is_compensated_as_its_complex_twin(tmp_path, capsys):
+    """A real-only ADC (TI ``adcCfg 2 0``): the range spectrum's positive half, the same
+    target, the same compensated slow time as the complex cube of the same motion."""
+    from raysim.io import write_imu_csv
+
+    lever = np.array([0.0, 0.0, 0.1])
+    traj = sinusoid("pitch", np.deg2rad(5), 10.0)
+    tgt = PointTarget.at(5.0, np.deg2rad(15), 0.0, radar_origin=lever)
+    imu = write_imu_csv(tmp_path / "imu.csv", simulate_imu(traj, "ideal", rate=1000.0,
+                                                           start=-0.01, end=0.02))
+    peaks = {}
+    for real in (False, True):
+        cfg = RadarConfig(num_chirps=64, sample_rate=2.5e6, complex_sampling=not real)
+        arr = upa(6, 6, wavelength=cfg.wavelength)
+        frame = simulate_point_targets(cfg, arr, [tgt], traj, lever_arm=lever)
+        assert np.iscomplexobj(frame.data) is not real
+        cube = tmp_path / f"cube{real:d}.npz"
+        np.savez(cube, data=frame.data, chirp_times=frame.chirp_times,
+                 element_positions=arr.virtual_positions,
+                 carrier_frequency=cfg.carrier_frequency, bandwidth=cfg.bandwidth,
+                 chirp_duration=cfg.chirp_duration, sample_rate=cfg.sample_rate,
+                 grid_shape=np.array(arr.grid_shape), lever_arm=lever)
+        out = tmp_path / f"beams{real:d}.npz"
+        assert main(["compensate", str(cube), "--imu", str(imu), "--out", str(out),
+                     "--range-m", "4:6", "--az-deg", "0:30:1", "--el-deg", "0:0:1",
+                     "--velocity", "given", "--initial-velocity", "0,0,0"]) == 0, \
+            capsys.readouterr().err
+        with np.load(out) as z:
+            power = np.abs(z["beams"]).sum(axis=0)[..., 0]          # [range, azimuth]
+            g, a = np.unravel_index(int(np.argmax(power)), power.shape)
+            slow = z["beams"][:, g, a, 0]
+            peaks[real] = (float(z["range_m"][g]), float(z["azimuth_deg"][a]))
+            assert np.abs(slow.mean()) / np.abs(slow).mean() > 0.9999
+    assert peaks[True] == peaks[False] and peaks[False][1] == pytest.approx(15.0), peaks
+
+
+def test_a_cube_whose_chirp_times_do_not_fit_is_named(tmp_path, capsys):
+    np.savez(tmp_path / "c.npz", data=np.zeros((4, 2, 2), complex), chirp_times=np.zeros(3),
+             element_positions=np.zeros((2, 3)), carrier_frequency=77e9, bandwidth=1e9,
+             chirp_duration=1e-5, sample_rate=1e6)
+    assert main(["compensate", str(tmp_path / "c.npz"), "--chain", "none",
+                 "--out", str(tmp_path / "o.npz")]) == 2
+    assert "chirp_times has shape (3,), expected one time per chirp of 'data' (4,)" in \
+        capsys.readouterr().err
