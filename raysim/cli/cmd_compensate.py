@@ -103,8 +103,9 @@ def register(subparsers) -> None:
         description=__doc__.split("\n\n")[0] + " Runs the exact rigid-body projection "
         "(or the paper's chain) on the selected range cells and angle grid.",
         epilog=EPILOG, formatter_class=_HelpFormatter)
-    p.add_argument("cube", help="raysim Zarr store, NetCDF file (.nc), .npz (keys: see "
-                   "raysim.pipeline.compensate) or DCA1000 capture (.bin, with --radar-config)")
+    p.add_argument("cube", help="raysim Zarr store, NetCDF file (.nc), .npz or MATLAB .mat "
+                   "(v7 or older; keys: see raysim.pipeline.compensate) or DCA1000 capture "
+                   "(.bin, with --radar-config)")
     p.add_argument("imu_positional", nargs="?", default=None, metavar="imu",
                    help="IMU log, same as --imu")
     p.add_argument("--imu", default=None, metavar="FILE",

@@ -203,15 +203,42 @@ def _load_store(path: str, frames: str | None, frame: int) -> CompensateInput:
                                          if "mounting_deg" in ds.attrs else None))
 
 
+def _mat_keys(path: str) -> dict:
+    """The variables of a MATLAB ``.mat`` file (v4 to v7): MATLAB's ``1 x n`` vectors and
+    ``1 x 1`` scalars as numpy's ``[n]`` and ``()``; ``data`` and ``element_positions``
+    keep their axes (a single channel stays an axis)."""
+    from scipy.io import loadmat, matlab
+
+    try:
+        raw = loadmat(path, squeeze_me=False)
+    except NotImplementedError:           # scipy reads up to v7; v7.3 is HDF5
+        raise ValueError(f"cube file {path!r} is a MATLAB v7.3 (HDF5) file; save it with "
+                         f"save(..., '-v7') or as .npz") from None
+    except (ValueError, matlab.MatReadError) as exc:
+        raise ValueError(f"cube file {path!r} is not a readable MATLAB file: {exc}") from None
+    out = {}
+    for k, v in raw.items():
+        if k.startswith("__"):
+            continue
+        v = np.asarray(v)
+        out[k] = v if k in ("data", "element_positions") else (
+            v.reshape(()) if v.size == 1 and k not in ("chirp_times", "tx_slot") else v.ravel())
+    return out
+
+
 def _load_npz(path: str) -> CompensateInput:
+    """An ``.npz`` or MATLAB ``.mat`` cube (the keys of :mod:`raysim.pipeline.compensate`)."""
     if not os.path.isfile(path):
         raise ValueError(f"cube file {path!r} does not exist")
-    with np.load(path) as z:
-        missing = [k for k in _NPZ_NEED if k not in z]
-        if missing:
-            raise ValueError(f"cube file {path!r} lacks keys {missing}; expected "
-                             f"{list(_NPZ_NEED)}")
-        c = {k: z[k] for k in z.files}
+    if path.endswith(".mat"):
+        c = _mat_keys(path)
+    else:
+        with np.load(path) as z:
+            c = {k: z[k] for k in z.files}
+    missing = [k for k in _NPZ_NEED if k not in c]
+    if missing:
+        raise ValueError(f"cube file {path!r} lacks keys {missing}; expected "
+                         f"{list(_NPZ_NEED)}")
     data = c["data"]
     if data.ndim != 3 or not (np.iscomplexobj(data) or np.issubdtype(data.dtype, np.number)):
         raise ValueError(f"cube 'data' must be [chirp, channel, sample] samples, complex (I/Q) "
@@ -283,11 +310,11 @@ def load_input(path: str, *, radar_config: str | None = None, frames: str | None
     if board is not None or antenna_positions is not None:
         raise ValueError("--board / --antenna-positions describe a raw capture's antennas; "
                          f"{path!r} carries its own element positions")
-    if not path.endswith(".npz") and (storage.store_exists(path) or
-                                      (path.endswith(".nc") and os.path.isfile(path))):
+    if not path.endswith((".npz", ".mat")) and (storage.store_exists(path) or
+                                                (path.endswith(".nc") and os.path.isfile(path))):
         return _load_store(path, frames, frame)
     if frames is not None:
-        raise ValueError(f"--frames {frames!r}: an .npz cube holds one frame")
+        raise ValueError(f"--frames {frames!r}: an .npz or .mat cube holds one frame")
     return _load_npz(path)
 
 

@@ -18,7 +18,7 @@ TDM slot order of the virtual array and the binary layout; every frame, or
 ``frames="LO:HI"``), a frame store written by :mod:`raysim.io.storage` (a Zarr
 store directory, or a NetCDF file ``.nc`` from
 :func:`raysim.io.storage.export_netcdf`; ``frame`` or ``frames``) or an ``.npz``
-file with these keys:
+file (or a MATLAB ``.mat`` of v7 or older: vectors ``1 x n`` or ``n x 1``) with these keys:
 
 =====================  =========================  =================================
 key                    shape                      meaning

@@ -273,3 +273,34 @@ def test_a_cube_whose_chirp_times_do_not_fit_is_named(tmp_path, capsys):
                  "--out", str(tmp_path / "o.npz")]) == 2
     assert "chirp_times has shape (3,), expected one time per chirp of 'data' (4,)" in \
         capsys.readouterr().err
+
+
+def test_a_matlab_cube_reads_as_its_npz_twin(tmp_path, capsys):
+    """The same keys saved by MATLAB (``save -v7``; here scipy's writer of that format,
+    which stores vectors as 1 x n and scalars as 1 x 1) give the same beams."""
+    from scipy.io import savemat
+
+    cfg = RadarConfig(num_chirps=16, sample_rate=2.5e6)
+    arr = upa(4, 2, wavelength=cfg.wavelength)
+    frame = simulate_point_targets(cfg, arr, [PointTarget.at(5.0, np.deg2rad(-10), 0.0)],
+                                   sinusoid("roll", np.deg2rad(2), 8.0))
+    keys = dict(data=frame.data, chirp_times=frame.chirp_times,
+                element_positions=arr.virtual_positions, carrier_frequency=cfg.carrier_frequency,
+                bandwidth=cfg.bandwidth, chirp_duration=cfg.chirp_duration,
+                sample_rate=cfg.sample_rate, grid_shape=np.array(arr.grid_shape))
+    np.savez(tmp_path / "c.npz", **keys)
+    savemat(tmp_path / "c.mat", keys)
+    beams = []
+    for name in ("c.npz", "c.mat"):
+        out = tmp_path / f"{name}.beams.npz"
+        assert main(["compensate", str(tmp_path / name), "--chain", "none", "--out", str(out),
+                     "--range-m", "4:6", "--az-deg", "-20:0:2", "--el-deg", "0:0:1"]) == 0
+        with np.load(out) as z:
+            beams.append(z["beams"])
+    np.testing.assert_array_equal(beams[0], beams[1])
+    v73 = tmp_path / "v73.mat"        # a v7.3 file: MATLAB's text header, version 0x0200, HDF5
+    v73.write_bytes(b"MATLAB 7.3 MAT-file".ljust(124) + b"\x00\x02IM" + bytes(384))
+    capsys.readouterr()
+    assert main(["compensate", str(v73), "--chain", "none", "--out",
+                 str(tmp_path / "o.npz")]) == 2
+    assert "MATLAB v7.3 (HDF5) file; save it with save(..., '-v7')" in capsys.readouterr().err
