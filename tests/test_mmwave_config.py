@@ -153,3 +153,19 @@ def test_bad_studio_json_names_the_field(tmp_path):
         read_mmwave_config(tmp_path / "x.json")
     with pytest.raises(ValueError, match="does not exist"):
         read_mmwave_config(tmp_path / "none.cfg")
+
+
+def test_studio_json_of_another_waveform_or_a_cascade_is_refused():
+    import copy
+
+    base = _studio()
+    assert parse_studio_json(base).fmt.num_loops > 0          # the fields absent: TDM, legacy
+    for key, value in (("waveformType", "advancedFrameChirp"), ("MIMOScheme", "BPM")):
+        doc = copy.deepcopy(base)
+        doc["mmWaveDevices"][0]["rfConfig"][key] = value
+        with pytest.raises(ValueError, match=rf"rfConfig {key} '{value}' is not supported"):
+            parse_studio_json(doc)
+    doc = copy.deepcopy(base)
+    doc["mmWaveDevices"] = doc["mmWaveDevices"] * 4                    # MMWCAS: four chips
+    with pytest.raises(ValueError, match="holds 4 devices"):
+        parse_studio_json(doc)

@@ -453,8 +453,16 @@ def parse_studio_json(doc: dict, *, layout: str | None = None, t0: float = 0.0,
     devices = _get(doc, "mmWaveDevices", where)
     if not isinstance(devices, list) or not devices:
         raise ValueError(f"{where}mmWaveDevices must be a non-empty list")
+    if len(devices) > 1:     # a cascade (MMWCAS): one array over several chips' captures
+        raise ValueError(f"{where}mmWaveDevices holds {len(devices)} devices (a cascaded "
+                         f"radar); one device's DCA1000 capture is read, expected one device")
     dev = devices[0]
     rf = _get(dev, "rfConfig", where)
+    # Studio writes both frame structures; these two fields say which the radar ran
+    for key, only in (("waveformType", "legacyFrameChirp"), ("MIMOScheme", "TDM")):
+        if rf.get(key, only) != only:
+            raise ValueError(f"{where}rfConfig {key} {rf[key]!r} is not supported, expected "
+                             f"{only!r} (one frame of chirps, TDM MIMO: each chirp one TX)")
     chan = _get(rf, "rlChanCfg_t", where)
     fmt = _get(_get(rf, "rlAdcOutCfg_t", where), "fmt", where)
     profiles = {}
