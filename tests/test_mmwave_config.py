@@ -169,3 +169,11 @@ def test_studio_json_of_another_waveform_or_a_cascade_is_refused():
     doc["mmWaveDevices"] = doc["mmWaveDevices"] * 4                    # MMWCAS: four chips
     with pytest.raises(ValueError, match="holds 4 devices"):
         parse_studio_json(doc)
+
+
+def test_an_enabled_bpm_is_refused_and_a_disabled_one_read():
+    cfg = RadarConfig(num_chirps=4, num_tx_slots=2, sample_rate=2.5e6)
+    text = sdk_cfg_text(cfg, tx_order=(0, 2))
+    assert parse_sdk_cfg(text + "bpmCfg -1 0 0 1\n").fmt.num_tx == 2
+    with pytest.raises(ValueError, match=r"'bpmCfg -1 1 0 1': BPM MIMO .* not supported"):
+        parse_sdk_cfg(text + "bpmCfg -1 1 0 1\n")

@@ -28,7 +28,8 @@ kHz/us> <idleTimeVar us> <adcStartTimeVar us> <txEnable>``
 <framePeriodicity ms> <triggerSelect> <frameTriggerDelay ms>``
 
 Other commands (``sensorStop``, ``lvdsStreamCfg``, ``guiMonitor``, ...) are
-ignored; ``advFrameCfg`` (sub-frames) is refused. The SDK file does not name
+ignored; ``advFrameCfg`` (sub-frames) and an enabled ``bpmCfg`` (BPM MIMO) are
+refused. The SDK file does not name
 the LVDS lane count; ``layout`` says it, else the board's.
 
 Antennas: the configuration does not say the board. The layout is the
@@ -407,6 +408,11 @@ def parse_sdk_cfg(text: str, *, layout: str | None = None, t0: float = 0.0, tx_p
                          f"profiles, chirps and loops) is not supported; a capture is read with "
                          f"one frameCfg (one profile, one TDM slot order): capture each "
                          f"sub-frame's configuration with frameCfg")
+    for ln in text.splitlines():     # bpmCfg <subFrameIdx> <enabled> <chirp0Idx> <chirp1Idx>
+        words = ln.split("%", 1)[0].split()
+        if words[:1] == ["bpmCfg"] and len(words) > 2 and words[2] not in ("0", "0.0"):
+            raise ValueError(f"{where}{ln.strip()!r}: BPM MIMO (binary phase-coded TX, bpmCfg "
+                             f"enabled) is not supported; expected TDM (bpmCfg enabled 0)")
     missing = [c for c in _REQUIRED if not found[c]]
     if missing:
         raise ValueError(f"{where}missing command(s) {missing}; an SDK .cfg needs "
