@@ -536,13 +536,18 @@ def read_mmwave_config(path: str | os.PathLike, *, layout: str | None = None, t0
     text = path.read_text(encoding="utf-8", errors="replace")
     kw = dict(t0=t0, tx_positions=tx_positions, rx_positions=rx_positions, source=str(path),
               board=board, antenna_positions=antenna_positions)
-    if path.suffix.lower() == ".json":
-        try:
-            doc = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
-        return parse_studio_json(doc, layout=layout, **kw)
-    return parse_sdk_cfg(text, layout=layout, **kw)
+    try:
+        if path.suffix.lower() == ".json":
+            try:
+                doc = json.loads(text)
+            except json.JSONDecodeError as exc:
+                raise ValueError(f"not valid JSON ({exc})") from None
+            return parse_studio_json(doc, layout=layout, **kw)
+        return parse_sdk_cfg(text, layout=layout, **kw)
+    except ValueError as exc:       # every message names the file once
+        if str(path) in str(exc):
+            raise
+        raise ValueError(f"{path}: {exc}") from None
 
 
 def sdk_cfg_text(config: RadarConfig, *, tx_order=(0,), rx_enabled=(0, 1, 2, 3),
