@@ -28,6 +28,7 @@ import numpy as np
 from raysim.io.files import atomic_write, check_output
 from raysim.platform.kinematics import slot_times
 from raysim.radar.config import RadarConfig
+from raysim.resources import check_memory
 from raysim.vocabulary import AXIS_UNITS
 
 __all__ = ["CompensateInput", "load_input", "frame_selection", "write_compensated_store",
@@ -38,6 +39,9 @@ __all__ = ["CompensateInput", "load_input", "frame_selection", "write_compensate
 COMPENSATED_FORMAT = 1
 #: Group attribute that marks a store written by :func:`write_compensated_store`.
 COMPENSATED_FORMAT_ATTR = "raysim_compensated"
+#: Bytes per element of MATLAB's numeric classes (``scipy.io.whosmat``).
+MAT_CLASS_BYTES = {"double": 8, "single": 4, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2,
+                   "int32": 4, "uint32": 4, "int64": 8, "uint64": 8}
 _NPZ_NEED = ("data", "chirp_times", "element_positions", "carrier_frequency", "bandwidth",
              "chirp_duration", "sample_rate")
 
@@ -226,10 +230,33 @@ def _mat_keys(path: str) -> dict:
     return out
 
 
+def _unpacked_bytes(path: str) -> int:
+    """Bytes the arrays of an ``.npz`` or ``.mat`` file take once read (before reading)."""
+    if path.endswith(".mat"):
+        from scipy.io import whosmat
+
+        try:
+            # complex arrays are not flagged here: counted at twice their class's size
+            return sum(2 * MAT_CLASS_BYTES.get(cls, 8) * int(np.prod(shape))
+                       for _, shape, cls in whosmat(path))
+        except Exception:  # noqa: BLE001 - unreadable: _mat_keys names the file's problem
+            return 0
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            return sum(i.file_size for i in z.infolist())
+    except zipfile.BadZipFile:
+        raise ValueError(f"cube file {path!r} is not an .npz archive") from None
+
+
 def _load_npz(path: str) -> CompensateInput:
     """An ``.npz`` or MATLAB ``.mat`` cube (the keys of :mod:`raysim.pipeline.compensate`)."""
     if not os.path.isfile(path):
         raise ValueError(f"cube file {path!r} does not exist")
+    check_memory(2 * _unpacked_bytes(path), f"cube file {path!r} (read whole, then range "
+                 f"compressed)", "the cube: write its frames to a Zarr store and select "
+                 "--frames")
     if path.endswith(".mat"):
         c = _mat_keys(path)
     else:

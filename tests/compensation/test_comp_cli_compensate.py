@@ -304,3 +304,23 @@ def test_a_matlab_cube_reads_as_its_npz_twin(tmp_path, capsys):
     assert main(["compensate", str(v73), "--chain", "none", "--out",
                  str(tmp_path / "o.npz")]) == 2
     assert "MATLAB v7.3 (HDF5) file; save it with save(..., '-v7')" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".mat"])
+def test_a_cube_larger_than_memory_is_refused_before_it_is_read(tmp_path, capsys, monkeypatch,
+                                                                 suffix):
+    from scipy.io import savemat
+
+    import raysim.resources
+
+    keys = dict(data=np.zeros((64, 8, 256), complex), chirp_times=np.arange(64) * 1e-4,
+                element_positions=np.zeros((8, 3)), carrier_frequency=77e9, bandwidth=1e9,
+                chirp_duration=5e-5, sample_rate=5e6)
+    path = tmp_path / f"c{suffix}"
+    (np.savez if suffix == ".npz" else savemat)(path, keys)
+    # 2 MiB of samples (complex128): refused where 3 MiB are free
+    monkeypatch.setattr(raysim.resources, "available_memory", lambda: 3 * 2**20)
+    assert main(["compensate", str(path), "--chain", "none", "--out",
+                 str(tmp_path / "o.npz")]) == 2
+    err = capsys.readouterr().err
+    assert f"cube file '{path}'" in err and "of memory" in err and "--frames" in err
