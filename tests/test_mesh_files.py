@@ -109,3 +109,18 @@ def test_declared_scale_refuses_a_unit_it_does_not_know(tmp_path):
     with pytest.raises(ValueError, match="declares the unit 'cubits of the realm'"):
         declared_scale(Loaded(), tmp_path / "x.3mf")
     assert declared_scale(_plate(1.0), tmp_path / "x.stl") == (None, None)
+
+
+def test_the_scene_report_places_a_millimetre_mesh_in_metres(tmp_path):
+    """The scene report's placement and coverage boxes read the same unit the scene does."""
+    from raysim.scenario import load_scenario
+    from raysim.studies.scene_report.meshes import mesh_boxes
+
+    _write_3mf_mm(tmp_path / "plate.3mf")
+    (tmp_path / "s.toml").write_text(
+        'name = "plate"\n[[scene.meshes]]\nfile = "plate.3mf"\nmaterial = "metal"\n'
+        "position_m = [10.0, 0.0, 0.0]\n")
+    (box,) = mesh_boxes(load_scenario(tmp_path / "s.toml"))
+    size = np.asarray(box["upper_m"]) - np.asarray(box["lower_m"])
+    np.testing.assert_allclose(sorted(size)[1:], [SIDE_M, SIDE_M], rtol=1e-6)
+    np.testing.assert_allclose(box["centre_m"], [10.0, 0.0, 0.0], atol=SIDE_M)

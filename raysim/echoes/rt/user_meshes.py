@@ -166,17 +166,26 @@ class ConvertedScene:
         return "\n".join([head] + [f"  - {n}" for n in self.notes])
 
 
-def _parts(spec: UserMesh) -> tuple[list[tuple[str, object]], float | None]:
+def with_declared_scale(spec: UserMesh, loaded) -> UserMesh:
+    """``spec`` with the unit its file declares (``loaded``: the file read) as its scale
+    where it gives none (:func:`raysim.io.mesh_files.declared_scale`)."""
+    if spec.scale is not None:
+        return spec
+    scale = declared_scale(loaded, spec.file)[0]
+    return spec if scale is None else replace(spec, scale=scale)
+
+
+def _parts(spec: UserMesh) -> tuple[list[tuple[str, object]], UserMesh]:
     """``(part name, trimesh.Trimesh)`` of a file, each in the file's own coordinates,
-    and the file's scale: the one given, else the unit the file declares, else ``None``."""
+    and ``spec`` with the unit the file declares (:func:`with_declared_scale`)."""
     import trimesh
 
     loaded = read_mesh_file(spec.file, process=False, **(
         {"split_object": True, "group_material": False}
         if spec.file.suffix.lower() == ".obj" else {}))
-    scale = declared_scale(loaded, spec.file)[0] if spec.scale is None else spec.scale
+    scaled = with_declared_scale(spec, loaded)
     if isinstance(loaded, trimesh.Trimesh):
-        return [(spec.file.stem, loaded)], scale
+        return [(spec.file.stem, loaded)], scaled
     if not isinstance(loaded, trimesh.Scene):
         raise ValueError(f"mesh file {str(spec.file)!r} holds no triangle mesh "
                          f"(got {type(loaded).__name__})")
@@ -188,7 +197,7 @@ def _parts(spec: UserMesh) -> tuple[list[tuple[str, object]], float | None]:
             parts.append((str(node), mesh.copy().apply_transform(transform)))
     if not parts:
         raise ValueError(f"mesh file {str(spec.file)!r} holds no triangles")
-    return parts, scale
+    return parts, scaled
 
 
 def _check_part(label: str, mesh, spec: UserMesh, wavelength: float, range_m: float,
@@ -289,10 +298,11 @@ def convert_meshes(meshes, out_dir: str | os.PathLike, *, frequency: float = 77e
     shapes, used = [], set()
     total = 0
     for i, spec in enumerate(meshes):
-        parts, scale = _parts(spec)
-        if scale != spec.scale:
-            notes.append(f"{spec.file.name}: declares its unit; read at {scale:g} m per unit")
-            spec = replace(spec, scale=scale)
+        parts, scaled = _parts(spec)
+        if scaled.scale not in (spec.scale, 1.0):
+            notes.append(f"{spec.file.name}: declares its unit; read at {scaled.scale:g} m "
+                         f"per unit")
+            spec = scaled
         names = {p for p, _ in parts}
         unknown = set(spec.materials) - names
         if unknown:

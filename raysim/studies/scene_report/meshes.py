@@ -54,13 +54,17 @@ def mesh_boxes(scenario) -> list[dict]:
     import trimesh
     from scipy.spatial import ConvexHull
 
-    from raysim.echoes.rt.user_meshes import UserMesh
+    from raysim.echoes.rt.user_meshes import UserMesh, with_declared_scale
+    from raysim.io.mesh_files import read_mesh_file
 
     out, taken = [], set()
     for m in scene.meshes:
         spec = UserMesh(**m.placement())
-        loaded = trimesh.load(spec.file, force="mesh", process=False)
-        v = np.asarray(loaded.vertices, dtype=float)
+        loaded = read_mesh_file(spec.file, process=False)
+        spec = with_declared_scale(spec, loaded)
+        if isinstance(loaded, trimesh.Scene):
+            loaded = loaded.to_mesh()            # every node's geometry at its place
+        v = np.asarray(getattr(loaded, "vertices", np.empty((0, 3))), dtype=float)
         if v.size == 0:
             raise ValueError(f"mesh file {spec.file}: no vertices")
         tf = spec.to_world()
