@@ -320,6 +320,24 @@ def test_advanced_subframe_cfg_is_refused_by_name():
         read_mmwave_config(REAL / "mmwave" / "jetson_profile_advanced_subframe.cfg")
 
 
+def test_px4_log_exported_by_ulog2csv_reads_as_the_log(tmp_path):
+    """pyulog's own CSV export of ``sensor_combined`` (float32 printed, microsecond stamps)."""
+    from pyulog.ulog2csv import convert_ulog2csv
+
+    from raysim.io.flight_logs.ulog import read_px4_ulog
+
+    log = REAL / "ulog" / "sample_log_small.ulg"
+    convert_ulog2csv(str(log), "sensor_combined", str(tmp_path), ",", None, None)
+    (csv,) = tmp_path.glob("*_sensor_combined_0.csv")
+    got, want = read_imu_log(csv), read_px4_ulog(log, topic="sensor_combined", instance=0)
+    assert "PX4 sensor_combined (pyulog ulog2csv)" in got.source
+    assert got.interval == want.interval > 0          # each sample a 4-5 ms average
+    np.testing.assert_allclose(got.time, want.time, rtol=0, atol=1e-6)
+    f32 = 2.0 ** -24                     # float32 printed to round trip: half an ulp
+    np.testing.assert_allclose(got.gyro, want.gyro, rtol=f32, atol=1e-30)
+    np.testing.assert_allclose(got.accel, want.accel, rtol=f32, atol=1e-30)
+
+
 def test_every_real_file_is_covered_here():
     """A new file in the folder needs a test above."""
     covered = {"sample_log_small.ulg", "sample_appended_multiple.ulg",

@@ -22,6 +22,12 @@ A vector column without a unit (``gyro_x``, ``accel_x``; the layout
 ``raysim compensate`` documented before this format) is read in SI units,
 rad/s and m/s^2.
 
+Flight-log exports are read as they are (:data:`EXPORTS`): PX4's
+``sensor_combined`` from pyulog's ``ulog2csv`` (``timestamp`` [us],
+``gyro_rad[0..2]``, ``accelerometer_m_s2[0..2]``) and ArduPilot's ``IMU`` from
+``mavlogdump.py --format csv`` or Mission Planner (``TimeUS``, ``GyrX..Z``,
+``AccX..Z``; one instance ``I``), both FRD and SI.
+
 Values are converted to SI on reading (s, rad/s, m/s^2). Time stamps must be
 strictly increasing; every value must be a finite number. Errors name the row
 (1-based data row and file line) and the column.
@@ -54,18 +60,42 @@ _TIME_RE = re.compile(r"^time_(?P<unit>[a-z]+)$")
 _VEC_RE = re.compile(r"^(?P<sensor>gyro|accel)_(?P<axis>[xyz])(?:_(?P<unit>[a-z0-9_]+))?$")
 #: Unit of a vector column named without one (``gyro_x``): SI.
 _SI_UNIT = {"gyro": "rad_s", "accel": "m_s2"}
+#: CSV exports of flight logs read as they are: their columns -> this format's names. Both
+#: log FRD body axes in SI units, time in microseconds since boot.
+EXPORTS = MappingProxyType({
+    "PX4 sensor_combined (pyulog ulog2csv)": MappingProxyType({
+        "timestamp": "time_us",
+        **{f"gyro_rad[{k}]": f"gyro_{a}_rad_s" for k, a in enumerate(_AXES)},
+        **{f"accelerometer_m_s2[{k}]": f"accel_{a}_m_s2" for k, a in enumerate(_AXES)}}),
+    **{f"ArduPilot IMU (mavlogdump --format csv, Mission Planner; {clock})": MappingProxyType({
+        clock: f"time_{clock[4:].lower()}",
+        **{f"Gyr{a.upper()}": f"gyro_{a}_rad_s" for a in _AXES},
+        **{f"Acc{a.upper()}": f"accel_{a}_m_s2" for a in _AXES}})
+       for clock in ("TimeUS", "TimeMS")},
+})
+#: The export whose rows are PX4 ``sensor_combined`` fields, read as the ULog reader does.
+PX4_EXPORT = next(iter(EXPORTS))
+#: Column of the IMU instance in an ArduPilot export (several IMUs interleave their rows).
+INSTANCE_COLUMN = "I"
 
 
 def _units_for(sensor: str) -> MappingProxyType:
     return GYRO_UNITS if sensor == "gyro" else ACCEL_UNITS
 
 
+def export_layout(header: list[str]) -> str | None:
+    """The flight-log export whose columns ``header`` holds (:data:`EXPORTS`), or None."""
+    names = {h.strip() for h in header}
+    return next((k for k, cols in EXPORTS.items() if set(cols) <= names), None)
+
+
 def _parse_header(header: list[str], where: str) -> tuple[int, float, dict]:
     """Column index and SI factor of the time and of each (sensor, axis)."""
     time_col: tuple[int, float] | None = None
     vec: dict[tuple[str, str], tuple[int, float]] = {}
+    alias = EXPORTS.get(export_layout(header), {})
     for i, raw in enumerate(header):
-        name = raw.strip()
+        name = alias.get(raw.strip(), raw.strip())
         m = _TIME_RE.match(name)
         if m:
             unit = m["unit"]
@@ -130,6 +160,8 @@ def read_imu_csv(path: str | os.PathLike) -> ImuSamples:
     header = None
     rows: list[list[float]] = []
     lines_of_rows: list[int] = []
+    instances: set[str] = set()
+    inst_col = None
     for line_no, line in enumerate(text_lines, start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
@@ -139,6 +171,12 @@ def read_imu_csv(path: str | os.PathLike) -> ImuSamples:
             t_col, t_factor, vec = _parse_header(header, where)
             cols = [t_col] + [vec[s, a][0] for s in ("gyro", "accel") for a in _AXES]
             names = [header[c].strip() for c in cols]
+            layout = export_layout(header)
+            if layout == PX4_EXPORT:
+                return _read_px4_export(path, header, text_lines[line_no:], line_no)
+            stripped = [h.strip() for h in header]
+            if layout is not None and INSTANCE_COLUMN in stripped:
+                inst_col = stripped.index(INSTANCE_COLUMN)
             continue
         row_no = len(rows) + 1
         if len(fields) != len(header):
@@ -158,10 +196,16 @@ def read_imu_csv(path: str | os.PathLike) -> ImuSamples:
             values.append(v)
         rows.append(values)
         lines_of_rows.append(line_no)
+        if inst_col is not None:
+            instances.add(fields[inst_col].strip())
     if header is None:
         raise ValueError(f"{where}no header row found")
     if not rows:
         raise ValueError(f"{where}no data rows after the header")
+    if len(instances) > 1:
+        raise ValueError(f"{where}rows of IMU instances {sorted(instances)} interleave "
+                         f"(column {INSTANCE_COLUMN!r}); export one instance, e.g. "
+                         f"mavlogdump.py --format csv --types IMU --condition 'IMU.I==0'")
     data = np.asarray(rows, dtype=float)
     time = data[:, 0] * t_factor
     factors = np.array([vec[s, a][1] for s in ("gyro", "accel") for a in _AXES])
@@ -174,7 +218,44 @@ def read_imu_csv(path: str | os.PathLike) -> ImuSamples:
         raise ValueError(f"{where}row {k + 1} (line {lines_of_rows[k]}), column {names[0]!r}: "
                          f"time stamp {float(data[k, 0])!r} {what} row {k} "
                          f"({float(data[k - 1, 0])!r}); time stamps must be strictly increasing")
-    return ImuSamples(time, vals[:, :3], vals[:, 3:], spec=None, truth=None, source=str(path))
+    source = str(path) if layout is None else f"{path} ({layout}: FRD, SI, time since boot)"
+    return ImuSamples(time, vals[:, :3], vals[:, 3:], spec=None, truth=None, source=source)
+
+
+def _read_px4_export(path: Path, header: list[str], lines: list[str], header_line: int
+                     ) -> ImuSamples:
+    """PX4 ``sensor_combined`` rows of a ``ulog2csv`` export, read as from the ULog: each
+    sample at the middle of its averaging interval (``gyro_integral_dt``)."""
+    from raysim.io.flight_logs import check_increasing, median_rate, time_base
+    from raysim.io.flight_logs.ulog import sensor_combined_samples
+
+    names = [h.strip() for h in header]
+    rows = []
+    for k, line in enumerate(lines, start=header_line + 1):
+        if not line.strip():
+            continue
+        fields = next(csv.reader([line]))
+        try:
+            rows.append([float(x) for x in fields])
+        except ValueError:
+            raise ValueError(f"{path}: line {k}: {line[:80]!r} is not {len(names)} "
+                             f"numbers") from None
+        if len(rows[-1]) != len(names):
+            raise ValueError(f"{path}: line {k} has {len(fields)} fields, the header has "
+                             f"{len(names)}")
+    if not rows:
+        raise ValueError(f"{path}: no data rows after the header")
+    data = np.asarray(rows, dtype=float)
+    if not np.all(np.isfinite(data)):
+        raise ValueError(f"{path}: values that are not finite numbers")
+    cols = {n: data[:, i] for i, n in enumerate(names)}
+    cols["gyro_integral_dt"] = cols.get("gyro_integral_dt", np.zeros(len(data)))
+    time, gyro, accel, interval = sensor_combined_samples(cols, str(path))
+    check_increasing(time, f"{path} (timestamp)")
+    rate = median_rate(time)
+    return ImuSamples(time, gyro, accel, spec=None, truth=None, rate=rate, interval=interval,
+                      source=f"{path} ({PX4_EXPORT}: FRD, SI, {rate:.4g} Hz, "
+                             f"{time_base(time)})")
 
 
 def write_imu_csv(path: str | os.PathLike, samples: ImuSamples, *, time_unit: str = "s",

@@ -137,6 +137,25 @@ def _interval(d: dict, field: str, n: int) -> np.ndarray:
     return dt
 
 
+def sensor_combined_samples(d: dict, where: str) -> tuple:
+    """``(time [sample], gyro [sample, 3], accel [sample, 3], interval)`` of PX4
+    ``sensor_combined`` fields ``d`` (a ULog's, or its ``ulog2csv`` export's columns):
+    each sample at the middle of its averaging interval [s], the accelerometer
+    interpolated to the gyro's times, ``interval`` the median averaging interval [s]."""
+    stamp = np.asarray(d["timestamp"], dtype=np.uint64).astype(float) * 1e-6
+    gyro = np.column_stack([d[f"gyro_rad[{i}]"] for i in range(3)]).astype(float)
+    accel = np.column_stack([d[f"accelerometer_m_s2[{i}]"] for i in range(3)]).astype(float)
+    rel = np.asarray(d.get("accelerometer_timestamp_relative", np.zeros(stamp.size)),
+                     dtype=float)
+    dt = _interval(d, "gyro_integral_dt", stamp.size)
+    time = stamp - 0.5e-6 * dt
+    t_acc = stamp + rel * 1e-6 - 0.5e-6 * _interval(d, "accelerometer_integral_dt", stamp.size)
+    if np.any(t_acc != time):
+        check_increasing(t_acc, f"{where} accelerometer")
+        accel = np.column_stack([np.interp(time, t_acc, accel[:, i]) for i in range(3)])
+    return time, gyro, accel, 1e-6 * float(np.median(dt)) if dt.size else 0.0
+
+
 def _candidates(log) -> tuple[list, dict]:
     """Complete IMU sources of a parsed log: ``(topic, instance, rate, (t, gyro, accel))``."""
     by = {(d.name, d.multi_id): d.data for d in log.data_list}
@@ -144,19 +163,7 @@ def _candidates(log) -> tuple[list, dict]:
     for (name, k), d in sorted(by.items()):
         try:
             if name == "sensor_combined":
-                stamp = np.asarray(d["timestamp"], dtype=np.uint64).astype(float) * 1e-6
-                gyro = np.column_stack([d[f"gyro_rad[{i}]"] for i in range(3)]).astype(float)
-                accel = np.column_stack([d[f"accelerometer_m_s2[{i}]"]
-                                         for i in range(3)]).astype(float)
-                rel = np.asarray(d.get("accelerometer_timestamp_relative",
-                                       np.zeros(stamp.size)), dtype=float)
-                time = stamp - 0.5e-6 * _interval(d, "gyro_integral_dt", stamp.size)
-                t_acc = (stamp + rel * 1e-6
-                         - 0.5e-6 * _interval(d, "accelerometer_integral_dt", stamp.size))
-                if np.any(t_acc != time):
-                    check_increasing(t_acc, f"{name}[{k}] accelerometer")
-                    accel = np.column_stack([np.interp(time, t_acc, accel[:, i])
-                                             for i in range(3)])
+                time, gyro, accel, _ = sensor_combined_samples(d, f"{name}[{k}]")
             elif name == "vehicle_imu":
                 stamp = np.asarray(d.get("timestamp_sample", d["timestamp"]),
                                    dtype=np.uint64).astype(float) * 1e-6
