@@ -109,7 +109,8 @@ def register(subparsers) -> None:
     p.add_argument("imu_positional", nargs="?", default=None, metavar="imu",
                    help="IMU log, same as --imu")
     p.add_argument("--imu", default=None, metavar="FILE",
-                   help="IMU log: CSV (units in the header), PX4 .ulg, ArduPilot .bin or a "
+                   help="IMU log: CSV (units in the header, or a PX4 ulog2csv / ArduPilot "
+                   "mavlogdump export), PX4 .ulg, ArduPilot .bin or a "
                    "ROS 2 bag (folder, .mcap, .db3) or ROS 1 .bag; left out: the IMU log of "
                    "the frame store")
     p.add_argument("--imu-topic", default=None, metavar="NAME",
