@@ -48,3 +48,22 @@ def test_interleaved_imu_instances_are_refused_with_the_export_to_run(tmp_path):
     path.write_text("\n".join([HEAD, *rows]) + "\n")
     with pytest.raises(ValueError, match=r"instances \['0', '1'\] interleave .*IMU\.I==0"):
         read_imu_log(path)
+
+
+def test_px4_export_samples_sit_at_their_intervals_middle(tmp_path):
+    """``ulog2csv`` rows are 4 ms averages stamped at their end: read as from the ULog."""
+    from raysim.io.imu_log import read_imu_csv
+
+    path = tmp_path / "f_sensor_combined_0.csv"
+    head = ("timestamp,gyro_rad[0],gyro_rad[1],gyro_rad[2],gyro_integral_dt,"
+            "accelerometer_timestamp_relative,accelerometer_m_s2[0],accelerometer_m_s2[1],"
+            "accelerometer_m_s2[2],accelerometer_integral_dt,accelerometer_clipping")
+    t = 20_000_000 + 4000 * np.arange(25)
+    rows = [f"{s},0.01,0.02,-0.03,4000,0,0.1,0.2,-9.7,4000,0" for s in t]
+    path.write_text("\n".join([head, *rows]) + "\n")
+    s = read_imu_log(path)
+    np.testing.assert_allclose(s.time, (t - 2000) * 1e-6, rtol=0, atol=1e-9)
+    assert s.interval == pytest.approx(4e-3) and "ulog2csv" in s.source
+    np.testing.assert_allclose(s.accel[0], [0.1, 0.2, -9.7])
+    with pytest.raises(ValueError, match="read it with raysim.io.read_imu_log"):
+        read_imu_csv(path)

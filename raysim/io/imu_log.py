@@ -83,6 +83,15 @@ def _units_for(sensor: str) -> MappingProxyType:
     return GYRO_UNITS if sensor == "gyro" else ACCEL_UNITS
 
 
+def csv_header(path: str | os.PathLike) -> tuple[list[str], int]:
+    """The header row of a CSV log (after ``#`` comment lines) and its 1-based line number."""
+    with Path(path).open(newline="") as fh:
+        for line_no, line in enumerate(fh, start=1):
+            if line.strip() and not line.lstrip().startswith("#"):
+                return next(csv.reader([line])), line_no
+    raise ValueError(f"{path}: no header row found")
+
+
 def export_layout(header: list[str]) -> str | None:
     """The flight-log export whose columns ``header`` holds (:data:`EXPORTS`), or None."""
     names = {h.strip() for h in header}
@@ -172,8 +181,10 @@ def read_imu_csv(path: str | os.PathLike) -> ImuSamples:
             cols = [t_col] + [vec[s, a][0] for s in ("gyro", "accel") for a in _AXES]
             names = [header[c].strip() for c in cols]
             layout = export_layout(header)
-            if layout == PX4_EXPORT:
-                return _read_px4_export(path, header, text_lines[line_no:], line_no)
+            if layout == PX4_EXPORT:     # its samples are interval averages: the ULog's reader
+                raise ValueError(f"{where}a PX4 sensor_combined export (pyulog ulog2csv): "
+                                 f"read it with raysim.io.read_imu_log, which places each "
+                                 f"sample at its averaging interval's middle as from the ULog")
             stripped = [h.strip() for h in header]
             if layout is not None and INSTANCE_COLUMN in stripped:
                 inst_col = stripped.index(INSTANCE_COLUMN)
@@ -220,42 +231,6 @@ def read_imu_csv(path: str | os.PathLike) -> ImuSamples:
                          f"({float(data[k - 1, 0])!r}); time stamps must be strictly increasing")
     source = str(path) if layout is None else f"{path} ({layout}: FRD, SI, time since boot)"
     return ImuSamples(time, vals[:, :3], vals[:, 3:], spec=None, truth=None, source=source)
-
-
-def _read_px4_export(path: Path, header: list[str], lines: list[str], header_line: int
-                     ) -> ImuSamples:
-    """PX4 ``sensor_combined`` rows of a ``ulog2csv`` export, read as from the ULog: each
-    sample at the middle of its averaging interval (``gyro_integral_dt``)."""
-    from raysim.io.flight_logs import check_increasing, median_rate, time_base
-    from raysim.io.flight_logs.ulog import sensor_combined_samples
-
-    names = [h.strip() for h in header]
-    rows = []
-    for k, line in enumerate(lines, start=header_line + 1):
-        if not line.strip():
-            continue
-        fields = next(csv.reader([line]))
-        try:
-            rows.append([float(x) for x in fields])
-        except ValueError:
-            raise ValueError(f"{path}: line {k}: {line[:80]!r} is not {len(names)} "
-                             f"numbers") from None
-        if len(rows[-1]) != len(names):
-            raise ValueError(f"{path}: line {k} has {len(fields)} fields, the header has "
-                             f"{len(names)}")
-    if not rows:
-        raise ValueError(f"{path}: no data rows after the header")
-    data = np.asarray(rows, dtype=float)
-    if not np.all(np.isfinite(data)):
-        raise ValueError(f"{path}: values that are not finite numbers")
-    cols = {n: data[:, i] for i, n in enumerate(names)}
-    cols["gyro_integral_dt"] = cols.get("gyro_integral_dt", np.zeros(len(data)))
-    time, gyro, accel, interval = sensor_combined_samples(cols, str(path))
-    check_increasing(time, f"{path} (timestamp)")
-    rate = median_rate(time)
-    return ImuSamples(time, gyro, accel, spec=None, truth=None, rate=rate, interval=interval,
-                      source=f"{path} ({PX4_EXPORT}: FRD, SI, {rate:.4g} Hz, "
-                             f"{time_base(time)})")
 
 
 def write_imu_csv(path: str | os.PathLike, samples: ImuSamples, *, time_unit: str = "s",

@@ -178,11 +178,15 @@ def read_imu_log(path: str | os.PathLike, **kwargs) -> ImuSamples:
                              f"instance={kwargs['instance']!r} (choose with topic=)")
         return read_ros_imu(p, **kwargs)
     if suffix == ".csv":
-        from raysim.io.imu_log import read_imu_csv
+        from raysim.io.imu_log import PX4_EXPORT, csv_header, export_layout, read_imu_csv
 
         if kwargs:
             raise ValueError(f"IMU CSV {str(p)!r}: no reader options expected, got "
                              f"{sorted(kwargs)}")
+        if export_layout(csv_header(p)[0]) == PX4_EXPORT:
+            from raysim.io.flight_logs.ulog import read_px4_csv_export
+
+            return read_px4_csv_export(p)
         return read_imu_csv(p)
     if suffix == ".ulg":
         from raysim.io.flight_logs.ulog import read_px4_ulog

@@ -156,6 +156,47 @@ def sensor_combined_samples(d: dict, where: str) -> tuple:
     return time, gyro, accel, 1e-6 * float(np.median(dt)) if dt.size else 0.0
 
 
+def read_px4_csv_export(path: str | os.PathLike) -> ImuSamples:
+    """PX4 ``sensor_combined`` rows of pyulog's ``ulog2csv`` export, read as from the ULog
+    (:func:`sensor_combined_samples`: each sample at its averaging interval's middle).
+
+    Raises
+    ------
+    ValueError
+        A row that is not numbers, a field count that is not the header's, or time
+        stamps that do not increase (the line named).
+    """
+    import csv
+
+    from raysim.io.imu_log import PX4_EXPORT, csv_header
+
+    path = Path(path)
+    header, header_line = csv_header(path)
+    names = [h.strip() for h in header]
+    rows = []
+    with path.open(newline="") as fh:
+        for k, fields in enumerate(csv.reader(fh), start=1):
+            if k <= header_line or not fields:
+                continue
+            if len(fields) != len(names):
+                raise ValueError(f"{path}: line {k} has {len(fields)} fields, the header has "
+                                 f"{len(names)}")
+            try:
+                rows.append([float(x) for x in fields])
+            except ValueError:
+                raise ValueError(f"{path}: line {k} is not {len(names)} numbers") from None
+    data = np.asarray(rows, dtype=float).reshape(-1, len(names))
+    if not data.size or not np.all(np.isfinite(data)):
+        raise ValueError(f"{path}: expected rows of finite numbers after the header")
+    cols = {n: data[:, i] for i, n in enumerate(names)}
+    time, gyro, accel, interval = sensor_combined_samples(cols, str(path))
+    check_increasing(time, f"{path} (timestamp)")
+    rate = median_rate(time)
+    return ImuSamples(time, gyro, accel, spec=None, truth=None, rate=rate, interval=interval,
+                      source=f"{path} ({PX4_EXPORT}: FRD, SI, {rate:.4g} Hz, "
+                             f"{time_base(time)})")
+
+
 def _candidates(log) -> tuple[list, dict]:
     """Complete IMU sources of a parsed log: ``(topic, instance, rate, (t, gyro, accel))``."""
     by = {(d.name, d.multi_id): d.data for d in log.data_list}
