@@ -285,11 +285,12 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            **({} if offset_search is None else {"offset_search": offset_search}))
     report = cal.report
     if auto:
-        from compensation.calibration import OFFSET_SEARCH_HALF_WIDTH
+        from compensation.calibration import OFFSET_SEARCH_HALF_WIDTH, OFFSET_SEARCH_STEP
 
         half = report["time_offset_search_s"] = float(offset_search or OFFSET_SEARCH_HALF_WIDTH)
         off = float(report["time_offset_s"])
-        if abs(off) > half and report.get("time_offset_sigma_s") is not None:
+        # a minimum at the window's edge is refined up to a grid step beyond it
+        if abs(off) > half + OFFSET_SEARCH_STEP and report.get("time_offset_sigma_s") is not None:
             from compensation.guards import CompensationWarning
 
             # the search found its minimum inside; the fits walked out: not pinned there
