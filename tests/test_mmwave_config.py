@@ -177,3 +177,10 @@ def test_an_enabled_bpm_is_refused_and_a_disabled_one_read():
     assert parse_sdk_cfg(text + "bpmCfg -1 0 0 1\n").fmt.num_tx == 2
     with pytest.raises(ValueError, match=r"'bpmCfg -1 1 0 1': BPM MIMO .* not supported"):
         parse_sdk_cfg(text + "bpmCfg -1 1 0 1\n")
+
+
+def test_a_json_file_named_cfg_is_named_as_json(tmp_path):
+    path = tmp_path / "mmw-xWR18xx.cfg"           # a tool's own JSON template, .cfg suffix
+    path.write_text('{\n  "channelCfg": {"rxMask": null, "txMask": null}\n}\n')
+    with pytest.raises(ValueError, match=r"mmw-xWR18xx\.cfg: holds JSON, not an mmWave SDK"):
+        read_mmwave_config(path)

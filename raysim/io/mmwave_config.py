@@ -414,6 +414,9 @@ def parse_sdk_cfg(text: str, *, layout: str | None = None, t0: float = 0.0, tx_p
             raise ValueError(f"{where}{ln.strip()!r}: BPM MIMO (binary phase-coded TX, bpmCfg "
                              f"enabled) is not supported; expected TDM (bpmCfg enabled 0)")
     missing = [c for c in _REQUIRED if not found[c]]
+    if missing and text.lstrip().startswith(("{", "[")):
+        raise ValueError(f"{where}holds JSON, not an mmWave SDK .cfg (CLI commands, one per "
+                         f"line); an mmWave Studio export is read from a .json file")
     if missing:
         raise ValueError(f"{where}missing command(s) {missing}; an SDK .cfg needs "
                          f"{list(_REQUIRED)}")
