@@ -294,3 +294,20 @@ def test_the_coarse_search_at_the_samples_instants_is_not_moved_by_folding():
     found, _ = coarse_offset(OFFSET + COARSE_GRID_S, point_cost, fit_clock)
     assert found == pytest.approx(OFFSET, abs=EXACT_TOL_S)
     assert abs(COARSE_GRID_S[int(np.argmin(phase_cost))]) >= POINT_PHASE_MISFIT_MIN_ERROR_S
+
+
+def test_the_interval_misfit_counts_a_frames_scatterers_once():
+    """Tracks of one frame share the platform's error: five scatterers over the same
+    intervals give the degrees of freedom of one."""
+    from compensation.clock_averaged import interval_misfit
+
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 0.0132, 1e-4)                          # a 13.2 ms frame
+    knots = np.arange(-0.01, 0.03, 5e-3)                      # 5 ms averages
+    one = [(t, rng.normal(size=t.size), rng.normal(size=t.size), 1.0)]
+    five = one * 5
+    two_frames = five + [(t + 0.04, *one[0][1:])] * 5
+    k1 = interval_misfit(one, np.concatenate([knots, knots + 0.04]), 5e-3)
+    k5 = interval_misfit(five, knots, 5e-3)
+    k10 = interval_misfit(two_frames, np.concatenate([knots, knots + 0.04]), 5e-3)
+    assert k5.dof == k1.dof and k10.dof == 2 * k1.dof
