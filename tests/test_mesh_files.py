@@ -124,3 +124,25 @@ def test_the_scene_report_places_a_millimetre_mesh_in_metres(tmp_path):
     size = np.asarray(box["upper_m"]) - np.asarray(box["lower_m"])
     np.testing.assert_allclose(sorted(size)[1:], [SIDE_M, SIDE_M], rtol=1e-6)
     np.testing.assert_allclose(box["centre_m"], [10.0, 0.0, 0.0], atol=SIDE_M)
+
+
+def test_a_z_up_cad_mesh_faces_the_radar_where_its_nose_points(tmp_path, capsys):
+    """A plate facing +x (the nose of a CAD frame, z up): at normal incidence from az 0
+    with ``--up z``, from az 90 in the file's own (y-up) frame, where +x is left."""
+    import trimesh
+
+    from raysim.cli import main
+
+    plate = T.square_plate(SIDE_M)            # in the xy plane, facing +z
+    turned = plate.vertices @ np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]).T
+    path = tmp_path / "nose.stl"
+    trimesh.Trimesh(turned, plate.faces, process=False).export(path)
+    peak = 10 * math.log10(T.plate_rcs(SIDE_M, LAM))
+    got = {}
+    for up, az in (("z", "0"), ("y", "90")):
+        assert main(["rcs", str(path), "--up", up, "--az-deg", az, "--el-deg", "0", "--json",
+                     "--max-bounces", "1", "--no-progress"]) == 0
+        got[up] = json.loads(capsys.readouterr().out)["rcs_dbsm"][0][0]
+    assert abs(got["z"] - peak) < CLOSED_FORM_DB and abs(got["y"] - peak) < CLOSED_FORM_DB
+    assert main(["rcs", "plate:0.1", "--up", "z", "--az-deg", "0", "--el-deg", "0"]) == 2
+    assert "--up applies to a mesh file" in capsys.readouterr().err

@@ -12,6 +12,10 @@ import numpy as np
 
 from raysim.cli.options import MAX_SPAN_VALUES, span_grid
 
+#: A z-up mesh's axes (x forward, y left, z up) into the frame of the epilog: +z
+#: forward (az 0), +x left (az 90), +y up; a rotation (det +1), so facets keep their sides.
+Z_UP_TO_RCS = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+
 _EPILOG = """\
 MESH is a mesh file (PLY, OBJ, STL, OFF, GLB/glTF, 3MF, COLLADA .dae; read by trimesh; in the
 unit the file declares (3MF, COLLADA, glTF), else metres, or --scale) or a canonical target:
@@ -31,6 +35,7 @@ examples:
   raysim rcs plate:0.1 --material metal --az-deg 0,1,2 --el-deg 0 --range-m 15
   raysim rcs car.glb --material metal --az-deg 0:360:5 --el-deg -10 --pol HH
   raysim rcs plate_mm.stl --scale 0.001 --az-deg 0 --el-deg 0   # file in millimetres
+  raysim rcs car.stl --up z --az-deg 0:180:2 --el-deg 0   # CAD frame: x forward, z up
   raysim rcs plate:0.05 --az-deg 0:90:1 --el-deg 0 --diffraction  # PO + edge fringe wave
   raysim rcs car:sedan --az-deg 0:180:1 --el-deg 0,45 --diffraction   # docs/cars.md
 
@@ -65,6 +70,9 @@ def register(subparsers) -> None:
                    help="metres per unit of a mesh file (0.001 for millimetres); left out: "
                    "the unit the file declares (3MF, COLLADA, glTF), else metres, and a file over "
                    "500 units across is refused as millimetres")
+    p.add_argument("--up", choices=("y", "z"), default=None,
+                   help="a mesh file's up axis: y (glTF, the frame below: +z forward, +x "
+                   "left; default) or z (CAD, STL/OBJ exports: +x forward, +y left)")
     p.add_argument("--diffraction", action="store_true",
                    help="add the edge diffraction (PTD fringe wave) of the mesh's sharp and "
                    "boundary edges; conductors only; its cost is printed on stderr")
@@ -169,10 +177,19 @@ def run(args) -> int:
         raise ValueError("--multiple-diffraction adds to --diffraction in the far field of a "
                          "mesh target: give --diffraction, leave out --range-m, not a car:")
     if str(args.mesh).startswith("car:"):
+        if args.up is not None:
+            raise ValueError(f"--up applies to a mesh file, not to {args.mesh!r}")
         result = _car(args, az, el)
         return _report(args, result, "per part")
     notes: list[str] = []
     mesh = load_target(args.mesh, args.scale, notes)
+    if args.up is not None and not Path(args.mesh).is_file():
+        raise ValueError(f"--up applies to a mesh file, not to the canonical target "
+                         f"{args.mesh!r}")
+    if args.up == "z":       # CAD (x forward, y left, z up) into this frame's (z, x, y)
+        from raysim.echoes.po.mesh import TriangleMesh
+
+        mesh = TriangleMesh(mesh.vertices @ Z_UP_TO_RCS.T, mesh.faces)
     for note in notes:
         print(f"note: {note}", file=sys.stderr)
     material = po_material(args.material, args.freq_hz)
