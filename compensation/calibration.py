@@ -176,12 +176,12 @@ class CalibrationResult:
         """Estimates with one-sigma uncertainties as plain numbers (SI units).
 
         With the radar-inertial estimate, the clock offset, gyro bias and initial velocity
-        are its (those applied), ``radar_inertial`` holds its whole state, spreads and
-        unconstrained components, and ``warnings`` its observability warnings.
+        are its (those applied; the offset's spread no tighter than the clock fit's it
+        started from, docs/self_calibration.md), ``radar_inertial`` holds its whole state,
+        spreads and unconstrained components, and ``warnings`` its observability warnings.
         """
         ri = self.radar_inertial
-        stamp, clock = ((0.0, 0.0) if self.clock is None       # the log's stamps, the fit's
-                        else (self.clock.stamp_sigma, self.clock.total_sigma))
+        stamp, clock = (0.0, 0.0) if (c := self.clock) is None else (c.stamp_sigma, c.total_sigma)
         out = {"time_offset_s": self.time_offset,
                "time_offset_sigma_s": None if self.clock is None else self.clock.total_sigma,
                "gyro_bias_rad_s": self.gyro_bias.tolist(),
@@ -197,8 +197,6 @@ class CalibrationResult:
             out["clock_drift"] = self.clock.drift
             out["clock_drift_sigma"] = self.clock.drift_sigma
         if ri is not None:
-            # no tighter than the clock fit it started from (a log averaged over intervals
-            # longer than a frame: runs started 22 ms apart ended 23 ms apart, each +-4 ms)
             out["time_offset_sigma_s"] = float(max(np.hypot(ri.sigma[12], stamp), clock))
             out["gyro_bias_sigma_rad_s"] = ri.sigma[9:12].tolist()
             out["clock_drift"], out["clock_drift_sigma"] = float(ri.state[13]), float(ri.sigma[13])
@@ -690,6 +688,8 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         cov0 = ri.initial_velocity_covariance
     else:
         cov0 = np.full((3, 3), np.nan)
+    if clock is not None and offset_search > 0:      # set only where the offset is estimated
+        clock = clock.beyond_search(tau - float(time_offset), offset_search, OFFSET_SEARCH_STEP)
     notes = [f"velocity: Doppler of {len(clutter)} ground scatterers (at rest)"] if clutter else []
     if "gyro_bias" in estimate and gb is None:
         notes.append("gyro_bias: not estimated (needs two frames or more and an array that "

@@ -58,7 +58,9 @@ class ClockOffset:
     stamp_sigma : float
         Spread the log's time stamps add to any offset estimated from that log [s],
         not in ``offset_sigma`` (the placement of an average within its interval,
-        :mod:`compensation.clock_averaged`); 0 for instantaneous samples.
+        :mod:`compensation.clock_averaged`), and the search's ambiguities
+        (:func:`compensation.clock_averaged.coarse_offset`, :meth:`beyond_search`); 0 for
+        instantaneous samples found unambiguously.
     """
 
     offset: float
@@ -72,6 +74,26 @@ class ClockOffset:
     def total_sigma(self) -> float:
         """``offset_sigma`` and ``stamp_sigma`` in quadrature [s]."""
         return float(np.hypot(self.offset_sigma, self.stamp_sigma))
+
+    def beyond_search(self, moved: float, half_width: float, step: float) -> ClockOffset:
+        """This estimate, or, where the fits carried the offset ``moved`` [s] from the
+        search's centre more than a grid ``step`` [s] past its ``half_width`` [s] (the
+        search found its minimum inside), one whose spread holds that distance (warned):
+        the radar did not pin the offset there (a 50 Hz log, or no lever arm on one frame)."""
+        if abs(moved) <= half_width + step:
+            return self
+        import warnings
+        from dataclasses import replace
+
+        from .guards import CompensationWarning
+
+        warnings.warn(f"clock: the fit moved the offset {1e3 * moved:+.2f} ms from the "
+                      f"search's centre, past the +-{1e3 * half_width:g} ms searched, where the "
+                      f"search found no minimum: the radar does not pin it; its spread states "
+                      f"that distance; widen --time-offset-search or give the offset from a "
+                      f"time sync (--time-offset, docs/recordings.md)", CompensationWarning,
+                      stacklevel=2)
+        return replace(self, stamp_sigma=float(np.hypot(self.stamp_sigma, moved)))
 
 
 def _detrend(t: np.ndarray, w: np.ndarray, x: np.ndarray) -> np.ndarray:

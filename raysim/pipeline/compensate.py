@@ -285,23 +285,9 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                            **({} if offset_search is None else {"offset_search": offset_search}))
     report = cal.report
     if auto:
-        from compensation.calibration import OFFSET_SEARCH_HALF_WIDTH, OFFSET_SEARCH_STEP
+        from compensation.calibration import OFFSET_SEARCH_HALF_WIDTH
 
-        half = report["time_offset_search_s"] = float(offset_search or OFFSET_SEARCH_HALF_WIDTH)
-        off = float(report["time_offset_s"])
-        # a minimum at the window's edge is refined up to a grid step beyond it
-        if abs(off) > half + OFFSET_SEARCH_STEP and report.get("time_offset_sigma_s") is not None:
-            from compensation.guards import CompensationWarning
-
-            # the search found its minimum inside; the fits walked out: not pinned there
-            text = (f"clock: the fit moved the offset to {1e3 * off:+.2f} ms, outside the "
-                    f"+-{1e3 * half:g} ms searched, where the search found no minimum: the "
-                    f"radar does not pin it; its spread is stated as its distance from the "
-                    f"window's centre; widen --time-offset-search or give the offset from "
-                    f"a time sync (--time-offset, docs/recordings.md)")
-            warnings.warn(text, CompensationWarning, stacklevel=3)
-            report["time_offset_sigma_s"] = max(report["time_offset_sigma_s"], abs(off))
-            report["warnings"] = [*report.get("warnings", ()), text]
+        report["time_offset_search_s"] = float(offset_search or OFFSET_SEARCH_HALF_WIDTH)
     from compensation.azimuth_shift import calibration_azimuth_check
 
     report["warnings"] = [*report.get("warnings", ()), *calibration_azimuth_check(   # warned
