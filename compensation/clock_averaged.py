@@ -234,9 +234,13 @@ class Misfit(NamedTuple):
     #: Mean square [rad^2/s^2 for interval means, rad^2 per chirp].
     cost: float
     #: Independent rows less the constants fitted [1]: the scatterers' rows of one
-    #: interval share the platform's error and count once; 0 for the per-chirp phase
-    #: misfit (its residuals correlate along a track: no count of independent rows).
+    #: interval share the platform's error and count once; for the per-chirp phase
+    #: misfit (its residuals correlate along a track) the log's samples within each
+    #: frame less the line fitted (:func:`sample_rows`).
     dof: int
+    #: Whether ``cost`` is the per-chirp phase misfit [rad^2] rather than interval
+    #: means [rad^2/s^2]: the two kinds do not compare.
+    per_chirp: bool = False
 
 
 def interval_misfit(tracks, knots, interval: float, lag: float = 0.0) -> Misfit:
@@ -275,7 +279,25 @@ def clock_misfit(tracks, imu_time, time_offset: float, interval: float = 0.0,
             return interval_misfit(tracks, knots, interval, lag)
     elif aliased and _spans_two(tracks, knots):
         return interval_misfit(tracks, knots, 0.0)
-    return Misfit(phase_misfit(tracks), 0)
+    return Misfit(phase_misfit(tracks), sample_rows(tracks, knots), per_chirp=True)
+
+
+def sample_rows(tracks, knots) -> int:
+    """Independent rows of the per-chirp phase misfit [1]: the log's samples within each
+    frame's chirps (the instants at which a shifted log misplaces the motion; the residual
+    phase between them is that motion, interpolated), a frame's scatterers counted once as
+    they share the platform's error, less the line fitted to each frame's tracks; 0
+    where no frame holds three samples."""
+    knots = np.sort(np.asarray(knots, dtype=float))
+    per_frame: dict = {}
+    for i, item in enumerate(tracks):
+        t = track_arrays(i, item)[0]
+        if t.size < 4:
+            continue
+        n = int(np.count_nonzero((knots >= t[0]) & (knots <= t[-1])))
+        key = round(float(t[0]), 9)
+        per_frame[key] = max(per_frame.get(key, 0), n)
+    return int(sum(n - 2 for n in per_frame.values() if n > 2))
 
 
 def _spans_two(tracks, knots) -> bool:
@@ -394,9 +416,9 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
     grid : array_like, shape ``[offset]``
         Offsets tried, increasing [s].
     misfits : sequence of Misfit, length ``offset``
-        Cost of each (:func:`clock_misfit`). Per-chirp misfits (no degrees of
-        freedom) are not tested for ambiguity, and are passed over where some
-        offsets have interval misfits.
+        Cost of each (:func:`clock_misfit`). Per-chirp misfits are passed over
+        where some offsets have interval misfits; those without degrees of freedom
+        are not tested for ambiguity.
     fit : callable
         The clock fit (:func:`fit_clock` with its log).
 
@@ -405,37 +427,42 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
     offset : float
         [s].
     fit : callable
-        ``fit``, with ``ambiguity`` (the distance to the other offset [s]) where the
-        misfits do not tell the best offset from another local minimum (warned).
+        ``fit``, with ``ambiguity`` (the distance to the farthest other offset [s])
+        where the misfits do not tell the best offset from other local minima (warned).
     """
     grid = np.asarray(grid, dtype=float)
     if grid.ndim != 1 or grid.size != len(misfits) or grid.size == 0:
         raise ValueError(f"grid of shape {grid.shape} and {len(misfits)} misfits: expected "
                          "one misfit per offset, at least one")
     dof = np.array([m.dof for m in misfits])
+    per_chirp = np.array([m.per_chirp for m in misfits])
     # interval misfits [rad^2/s^2] and per-chirp ones [rad^2] do not compare: where the
     # frames span two intervals at some offsets only, those offsets alone
-    cost = np.array([m.cost if m.dof > 0 or not dof.any() else np.inf for m in misfits],
-                    dtype=float)
+    cost = np.array([m.cost if not m.per_chirp or per_chirp.all() else np.inf
+                     for m in misfits], dtype=float)
     best = int(np.argmin(cost))
     if grid.size < 3 or dof[best] <= 0:
         return float(grid[best]), fit
     padded = np.concatenate([[np.inf], cost, [np.inf]])
-    local = (cost <= padded[:-2]) & (cost <= padded[2:]) & (dof > 0)
+    local = (cost <= padded[:-2]) & (cost <= padded[2:]) & (dof > 0) & np.isfinite(cost)
     far = np.abs(grid - grid[best]) > AMBIGUITY_MIN_SEPARATION
     rivals = np.flatnonzero(local & far)
+    limit = np.array([fisher_f.ppf(AMBIGUITY_LEVEL, dof[r], dof[best]) for r in rivals])
+    rivals, limit = rivals[cost[rivals] / cost[best] < limit], limit[cost[rivals] / cost[best]
+                                                                      < limit]
     if rivals.size == 0:
         return float(grid[best]), fit
-    other = int(rivals[np.argmin(cost[rivals])])
-    ratio = cost[other] / cost[best]
-    limit = float(fisher_f.ppf(AMBIGUITY_LEVEL, dof[other], dof[best]))
-    if ratio >= limit:
-        return float(grid[best]), fit
+    # the farthest of the minima fitted about as well: the spread must reach it
+    k = int(np.argmax(np.abs(grid[rivals] - grid[best])))
+    other, ratio = int(rivals[k]), float(cost[rivals[k]] / cost[best])
     gap = abs(float(grid[other] - grid[best]))
+    cause = ("a vibration's period repeats within the search" if misfits[best].per_chirp
+             else "the log's averages")
     warnings.warn(f"clock: the radar fits offsets {1e3 * grid[best]:+.2f} ms and "
                   f"{1e3 * grid[other]:+.2f} ms about as well (misfit ratio {ratio:.2f}, "
-                  f"below {limit:.2f}, the {AMBIGUITY_LEVEL:g} quantile of F): the log's "
-                  f"averages leave the offset ambiguous; the first is kept and its spread "
+                  f"below {limit[k]:.2f}, the {AMBIGUITY_LEVEL:g} quantile of F"
+                  f"{f'; {rivals.size} such minima' if rivals.size > 1 else ''}): {cause} "
+                  f"leaves the offset ambiguous; the first is kept and its spread "
                   f"states {1e3 * gap:.2f} ms; give the offset from a time sync "
                   f"(--time-offset, docs/recordings.md)", CompensationWarning, stacklevel=2)
     return float(grid[best]), partial(fit, ambiguity=gap)

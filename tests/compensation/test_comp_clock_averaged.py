@@ -23,6 +23,7 @@ from compensation.clock_averaged import (
     coarse_offset,
     fit_clock,
     fit_time_shift_averaged,
+    sample_rows,
 )
 from compensation.clock_offset import fit_time_shift, phase_misfit
 from compensation.guards import CompensationWarning
@@ -202,8 +203,10 @@ def test_the_coarse_search_over_interval_means_is_not_moved_by_aliased_vibration
         found, fit = coarse_offset(OFFSET + COARSE_GRID_S, interval_cost, fit_clock)
     assert found == pytest.approx(OFFSET, abs=EXACT_TOL_S) and fit is fit_clock
     assert abs(COARSE_GRID_S[int(np.argmin(phase_cost))]) >= PHASE_MISFIT_MIN_ERROR_S
-    # instantaneous samples keep the per-chirp misfit (no degrees of freedom counted)
-    assert clock_misfit(tracks, imu_t, OFFSET, 0.0) == (phase_misfit(tracks), 0)
+    # instantaneous samples keep the per-chirp misfit, its rows the log's samples
+    m = clock_misfit(tracks, imu_t, OFFSET, 0.0)
+    assert m.per_chirp and m.cost == phase_misfit(tracks)
+    assert m.dof == sample_rows(tracks, imu_t - OFFSET)
 
 
 #: Misfit ratios of a second minimum well inside and well outside Fisher's 95 % F
@@ -238,14 +241,44 @@ def test_a_second_minimum_as_good_as_the_best_is_warned_and_stated(ratio):
     assert est.stamp_sigma == pytest.approx(np.hypot(plain.stamp_sigma, best - rival))
 
 
+def test_per_chirp_rows_are_the_log_samples_in_each_frame_less_its_line():
+    """Two frames of three scatterers, chirps over 0-9.9 ms and 40-49.9 ms, a 1 kHz log:
+    10 samples in each frame (the scatterers share them), less 2 for the line: 16 rows;
+    a log of one sample per frame gives none."""
+    t = np.arange(100) * 1e-4
+    tracks = [(t0 + t, np.zeros(100), np.zeros(100), np.ones(100))
+              for t0 in (0.0, 0.04) for _ in range(3)]
+    assert sample_rows(tracks, np.arange(0.0, 0.06, 1e-3) + 0.5e-3) == 2 * (10 - 2)
+    assert sample_rows(tracks, np.array([0.005, 0.045])) == 0
+
+
+def test_per_chirp_minima_a_vibration_period_apart_are_warned_to_the_farthest():
+    """A per-chirp misfit whose minima repeat every 7 ms (a 143 Hz vibration against a
+    log that resolves it but a record too short to tell its periods apart), the three
+    within 5 % of each other at 40 rows each: ambiguous, and the spread reaches the
+    farthest minimum, 7 ms."""
+    grid = np.arange(-10e-3, 10.01e-3, 0.5e-3)
+    cost = 2.0 - np.cos(2 * np.pi * grid / 7e-3) + 0.05 * (grid / 10e-3) ** 2
+    misfits = [Misfit(float(c), 40, per_chirp=True) for c in cost]
+    ph = _phases()
+    imu_t, tracks = _record(OFFSET, ph)
+    plain = fit_clock(tracks, imu_time=imu_t, time_offset=OFFSET, interval=INTERVAL)
+    with pytest.warns(CompensationWarning, match="vibration's period.*ambiguous.*7.00 ms"):
+        found, fit = coarse_offset(grid, misfits, fit_clock)
+    assert found == pytest.approx(0.0)
+    est = fit(tracks, imu_time=imu_t, time_offset=OFFSET, interval=INTERVAL)
+    assert est.stamp_sigma == pytest.approx(np.hypot(plain.stamp_sigma, 7e-3))
+
+
 def test_per_chirp_misfits_are_passed_over_where_interval_misfits_exist():
     """Misfits of the two kinds do not compare (rad^2 against rad^2/s^2): the offsets
     whose frames span two intervals alone are searched, those that do not are not."""
     grid = np.array([-1e-3, 0.0, 1e-3, 2e-3])
-    misfits = [Misfit(1e-4, 0), Misfit(9.0, 15), Misfit(4.0, 15), Misfit(2e-4, 0)]
+    misfits = [Misfit(1e-4, 9, True), Misfit(9.0, 15), Misfit(4.0, 15), Misfit(2e-4, 9, True)]
     assert coarse_offset(grid, misfits, fit_clock) == (1e-3, fit_clock)
     # per-chirp misfits alone: their least
-    assert coarse_offset(grid, [Misfit(c, 0) for c in (3.0, 1.0, 2.0, 4.0)], fit_clock)[0] == 0.0
+    assert coarse_offset(grid, [Misfit(c, 0, True) for c in (3.0, 1.0, 2.0, 4.0)],
+                         fit_clock)[0] == 0.0
     with pytest.raises(ValueError, match="one misfit per offset"):
         coarse_offset(grid, misfits[:3], fit_clock)
 
