@@ -7,8 +7,7 @@ from raysim.platform.imu import Imu
 from raysim.platform.imu_output import boxcar_gain, boxcar_output, drop_gaps
 from raysim.platform.motion import sinusoid
 
-#: Relative tolerance of the sinc gain of a boxcar of 4 samples of a 1 kHz tone sampling
-#: (the discrete boxcar of m samples has gain |sin(pi f m / fs) / (m sin(pi f / fs))|).
+#: Relative tolerance of a trapezoid mean against its hand sum [1] (float64 rounding).
 GAIN_RTOL = 1e-9
 
 
@@ -17,30 +16,39 @@ def _fast(freq=150.0, rate=1000.0, end=0.5):
     return Imu("ideal", rate=rate)(traj, 0.0, end, seed=0)
 
 
-def test_boxcar_gain_of_a_rotor_tone_is_the_discrete_closed_form():
+def test_boxcar_gain_of_a_rotor_tone_is_the_trapezoid_closed_form():
+    """PX4's integrator joins the fast samples by lines: the output of a tone is the
+    discrete boxcar's Dirichlet gain times cos(x), x = pi f / f_fast (the mean of the two
+    rectangle rules half a fast period apart), with no delay about the interval's middle."""
     fast, rate, freq = 1000.0, 250.0, 150.0
     s = _fast(freq, fast)
     out = boxcar_output(s, rate)
     m = round(fast / rate)
-    # The roll rate is A w cos(w t): its boxcar mean is the tone times the discrete Dirichlet gain.
+    # The roll rate is A w cos(w t): its mean is the tone times the trapezoid's gain.
     x = np.pi * freq / fast
-    dirichlet = abs(np.sin(m * x) / (m * np.sin(x)))
+    trapezoid = abs(np.sin(m * x) / (m * np.sin(x)) * np.cos(x))
     amp_in = np.max(np.abs(s.gyro[:, 0]))
-    # least-squares amplitude of the output tone at the interval middles
-    tc = out.time - (m - 1) / (2 * fast)
+    # least-squares amplitude and phase of the output tone at the interval middles
+    tc = out.time - 0.5 / rate
     basis = np.stack([np.cos(2 * np.pi * freq * tc), np.sin(2 * np.pi * freq * tc)], axis=1)
     coef, *_ = np.linalg.lstsq(basis, out.gyro[:, 0], rcond=None)
-    assert np.hypot(*coef) / amp_in == pytest.approx(dirichlet, rel=1e-3)
+    assert np.hypot(*coef) / amp_in == pytest.approx(trapezoid, rel=1e-3)
+    # in phase with the input's cosine at the middles: no delay left to the clock offset
+    ref, *_ = np.linalg.lstsq(np.stack([np.cos(2 * np.pi * freq * s.time),
+                                        np.sin(2 * np.pi * freq * s.time)], axis=1),
+                              s.gyro[:, 0], rcond=None)
+    assert np.arctan2(coef[1], coef[0]) == pytest.approx(np.arctan2(ref[1], ref[0]), abs=1e-3)
     # the continuous boxcar approximates it at 4 samples per interval within 10 %
-    assert boxcar_gain(freq, rate) == pytest.approx(dirichlet, rel=0.1)
+    assert boxcar_gain(freq, rate) == pytest.approx(trapezoid, rel=0.1)
 
 
-def test_boxcar_intervals_end_on_output_ticks_and_average_m_samples():
+def test_boxcar_intervals_end_on_output_ticks_and_take_the_trapezoid_of_m_periods():
     s = _fast()
     out = boxcar_output(s, 250.0)
     assert np.allclose(out.time * 250.0, np.round(out.time * 250.0), atol=1e-6)
     k = int(np.searchsorted(s.time, out.time[3]))
-    assert np.allclose(out.accel[3], s.accel[k - 3:k + 1].mean(axis=0), rtol=GAIN_RTOL)
+    w = np.array([0.5, 1.0, 1.0, 1.0, 0.5]) / 4
+    assert np.allclose(out.accel[3], w @ s.accel[k - 4:k + 1], rtol=GAIN_RTOL)
     assert out.rate == 250.0 and out.truth.true_time.shape == out.time.shape
 
 

@@ -10,10 +10,17 @@ above ``1 / (2 T)`` into the logged band, so a 250 Hz log cannot show the
 100-200 Hz rotor vibration that moves the radar: only the radar itself can
 (docs/imu.md).
 
-Stamp convention: output sample ``k`` is the mean of the fast samples whose
-IMU-clock time lies in ``(t_k - 1/rate, t_k]`` and is stamped ``t_k``, the end
-of its interval (as PX4's integrators stamp the last sample integrated); its
-effective time is the middle of the interval, ``t_k - 1 / (2 rate)``.
+Stamp convention: output sample ``k`` is the integral over ``[t_k - 1/rate, t_k]``
+of the fast samples joined by straight lines (the trapezoid rule, as PX4's
+``Integrator::put`` integrates, ``(val + last_val) dt / 2``), divided by the
+interval, and is stamped ``t_k``, the end of its interval (as PX4's integrators
+stamp the last sample integrated); its effective time is the middle of the
+interval, ``t_k - 1 / (2 rate)``, exactly: the weights ``1/2, 1, ..., 1, 1/2`` of
+the ``m + 1`` fast samples are symmetric about it. (A plain mean of the ``m``
+samples in ``(t_k - 1/rate, t_k]`` would sit half a fast period later, 0.25 ms
+at 2 kHz: an offset the log cannot state.) Its gain at a tone ``f`` is the
+discrete boxcar's ``|sin(m x) / (m sin x)|`` times ``cos x``, ``x = pi f / f_fast``
+(the mean of the two rectangle rules half a fast period either side).
 """
 
 from __future__ import annotations
@@ -59,8 +66,9 @@ def boxcar_output(samples: ImuSamples, rate: float) -> ImuSamples:
     -------
     ImuSamples
         ``time [output]``: the end of each complete interval of ``m`` fast
-        samples; ``gyro``/``accel [output, 3]``: their means. ``truth`` keeps
-        the matrices, the mean biases and the truth time of each stamp.
+        periods; ``gyro``/``accel [output, 3]``: their trapezoid means over the
+        ``m + 1`` samples from its start to its end. ``truth`` keeps the
+        matrices, the biases so averaged and the truth time of each stamp.
     """
     rate = float(rate)
     if not math.isfinite(rate) or rate <= 0.0:
@@ -73,22 +81,26 @@ def boxcar_output(samples: ImuSamples, rate: float) -> ImuSamples:
         raise ValueError(f"rate must divide the fast rate {fast:g} Hz by an integer, got "
                          f"{rate:g} Hz ({fast / rate:g} fast samples per output)")
     # Output intervals end on the output clock's ticks k / rate: the first complete one
-    # starts at the first fast sample on or after a tick.
+    # starts at the first fast sample on a tick (its trapezoid needs that sample too).
     ticks = np.round(samples.time * fast).astype(np.int64)
-    first = int(np.argmax(ticks % m == 1 % m)) if m > 1 else 0
-    count = (samples.num_samples - first) // m
+    first = int(np.argmax(ticks % m == 0))
+    if ticks[first] % m:
+        first = samples.num_samples
+    count = (samples.num_samples - 1 - first) // m
     if count < 1:
         raise ValueError(f"{samples.num_samples} fast samples hold no complete interval of "
                          f"{m} samples")
-    sl = slice(first, first + count * m)
+    # trapezoid weights of the m + 1 samples of each interval, both ends shared
+    index = first + m * np.arange(count)[:, None] + np.arange(m + 1)       # [output, m + 1]
+    weight = np.r_[0.5, np.ones(m - 1), 0.5] / m if m > 1 else np.array([0.5, 0.5])
 
     def mean(x: np.ndarray) -> np.ndarray:
-        return x[sl].reshape(count, m, *x.shape[1:]).mean(axis=1)
+        return np.einsum("j,kj...->k...", weight, x[index])
 
-    time = samples.time[sl].reshape(count, m)[:, -1]
+    time = samples.time[index[:, -1]]
     truth = samples.truth
     if truth is not None:
-        truth = replace(truth, true_time=truth.true_time[sl].reshape(count, m)[:, -1],
+        truth = replace(truth, true_time=truth.true_time[index[:, -1]],
                         gyro_bias=mean(truth.gyro_bias), accel_bias=mean(truth.accel_bias))
     return ImuSamples(time, mean(samples.gyro), mean(samples.accel), spec=samples.spec,
                       truth=truth, source=f"{samples.source}, boxcar-averaged to {rate:g} Hz",
