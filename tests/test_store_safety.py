@@ -82,6 +82,28 @@ def test_a_zarr_store_of_someone_else_is_not_replaced(scenario, tmp_path):
     assert _snapshot(other) == before
 
 
+def test_a_raysim_store_holding_a_users_files_is_not_replaced(scenario, tmp_path):
+    """Notes kept in a store, and the scenario a command reads from inside it, are not
+    Zarr's: replacing the store would delete them with it."""
+    from raysim.io.store_guard import foreign_files
+
+    path = tmp_path / "s.zarr"
+    render(scenario, path, max_frames=1)
+    assert foreign_files(path) == []
+    (path / "notes.txt").write_text("mine")
+    scen = path / "scen.toml"
+    scen.write_text((ROOT / "examples" / "case_stationary.toml").read_text())
+    before = _snapshot(path)
+    with pytest.raises(ValueError, match=r"also holds 'notes.txt' and 1 more.*did not\s+write"):
+        render(scenario, path, overwrite=True)
+    code = cli_main(["render", str(scen), "--out", str(path), "--overwrite", "--no-progress"])
+    assert code == 2 and _snapshot(path) == before
+    # a file among an array's chunks is not a chunk either
+    arrays = [d for d in path.iterdir() if (d / "zarr.json").is_file() or (d / ".zarray").is_file()]
+    (arrays[0] / "copy of chunk").write_text("x")
+    assert path / arrays[0].name / "copy of chunk" in foreign_files(path)
+
+
 # --------------------------------------------------------------- readers
 def test_reader_of_a_store_being_appended_never_writes(scenario, tmp_path):
     """A half-appended frame (a writer between two variables) is left out, nothing written."""

@@ -3,7 +3,9 @@
 * A store belongs to raysim when its Zarr group carries the attribute
   ``raysim_format`` (:func:`is_raysim_store`). Only such a store (or an empty
   folder) is ever replaced or deleted (:func:`check_replaceable`): a user's
-  folder given by mistake as ``--out`` is refused, never emptied.
+  folder given by mistake as ``--out`` is refused, never emptied, and so is a
+  raysim store that holds anything Zarr did not write (:func:`foreign_files`:
+  a user's notes, or the command's own inputs kept inside it).
 * One writer at a time: :func:`writer_lock` takes an exclusive, non-blocking
   lock on the file ``.<store name>.lock`` beside the store for the whole
   render; a second writer gets a :class:`ValueError` naming the store and the
@@ -30,7 +32,7 @@ import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["STORE_MARKER", "is_raysim_store", "check_replaceable", "remove_store",
+__all__ = ["STORE_MARKER", "is_raysim_store", "check_replaceable", "foreign_files", "remove_store",
            "lock_path", "writer_lock", "remove_debris", "tmp_siblings", "remove_tmp_files"]
 
 #: Group attribute that marks a store written by raysim.
@@ -73,11 +75,63 @@ def check_replaceable(path: str | os.PathLike, what: str = "store") -> None:
     if p.is_dir() and not any(p.iterdir()):
         return
     if p.is_dir() and is_raysim_store(p):
+        foreign = foreign_files(p)
+        if foreign:
+            more = f" and {len(foreign) - 1} more" if len(foreign) > 1 else ""
+            raise ValueError(f"{what} {str(p)!r} is a raysim store that also holds "
+                             f"{str(foreign[0].relative_to(p))!r}{more}, which raysim did not "
+                             f"write; refusing to replace or delete it. Move those files out "
+                             f"or choose another output")
         return
     kind = "folder" if p.is_dir() else "file"
     raise ValueError(f"{what} {str(p)!r} is a {kind} that raysim did not write (no Zarr group "
                      f"with attribute {STORE_MARKER!r}); refusing to replace or delete it. "
                      f"Expected a raysim store or a new path: choose another output")
+
+
+#: Metadata files of a Zarr v2 or v3 hierarchy.
+ZARR_METADATA = frozenset({"zarr.json", ".zgroup", ".zattrs", ".zarray", ".zmetadata"})
+#: One component of a chunk key below its array: v3 ``c/0/1``, v2 ``0.1`` or ``0/1``.
+_CHUNK_PART = re.compile(r"^(c|\d+(\.\d+)*)$")
+
+
+def _is_array(folder: Path) -> bool:
+    if (folder / ".zarray").is_file():
+        return True
+    meta = folder / "zarr.json"
+    try:
+        return meta.is_file() and '"array"' in meta.read_text(errors="replace")
+    except OSError:
+        return False
+
+
+def foreign_files(store: str | os.PathLike) -> list[Path]:
+    """Files below a store that Zarr did not write: anything but metadata files,
+    chunk keys below an array and a killed writer's ``*.partial`` chunks (sorted).
+
+    A user's notes, or the very inputs of the command, kept inside an output store
+    would otherwise be deleted with it when it is replaced.
+    """
+    root = Path(store)
+    foreign = []
+    for dirpath, dirnames, filenames in os.walk(root):
+        here = Path(dirpath)
+        foreign += [here / d for d in dirnames if (here / d).is_symlink()]
+        for name in filenames:
+            f = here / name
+            if f.is_symlink():
+                foreign.append(f)
+                continue
+            if name in ZARR_METADATA or name.endswith(".partial"):
+                continue
+            rel = f.relative_to(root).parts
+            # the nearest folder above the file that is an array: the rest is its chunk key
+            ok = any(_is_array(root.joinpath(*rel[:k]))
+                     and all(_CHUNK_PART.match(x) for x in rel[k:])
+                     for k in range(len(rel) - 1, 0, -1))
+            if not ok:
+                foreign.append(f)
+    return sorted(foreign)
 
 
 def remove_store(path: str | os.PathLike) -> None:

@@ -157,6 +157,31 @@ def test_compensate_zarr_store_with_its_imu_log(tmp_path, capsys):
     assert "--frame 3" in capsys.readouterr().err
 
 
+def test_compensate_keeps_an_imu_log_kept_inside_its_output_store(tmp_path, capsys):
+    """The IMU log moved into the compensated store of an earlier run, then given with
+    --imu: replacing that store would delete the command's own input."""
+    cfg = RadarConfig(num_chirps=64, sample_rate=2.5e6)
+    arr = upa(6, 6, wavelength=cfg.wavelength)
+    traj = sinusoid("pitch", np.deg2rad(5), 10.0)
+    frame = simulate_point_targets(cfg, arr, [PointTarget.at(12.0, np.deg2rad(15), 0.0)],
+                                   traj)
+    np.savez(tmp_path / "cube.npz", data=frame.data, chirp_times=frame.chirp_times,
+             element_positions=arr.virtual_positions, carrier_frequency=cfg.carrier_frequency,
+             bandwidth=cfg.bandwidth, chirp_duration=cfg.chirp_duration,
+             sample_rate=cfg.sample_rate, grid_shape=np.array(arr.grid_shape))
+    s = simulate_imu(traj, "ideal", rate=1000.0, start=-0.01, end=0.02)
+    out = tmp_path / "beams.zarr"
+    args = ["--out", str(out), "--range-m", "11.5:12.5", "--az-deg", "15:15:1", "--el-deg",
+            "0:0:1", "--velocity", "given", "--initial-velocity", "0,0,0", "--no-progress"]
+    imu, _ = _write_imu("write_imu_csv", tmp_path, s)
+    assert main(["compensate", str(tmp_path / "cube.npz"), *imu, *args]) == 0
+    kept = out / "imu.csv"
+    (tmp_path / "imu.csv").rename(kept)
+    capsys.readouterr()
+    assert main(["compensate", str(tmp_path / "cube.npz"), "--imu", str(kept), *args]) == 2
+    assert "which raysim did not write" in capsys.readouterr().err and kept.is_file()
+
+
 def test_compensate_netcdf_store(tmp_path):
     from raysim.io import storage
 
