@@ -244,6 +244,9 @@ CASES = [
     Bad("reproduction-overrides-not-a-mapping",
         lambda _: __import__("raysim.studies.reproduce", fromlist=["x"]).ReproductionSettings(
             overrides=[("radar.num_chirps", 64)]), ValueError, ("overrides", "list")),
+    Bad("reproduction-seeds-beyond-the-bound",
+        lambda _: __import__("raysim.studies.reproduce", fromlist=["x"]).reproduce(
+            ["rotation_y"], seeds=1_000_000_000), ValueError, ("1 to 1000", "1000000000")),
     Bad("unknown-paper-case",
         lambda _: __import__("raysim.scenario", fromlist=["x"]).get_case("roll_x"), ValueError,
         ("'roll_x'", "rotation_y")),

@@ -48,6 +48,26 @@ def test_parse_values():
             parse_values(bad)
 
 
+@pytest.mark.parametrize("text, named", [
+    ("linspace(1, 2, 1000000000)", "1000000000 values"),
+    ("range(1000000000)", "1000000000 values"),
+    ("range(1, 5, 0)", "step must not be zero"),
+    ("linspace(1, inf, 3)", "finite")])
+def test_a_range_too_long_or_malformed_is_refused_before_it_is_expanded(text, named,
+                                                                         monkeypatch):
+    """A mistyped count is refused by its length, not by running out of memory."""
+    monkeypatch.setattr(sweep_mod.np, "linspace", None)      # never reached
+    with pytest.raises(ValueError, match=named):
+        parse_values(text)
+
+
+def test_a_sweep_of_more_points_than_its_bound_is_refused(capsys, tmp_path):
+    code = main(["sweep", "--case", "rotation_y", "--param", "imu.rate_hz=range(1, 1000)",
+                 "--seeds", "range(1000)", "--out", str(tmp_path / "sw")])
+    assert code == 2 and "999000 points (999 values x 1000 seeds)" in capsys.readouterr().err
+    assert not (tmp_path / "sw").exists()
+
+
 def test_points_are_validated_and_keyed(spec):
     pts = sweep_points(spec)
     assert len(pts) == 6 and len({p.key for p in pts}) == 6

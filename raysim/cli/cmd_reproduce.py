@@ -67,16 +67,24 @@ def run(args) -> int:
     from raysim.cli.options import chains_option, check_output, known_name
     from raysim.platform.imu import PRESETS
     from raysim.scenario.paper_cases import PAPER_CASES
-    from raysim.studies.reproduce import ReproductionSettings, format_table, reproduce
+    from raysim.studies.reproduce import (
+        MAX_SEEDS,
+        ReproductionSettings,
+        format_table,
+        reproduce,
+    )
 
     known_name(args.imu, PRESETS, "--imu", "IMU preset")
     seeds = args.seeds if args.seeds is not None else (1 if args.imu == "ideal" else 20)
-    if seeds < 1:
-        raise ValueError(f"--seeds must be >= 1, got {seeds}")
+    if not 1 <= seeds <= MAX_SEEDS:
+        raise ValueError(f"--seeds: got {seeds}, expected 1 to {MAX_SEEDS} (each seed renders "
+                         f"every case again)")
     if args.imu_rate is not None and not args.imu_rate > 0:
         raise ValueError(f"--imu-rate must be a positive rate in Hz, got {args.imu_rate}")
     chains = chains_option(args.chains)
     cases = None if not args.cases else [c.strip() for c in args.cases.split(",") if c.strip()]
+    if args.cases is not None and not cases:
+        raise ValueError(f"--cases: got {args.cases!r}, expected case names separated by commas")
     for case in cases or ():
         known_name(case, PAPER_CASES, "--cases", "case")
     check_output(args.out, "dir", "--out", names=("reproduction.json", "reproduction.csv"))

@@ -55,10 +55,14 @@ from raysim.vocabulary import metric_unit, parse_chains
 
 __all__ = ["SweepSpec", "SweepPoint", "SweepResult", "parse_values", "sweep_points",
            "point_key", "run_sweep", "gather_results", "load_point", "warning_summary",
-           "BOOKKEEPING_VARIABLES", "dimension_name", "dimension_names", "check_out_dir"]
+           "BOOKKEEPING_VARIABLES", "MAX_POINTS", "dimension_name", "dimension_names",
+           "check_out_dir"]
 
 #: Variables of a sweep Dataset that are not metrics.
 BOOKKEEPING_VARIABLES = ("point_done", "warnings")
+#: Most points of one sweep (values of every key times the seeds) [1]: each point renders
+#: a scenario (seconds to minutes), so more is a mistyped range, refused before expanding.
+MAX_POINTS = 100_000
 
 
 def parse_values(text: str) -> list:
@@ -82,13 +86,24 @@ def parse_values(text: str) -> list:
             nums = [float(a) for a in args]
         except ValueError:
             raise ValueError(f"{text!r}: arguments of {fn}() must be numbers") from None
+        if not all(math.isfinite(n) for n in nums):
+            raise ValueError(f"{text!r}: arguments of {fn}() must be finite numbers")
         if fn == "range":
             if not 1 <= len(nums) <= 3 or any(n != int(n) for n in nums):
                 raise ValueError(f"{text!r}: range() takes 1 to 3 integers")
-            vals = list(range(*[int(n) for n in nums]))
+            if len(nums) == 3 and nums[2] == 0:
+                raise ValueError(f"{text!r}: range() step must not be zero")
+            count = len(range(*[int(n) for n in nums]))
         else:
             if len(nums) != 3 or nums[2] != int(nums[2]) or nums[2] < 1:
                 raise ValueError(f"{text!r}: {fn}(START, STOP, NUM) needs an integer NUM >= 1")
+            count = int(nums[2])
+        if count > MAX_POINTS:
+            raise ValueError(f"{text!r}: {count} values, more than a sweep's {MAX_POINTS} "
+                             f"points; expected a shorter range")
+        if fn == "range":
+            vals = list(range(*[int(n) for n in nums]))
+        else:
             gen = np.linspace if fn == "linspace" else np.logspace
             vals = [float(v) for v in gen(nums[0], nums[1], int(nums[2]))]
     elif text.startswith("["):
@@ -141,6 +156,11 @@ class SweepSpec:
         if not seeds or any(s < 0 for s in seeds):
             raise ValueError(f"seeds must be a non-empty list of integers >= 0, got {self.seeds}")
         object.__setattr__(self, "seeds", seeds)
+        total = math.prod(len(v) for v in params.values()) * len(seeds)
+        if total > MAX_POINTS:
+            shape = " x ".join(str(len(v)) for v in params.values())
+            raise ValueError(f"the sweep has {total} points ({shape} values x {len(seeds)} "
+                             f"seeds), more than {MAX_POINTS}; expected fewer values or seeds")
         chains = tuple(c.key for c in parse_chains(self.chains))
         object.__setattr__(self, "chains", chains)
 

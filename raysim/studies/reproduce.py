@@ -66,6 +66,9 @@ __all__ = ["DEFAULT_CHAINS", "ROW_METRICS", "ReproductionSettings", "case_scenar
 
 #: Chains evaluated for every case, in table order (:func:`raysim.vocabulary.parse_chains`).
 DEFAULT_CHAINS = CHAIN_KEYS
+#: Most IMU seeds of one reproduction [1]: each renders and measures every case again
+#: (seconds to minutes a seed), so more is a mistyped count, refused before any work.
+MAX_SEEDS = 1000
 #: Metrics of every row (mean and ``_std`` over seeds), names of :data:`raysim.vocabulary.METRICS`.
 ROW_METRICS = ("pseudo_velocity_mps", "pseudo_velocity_bins", "doppler_width_hz",
                "width_improvement_pct", "width_vs_stationary", "angle_error_deg", "az_deg",
@@ -371,8 +374,9 @@ def reproduce(cases=None, *, imu: str = "ideal", seeds: int = 1,
     for name in names:
         if name not in PAPER_CASES:
             raise ValueError(f"unknown case {name!r}; expected some of {sorted(PAPER_CASES)}")
-    if int(seeds) < 1:
-        raise ValueError(f"seeds must be >= 1, got {seeds!r}")
+    if not 1 <= int(seeds) <= MAX_SEEDS:
+        raise ValueError(f"seeds must be 1 to {MAX_SEEDS} (each renders every case again), "
+                         f"got {seeds!r}")
     keys = [s.key for s in parse_chains(chains)]
     fig_dir = None
     if out_dir is not None:
