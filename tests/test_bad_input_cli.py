@@ -228,6 +228,16 @@ CLI_CASES = [
     Bad("size-rcs-directions",
         lambda _: cli(["rcs", "plate:0.1", "--az-deg", "0:360:0.01", "--el-deg", "-90:90:0.01"]),
         CliError, ("exit 2", "648054001 directions", "evaluations", "--az-deg / --el-deg")),
+    Bad("size-rcs-directions-single-bounce",      # few facets: each direction's own cost
+        lambda _: cli(["rcs", "plate:0.1", "--az-deg", "0:360:0.01", "--el-deg", "0:90:0.01",
+                       "--max-bounces", "1"]),
+        CliError, ("exit 2", "324045001 directions", "for the direction itself")),
+    Bad("size-compensate-infinite-angles",
+        lambda t: cli(["compensate", _cube(t), "--az-deg=-inf:inf:1", "--out", t / "b.zarr"]),
+        CliError, ("exit 2", "--az-deg", "finite")),
+    Bad("compensate-angles-beyond-90-deg",
+        lambda t: cli(["compensate", _cube(t), "--az-deg", "-200:200:1", "--out",
+                       t / "b.zarr"]), CliError, ("exit 2", "--az-deg", "degrees within +-90")),
     Bad("size-rcs-facets",
         lambda _: __import__("raysim.echoes.po.rcs", fromlist=["x"]).rcs_job_size(
             __import__("types").SimpleNamespace(faces=range(10_000_000), radius=1.0), 1,

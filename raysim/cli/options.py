@@ -110,6 +110,8 @@ def span_option(text: str, name: str, with_step: bool) -> tuple:
     except ValueError:
         raise ValueError(f"{name} must look like {'LO:HI:STEP' if with_step else 'LO:HI'}, "
                          f"got {text!r}") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise ValueError(f"{name}: got {text!r}, expected finite numbers")
     if len(vals) != (3 if with_step else 2) or not vals[0] <= vals[1] or \
             (with_step and vals[2] <= 0):
         raise ValueError(f"{name} must look like {'LO:HI:STEP' if with_step else 'LO:HI'} "
@@ -121,10 +123,18 @@ def span_option(text: str, name: str, with_step: bool) -> tuple:
 MAX_SPAN_VALUES = 100_000
 
 
-def span_grid(text: str, name: str) -> np.ndarray:
-    """``LO:HI:STEP`` -> ``LO, LO + STEP, ...`` up to ``HI`` included, shape ``[value]``."""
+def span_grid(text: str, name: str, bound: float | None = None) -> np.ndarray:
+    """``LO:HI:STEP`` -> ``LO, LO + STEP, ...`` up to ``HI`` included, shape ``[value]``;
+    with ``bound``, LO and HI within ``+-bound`` (an angle option's unit and range)."""
     lo, hi, step = span_option(text, name, True)
-    count = int(math.floor((hi - lo) / step + 1e-9)) + 1
+    if bound is not None and not -bound <= lo <= hi <= bound:
+        raise ValueError(f"{name}: got {text!r}, expected angles in degrees within "
+                         f"+-{bound:g}")
+    steps = (hi - lo) / step
+    if not steps < MAX_SPAN_VALUES:         # also a step so small the count overflows
+        raise ValueError(f"{name}: got {text!r}, {steps + 1:.3g} values (at most "
+                         f"{MAX_SPAN_VALUES})")
+    count = int(math.floor(steps + 1e-9)) + 1
     if count > MAX_SPAN_VALUES:
         raise ValueError(f"{name}: got {text!r}, {count} values (at most {MAX_SPAN_VALUES})")
     return lo + step * np.arange(count)
