@@ -88,6 +88,23 @@ def test_score_refuses_a_folder_without_truth(scored, tmp_path, capsys):
     assert "something-else" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("edit, named", [
+    (lambda d: {"format": d["format"]}, "missing field(s) ['capture'"),
+    (lambda d: {**d, "time_offset": None}, "'time_offset' is None, expected a finite number"),
+    (lambda d: {**d, "targets": "abc"}, "'targets' is 'abc', expected finite numbers of "
+                                         "shape [Nx3]"),
+    (lambda d: {**d, "lever_arm": [1]}, "'lever_arm' is [1], expected finite numbers of "
+                                        "shape [3]"),
+    (lambda d: {**d, "attitude": 1}, "'attitude' is 1, expected true or false"),
+    (lambda d: {**d, "wind": 3}, "unknown field(s) ['wind']")])
+def test_an_edited_truth_is_refused_naming_its_field(scored, tmp_path, capsys, edit, named):
+    _, folder, store = scored
+    data = json.loads((folder / TRUTH_FILE).read_text())
+    (tmp_path / TRUTH_FILE).write_text(json.dumps(edit(data)))
+    assert main(["score", str(tmp_path), str(store)]) == 2
+    assert named in capsys.readouterr().err
+
+
 def test_flight_keeps_a_truth_file_it_did_not_write(tmp_path, capsys):
     (tmp_path / "f").mkdir()
     mine = tmp_path / "f" / TRUTH_FILE

@@ -32,6 +32,56 @@ LIMITS = {"beam_angle_error_deg": 0.2, "beam_pseudo_velocity_bins": 0.05,
 _ARRAYS = ("frame_starts", "initial_velocity", "initial_attitude_deg", "initial_position",
            "lever_arm", "log_attitude_deg")
 _PATHS = ("capture", "radar_config", "imu_log")
+#: Shape of each numeric field of the truth (-1: any length >= 1); None where it may be.
+_SHAPES = {"start": (), "time_offset": (), "imu_rate": (), "clock_drift_ppm": (),
+           "frame_starts": (-1,), "initial_velocity": (-1, 3), "initial_attitude_deg": (-1, 3),
+           "initial_position": (-1, 3), "lever_arm": (3,), "log_attitude_deg": (-1, 3),
+           "target": (3,), "targets": (-1, 3), "mounting_deg": (3,), "gaps": (-1, 2)}
+_OPTIONAL = ("log_attitude_deg",)
+_TEXT = ("imu", "board")
+_FLAGS = ("imu_boxcar", "attitude")
+
+
+def _checked(path: Path, data: dict) -> dict:
+    """The truth's fields, each checked against its kind and shape; a ValueError names
+    the file, the field and what was expected."""
+    from dataclasses import MISSING, fields
+
+    known = {f.name: f for f in fields(FlightFiles)}
+    extra = sorted(set(data) - set(known) - {"format"})
+    missing = [k for k, f in known.items() if k not in data and f.default is MISSING]
+    if extra or missing:
+        raise ValueError(f"{str(path)!r}: " + "; ".join(
+            ([f"unknown field(s) {extra}"] if extra else [])
+            + ([f"missing field(s) {missing}"] if missing else []))
+            + ": expected a flight truth written by `raysim flight`")
+    kw = {}
+    for k, v in data.items():
+        if k == "format":
+            continue
+        bad = None
+        if k in _PATHS or k in _TEXT:
+            bad = None if isinstance(v, str) and v else "a non-empty string"
+        elif k in _FLAGS:
+            bad = None if isinstance(v, bool) else "true or false"
+        elif not (v is None and k in _OPTIONAL):
+            shape = _SHAPES[k]
+            try:
+                a = np.asarray(v, dtype=float)
+            except (TypeError, ValueError):
+                a = None
+            fits = (a is not None and a.ndim == len(shape) and np.all(np.isfinite(a))
+                    and all(n == m or (m == -1 and n >= 1) for n, m in zip(a.shape, shape))
+                    and not isinstance(v, bool))
+            if k == "gaps" and a is not None and a.size == 0:
+                fits = True                             # no logger gaps
+            dims = "x".join("N" if m == -1 else str(m) for m in shape)
+            bad = None if fits else ("a finite number" if not shape else
+                                     f"finite numbers of shape [{dims}]")
+        if bad:
+            raise ValueError(f"{str(path)!r}: field {k!r} is {v!r}, expected {bad}")
+        kw[k] = v
+    return kw
 
 
 def read_truth(folder: str | Path):
@@ -55,7 +105,7 @@ def read_truth(folder: str | Path):
     if not isinstance(data, dict) or data.get("format") != TRUTH_FORMAT:
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise ValueError(f"{str(path)!r} has format {got!r}; expected {TRUTH_FORMAT!r}")
-    kw = {k: v for k, v in data.items() if k != "format"}
+    kw = _checked(path, data)
     for k in _PATHS:
         kw[k] = folder / kw[k]
     for k in _ARRAYS:
