@@ -71,7 +71,8 @@ def _checked(path: Path, data: dict) -> dict:
             except (TypeError, ValueError):
                 a = None
             fits = (a is not None and a.ndim == len(shape) and np.all(np.isfinite(a))
-                    and all(n == m or (m == -1 and n >= 1) for n, m in zip(a.shape, shape, strict=True))
+                    and all(n == m or (m == -1 and n >= 1)
+                            for n, m in zip(a.shape, shape, strict=True))
                     and not isinstance(v, bool))
             if k == "gaps" and a is not None and a.size == 0:
                 fits = True                             # no logger gaps
