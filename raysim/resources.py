@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 
 __all__ = ["LARGE_OUTPUT_BYTES", "available_memory", "format_bytes", "check_memory",
-           "cube_bytes"]
+           "cube_bytes", "tree_bytes"]
 
 #: Outputs above this size are announced before they are written [bytes].
 LARGE_OUTPUT_BYTES = 1 << 30
@@ -92,6 +92,16 @@ def format_bytes(n: float) -> str:
             return f"{n:.3g} {unit}" if unit != "B" else f"{int(n)} B"
         n /= 1024
     return f"{n:.3g} PiB"
+
+
+def tree_bytes(path) -> int:
+    """Bytes of the files under ``path`` (a file: its size; missing: 0)."""
+    from pathlib import Path
+
+    p = Path(path)
+    if p.is_file():
+        return p.stat().st_size
+    return sum(f.stat().st_size for f in p.rglob("*") if f.is_file()) if p.is_dir() else 0
 
 
 def cube_bytes(num_chirps: int, num_channels: int, num_samples: int, itemsize: int = 8) -> int:

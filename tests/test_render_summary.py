@@ -8,8 +8,7 @@ import re
 import pytest
 
 from raysim.cli import main
-from raysim.cli.cmd_render import _tree_bytes
-from raysim.resources import format_bytes
+from raysim.resources import format_bytes, tree_bytes
 
 SMALL = ["--set", "radar.num_chirps=16", "--set", "array.nx=4", "--set", "array.ny=4",
          "--no-progress"]
@@ -21,8 +20,8 @@ def test_point_scene_summary_and_resume(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "traced (frame 0): 1 point target(s)" in err
     assert (f"wrote: 1 frame(s) rendered now, 0 kept, 1/1 in the store; "
-            f"{format_bytes(_tree_bytes(store))} in {store}") in err
-    assert _tree_bytes(store) > 0
+            f"{format_bytes(tree_bytes(store))} in {store}") in err
+    assert tree_bytes(store) > 0
     # resumed: nothing traced now, the frame kept is counted
     assert main(["render", "examples/case_stationary.toml", "--out", str(store), *SMALL]) == 0
     err = capsys.readouterr().err

@@ -335,7 +335,9 @@ def run(args) -> int:
         print(f"autofocus frame {result.frames[k]}: residual phase rms {rep['rms_phase_rad']:.3g} "
               f"rad (sigma {sigma} rad), band {rep['band_hz'][0]:.0f}-{rep['band_hz'][1]:.0f} "
               f"Hz, {rep['cells']} cells{rate}")
-    print(f"wrote {args.out}: beams {result.shape} [frame, chirp, range, azimuth, elevation], "
-          f"chain {result.chain}" + (f", {len(result.warnings)} warning(s)"
-                                     if result.warnings else ""))
+    from raysim.resources import format_bytes, tree_bytes
+
+    print(f"wrote {args.out} ({format_bytes(tree_bytes(args.out))}): beams {result.shape} "
+          f"[frame, chirp, range, azimuth, elevation], chain {result.chain}"
+          + (f", {len(result.warnings)} warning(s)" if result.warnings else ""))
     return 0

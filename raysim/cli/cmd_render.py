@@ -92,16 +92,6 @@ _KIND_NAMES = {"specular": "specular ground", "diffuse": "diffuse", "target": "p
                "po_centre": "PO centres of meshes", "other_specular": "other specular"}
 
 
-def _tree_bytes(path) -> int:
-    """Bytes of the files under ``path`` (a file: its size; missing: 0)."""
-    from pathlib import Path
-
-    p = Path(path)
-    if p.is_file():
-        return p.stat().st_size
-    return sum(f.stat().st_size for f in p.rglob("*") if f.is_file()) if p.is_dir() else 0
-
-
 def traced_lines(scenario, summary, netcdf=None) -> list[str]:
     """What ``raysim render`` traced and wrote, as lines for stderr.
 
@@ -124,7 +114,7 @@ def traced_lines(scenario, summary, netcdf=None) -> list[str]:
         ``[[scene.meshes]]`` scene, and ``wrote: ...`` (frames and sizes).
     """
     from raysim.pipeline.sources import path_kinds
-    from raysim.resources import format_bytes
+    from raysim.resources import format_bytes, tree_bytes
 
     lines = []
     scene = scenario.scene
@@ -153,9 +143,9 @@ def traced_lines(scenario, summary, netcdf=None) -> list[str]:
                 per = mesh_summary(mesh_boxes(scenario), paths, {})
                 lines.append("  meshes: " + ", ".join(f"{m['name']} {m['num_paths']} paths"
                                                       for m in per))
-    size = f"{format_bytes(_tree_bytes(summary.path))} in {summary.path}"
+    size = f"{format_bytes(tree_bytes(summary.path))} in {summary.path}"
     if netcdf:
-        size += f", {format_bytes(_tree_bytes(netcdf))} in {netcdf}"
+        size += f", {format_bytes(tree_bytes(netcdf))} in {netcdf}"
     lines.append(f"wrote: {summary.frames_rendered} frame(s) rendered now, "
                  f"{summary.frames_resumed} kept, "
                  f"{summary.frames_resumed + summary.frames_rendered}/{summary.frames_total} "

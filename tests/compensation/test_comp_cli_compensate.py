@@ -175,6 +175,9 @@ def test_compensate_keeps_an_imu_log_kept_inside_its_output_store(tmp_path, caps
             "0:0:1", "--velocity", "given", "--initial-velocity", "0,0,0", "--no-progress"]
     imu, _ = _write_imu("write_imu_csv", tmp_path, s)
     assert main(["compensate", str(tmp_path / "cube.npz"), *imu, *args]) == 0
+    from raysim.resources import format_bytes, tree_bytes
+
+    assert f"wrote {out} ({format_bytes(tree_bytes(out))}): beams" in capsys.readouterr().out
     kept = out / "imu.csv"
     (tmp_path / "imu.csv").rename(kept)
     capsys.readouterr()
