@@ -62,6 +62,18 @@ def _cube(tmp: Path) -> Path:
     return path
 
 
+def _folder(path: Path) -> Path:
+    path.mkdir()
+    return path
+
+
+def _binary(tmp: Path, name: str) -> Path:
+    """A file of binary bytes (a ULog's magic and a few non-UTF-8 bytes) named ``name``."""
+    p = tmp / name
+    p.write_bytes(b"ULog\x01\x12\x35\x01\xb8\xff\xfe\x00" * 4)
+    return p
+
+
 def _plate_mm(tmp: Path, side: float) -> Path:
     """A square plate of ``side`` file units (STL), as a CAD tool in millimetres writes it."""
     import trimesh
@@ -254,6 +266,26 @@ CLI_CASES = [
     Bad("size-flight-frames",
         lambda t: cli(["flight", t / "f", "--frames", "1000000000"]), CliError,
         ("exit 2", "1000000000 frame(s)", "--frames")),
+    Bad("flight-seed-named-as-typed",
+        lambda t: cli(["flight", t / "f", "--seed", "-1"]), CliError,
+        ("exit 2", "--seed", "non-negative integer")),
+    Bad("flight-time-offset-named-as-typed",
+        lambda t: cli(["flight", t / "f", "--time-offset", "nan"]), CliError,
+        ("exit 2", "--time-offset", "finite number")),
+    Bad("flight-decimate-tolerance-named-as-typed",
+        lambda t: cli(["flight", t / "f", "--decimate-tolerance", "5"]), CliError,
+        ("exit 2", "--decimate-tolerance", "(0, 0.1]")),
+    Bad("flight-imu-fast-rate-named-as-typed",
+        lambda t: cli(["flight", t / "f", "--imu-boxcar", "--imu-fast-rate", "2500"]),
+        CliError, ("exit 2", "--imu-fast-rate", "whole multiple of --imu-rate")),
+    Bad("compensate-capture-is-a-folder",
+        lambda t: cli(["compensate", _folder(t / "capture"), "--radar-config", t / "r.cfg",
+                       "--imu", t / "f.ulg", "--out", t / "b.zarr"]), CliError,
+        ("exit 2", "capture", "is a folder")),
+    Bad("compensate-binary-log-named-csv",
+        lambda t: cli(["compensate", _cube(t), "--imu", _binary(t, "log.csv"), "--out",
+                       t / "b.zarr"]), CliError,
+        ("exit 2", "log.csv", "not a text CSV", ".ulg")),
     Bad("size-flight-target-behind",
         lambda t: cli(["flight", t / "f", "--target", "15,100,0"]), CliError,
         ("exit 2", "--target", "azimuth 100", "[-90, 90] deg")),

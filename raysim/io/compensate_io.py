@@ -127,6 +127,14 @@ def frame_selection(text: str | None, total: int, option: str = "--frames") -> l
     return list(range(lo, hi))
 
 
+def _check_file(path: str, what: str) -> None:
+    """A ValueError naming ``what`` unless ``path`` is a file: absent, or a folder."""
+    if os.path.isdir(path):
+        raise ValueError(f"{what} {path!r} is a folder; expected a file")
+    if not os.path.isfile(path):
+        raise ValueError(f"{what} {path!r} does not exist")
+
+
 def _load_capture(path: str, radar_config: str, frames: str | None, layout: str | None,
                   t0: float, board: str | None = None, antenna_positions=None,
                   drop_incomplete: bool = False) -> CompensateInput:
@@ -136,12 +144,11 @@ def _load_capture(path: str, radar_config: str, frames: str | None, layout: str 
     if radar_config is None:
         raise ValueError(f"{path!r} is a raw capture: give its radar configuration with "
                          f"--radar-config FILE (mmWave SDK .cfg or mmWave Studio .json)")
-    if not os.path.isfile(path):
-        raise ValueError(f"capture {path!r} does not exist")
+    _check_file(path, "capture")
     if not np.isfinite(t0):
         raise ValueError(f"--capture-t0 must be a finite time in seconds, got {t0!r}")
-    if antenna_positions is not None and not os.path.isfile(os.fspath(antenna_positions)):
-        raise ValueError(f"--antenna-positions {os.fspath(antenna_positions)!r} does not exist")
+    if antenna_positions is not None:
+        _check_file(os.fspath(antenna_positions), "--antenna-positions")
     m = read_mmwave_config(radar_config, layout=layout, t0=t0, board=board,
                            antenna_positions=antenna_positions)
     fmt = m.fmt
@@ -252,8 +259,7 @@ def _unpacked_bytes(path: str) -> int:
 
 def _load_npz(path: str) -> CompensateInput:
     """An ``.npz`` or MATLAB ``.mat`` cube (the keys of :mod:`raysim.pipeline.compensate`)."""
-    if not os.path.isfile(path):
-        raise ValueError(f"cube file {path!r} does not exist")
+    _check_file(path, "cube file")
     check_memory(2 * _unpacked_bytes(path), f"cube file {path!r} (read whole, then range "
                  f"compressed)", "the cube: write its frames to a Zarr store and select "
                  "--frames")

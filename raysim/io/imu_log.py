@@ -83,12 +83,21 @@ def _units_for(sensor: str) -> MappingProxyType:
     return GYRO_UNITS if sensor == "gyro" else ACCEL_UNITS
 
 
+def _not_text(path, exc: UnicodeDecodeError) -> ValueError:
+    return ValueError(f"{path}: not a text CSV (byte {exc.start} is not UTF-8): expected a "
+                      f"CSV IMU log; a binary flight log keeps its own suffix (.ulg, .bin, "
+                      f".bag, .mcap)")
+
+
 def csv_header(path: str | os.PathLike) -> tuple[list[str], int]:
     """The header row of a CSV log (after ``#`` comment lines) and its 1-based line number."""
-    with Path(path).open(newline="") as fh:
-        for line_no, line in enumerate(fh, start=1):
-            if line.strip() and not line.lstrip().startswith("#"):
-                return next(csv.reader([line])), line_no
+    try:
+        with Path(path).open(newline="") as fh:
+            for line_no, line in enumerate(fh, start=1):
+                if line.strip() and not line.lstrip().startswith("#"):
+                    return next(csv.reader([line])), line_no
+    except UnicodeDecodeError as exc:
+        raise _not_text(path, exc) from None
     raise ValueError(f"{path}: no header row found")
 
 
@@ -164,8 +173,11 @@ def read_imu_csv(path: str | os.PathLike) -> ImuSamples:
     """
     path = Path(path)
     where = f"{path}: "
-    with path.open(newline="") as fh:
-        text_lines = fh.read().splitlines()
+    try:
+        with path.open(newline="") as fh:
+            text_lines = fh.read().splitlines()
+    except UnicodeDecodeError as exc:
+        raise _not_text(path, exc) from None
     header = None
     rows: list[list[float]] = []
     lines_of_rows: list[int] = []

@@ -534,6 +534,9 @@ def read_mmwave_config(path: str | os.PathLike, *, layout: str | None = None, t0
         A missing file, invalid JSON, or an invalid configuration.
     """
     path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"radar configuration {str(path)!r} is a folder; expected an mmWave "
+                         f"SDK .cfg or mmWave Studio .json file")
     if not path.is_file():
         raise ValueError(f"radar configuration {str(path)!r} does not exist")
     text = path.read_text(encoding="utf-8", errors="replace")
