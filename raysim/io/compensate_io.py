@@ -127,6 +127,13 @@ def frame_selection(text: str | None, total: int, option: str = "--frames") -> l
     return list(range(lo, hi))
 
 
+#: Suffixes of file formats an output path may not carry: the output is a Zarr folder
+#: or an .npz file, never what these promise.
+OTHER_FORMAT_SUFFIXES = frozenset({".nc", ".h5", ".hdf5", ".mat", ".npy", ".txt", ".csv",
+                                   ".json", ".toml", ".cfg", ".bin", ".ulg", ".bag", ".mcap",
+                                   ".zip", ".png", ".pdf"})
+
+
 def _check_file(path: str, what: str) -> None:
     """A ValueError naming ``what`` unless ``path`` is a file: absent, or a folder."""
     if os.path.isdir(path):
@@ -461,9 +468,10 @@ def write_compensated_npz(path: str, beams, chain: str, azimuth_deg, elevation_d
 def check_compensated_output(path, option: str = "--out", inputs=()) -> bool:
     """Check, before any computation, that the compensated output may be written at ``path``.
 
-    A path ending in ``.npz`` is a file; any other a Zarr store, which may
-    replace only an earlier store of :func:`write_compensated_store` (never a
-    frame store or another folder).
+    A path ending in ``.npz`` (any case) is a file; one ending in the suffix of
+    another format (:data:`OTHER_FORMAT_SUFFIXES`) is refused; any other a Zarr
+    store, which may replace only an earlier store of
+    :func:`write_compensated_store` (never a frame store or another folder).
 
     Parameters
     ----------
@@ -489,7 +497,13 @@ def check_compensated_output(path, option: str = "--out", inputs=()) -> bool:
     from raysim.io.zarr_store import store_exists
 
     path = os.fspath(path)
-    as_npz = path.endswith(".npz")
+    as_npz = path.lower().endswith(".npz")
+    suffix = os.path.splitext(path.rstrip("/"))[1]
+    if suffix.lower() in OTHER_FORMAT_SUFFIXES:
+        # a Zarr folder named beams.nc would not be the file its name promises
+        raise ValueError(f"{option}: got {path!r}, whose suffix {suffix!r} names a format "
+                         f"not written here; expected a Zarr store (.zarr, or no suffix) or, "
+                         f"for one frame, .npz")
     check_output(path, "file" if as_npz else "dir", option, inputs=inputs)
     if not as_npz and os.path.isdir(path):
         if not store_exists(path):
