@@ -124,8 +124,9 @@ def register(subparsers) -> None:
                    help="largest IMU-log gap inside the window used (the selected chirps plus "
                    "0.5 s) filled by interpolation, with a warning; gaps outside it are not "
                    "judged (default 0.06 s, or 3.5 median intervals if larger)")
-    p.add_argument("--frame", type=int, default=0,
-                   help="frame of a Zarr / NetCDF store to compensate (position along frame)")
+    p.add_argument("--frame", type=int, default=None,
+                   help="frame of a Zarr / NetCDF store to compensate (position along frame; "
+                   "left out: the first, or --frames)")
     p.add_argument("--frames", default=None, metavar="LO:HI",
                    help="frames of a capture or store (HI excluded; default: every frame of a "
                    "capture, --frame of a store)")

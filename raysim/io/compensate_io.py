@@ -304,7 +304,7 @@ def _load_npz(path: str) -> CompensateInput:
 
 
 def load_input(path: str, *, radar_config: str | None = None, frames: str | None = None,
-               frame: int = 0, layout: str | None = None,
+               frame: int | None = None, layout: str | None = None,
                capture_t0: float = 0.0, board: str | None = None,
                antenna_positions=None, drop_incomplete: bool = False) -> CompensateInput:
     """Open the input of the compensate stage (``raysim compensate``).
@@ -319,8 +319,9 @@ def load_input(path: str, *, radar_config: str | None = None, frames: str | None
     frames : str, optional
         ``LO:HI`` or ``K``: frames of a capture or store (default: all frames of
         a capture, ``frame`` of a store).
-    frame : int
-        One frame of a store when ``frames`` is None.
+    frame : int, optional
+        One frame of a store (negative: from the end); None: the first, or ``frames``.
+        Refused with ``frames``, and for a capture or a one-frame cube.
     layout : {"2lane", "4lane"}, optional
         LVDS layout of a capture (default from the configuration or the
         board). A capture whose size or zero-filled lanes do not fit it is
@@ -342,6 +343,15 @@ def load_input(path: str, *, radar_config: str | None = None, frames: str | None
     """
     from raysim.io import storage
 
+    if frame is not None and frames is not None:
+        raise ValueError(f"--frame {frame} and --frames {frames!r}: give one (a frame of a "
+                         f"store, or a range of frames)")
+    is_store = not path.endswith((".npz", ".mat")) and (
+        storage.store_exists(path) or (path.endswith(".nc") and os.path.isfile(path)))
+    if frame is not None and not is_store:
+        raise ValueError(f"--frame {frame} selects a frame of a Zarr or NetCDF store; "
+                         f"{path!r} is not one (a capture takes --frames K:K+1, a cube "
+                         f"holds one frame)")
     if radar_config is not None or path.endswith(".bin"):
         return _load_capture(path, radar_config, frames, layout, capture_t0, board,
                              antenna_positions, drop_incomplete)
@@ -350,9 +360,8 @@ def load_input(path: str, *, radar_config: str | None = None, frames: str | None
     if board is not None or antenna_positions is not None:
         raise ValueError("--board / --antenna-positions describe a raw capture's antennas; "
                          f"{path!r} carries its own element positions")
-    if not path.endswith((".npz", ".mat")) and (storage.store_exists(path) or
-                                                (path.endswith(".nc") and os.path.isfile(path))):
-        return _load_store(path, frames, frame)
+    if is_store:
+        return _load_store(path, frames, 0 if frame is None else frame)
     if frames is not None:
         raise ValueError(f"--frames {frames!r}: an .npz or .mat cube holds one frame")
     return _load_npz(path)

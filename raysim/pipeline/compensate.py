@@ -346,7 +346,7 @@ def _size_job(inp, out: Path, range_m, beams: int, calibrating: bool, notes: lis
 
 
 def compensate(source, imu=None, *, out, chain="exact", frames=None,
-               frame: int = 0, radar_config=None, layout: str | None = None,
+               frame: int | None = None, radar_config=None, layout: str | None = None,
                capture_t0: float = 0.0, range_m=None, azimuth_deg=None,
                elevation_deg=None, lever_arm=None, time_offset: float | str = 0.0,
                velocity: str = "hover", initial_velocity=None,
@@ -381,8 +381,8 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         ``"LO:HI"`` or ``(LO, HI)`` (HI excluded), or ``"K"`` / ``K``: frames of
         a capture or store (default every frame of a capture, ``frame`` of a
         store).
-    frame : int
-        Frame of a store when ``frames`` is None.
+    frame : int, optional
+        Frame of a store (None: the first, or ``frames``).
     radar_config : str or path-like, optional
         mmWave SDK ``.cfg`` or Studio ``.json`` of a capture.
     layout : {"2lane", "4lane"}, optional
