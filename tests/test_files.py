@@ -10,6 +10,7 @@ from raysim.io.files import (
     atomic_write,
     atomic_write_json,
     atomic_write_text,
+    written_together,
 )
 
 
@@ -77,3 +78,37 @@ def test_output_that_is_an_input_is_refused(tmp_path):
     store.mkdir()
     with pytest.raises(ValueError, match="inputs"):
         check_output(store / "r.html", "file", "--out", inputs=[store])
+
+
+NAMES = ("capture.bin", "log.ulg", "truth.json")
+
+
+def _write_set(folder, upto: int, stop: BaseException):
+    with written_together(folder, NAMES):
+        for name in NAMES[:upto]:
+            atomic_write_text(folder / name, name)
+        raise stop
+
+
+@pytest.mark.parametrize("stop", [KeyboardInterrupt(), ValueError("disk full")])
+def test_a_set_interrupted_midway_leaves_nothing_not_even_its_folder(tmp_path, stop):
+    folder = tmp_path / "flight"
+    with pytest.raises(type(stop)):
+        _write_set(folder, 2, stop)
+    assert not folder.exists()
+
+
+def test_an_interrupted_rewrite_removes_the_stale_set_but_not_a_users_file(tmp_path):
+    """A capture rewritten, then the job stopped: the old log and truth no longer match it,
+    all of raysim's go; the user's notes stay. Stopped before writing, all stay."""
+    folder = tmp_path / "flight"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("mine")
+    for name in NAMES:
+        atomic_write_text(folder / name, "old " + name)
+    with pytest.raises(KeyboardInterrupt):
+        _write_set(folder, 0, KeyboardInterrupt())
+    assert _names(folder) == sorted([*NAMES, "notes.txt"])
+    with pytest.raises(KeyboardInterrupt):
+        _write_set(folder, 1, KeyboardInterrupt())
+    assert _names(folder) == ["notes.txt"]

@@ -125,6 +125,33 @@ def written_by_raysim(path: str | os.PathLike) -> bool:
     return isinstance(entry, list) and entry == _stamp(path)
 
 
+@contextlib.contextmanager
+def written_together(folder: str | os.PathLike, names: Iterable[str]):
+    """Create ``folder`` and write files that only make sense together inside the block.
+
+    If the block fails or is interrupted after one of ``names`` was written, every one
+    of them raysim wrote is removed (the earlier set's too: it no longer matches), and
+    the folder when the block created it and nothing else is left in it; a failure
+    before anything was written leaves the folder as it was.
+    """
+    folder = Path(folder)
+    created = not folder.exists()
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = [folder / n for n in names]
+    before = {p: _stamp(p) if p.is_file() else None for p in paths}
+    try:
+        yield folder
+    except BaseException:
+        if any((_stamp(p) if p.is_file() else None) != before[p] for p in paths):
+            for p in paths:
+                if written_by_raysim(p):
+                    p.unlink(missing_ok=True)
+        if created and {q.name for q in folder.iterdir()} <= {MANIFEST}:
+            (folder / MANIFEST).unlink(missing_ok=True)
+            folder.rmdir()
+        raise
+
+
 def check_replaceable_file(path: str | os.PathLike, option: str = "output") -> None:
     """Raise ValueError unless ``path`` is absent or a file raysim wrote (unchanged since).
 

@@ -22,6 +22,7 @@ Clocks: the radar clock is the truth time (the first ramp at ``start`` s,
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -353,7 +354,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     FlightFiles
     """
     from raysim.echoes.oracle import PointTarget, simulate_point_targets
-    from raysim.io.files import atomic_write_text, check_output
+    from raysim.io.files import atomic_write_text, check_output, written_together
     from raysim.io.flight_logs.ulog import write_px4_ulog
     from raysim.io.mmwave_config import sdk_cfg_text
     from raysim.io.ti_boards import BOARDS, resolve_board
@@ -386,92 +387,89 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     tgts = _targets(target if targets is None else targets, cfg)
     mount = mount_ypr(mounting_deg)
     size_flight(cfg, frames, len(tx_order) * len(rx_on), folder, announce=progress)
-    folder.mkdir(parents=True, exist_ok=True)
-    traj = hover_jitter(seed) if trajectory is None else trajectory
-    lay = resolve_board(layout.name, tx_order=tx_order, rx_enabled=rx_on,
-                        start_freq_hz=cfg.carrier_frequency, wavelength=cfg.center_wavelength)
-    name = ("TI 3Tx x 4Rx (TX0, TX2, TX1)" if layout.name == DEFAULT_BOARD
-            else f"TI {layout.name} (TX{', TX'.join(map(str, tx_order))})")
-    array = tdm_mimo(lay.tx[list(tx_order)], lay.rx[list(rx_on)], name=name)
-    lever = np.asarray(lever_arm, dtype=float)
-    points = [PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=lever)
-              if mounting_deg is None else
-              PointTarget(nominal_target_position(r, np.deg2rad(az), np.deg2rad(el), lever,
-                                                  mount), np.zeros(3))
-              for r, az, el in tgts]
-    mounted = mount_array(array, mount)
-    clutter = []
-    if clutter_scene is not None:
-        from raysim.pipeline.flight_clutter import clutter_points
+    with written_together(folder, FLIGHT_FILES):   # a capture without its log: none
+        traj = hover_jitter(seed) if trajectory is None else trajectory
+        lay = resolve_board(layout.name, tx_order=tx_order, rx_enabled=rx_on,
+                            start_freq_hz=cfg.carrier_frequency, wavelength=cfg.center_wavelength)
+        name = ("TI 3Tx x 4Rx (TX0, TX2, TX1)" if layout.name == DEFAULT_BOARD
+                else f"TI {layout.name} (TX{', TX'.join(map(str, tx_order))})")
+        array = tdm_mimo(lay.tx[list(tx_order)], lay.rx[list(rx_on)], name=name)
+        lever = np.asarray(lever_arm, dtype=float)
+        points = [PointTarget.at(r, np.deg2rad(az), np.deg2rad(el), radar_origin=lever)
+                  if mounting_deg is None else
+                  PointTarget(nominal_target_position(r, np.deg2rad(az), np.deg2rad(el), lever,
+                                                      mount), np.zeros(3))
+                  for r, az, el in tgts]
+        mounted = mount_array(array, mount)
+        clutter = []
+        if clutter_scene is not None:
+            from raysim.pipeline.flight_clutter import clutter_points
 
-        clutter, summary = clutter_points(clutter_scene, cfg, array, lever,
-                                          altitude=clutter_altitude, seed=seed,
-                                          max_scatterers=clutter_max_scatterers,
-                                          mounting_deg=mount, specular=clutter_specular)
-        if progress:
-            import sys
+            clutter, summary = clutter_points(clutter_scene, cfg, array, lever,
+                                              altitude=clutter_altitude, seed=seed,
+                                              max_scatterers=clutter_max_scatterers,
+                                              mounting_deg=mount, specular=clutter_specular)
+            if progress:
+                print(f"flight: {summary}", file=sys.stderr, flush=True)
+        ks = range(frames)
+        if progress and frames > 1:
+            from tqdm import tqdm
 
-            print(f"flight: {summary}", file=sys.stderr, flush=True)
-    ks = range(frames)
-    if progress and frames > 1:
-        import sys
+            ks = tqdm(ks, unit="frame", desc="flight", file=sys.stderr)
+        def render(pts, f: int) -> np.ndarray:
+            if decimate == 1:                  # the oracle's own render, every chirp exact
+                return simulate_point_targets(cfg, mounted, pts, traj, lever_arm=lever,
+                                              frame=f, t0=start, pattern=mount_pattern(
+                                                  cfg.pattern, mount)).data
+            from raysim.echoes.oracle import check_frame_memory, point_target_delays
+            from raysim.synthesis.frame import adc_samples
+            from raysim.synthesis.select import synthesize, tones_error
 
-        from tqdm import tqdm
+            # the delays and amplitudes twice: the path groups of the decimation copy theirs
+            check_frame_memory(cfg, mounted, 2 * len(pts))
+            tau, amp = point_target_delays(cfg, mounted, traj, pts, lever_arm=lever, frame=f,
+                                           t0=start, pattern=mount_pattern(cfg.pattern, mount))
+            eps = max(FLIGHT_SYNTHESIS_EPS, tones_error(len(pts)))
+            return adc_samples(synthesize(tau, amp, cfg, method="tones", eps=eps,
+                                          decimate=decimate, decimate_tolerance=tolerance), cfg)
 
-        ks = tqdm(ks, unit="frame", desc="flight", file=sys.stderr)
-    def render(pts, f: int) -> np.ndarray:
-        if decimate == 1:                  # the oracle's own render, every chirp exact
-            return simulate_point_targets(cfg, mounted, pts, traj, lever_arm=lever, frame=f,
-                                          t0=start, pattern=mount_pattern(cfg.pattern, mount)).data
-        from raysim.echoes.oracle import check_frame_memory, point_target_delays
-        from raysim.synthesis.frame import adc_samples
-        from raysim.synthesis.select import synthesize, tones_error
+        def frame(f: int) -> np.ndarray:
+            data = render(points, f)
+            if clutter:
+                data = data + render(clutter, f)
+            return data
 
-        # the delays and amplitudes twice: the path groups of the decimation copy theirs
-        check_frame_memory(cfg, mounted, 2 * len(pts))
-        tau, amp = point_target_delays(cfg, mounted, traj, pts, lever_arm=lever, frame=f,
-                                       t0=start, pattern=mount_pattern(cfg.pattern, mount))
-        eps = max(FLIGHT_SYNTHESIS_EPS, tones_error(len(pts)))
-        return adc_samples(synthesize(tau, amp, cfg, method="tones", eps=eps,
-                                      decimate=decimate, decimate_tolerance=tolerance), cfg)
+        cube = np.stack([frame(f) for f in ks])
+        feed = np.tile(lay.rx_phase[list(rx_on)], len(tx_order))      # [channel]: RX feed signs
+        if np.any(feed != 1):
+            cube = cube * feed[None, None, :, None]
+        cube = cube * (FULL_SCALE_COUNTS / np.abs(cube).max())
+        fmt = Dca1000Format.from_radar_config(cfg, num_rx=len(rx_on), t0=start,
+                                              layout=lay.layout or "2lane")
+        capture = write_dca1000(folder / "adc_data.bin", cube, fmt)
+        radar_cfg = atomic_write_text(folder / "radar.cfg",
+                                      sdk_cfg_text(cfg, tx_order=tx_order, rx_enabled=rx_on))
+        end = start + frames * cfg.frame_interval + 0.05
+        tail = 0.0 if log_gaps <= int(gaps_in_capture) else 0.65 + 0.3 * log_gaps   # room after
+        samples, att, gaps = flight_log(
+            traj, imu, rate=imu_rate, times=[start, end + tail], seed=seed,
+            time_offset=time_offset, clock_drift_ppm=clock_drift_ppm, boxcar=imu_boxcar,
+            fast_rate=imu_fast_rate, gaps=log_gaps, gaps_in_capture=gaps_in_capture,
+            attitude=attitude, capture=(start, end - 0.05))
+        ulog = write_px4_ulog(folder / "flight.ulg", samples, att, averaged=bool(imu_boxcar))
+        starts = start + np.arange(frames) * cfg.frame_interval
+        flight = FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,
+                           float(time_offset), np.asarray(traj.velocity(starts), dtype=float),
+                           np.rad2deg(np.asarray(traj.euler(starts), dtype=float)),
+                           np.asarray(traj.position(starts), dtype=float), lever, tgts[0],
+                           imu, tuple(tgts), layout.name, tuple(float(x) for x in mount),
+                           float(imu_rate), bool(imu_boxcar), tuple(gaps), bool(attitude),
+                           float(clock_drift_ppm), None if att is None else np.array(
+                               [att.euler_deg(time_offset + (1 + 1e-6 * clock_drift_ppm) * t)
+                                for t in starts]))
+        from raysim.io.files import atomic_write_json
 
-    def frame(f: int) -> np.ndarray:
-        data = render(points, f)
-        if clutter:
-            data = data + render(clutter, f)
-        return data
-
-    cube = np.stack([frame(f) for f in ks])
-    feed = np.tile(lay.rx_phase[list(rx_on)], len(tx_order))      # [channel]: RX feed signs
-    if np.any(feed != 1):
-        cube = cube * feed[None, None, :, None]
-    cube = cube * (FULL_SCALE_COUNTS / np.abs(cube).max())
-    fmt = Dca1000Format.from_radar_config(cfg, num_rx=len(rx_on), t0=start,
-                                          layout=lay.layout or "2lane")
-    capture = write_dca1000(folder / "adc_data.bin", cube, fmt)
-    radar_cfg = atomic_write_text(folder / "radar.cfg",
-                                  sdk_cfg_text(cfg, tx_order=tx_order, rx_enabled=rx_on))
-    end = start + frames * cfg.frame_interval + 0.05
-    tail = 0.0 if log_gaps <= int(gaps_in_capture) else 0.65 + 0.3 * log_gaps   # room after
-    samples, att, gaps = flight_log(
-        traj, imu, rate=imu_rate, times=[start, end + tail], seed=seed,
-        time_offset=time_offset, clock_drift_ppm=clock_drift_ppm, boxcar=imu_boxcar,
-        fast_rate=imu_fast_rate, gaps=log_gaps, gaps_in_capture=gaps_in_capture,
-        attitude=attitude, capture=(start, end - 0.05))
-    ulog = write_px4_ulog(folder / "flight.ulg", samples, att, averaged=bool(imu_boxcar))
-    starts = start + np.arange(frames) * cfg.frame_interval
-    flight = FlightFiles(Path(capture), Path(radar_cfg), Path(ulog), float(start), starts,
-                       float(time_offset), np.asarray(traj.velocity(starts), dtype=float),
-                       np.rad2deg(np.asarray(traj.euler(starts), dtype=float)),
-                       np.asarray(traj.position(starts), dtype=float), lever, tgts[0],
-                       imu, tuple(tgts), layout.name, tuple(float(x) for x in mount),
-                       float(imu_rate), bool(imu_boxcar), tuple(gaps), bool(attitude),
-                       float(clock_drift_ppm), None if att is None else np.array(
-                           [att.euler_deg(time_offset + (1 + 1e-6 * clock_drift_ppm) * t)
-                            for t in starts]))
-    from raysim.io.files import atomic_write_json
-
-    atomic_write_json(folder / TRUTH_FILE, flight.truth(), indent=1)
+        atomic_write_json(folder / TRUTH_FILE, flight.truth(), indent=1)
     return flight
 
 
@@ -523,8 +521,6 @@ def size_flight(cfg, frames: int, channels: int, folder: Path, announce: bool = 
     int
         Estimated capture size [bytes].
     """
-    import sys
-
     from raysim.resources import LARGE_OUTPUT_BYTES, check_memory, format_bytes, free_disk
 
     cells = int(frames) * int(cfg.num_chirps) * int(channels) * int(cfg.num_samples)
@@ -687,8 +683,6 @@ def calibrated_flight_table(folder: str | Path, seeds=range(4), *, frames: int =
 
 
 if __name__ == "__main__":     # python -m raysim.pipeline.flight FOLDER [SEEDS] [FRAMES]
-    import sys
-
     seeds_ = range(int(sys.argv[2]) if len(sys.argv) > 2 else 6)
     table = calibrated_flight_table(sys.argv[1], seeds_,
                                     frames=int(sys.argv[3]) if len(sys.argv) > 3 else 4)
