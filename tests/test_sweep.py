@@ -232,3 +232,13 @@ def test_sweep_cli_refuses_out_of_another_sweep(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "holds another sweep" in err
     assert "parameters.radar.num_chirps" in err
+
+
+def test_more_local_workers_than_the_machine_holds_are_refused(capsys, tmp_path):
+    from raysim.cli.cmd_sweep import MAX_WORKERS_PER_CPU
+
+    too_many = MAX_WORKERS_PER_CPU * (__import__("os").cpu_count() or 1) + 1
+    code = main(["sweep", "--case", "rotation_y", "--param", "imu.rate_hz=1,2", "--workers",
+                 str(too_many), "--out", str(tmp_path / "sw")])
+    assert code == 2 and f"--workers: got {too_many}" in capsys.readouterr().err
+    assert not (tmp_path / "sw").exists()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 
 from raysim.vocabulary import CHAINS
@@ -38,6 +39,8 @@ unavailable (finished points are kept), 2 invalid input, 130 interrupted.
 
 #: Metrics (names of :data:`raysim.vocabulary.METRICS`) printed as means after a sweep.
 SUMMARY_METRICS = ("pseudo_velocity_mps", "doppler_width_hz", "angle_error_deg")
+#: Most local workers (and threads each) per CPU core [1].
+MAX_WORKERS_PER_CPU = 8
 
 
 def register(subparsers) -> None:
@@ -82,9 +85,12 @@ def run(args) -> int:
 
     if bool(args.scenario) == bool(args.case):
         raise ValueError("give exactly one base: SCENARIO.toml or --case NAME")
+    # each local worker holds a scenario's render: more than a few per core only thrash
+    most = MAX_WORKERS_PER_CPU * (os.cpu_count() or 1)
     for name in ("workers", "threads"):
-        if getattr(args, name) < 1:
-            raise ValueError(f"--{name}: got {getattr(args, name)}, expected >= 1")
+        if not 1 <= getattr(args, name) <= most:
+            raise ValueError(f"--{name}: got {getattr(args, name)}, expected 1 to {most} "
+                             f"({MAX_WORKERS_PER_CPU} per CPU core of this machine)")
     check_output(args.out, "dir", "--out")
     base = load_scenario(args.scenario) if args.scenario else scenario_from_case(args.case)
     if args.set:
