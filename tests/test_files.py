@@ -112,3 +112,32 @@ def test_an_interrupted_rewrite_removes_the_stale_set_but_not_a_users_file(tmp_p
     with pytest.raises(KeyboardInterrupt):
         _write_set(folder, 1, KeyboardInterrupt())
     assert _names(folder) == ["notes.txt"]
+
+
+def test_an_interrupted_command_says_one_line_and_the_dying_tasks_nothing(monkeypatch, capsys):
+    """Ctrl-C in a command that runs Dask: the pending tasks' loggers and the threads that
+    die with the process used to print a hundred lines after the one that says what
+    happened."""
+    import logging
+    import sys
+    import threading
+
+    import raysim.cli.cmd_scenes as scenes
+
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)
+    monkeypatch.setattr(threading, "excepthook", threading.excepthook)
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(scenes, "run_list", interrupted)
+    from raysim.cli import main
+
+    try:
+        assert main(["scenes", "list"]) == 130
+        logging.getLogger("asyncio").error("Task was destroyed but it is pending!")
+        threading.excepthook(None)
+    finally:
+        logging.disable(logging.NOTSET)
+    err = capsys.readouterr().err
+    assert err.strip() == "raysim scenes: interrupted; finished outputs were kept"

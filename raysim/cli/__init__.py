@@ -66,8 +66,20 @@ def main(argv: list[str] | None = None) -> int:
         print(f"raysim {args.command}: error:{name} {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        _quiet_shutdown()
         print(f"raysim {args.command}: interrupted; finished outputs were kept", file=sys.stderr)
         return 130
+
+
+def _quiet_shutdown() -> None:
+    """After an interrupt, the pending tasks of Dask's scheduler and of the event loop that
+    die with the process report nothing: the one line above says what happened."""
+    import logging
+    import threading
+
+    logging.disable(logging.CRITICAL)
+    sys.unraisablehook = lambda _unraisable: None
+    threading.excepthook = lambda _args: None
 
 
 #: Exit status when the reader of the output closed the pipe early (128 + SIGPIPE, as a
