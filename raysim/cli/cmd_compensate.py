@@ -201,9 +201,12 @@ def register(subparsers) -> None:
     p.add_argument("--direction-deg", default=None, metavar="AZ,EL",
                    help="target direction for the paper chain's slow-time correction [deg]; "
                    "needed by --chain paper, not used by the others")
-    p.add_argument("--autofocus", nargs="?", const="phase", default=None,
-                   choices=("phase", "stationary", "displacement"),
-                   help="after the IMU-driven chain, estimate the residual per-chirp phase "
+    p.add_argument("--autofocus", nargs="?", const="phase", default="auto",
+                   choices=("auto", "off", "phase", "stationary", "displacement"),
+                   help="'auto' (default): 'displacement' where the IMU-driven chain warns that "
+                   "it leaves motion in the data (the log does not resolve the vibration, or "
+                   "the stationary scatterers keep a Doppler), else off; otherwise: "
+                   "after the IMU-driven chain, estimate the residual per-chirp phase "
                    "common to the stationary scatterers from the beams and remove it (rotor "
                    "vibration a low-rate IMU log cannot see); 'phase' (alone: --autofocus) "
                    "leaves the linear phase (Doppler) as it is, 'stationary' also removes "
@@ -311,18 +314,19 @@ def run(args) -> int:
         max_gap=args.max_gap, imu_topic=args.imu_topic, imu_instance=args.imu_instance,
         board=args.board, antenna_positions=args.antenna_positions,
         mounting_deg=args.mounting_deg, progress=not args.no_progress,
-        autofocus=args.autofocus or False, ground_doppler=args.ground_doppler)
+        autofocus=False if args.autofocus == "off" else args.autofocus,
+        ground_doppler=args.ground_doppler)
     for note in result.notes:
         print(f"note: {note}", file=sys.stderr)
     if result.imu_source is not None:
         print(f"IMU log: {result.imu_source}")
     for w in result.warnings:
         print(f"warning: {result.chain}: {w}", file=sys.stderr)
-    if not args.autofocus and any(w.startswith("imu rate:") for w in result.warnings):
+    if args.autofocus == "off" and any(w.startswith("imu rate:") for w in result.warnings):
         print("note: --autofocus displacement estimates the vibration this log does not "
               "resolve from the stationary scatterers (docs/compensation.md, \"Radar "
               "autofocus\")", file=sys.stderr)
-    elif not args.autofocus and any(w.startswith("azimuth:") for w in result.warnings):
+    elif args.autofocus == "off" and any(w.startswith("azimuth:") for w in result.warnings):
         print("note: --autofocus displacement removes a Doppler left common to the stationary "
               "scatterers of each frame (the velocity error the azimuth warning measures; "
               "docs/compensation.md, \"Radar autofocus\")", file=sys.stderr)

@@ -309,6 +309,27 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
                                                    else time_offset)
 
 
+#: Warnings of the IMU-driven chain that say it leaves motion in the data, by their
+#: prefix, and what each means (``autofocus="auto"`` then removes it).
+AUTOFOCUS_CAUSES = {"imu rate:": "the log does not resolve the vibration",
+                    "azimuth:": "the stationary scatterers keep a Doppler the estimated "
+                                "velocity does not remove"}
+
+
+def _autofocus_needed(motions, calibration, notes: list) -> str | bool:
+    """``"displacement"`` where the chain's warnings name motion left in the data (a note
+    says why), else False."""
+    said = [w for m in motions or () for w in m.warnings]
+    said += list((calibration or {}).get("warnings", ()))
+    causes = [why for prefix, why in AUTOFOCUS_CAUSES.items()
+              if any(w.startswith(prefix) for w in said)]
+    if not causes:
+        return False
+    notes.append(f"autofocus: displacement applied ({'; '.join(causes)}: the warnings "
+                 f"below); --autofocus off keeps the IMU-driven chain alone")
+    return "displacement"
+
+
 def _size_job(inp, out: Path, range_m, beams: int, calibrating: bool, notes: list
               ) -> tuple[np.ndarray, np.ndarray]:
     """The range axis ``[cell]`` [m] and the cells compensated, the job sized as a whole.
@@ -464,8 +485,13 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         (:mod:`compensation.mounting`).
     progress : bool
         A progress bar on stderr for records of several frames.
-    autofocus : bool or {"phase", "stationary", "displacement"}
-        After the chain, estimate and remove the residual per-chirp phase
+    autofocus : bool or {"phase", "stationary", "displacement", "auto"}
+        ``"auto"`` (``raysim compensate``'s default): ``"displacement"`` where the
+        IMU-driven chain states that it leaves motion in the data (an ``imu rate:``
+        warning: the log does not resolve the vibration; an ``azimuth:`` warning: the
+        stationary scatterers keep a Doppler the estimated velocity does not remove),
+        with a note, else none. Otherwise: after the chain, estimate and remove the
+        residual per-chirp phase
         common to the stationary scatterers (:func:`compensation.autofocus.autofocus_beams`):
         ``True`` or ``"phase"`` leaves the linear phase (Doppler) as it is,
         ``"stationary"`` also removes the common Doppler of those scatterers (a
@@ -491,11 +517,12 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         disk available (the size and the settings to reduce).
     """
     spec = parse_chain(chain)
-    if autofocus not in (False, None, True, "phase", "stationary", "displacement"):
-        raise ValueError(f"--autofocus: got {autofocus!r}, expected 'phase', 'stationary' "
-                         f"or 'displacement'")
-    doppler = "stationary" if autofocus in ("stationary", "displacement") else "keep"
-    if autofocus and not spec.compensated:
+    if autofocus not in (False, None, True, "phase", "stationary", "displacement", "auto"):
+        raise ValueError(f"--autofocus: got {autofocus!r}, expected 'phase', 'stationary', "
+                         f"'displacement' or 'auto'")
+    if autofocus == "auto" and not spec.compensated:
+        autofocus = False
+    if autofocus and autofocus != "auto" and not spec.compensated:
         raise ValueError(f"--autofocus: follows the IMU-driven chain; the chain {spec.key!r} "
                          f"compensates nothing")
     if velocity not in VELOCITY_CHOICES:
@@ -574,6 +601,9 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                 azimuth=az, offset_search=time_offset_search)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
+        if autofocus == "auto":
+            autofocus = _autofocus_needed(motions, calibration, notes)
+        doppler = "stationary" if autofocus in ("stationary", "displacement") else "keep"
         results, found, focus = [], list(window_notes), [] if autofocus else None
         array: dict = {}
         if calibration is not None:   # what the scene leaves unconstrained (also warned)

@@ -318,3 +318,28 @@ def test_frames_in_a_filled_logger_gap_are_named(tmp_path, capsys):
     assert inside and len(named) == 1
     listed = named[0].split("frame(s) ")[1].split(" lie")[0].split(", ")
     assert [int(k) for k in listed] == inside
+
+
+def test_the_autofocus_runs_by_default_where_the_chain_says_it_leaves_motion(tmp_path, capsys):
+    """A 250 Hz log of instantaneous samples does not resolve the rotor band (the chain's
+    ``imu rate:`` warning): ``raysim compensate`` removes what it leaves by the radar's
+    displacement autofocus, says so, and ``--autofocus off`` keeps the chain alone."""
+    import json
+
+    flight = write_flight(tmp_path / "f", frames=1, imu_rate=250.0)
+    args = flight.command(tmp_path / "auto.zarr", "--range-m", "10.8:11.8", "--az-deg",
+                          "14:26:0.5", "--el-deg", "0:0:1", "--no-progress")
+    assert "--autofocus" not in args
+    capsys.readouterr()
+    assert main(args) == 0
+    err = capsys.readouterr().err
+    assert "note: autofocus: displacement applied (the log does not resolve" in err
+    assert "warning: exact: imu rate:" in err
+    focus = json.loads(open_store(tmp_path / "auto.zarr").attrs["autofocus"])
+    assert [f["mode"] for f in focus] == ["displacement"]
+    off = [*args[:args.index("--out") + 1], str(tmp_path / "off.zarr"),
+           *args[args.index("--out") + 2:], "--autofocus", "off"]
+    assert main(off) == 0
+    err = capsys.readouterr().err
+    assert "applied" not in err and "note: --autofocus displacement estimates" in err
+    assert "autofocus" not in open_store(tmp_path / "off.zarr").attrs
