@@ -241,10 +241,10 @@ def test_a_self_calibration_off_by_a_velocity_warns_of_the_azimuth_it_misses(
         return dataclasses.replace(cal, result=dataclasses.replace(cal.result, motions=moved))
 
     base = tmp_path / "b.zarr"
-    assert main(flight.calibrating_command(base, *GRID)) == 0
+    assert main(flight.calibrating_command(base, *GRID, "--autofocus", "off")) == 0
     monkeypatch.setattr(stage, "calibrate_record", calibrate)
     out = tmp_path / "v.zarr"
-    assert main(flight.calibrating_command(out, *GRID)) == 0
+    assert main(flight.calibrating_command(out, *GRID, "--autofocus", "off")) == 0
     cal = json.loads(open_store(out).attrs["self_calibration"])
     said = [w for w in cal["warnings"] if w.startswith("azimuth:")]
     assert len(said) == 1, cal["warnings"]
@@ -253,10 +253,13 @@ def test_a_self_calibration_off_by_a_velocity_warns_of_the_azimuth_it_misses(
     miss = err[j, frame] - _measure(flight, base)[0][j, frame]
     assert abs(err[j, frame]) > ANGLE_TOL_DEG, (err, said)
     assert abs(miss - shift) <= SHIFT_REL_TOL * abs(shift) + SHIFT_ABS_TOL_DEG, (miss, said)
-    # the note names the radar autofocus, which removes that Doppler frame by frame
+    # the note names the radar autofocus, which removes that Doppler frame by frame; by
+    # default (--autofocus auto) the warning applies it
     assert "note: --autofocus displacement removes a Doppler" in capsys.readouterr().err
     focused = tmp_path / "a.zarr"
-    assert main(flight.calibrating_command(focused, *GRID, "--autofocus", "displacement")) == 0
+    assert main(flight.calibrating_command(focused, *GRID)) == 0
+    assert "note: autofocus: displacement applied (the stationary scatterers keep a Doppler" \
+        in capsys.readouterr().err
     assert np.all(np.abs(_measure(flight, focused)[0]) <= ANGLE_TOL_DEG)
 
 

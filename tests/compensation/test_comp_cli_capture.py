@@ -261,7 +261,8 @@ def test_flight_prints_a_beam_grid_through_every_target(tmp_path, capsys):
 
 def test_flight_with_a_low_rate_log_prints_the_autofocus(tmp_path, capsys):
     """A 250 Hz boxcar log does not resolve the rotor lines: the printed commands carry the
-    radar autofocus, and compensate without it says what would estimate that vibration."""
+    radar autofocus, and compensate with the autofocus off says what would estimate that
+    vibration."""
     import shlex
 
     assert main(["flight", str(tmp_path / "fl"), "--frames", "1", "--imu", "ideal",
@@ -273,7 +274,8 @@ def test_flight_with_a_low_rate_log_prints_the_autofocus(tmp_path, capsys):
         assert c[c.index("--autofocus") + 1] == "displacement"
     given = commands[-1][1:]
     i = given.index("--autofocus")
-    assert main(given[:i] + given[i + 2:] + ["--az-deg", "15:25:1", "--no-progress"]) == 0
+    assert main(given[:i] + given[i + 2:] + ["--az-deg", "15:25:1", "--no-progress",
+                                             "--autofocus", "off"]) == 0
     err = capsys.readouterr().err
     assert "imu rate:" in err and "note: --autofocus displacement" in err
 
