@@ -68,14 +68,16 @@ The warnings are the chains' and the integration's assumption warnings
 (:mod:`compensation.guards`), in the output and in
 :attr:`CompensateResult.warnings`.
 
-Autofocus (``autofocus``, ``--autofocus [phase|stationary|displacement]``): after
+Autofocus (``autofocus``, ``--autofocus [auto|off|phase|stationary|displacement]``): after
 the IMU-driven chain, the residual per-chirp phase common to the stationary
 scatterers (vibration the IMU log cannot see) is estimated from each frame's
 beams and removed (:func:`compensation.autofocus.autofocus_beams`; TDM: stamped
 at each chirp's mean slot time); ``displacement``: the residual displacement
 vector, every beam corrected at its own direction
 (:func:`compensation.autofocus_displacement.autofocus_displacement`); its report
-(rms phase, band, sigma, cells) is :attr:`CompensateResult.autofocus`.
+(rms phase, band, sigma, cells) is :attr:`CompensateResult.autofocus`. ``auto``
+(the command's default, ``--autofocus off`` to skip) applies ``displacement`` where
+the chain warns that it leaves motion in the data (:data:`AUTOFOCUS_CAUSES`).
 
 Errors name the parameter by its ``raysim compensate`` option (``--frames``,
 ``--range-m`` ...): parameter ``x_y`` is option ``--x-y``.
@@ -522,7 +524,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                          f"'displacement' or 'auto'")
     if autofocus == "auto" and not spec.compensated:
         autofocus = False
-    if autofocus and autofocus != "auto" and not spec.compensated:
+    if autofocus and not spec.compensated:
         raise ValueError(f"--autofocus: follows the IMU-driven chain; the chain {spec.key!r} "
                          f"compensates nothing")
     if velocity not in VELOCITY_CHOICES:
