@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
+import json
 import os
 import re
 import shutil
@@ -100,8 +101,8 @@ def _is_array(folder: Path) -> bool:
         return True
     meta = folder / "zarr.json"
     try:
-        return meta.is_file() and '"array"' in meta.read_text(errors="replace")
-    except OSError:
+        return meta.is_file() and json.loads(meta.read_text()).get("node_type") == "array"
+    except (OSError, ValueError, AttributeError):
         return False
 
 
