@@ -142,3 +142,19 @@ def test_targets_two_range_cells_apart_are_measured_each_in_its_own(tmp_path):
                                "--el-deg", "0:0:1", "--no-progress")) == 0
     m = measure_targets(out, flight)                              # [target, frame, 3]
     assert np.all(m[..., 0] <= LIMITS["beam_angle_error_deg"]), m[..., 0]
+
+
+def test_a_store_of_another_flight_is_refused_a_copied_folder_passes(scored, tmp_path, capsys):
+    """A store compensated from another capture scored against this flight's truth would
+    measure the wrong targets; a copy of the flight's folder is the same flight."""
+    _, folder, store = scored
+    other = tmp_path / "other"
+    shutil.copytree(folder, other, ignore=shutil.ignore_patterns("*.zarr"))
+    assert main(["score", str(other), str(store)]) == 0             # same bytes: scored
+    capture = other / "adc_data.bin"
+    data = bytearray(capture.read_bytes())
+    data[-1] ^= 1                                                # another capture
+    capture.write_bytes(bytes(data))
+    capsys.readouterr()
+    assert main(["score", str(other), str(store)]) == 2
+    assert "compensated from the capture" in capsys.readouterr().err

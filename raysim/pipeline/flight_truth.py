@@ -122,6 +122,23 @@ def read_truth(folder: str | Path):
         raise ValueError(f"{str(path)!r} does not hold a flight's truth ({exc})") from None
 
 
+def _check_same_capture(ds, flight) -> None:
+    """A ValueError where the store was compensated from another capture than the flight's
+    (both files present and their bytes differ); a copied or moved folder passes."""
+    import filecmp
+
+    try:
+        source = Path(json.loads(ds.attrs.get("source", "{}")).get("capture", ""))
+    except (ValueError, AttributeError, TypeError):
+        return
+    ours = Path(flight.capture)
+    if not source.name or not source.is_file() or not ours.is_file():
+        return
+    if source.resolve() != ours.resolve() and not filecmp.cmp(source, ours, shallow=False):
+        raise ValueError(f"the store was compensated from the capture {str(source)!r}, not "
+                         f"this flight's {str(ours)!r}; expected a store of this flight")
+
+
 def score_flight(folder: str | Path, store, first: int | None = None) -> dict:
     """Score a compensated store of a flight against the flight's truth and :data:`LIMITS`.
 
@@ -150,6 +167,7 @@ def score_flight(folder: str | Path, store, first: int | None = None) -> dict:
 
     flight = read_truth(folder)
     ds = store if hasattr(store, "data_vars") else open_store(store)
+    _check_same_capture(ds, flight)
     if first is None:
         first = int(ds["frame"].values[0]) if "frame" in ds.coords else 0
     if not 0 <= first < len(flight.frame_starts):
