@@ -115,6 +115,13 @@ def foreign_files(store: str | os.PathLike) -> list[Path]:
     """
     root = Path(store)
     foreign = []
+    arrays: dict = {}          # folder -> whether it is an array, each read once
+
+    def is_array(folder: Path) -> bool:
+        if folder not in arrays:
+            arrays[folder] = _is_array(folder)
+        return arrays[folder]
+
     for dirpath, dirnames, filenames in os.walk(root):
         here = Path(dirpath)
         foreign += [here / d for d in dirnames if (here / d).is_symlink()]
@@ -127,7 +134,7 @@ def foreign_files(store: str | os.PathLike) -> list[Path]:
                 continue
             rel = f.relative_to(root).parts
             # the nearest folder above the file that is an array: the rest is its chunk key
-            ok = any(_is_array(root.joinpath(*rel[:k]))
+            ok = any(is_array(root.joinpath(*rel[:k]))
                      and all(_CHUNK_PART.match(x) for x in rel[k:])
                      for k in range(len(rel) - 1, 0, -1))
             if not ok:
