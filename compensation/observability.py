@@ -37,7 +37,9 @@ MIN_DIRECTIONS = 3
 SAME_DIRECTION = float(np.deg2rad(1.0))
 #: A given tilt (the flight controller's attitude, or roll and pitch from the ground
 #: plane) whose estimated spread exceeds this [deg] is warned: every beam's angle in the
-#: world carries it, and it is the angle a compensated target is held to.
+#: world carries it, and it is the angle a compensated target is held to. The spread is
+#: that of both axes together (their root sum of squares: a beam near the nadir moves by
+#: the tilt vector's length).
 TILT_WARN_DEG = 0.2
 
 
@@ -165,9 +167,10 @@ def observability_warnings(names, sigma, sig0, attitude_given: bool, directions
                    f"no better than the accelerometer bias is known: tilt_n +- {tilt[0]:.2g}, "
                    f"tilt_e +- {tilt[1]:.2g} deg (of the nominal attitude's "
                    f"{np.rad2deg(sig0[3]):.3g}); give the attitude")
-    elif np.rad2deg(np.max(sigma[3:5])) > TILT_WARN_DEG:
+    elif np.hypot(*np.rad2deg(sigma[3:5])) > TILT_WARN_DEG:
         tilt = np.rad2deg(sigma[3:5])
         out.append(f"attitude: roll and pitch known to tilt_n +- {tilt[0]:.2g}, tilt_e +- "
-                   f"{tilt[1]:.2g} deg only (over {TILT_WARN_DEG:g}; from the attitude given "
-                   f"or the ground plane): every beam's angle in the world carries it")
+                   f"{tilt[1]:.2g} deg only (together +- {np.hypot(*tilt):.2g}, over "
+                   f"{TILT_WARN_DEG:g}; from the attitude given or the ground plane): every "
+                   f"beam's angle in the world carries it")
     return tuple(out)

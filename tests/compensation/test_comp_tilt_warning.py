@@ -30,6 +30,18 @@ def test_a_loose_given_tilt_is_warned_with_its_spread():
     assert len(said) == 1 and "tilt_n +- 2," in said[0] and "carries it" in said[0]
 
 
+def test_two_axes_each_under_the_bound_but_together_over_it_are_warned():
+    """Roll and pitch from a sparse ground at +-0.18 deg each (a flight without the
+    controller's attitude, 0.38 deg of angle error measured): together +-0.25 deg."""
+    sig0 = np.ones(len(STATE_NAMES)) * 0.1
+    sig = sig0 * 0.01
+    sig[3:5] = np.deg2rad([0.18, 0.18])
+    assert 0.18 < TILT_WARN_DEG
+    said = [w for w in observability_warnings((), sig, sig0, True, DIRECTIONS)
+            if w.startswith("attitude:")]
+    assert len(said) == 1 and "together +- 0.25" in said[0]
+
+
 def test_a_tight_given_tilt_is_not():
     assert not [w for w in _warnings(0.5 * TILT_WARN_DEG, True) if w.startswith("attitude:")]
 
