@@ -371,10 +371,13 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
     if not (np.isfinite(start) and start > 0):
         raise ValueError(f"start must be a positive time [s] (the IMU starts at 0), got "
                          f"{start!r}")
+    from raysim.pipeline.flight_log import check_flight_log
     from raysim.synthesis.select import check_decimate, check_decimate_tolerance
 
     decimate = check_decimate(decimate)
-    tolerance = check_decimate_tolerance(decimate_tolerance, FLIGHT_SYNTHESIS_EPS)
+    tolerance = check_decimate_tolerance(decimate_tolerance, FLIGHT_SYNTHESIS_EPS,
+                                         "--decimate-tolerance")
+    check_flight_log(seed, time_offset, clock_drift_ppm, imu_rate, imu_fast_rate, imu_boxcar)
     folder = check_output(folder, "dir", "folder", names=FLIGHT_FILES)
     layout = resolve_board(board, tx_order=(0,), rx_enabled=(0,), start_freq_hz=77e9
                            if BOARDS.get(board) is None or BOARDS[board].band_ghz[0] > 70

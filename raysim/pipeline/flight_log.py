@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["flight_log", "place_gaps", "controller_tilt_error", "ATTITUDE_RATE",
+__all__ = ["flight_log", "check_flight_log", "place_gaps", "controller_tilt_error", "ATTITUDE_RATE",
            "CONTROLLER_TILT_SIGMA_DEG", "CONTROLLER_WANDER_DEG", "GAP_LENGTH_S"]
 
 #: Rate of the written attitude [Hz] (PX4 logs ``vehicle_attitude`` at about 200 Hz).
@@ -112,6 +112,25 @@ def controller_tilt_error(t, seed: int) -> np.ndarray:
     return np.column_stack([np.deg2rad(const + wander), np.zeros(t.size)])
 
 
+def check_flight_log(seed: int, time_offset: float, clock_drift_ppm: float, rate: float,
+                     fast_rate: float, boxcar: bool) -> None:
+    """Check the log's settings before anything is rendered; a ValueError names each by the
+    ``raysim flight`` option that sets it."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"--seed: got {seed!r}, expected a non-negative integer")
+    for option, value in (("--time-offset", time_offset),
+                          ("--clock-drift-ppm", clock_drift_ppm)):
+        if not np.isfinite(value):
+            raise ValueError(f"{option}: got {value!r}, expected a finite number")
+    if not (np.isfinite(rate) and rate > 0):
+        raise ValueError(f"--imu-rate: got {rate!r}, expected a positive rate [Hz]")
+    if boxcar:
+        m = fast_rate / rate if np.isfinite(fast_rate) else np.nan
+        if not (np.isfinite(m) and m >= 1 and abs(m - round(m)) < 1e-6):
+            raise ValueError(f"--imu-fast-rate: got {fast_rate!r} Hz, expected a whole "
+                             f"multiple of --imu-rate {rate:g} Hz")
+
+
 def flight_log(trajectory, imu: str, *, rate: float, times, seed: int, time_offset: float,
                clock_drift_ppm: float = 0.0, boxcar: bool = False, fast_rate: float = 2000.0,
                gaps: int = 0, gaps_in_capture: bool = False, attitude: bool = True,
@@ -157,16 +176,12 @@ def flight_log(trajectory, imu: str, *, rate: float, times, seed: int, time_offs
     from raysim.platform.imu import Imu
     from raysim.platform.imu_output import boxcar_output, drop_gaps
 
-    if not (np.isfinite(rate) and rate > 0):
-        raise ValueError(f"--imu-rate: got {rate!r}, expected a positive rate [Hz]")
+    check_flight_log(seed, time_offset, clock_drift_ppm, rate, fast_rate, boxcar)
     clock = Imu("ideal", rate=rate, time_offset=time_offset, clock_drift_ppm=clock_drift_ppm)
     # an IMU clock behind the radar's starts the log 1 us after its own zero, so that
     # rounding to whole microseconds never gives a negative stamp
     boot = 0.0 if float(clock.to_imu_time(0.0)) >= 0 else float(clock.to_true_time(0.0)) + 1e-6
     if boxcar:
-        if not (np.isfinite(fast_rate) and fast_rate >= rate):
-            raise ValueError(f"--imu-fast-rate: got {fast_rate!r}, expected a rate >= "
-                             f"--imu-rate {rate:g} Hz")
         fast = imu_record(trajectory, imu, rate=fast_rate, times=times, seed=seed,
                           time_offset=time_offset, clock_drift_ppm=clock_drift_ppm, start=boot)
         samples = boxcar_output(fast, rate)

@@ -109,17 +109,16 @@ def check_decimate(decimate) -> str | int:
     raise ValueError(f"decimate must be 'auto', 'off' or an integer >= 1, got {decimate!r}")
 
 
-def check_decimate_tolerance(tolerance, eps: float) -> float:
+def check_decimate_tolerance(tolerance, eps: float, name: str = "decimate_tolerance") -> float:
     """The interpolation tolerance: ``tolerance``, or ``DECIMATION_EPS_SHARE * eps`` if None.
 
-    Raises ValueError unless it is a number in ``(0, 0.1]`` (relative error).
+    Raises ValueError naming ``name`` unless it is a number in ``(0, 0.1]`` (relative error).
     """
     if tolerance is None:
         return DECIMATION_EPS_SHARE * float(eps)
     if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating)) \
             or not 0 < float(tolerance) <= 0.1:
-        raise ValueError(f"decimate_tolerance must be a relative error in (0, 0.1], "
-                         f"got {tolerance!r}")
+        raise ValueError(f"{name} must be a relative error in (0, 0.1], got {tolerance!r}")
     return float(tolerance)
 
 
