@@ -376,7 +376,7 @@ def write_flight(folder: str | Path, *, trajectory=None, imu: str = "consumer_me
 
     decimate = check_decimate(decimate)
     tolerance = check_decimate_tolerance(decimate_tolerance, FLIGHT_SYNTHESIS_EPS,
-                                         "--decimate-tolerance")
+                                         "decimate_tolerance (--decimate-tolerance)")
     check_flight_log(seed, time_offset, clock_drift_ppm, imu_rate, imu_fast_rate, imu_boxcar)
     folder = check_output(folder, "dir", "folder", names=FLIGHT_FILES)
     layout = resolve_board(board, tx_order=(0,), rx_enabled=(0,), start_freq_hz=77e9
