@@ -242,6 +242,26 @@ def test_dataflash_file_is_read_with_pymavlink(tmp_path):
         read_imu_log(tmp_path / "i0.bin", instance=0)
 
 
+def test_dataflash_reading_closes_the_log(tmp_path, monkeypatch):
+    """pymavlink's reader holds the file and a memory map until closed: both readers close
+    it (an open map keeps the file locked on Windows and warns at exit elsewhere)."""
+    pytest.importorskip("pymavlink", reason="optional extra raysim[ardupilot] not installed")
+    from pymavlink import DFReader
+
+    from raysim.io.flight_logs.attitude import read_attitude_log
+
+    path = write_dataflash_imu(tmp_path / "c.bin", _motion())
+    opened, closed = [], []
+    init, close = DFReader.DFReader_binary.__init__, DFReader.DFReader_binary.close
+    monkeypatch.setattr(DFReader.DFReader_binary, "__init__",
+                        lambda self, *a, **k: (opened.append(self), init(self, *a, **k))[1])
+    monkeypatch.setattr(DFReader.DFReader_binary, "close",
+                        lambda self: (closed.append(self), close(self))[1])
+    read_imu_log(path)
+    read_attitude_log(path)
+    assert len(opened) == 2 and closed == opened
+
+
 def test_dataflash_without_pymavlink_names_the_extra(tmp_path, monkeypatch):
     path = write_dataflash_imu(tmp_path / "x.bin", _motion())
     monkeypatch.setitem(sys.modules, "pymavlink", None)   # import fails as if not installed

@@ -132,12 +132,15 @@ def _dataflash(path: Path) -> AttitudeLog | None:
 
     log = _dfreader().DFReader_binary(str(path))
     rows: dict = {"ATT": [], "AHRS2": []}
-    while True:
-        msg = log.recv_match(type=list(rows))
-        if msg is None:
-            break
-        fields = msg.get_fieldnames()
-        rows[msg.get_type()].append((_stamp(msg, fields), msg.Yaw, msg.Pitch, msg.Roll))
+    try:
+        while True:
+            msg = log.recv_match(type=list(rows))
+            if msg is None:
+                break
+            fields = msg.get_fieldnames()
+            rows[msg.get_type()].append((_stamp(msg, fields), msg.Yaw, msg.Pitch, msg.Roll))
+    finally:
+        log.close()
     for name, r in rows.items():
         if len(r) >= 2:
             a = np.asarray(r, dtype=float)

@@ -121,6 +121,13 @@ def _pair(t_g, g, t_a, a, what: str) -> tuple:
 def _scan(path: Path) -> tuple[dict, str]:
     """Rows of every IMU source of the log, and the time field of ``IMU`` messages."""
     log = _dfreader().DFReader_binary(str(path))
+    try:
+        return _scan_messages(log)
+    finally:
+        log.close()                  # its file and memory map, not left to the collector
+
+
+def _scan_messages(log) -> tuple[dict, str]:
     imu = defaultdict(list)
     raw = {"GYR": defaultdict(list), "ACC": defaultdict(list)}
     heads, data = {}, defaultdict(list)
