@@ -246,3 +246,34 @@ def test_check_is_not_fooled_by_float32_grid_rounding():
                           double_grid=True)
     l2, row = dm.check_errors(got, exact)
     assert l2 <= DECIMATION_EPS_SHARE * EPS and row <= DECIMATION_EPS_SHARE * EPS
+
+
+def test_command_line_states_its_own_warnings_in_one_line(monkeypatch, capsys):
+    """Warnings of raysim and compensation (their classes, or a plain one raised in their
+    code) reach the user as one line each, ``raysim COMMAND: warning: TEXT``: no file,
+    line or source of the call; another library's warning keeps its form."""
+    import argparse
+
+    import raysim.cli as cli
+    from compensation.guards import CompensationWarning
+    from raysim.radar import pattern
+
+    def job(_args):
+        warnings.warn("clock: a test\n  of two lines", CompensationWarning, stacklevel=1)
+        warnings.warn_explicit("plain, from raysim", UserWarning, pattern.__file__, 1)
+        warnings.warn("from elsewhere", UserWarning, stacklevel=1)
+        return 0
+
+    def parser():
+        p = argparse.ArgumentParser(prog="raysim")
+        p.add_subparsers(dest="command").add_parser("flight").set_defaults(func=job)
+        return p
+
+    monkeypatch.setattr(cli, "build_parser", parser)
+    with warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        assert cli.main(["flight"]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "raysim flight: warning: clock: a test of two lines",
+        "raysim flight: warning: plain, from raysim"]
+    assert [str(w.message) for w in shown] == ["from elsewhere"]

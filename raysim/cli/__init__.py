@@ -20,6 +20,7 @@ import signal
 import sys
 import threading
 import warnings
+from pathlib import Path
 
 from raysim import __version__
 from raysim.cli.options import Parser
@@ -88,6 +89,9 @@ PIPE_CLOSED = 141
 #: Warnings the command line states as one line of its own (class names): they report a
 #: choice the program made, not a fault of the user's input or of the code.
 NOTE_WARNINGS = ("DecimationRefused",)
+#: Packages whose warnings the command line states as one line each: they speak to the
+#: user about the run, so the file, line and source of the ``warn`` call are noise there.
+OWN_PACKAGES = ("raysim", "compensation")
 
 
 def note_line(command: str, message) -> str:
@@ -96,18 +100,43 @@ def note_line(command: str, message) -> str:
     return f"raysim {command}: note: {text}"
 
 
+def warning_line(command: str, message) -> str:
+    """The one line that states a warning of :data:`OWN_PACKAGES`."""
+    text = " ".join(str(message).split())
+    return f"raysim {command}: warning: {text}"
+
+
+def _own(category, filename) -> bool:
+    """A warning class of ours, or a plain one raised from our code."""
+    if category.__module__.split(".")[0] in OWN_PACKAGES:
+        return True
+    where = Path(str(filename)).resolve()
+    return issubclass(category, UserWarning) and any(
+        where.is_relative_to(d) for d in _package_dirs())
+
+
+def _package_dirs() -> tuple:
+    return tuple(Path(importlib.import_module(n).__file__).resolve().parent
+                 for n in OWN_PACKAGES)
+
+
 @contextlib.contextmanager
 def _notes_as_lines(command: str):
-    """While the block runs, :data:`NOTE_WARNINGS` go to stderr as one line each, through
-    ``tqdm.write`` so that a progress bar is redrawn below them; other warnings as before."""
+    """While the block runs, :data:`NOTE_WARNINGS` and the other warnings of
+    :data:`OWN_PACKAGES` go to stderr as one line each, through ``tqdm.write`` so that a
+    progress bar is redrawn below them; other libraries' warnings as before."""
     shown = warnings.showwarning
 
     def show(message, category, filename, lineno, file=None, line=None):
-        if category.__name__ not in NOTE_WARNINGS:
+        if category.__name__ in NOTE_WARNINGS:
+            text = note_line(command, message)
+        elif _own(category, filename):
+            text = warning_line(command, message)
+        else:
             return shown(message, category, filename, lineno, file, line)
         from tqdm import tqdm
 
-        tqdm.write(note_line(command, message), file=sys.stderr)
+        tqdm.write(text, file=sys.stderr)
 
     warnings.showwarning = show
     try:

@@ -28,6 +28,7 @@ self-calibration's estimates and the output written.
 from __future__ import annotations
 
 import sys
+import warnings
 
 import numpy as np
 
@@ -280,21 +281,11 @@ def _calibration_text(report: dict) -> str:
     return "\n".join(lines)
 
 
-def run(args) -> int:
-    """Execute ``raysim compensate``; returns the exit code."""
+def _compensate(args, spec, attitude):
+    """The pipeline's ``compensate`` with the command's options."""
     from raysim.pipeline.compensate import compensate
 
-    spec = _chain(args.chain)
-    if args.imu is not None and args.imu_positional is not None:
-        raise ValueError(f"give the IMU log once: --imu {args.imu!r} and the positional "
-                         f"{args.imu_positional!r} were both given")
-    if spec.name == "paper" and args.direction_deg is None:
-        raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target direction)")
-    if args.ground_doppler and args.velocity != "radar":
-        raise ValueError(f"--ground-doppler measures the velocity: needs --velocity radar, got "
-                         f"--velocity {args.velocity}")
-    attitude = None if args.initial_attitude_deg is None else args.initial_attitude_deg.strip()
-    result = compensate(
+    return compensate(
         args.cube, args.imu if args.imu is not None else args.imu_positional, out=args.out,
         chain=spec, frames=args.frames, frame=args.frame, radar_config=args.radar_config,
         layout=args.layout, capture_t0=args.capture_t0, drop_incomplete=args.drop_incomplete,
@@ -316,6 +307,29 @@ def run(args) -> int:
         mounting_deg=args.mounting_deg, progress=not args.no_progress,
         autofocus=False if args.autofocus == "off" else args.autofocus,
         ground_doppler=args.ground_doppler)
+
+
+def run(args) -> int:
+    """Execute ``raysim compensate``; returns the exit code."""
+    spec = _chain(args.chain)
+    if args.imu is not None and args.imu_positional is not None:
+        raise ValueError(f"give the IMU log once: --imu {args.imu!r} and the positional "
+                         f"{args.imu_positional!r} were both given")
+    if spec.name == "paper" and args.direction_deg is None:
+        raise ValueError(f"--chain {spec.key} needs --direction-deg AZ,EL (target direction)")
+    if args.ground_doppler and args.velocity != "radar":
+        raise ValueError(f"--ground-doppler measures the velocity: needs --velocity radar, got "
+                         f"--velocity {args.velocity}")
+    attitude = None if args.initial_attitude_deg is None else args.initial_attitude_deg.strip()
+    result = None
+    try:   # the result's warnings are printed below with their chain: each said once
+        with warnings.catch_warnings(record=True) as caught:
+            result = _compensate(args, spec, attitude)
+    finally:
+        said = () if result is None else result.warnings
+        for w in caught:
+            if not any(str(w.message) in text for text in said):
+                warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     for note in result.notes:
         print(f"note: {note}", file=sys.stderr)
     if result.imu_source is not None:
