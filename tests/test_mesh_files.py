@@ -146,3 +146,37 @@ def test_a_z_up_cad_mesh_faces_the_radar_where_its_nose_points(tmp_path, capsys)
     assert abs(got["z"] - peak) < CLOSED_FORM_DB and abs(got["y"] - peak) < CLOSED_FORM_DB
     assert main(["rcs", "plate:0.1", "--up", "z", "--az-deg", "0", "--el-deg", "0"]) == 2
     assert "--up applies to a mesh file" in capsys.readouterr().err
+
+
+def test_a_file_without_a_unit_is_said_to_be_read_as_metres_with_its_size(tmp_path):
+    """STL, OBJ, PLY and OFF state no unit: the scene says it read metres and how large
+    the mesh then is, so a 40 mm part read as 40 m shows at once."""
+    path = tmp_path / "part.stl"
+    path.write_bytes(_plate(1000.0).export(file_type="stl"))      # drawn in mm, 40 units
+    out = convert_meshes([UserMesh(file=path, material="metal")], tmp_path / "scene")
+    said = [n for n in out.notes if "declares no unit" in n]
+    assert len(said) == 1 and "read as metres, 40 x 40 x 0 m across" in said[0], out.notes
+    mm = convert_meshes([UserMesh(file=path, material="metal", scale=0.001)], tmp_path / "mm")
+    assert not any("declares no unit" in n for n in mm.notes)
+
+
+def test_a_missing_texture_is_not_logged_as_a_crash(tmp_path, caplog):
+    """A radar uses no texture: trimesh's traceback for a missing image file is dropped
+    while a file is read; its other log records still reach the user."""
+    import logging
+
+    from raysim.io.mesh_files import _appearance_logs_dropped
+
+    text = _plate(1.0).export(file_type="ply", encoding="ascii").decode()
+    head, body = text.split("end_header\n", 1)
+    path = tmp_path / "textured.ply"
+    path.write_text(head.replace("element vertex", "comment TextureFile missing.jpg\n"
+                                 "element vertex", 1) + "end_header\n" + body)
+    with caplog.at_level(logging.DEBUG):
+        assert len(read_mesh_file(path).faces) == 2
+        assert not [r for r in caplog.records if r.levelno >= logging.WARNING]
+        with _appearance_logs_dropped():
+            logging.getLogger("trimesh.util").warning("unable to load image!")
+            logging.getLogger("trimesh.util").warning("face indices out of range")
+    assert [r.getMessage() for r in caplog.records
+            if r.levelno >= logging.WARNING] == ["face indices out of range"]

@@ -9,6 +9,8 @@ check (a bounding box over 500 units is taken for millimetres).
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import math
 from pathlib import Path
 
@@ -40,7 +42,8 @@ def read_mesh_file(path, **options):
         raise ValueError(f"mesh file {str(path)!r}: expected one of "
                          f"{', '.join(MESH_SUFFIXES)}, got suffix {path.suffix!r}")
     try:
-        return trimesh.load(str(path), **options)
+        with _appearance_logs_dropped():
+            return trimesh.load(str(path), **options)
     except ImportError as exc:  # a soft dependency of trimesh's reader for this format
         raise ValueError(f"mesh file {str(path)!r}: its reader needs a package that is not "
                          f"installed ({exc}); or export the mesh as PLY, OBJ, STL or GLB"
@@ -48,6 +51,33 @@ def read_mesh_file(path, **options):
     except Exception as exc:  # trimesh raises many types for a malformed file
         raise ValueError(f"mesh file {str(path)!r} is not a readable mesh: "
                          f"{type(exc).__name__}: {exc}") from None
+
+
+#: Words of trimesh's log records about a file's look (textures, images, colours), which
+#: a radar does not use: a missing texture is logged with a traceback that reads as a crash.
+APPEARANCE_WORDS = ("image", "texture", "shininess", "color", "colour")
+
+
+class _Appearance(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = record.getMessage().lower()
+        return not any(w in text for w in APPEARANCE_WORDS)
+
+
+@contextlib.contextmanager
+def _appearance_logs_dropped():
+    """While trimesh reads, its log records about appearance are dropped; others pass."""
+    # a logger's filter sees only the records logged to it: every trimesh module's logger
+    logs = [logging.getLogger(n) for n in list(logging.root.manager.loggerDict)
+            if n == "trimesh" or n.startswith("trimesh.")]
+    drop = _Appearance()
+    for log in logs:
+        log.addFilter(drop)
+    try:
+        yield
+    finally:
+        for log in logs:
+            log.removeFilter(drop)
 
 
 def declared_scale(loaded, path) -> tuple[float | None, str | None]:

@@ -303,6 +303,13 @@ def convert_meshes(meshes, out_dir: str | os.PathLike, *, frequency: float = 77e
             notes.append(f"{spec.file.name}: declares its unit; read at {scaled.scale:g} m "
                          f"per unit")
             spec = scaled
+        elif scaled.scale is None:    # the assumption said, with the size it gives
+            lo = np.min([m.bounds[0] for _, m in parts], axis=0)
+            hi = np.max([m.bounds[1] for _, m in parts], axis=0)
+            size = " x ".join(f"{d:.3g}" for d in hi - lo)
+            notes.append(f"{spec.file.name}: declares no unit; read as metres, {size} m "
+                         f"across (set scale, metres per file unit, if it is drawn in "
+                         f"millimetres, inches, ...)")
         names = {p for p, _ in parts}
         unknown = set(spec.materials) - names
         if unknown:
