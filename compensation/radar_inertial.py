@@ -75,6 +75,7 @@ from .observability import (
     observability_warnings,
 )
 from .strapdown import STANDARD_GRAVITY, PlatformMotion
+from .velocity_signal import smoothed_motions
 
 __all__ = ["DETECTED_GROUP", "GROUND_GROUP", "STATE_NAMES", "DopplerMeasurements", "ImuErrors",
            "ObservabilityWarning", "RadarInertialResult", "estimate_radar_inertial",
@@ -257,7 +258,8 @@ class RadarInertialResult:
         Unconstrained directions of the state, as combinations of the
         components in units of their prior spreads (largest terms).
     motions : tuple of PlatformMotion
-        Per-frame motion integrated with the corrected inputs.
+        Per-frame motion integrated with the corrected inputs, plus the IMU noise's
+        velocity error estimated from the Doppler residuals (``noise_velocity_mps``).
     initial_velocity : ndarray, shape ``[3]``
         Body velocity in W at the reference time [m/s].
     initial_attitude : ndarray, shape ``[3, 3]``
@@ -286,6 +288,9 @@ class RadarInertialResult:
     block_velocity_sigma : tuple of float
         Spread of the velocity error common to each block's rows along W's
         axes [m/s] (:mod:`compensation.block_velocity`), at the last pass.
+    noise_velocity_mps : float
+        Largest correction of ``motions`` by the IMU noise's velocity error the Doppler
+        residuals show [m/s] (:mod:`compensation.velocity_signal`; 0 unsmoothed).
     """
 
     state: np.ndarray
@@ -305,6 +310,7 @@ class RadarInertialResult:
     misfit_sigma: float = 0.0
     group_scale: tuple[float, ...] = ()
     block_velocity_sigma: tuple[float, ...] = ()
+    noise_velocity_mps: float = 0.0
 
     @property
     def sigma(self) -> np.ndarray:
@@ -326,7 +332,7 @@ class RadarInertialResult:
                 "measurements": self.measurements, "rejected": self.rejected,
                 "misfit_sigma": self.misfit_sigma, "group_scale": list(self.group_scale),
                 "block_velocity_sigma_mps": list(self.block_velocity_sigma),
-                "warnings": list(self.warnings)}
+                "noise_velocity_mps": self.noise_velocity_mps, "warnings": list(self.warnings)}
 
 
 def _ls_slope(t: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -400,7 +406,8 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
                             attitude_given: bool = True,
                             reference_time: float | None = None,
                             iterations: int = ITERATIONS, gravity: float = STANDARD_GRAVITY,
-                            warn: bool = True, **options) -> RadarInertialResult:
+                            warn: bool = True, smooth: bool = True,
+                            **options) -> RadarInertialResult:
     """Velocity, attitude, IMU biases and clock of a record from its IMU log and radar.
 
     Parameters
@@ -456,6 +463,9 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     warn : bool
         Issue the warnings as :class:`ObservabilityWarning` (they are in the
         result either way).
+    smooth : bool
+        Add the IMU noise's velocity error the Doppler residuals show to the motions
+        (:mod:`compensation.velocity_signal`).
     **options
         For :func:`compensation.integrate_imu` (``lever_arm``,
         ``initial_position`` ...); not ``velocity`` nor ``initial_velocity``.
@@ -632,8 +642,14 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
         if np.any(scale > 1.0) or np.any(newly):
             held, r, x = held | newly, r + h[:, newly] @ x[newly], np.where(newly, 0.0, x)
             x_new, cov = solve_batch(h, r, cw, p0, x, held)
-        x = x_new
+        res, x = r - h @ (x_new - x), x_new               # the residuals at the solution
         motions = integrate(x)
+    smoothed = 0.0
+    if kept and smooth:      # the IMU noise's velocity error the Doppler residuals show
+        motions, smoothed = smoothed_motions(
+            motions, t_ref, meas.window.mean(axis=1), h[:kept, VELOCITY],
+            np.linalg.solve(cw, res)[:kept],
+            _velocity_change(meas, motions, motions[0].velocity[0]), imu_errors, g)
     cov = _tilt_leak(cov, r0, g)
     names, dirs = observability(p0, fisher)
     notes = observability_warnings(names, np.sqrt(np.diag(cov)), sig0, attitude_given,
@@ -645,7 +661,7 @@ def estimate_radar_inertial(imu_time, gyro, accel, frame_times: Sequence,
     return RadarInertialResult(x, cov, p0, names, dirs, tuple(motions), v0 + x[VELOCITY], att,
                                tau0 + float(x[CLOCK_OFFSET]), bg0 + x[GYRO_BIAS], chi2, kept,
                                rejected, notes, misfit, tuple(float(v) for v in scale),
-                               tuple(float(v) for v in np.sqrt(block_q)))
+                               tuple(float(v) for v in np.sqrt(block_q)), smoothed)
 
 
 def _tilt_leak(cov: np.ndarray, r0: np.ndarray, g: float) -> np.ndarray:

@@ -268,6 +268,9 @@ def _calibration_text(report: dict) -> str:
             lines.append("  unconstrained by the radar: none")
         lines.append(f"  Doppler measurements used: {ri['measurements']} "
                      f"({ri['rejected']} rejected), chi2 {ri['chi2']:.2f}")
+        if ri.get("noise_velocity_mps"):
+            lines.append(f"  IMU noise's velocity error taken from the Doppler residuals: up "
+                         f"to {1e3 * ri['noise_velocity_mps']:.2f} mm/s")
     lines.append(f"  scatterers used: {report['scatterers']}")
     lines.extend(f"  {note}" for note in report.get("notes", ()))
     gp = report.get("ground_plane")

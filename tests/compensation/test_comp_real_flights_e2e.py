@@ -125,6 +125,10 @@ def test_clock_offset_and_scatterers_of_every_flight(tmp, case):
     sigma = json.loads(ds.attrs["self_calibration"])["time_offset_sigma_s"]
     assert abs(ds.attrs["time_offset_s"] - TIME_OFFSET_S) <= CLOCK_SIGMAS * sigma
     assert json.loads(ds.attrs["self_calibration"])["scatterers"] == len(DEFAULT5_TARGETS)
+    # the IMU noise's velocity error the Doppler residuals show, removed and said
+    ri = json.loads(ds.attrs["self_calibration"])["radar_inertial"]
+    assert ri["noise_velocity_mps"] > 0
+    assert "IMU noise's velocity error taken from the Doppler residuals" in out
 
 
 #: Stated spreads within which the ground plane's roll and pitch must lie of the truth.
