@@ -652,8 +652,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                         p, beams.wavelength, az, el), spans=angle_apertures(p, beams.wavelength))
                 opts = dict(slot_times=inp.slot_times[k], doppler=doppler,
                             sidelobe_db=array["sidelobe_db"])
+                moving = {} if mot is None else {   # the grid's miss of each cell, its Doppler
+                    "radar_velocity": np.mean(mot.radar_velocity, axis=0)}
                 beams, est = (autofocus_displacement.autofocus_displacement(
-                    beams, **opts, array_spans=array["spans"])
+                    beams, **opts, array_spans=array["spans"], **moving)
                     if autofocus == "displacement" else autofocus_beams(beams, **opts))
                 focus.append(est.report())
             found.extend(w for w in beams.warnings if w not in found)
