@@ -111,10 +111,6 @@ def test_command_line_states_a_refusal_in_one_line(frame, monkeypatch, capsys):
     """A command whose render refuses decimation says so on one line of stderr (the
     command, what was refused and why, that every chirp was rendered exactly), not as a
     Python warning with its file, line and source; other warnings keep their form."""
-    import argparse
-
-    import raysim.cli as cli
-
     cfg, arr, traj, paths = frame
     short = (cfg.with_(num_chirps=16), arr, traj, paths)
     monkeypatch.setattr(select, "_SAID", set())
@@ -124,19 +120,29 @@ def test_command_line_states_a_refusal_in_one_line(frame, monkeypatch, capsys):
         warnings.warn("something else", UserWarning, stacklevel=1)
         return 0
 
+    err, shown = _run_command(monkeypatch, capsys, "render", job)
+    assert err == ["raysim render: note: slow-time decimation refused, every chirp rendered "
+                   "exactly: too few chirps (16 < 64)"]
+    assert shown == ["something else"]                                # the usual way
+
+
+def _run_command(monkeypatch, capsys, name: str, job) -> tuple[list, list]:
+    """``raysim NAME`` running ``job``: (stderr lines, messages of the warnings shown the
+    usual way)."""
+    import argparse
+
+    import raysim.cli as cli
+
     def parser():
         p = argparse.ArgumentParser(prog="raysim")
-        p.add_subparsers(dest="command").add_parser("render").set_defaults(func=job)
+        p.add_subparsers(dest="command").add_parser(name).set_defaults(func=job)
         return p
 
     monkeypatch.setattr(cli, "build_parser", parser)
     with warnings.catch_warnings(record=True) as shown:
         warnings.simplefilter("always")
-        assert cli.main(["render"]) == 0
-    assert capsys.readouterr().err.splitlines() == [
-        "raysim render: note: slow-time decimation refused, every chirp rendered exactly: "
-        "too few chirps (16 < 64)"]
-    assert [str(w.message) for w in shown] == ["something else"]      # the usual way
+        assert cli.main([name]) == 0
+    return capsys.readouterr().err.splitlines(), [str(w.message) for w in shown]
 
 
 def test_bad_decimation_input(frame):
@@ -252,9 +258,6 @@ def test_command_line_states_its_own_warnings_in_one_line(monkeypatch, capsys):
     """Warnings of raysim and compensation (their classes, or a plain one raised in their
     code) reach the user as one line each, ``raysim COMMAND: warning: TEXT``: no file,
     line or source of the call; another library's warning keeps its form."""
-    import argparse
-
-    import raysim.cli as cli
     from compensation.guards import CompensationWarning
     from raysim.radar import pattern
 
@@ -264,16 +267,7 @@ def test_command_line_states_its_own_warnings_in_one_line(monkeypatch, capsys):
         warnings.warn("from elsewhere", UserWarning, stacklevel=1)
         return 0
 
-    def parser():
-        p = argparse.ArgumentParser(prog="raysim")
-        p.add_subparsers(dest="command").add_parser("flight").set_defaults(func=job)
-        return p
-
-    monkeypatch.setattr(cli, "build_parser", parser)
-    with warnings.catch_warnings(record=True) as shown:
-        warnings.simplefilter("always")
-        assert cli.main(["flight"]) == 0
-    assert capsys.readouterr().err.splitlines() == [
-        "raysim flight: warning: clock: a test of two lines",
-        "raysim flight: warning: plain, from raysim"]
-    assert [str(w.message) for w in shown] == ["from elsewhere"]
+    err, shown = _run_command(monkeypatch, capsys, "flight", job)
+    assert err == ["raysim flight: warning: clock: a test of two lines",
+                   "raysim flight: warning: plain, from raysim"]
+    assert shown == ["from elsewhere"]
