@@ -75,7 +75,7 @@ from .observability import (
     observability_warnings,
 )
 from .strapdown import STANDARD_GRAVITY, PlatformMotion
-from .velocity_signal import smoothed_motions
+from .velocity_signal import imu_noise_terms, smoothed_motions
 
 __all__ = ["DETECTED_GROUP", "GROUND_GROUP", "STATE_NAMES", "DopplerMeasurements", "ImuErrors",
            "ObservabilityWarning", "RadarInertialResult", "estimate_radar_inertial",
@@ -355,15 +355,10 @@ def _noise_cov(meas: DopplerMeasurements, imu: ImuErrors, t_ref: float, gravity:
     covariance of the velocity estimate ``[3, 3]`` (the true velocity's spread
     about it).
     """
-    s = np.abs(meas.window.mean(axis=1) - t_ref)
-    lo, hi = np.minimum.outer(s, s), np.maximum.outer(s, s)
-    q_acc = imu.accel_noise_density ** 2 * lo
-    q_tilt = (gravity * imu.gyro_noise_density) ** 2 * lo ** 2 * (3 * hi - lo) / 6
-    q_scale = imu.accel_scale_sigma ** 2 * (dv @ dv.T)
+    s = meas.window.mean(axis=1) - t_ref
+    q_iso, q_tilt = imu_noise_terms(s, s, dv, dv, imu, gravity)     # the IMU's, as smoothed
     u = meas.directions
-    uu = u @ u.T
-    uh = u[:, :2] @ u[:, :2].T
-    out = np.diag(meas.sigma ** 2) + (q_acc + q_scale) * uu + q_tilt * uh
+    out = np.diag(meas.sigma ** 2) + q_iso * (u @ u.T) + q_tilt * (u[:, :2] @ u[:, :2].T)
     if meas.direction_cov is not None:
         same = np.all(np.abs(u[:, None, :] - u[None, :, :]) < 1e-12, axis=2)
         d = meas.direction_cov

@@ -38,21 +38,24 @@ import numpy as np
 
 from ._checks import finite_array
 
-__all__ = ["SIGNAL_STEP_S", "imu_noise_kernel", "smoothed_motions", "velocity_signal",
-           "with_velocity_signal"]
+__all__ = ["SIGNAL_STEP_S", "imu_noise_kernel", "imu_noise_terms", "smoothed_motions",
+           "velocity_signal", "with_velocity_signal"]
 
 #: Step of the grid on which the signal is integrated into a position [s] (the kernel
 #: is smooth: a random walk's mean given measurements is piecewise linear between them).
 SIGNAL_STEP_S = 1e-3
 
 
-def imu_noise_kernel(s_a, s_b, dv_a, dv_b, imu, gravity: float) -> np.ndarray:
-    """``K(t_a, t_b)`` of the module docstring, ``[a, b, 3, 3]`` [m^2/s^2].
+def imu_noise_terms(s_a, s_b, dv_a, dv_b, imu, gravity: float) -> tuple[np.ndarray, np.ndarray]:
+    """The two scalar parts of ``K(t_a, t_b)`` (module docstring), ``[a, b]`` each
+    [m^2/s^2]: the isotropic one (accelerometer walk and scale errors) and the one on
+    the horizontal axes (gyro walk through gravity). The radar-inertial estimate's
+    measurement covariance uses the same (:func:`compensation.radar_inertial`).
 
     Parameters
     ----------
     s_a, s_b : array_like, shapes ``[a]``, ``[b]``
-        Times since the reference [s], non-negative.
+        Times since the reference [s].
     dv_a, dv_b : array_like, shapes ``[a, 3]``, ``[b, 3]``
         Velocity change since the reference at those times [m/s].
     imu : compensation.ImuErrors
@@ -65,6 +68,13 @@ def imu_noise_kernel(s_a, s_b, dv_a, dv_b, imu, gravity: float) -> np.ndarray:
     iso = (imu.accel_noise_density ** 2 * lo
            + imu.accel_scale_sigma ** 2 * (np.asarray(dv_a) @ np.asarray(dv_b).T))
     tilt = (gravity * imu.gyro_noise_density) ** 2 * lo ** 2 * (3 * hi - lo) / 6
+    return iso, tilt
+
+
+def imu_noise_kernel(s_a, s_b, dv_a, dv_b, imu, gravity: float) -> np.ndarray:
+    """``K(t_a, t_b)`` of the module docstring, ``[a, b, 3, 3]`` [m^2/s^2] (arguments as
+    :func:`imu_noise_terms`)."""
+    iso, tilt = imu_noise_terms(s_a, s_b, dv_a, dv_b, imu, gravity)
     out = iso[..., None, None] * np.eye(3)
     out[..., :2, :2] += tilt[..., None, None] * np.eye(2)
     return out
