@@ -29,6 +29,7 @@ from functools import partial
 import numpy as np
 
 from ._checks import finite_array, positive
+from .cell_directions import parabola_vertex
 from .clock_averaged import SEARCH_FRAMES_AVERAGED, clock_misfit, coarse_offset, fit_clock
 from .clock_offset import ClockOffset, phase_tracks
 from .ego_velocity import EgoVelocity, fit_ego_velocity, slow_time_velocity
@@ -40,6 +41,7 @@ from .gyro_bias import GyroBias, fit_gyro_bias
 from .ingestion import check_frame_times, folds_vibration
 from .mounting import mounting_rotation, radar_frame_motion, world_directions
 from .multiframe import apply_velocity, integrate_record
+from .point_tracks import clock_scatterers
 from .radar_inertial import (
     MAX_MEASUREMENTS,
     DopplerMeasurements,
@@ -337,16 +339,12 @@ def _gate(rc, s: Scatterer, options) -> tuple[np.ndarray, dict]:
 
 def _beams(rcs, positions, motions, scatterers, options) -> np.ndarray:
     """Slow-time beam of every scatterer in every frame, ``[frame, scatterer, chirp]``."""
-    out = []
-    for rc, m in zip(rcs, motions, strict=True):
-        rows = []
-        for s in scatterers:
-            x, opts = _gate(rc, s, options)
-            b = rigid_body_projection(x, positions, m, azimuth=[s.azimuth],
-                                      elevation=[s.elevation], **opts)
-            rows.append(b.data[:, 0, 0, 0].astype(complex))
-        out.append(rows)
-    return np.asarray(out)
+    def beam(rc, m, s):
+        x, opts = _gate(rc, s, options)
+        return rigid_body_projection(x, positions, m, azimuth=[s.azimuth],
+                                     elevation=[s.elevation], **opts).data[:, 0, 0, 0]
+    return np.asarray([[beam(rc, m, s) for s in scatterers]
+                       for rc, m in zip(rcs, motions, strict=True)], dtype=complex)
 
 
 def _loop_motion(m: PlatformMotion, n_chirps: int) -> PlatformMotion:
@@ -370,9 +368,10 @@ def _peak(rc, positions, m: PlatformMotion, s: Scatterer, options, half: float, 
     i, e = np.unravel_index(int(np.argmax(p)), p.shape)
     if (has_az and not 0 < i < az.size - 1) or (has_el and not 0 < e < el.size - 1):
         return None
-    db = 10 * np.log10(p)
-    fa = _vertex(db[i - 1, e], db[i, e], db[i + 1, e]) if has_az else 0.0
-    fe = _vertex(db[i, e - 1], db[i, e], db[i, e + 1]) if has_el else 0.0
+    db = 10 * np.log10(p)        # the peak's vertex, within half a step of the grid's best
+    fa = parabola_vertex(db[i - 1, e], db[i, e], db[i + 1, e]) if has_az else 0.0
+    fe = parabola_vertex(db[i, e - 1], db[i, e], db[i, e + 1]) if has_el else 0.0
+    fa, fe = np.clip([fa, fe], -0.5, 0.5)
     return float(az[i] + fa * step), float(el[e] + fe * step)
 
 
@@ -402,12 +401,6 @@ def _with_prior(estimate: np.ndarray, cov: np.ndarray, prior_sigma: float
     info = np.linalg.inv(cov)
     post = np.linalg.inv(info + np.eye(3) / max(prior_sigma, 1e-6) ** 2)
     return post @ (info @ estimate), 0.5 * (post + post.T)
-
-
-def _vertex(lo: float, mid: float, hi: float) -> float:
-    """Vertex offset in steps of the parabola through three samples."""
-    den = lo - 2.0 * mid + hi
-    return 0.0 if den >= 0 else float(np.clip(0.5 * (lo - hi) / den, -0.5, 0.5))
 
 
 #: Options of :func:`compensation.integrate_imu` the radar-inertial integration keeps (the
@@ -625,23 +618,29 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         dv = np.stack([f.velocity for f in fits])
         return apply_velocity(ms, mids, dv, t_ref), fits
 
+    timed, mixed = scatterers, 0.0     # the clock's scatterers: one point a cell (point_tracks)
+    if "time_offset" in estimate:
+        timed, mixed = clock_scatterers(phase_tracks(_beams(
+            rcs, positions, seen(motions), scatterers, proj), seen(motions), scatterers, lam),
+            scatterers, offset_search)
     clock_fit = partial(fit_clock, drift=drift, imu_time=imu_time, interval=imu_interval,
-                        aliased=(al := folds_vibration(imu_time, gyro, imu_interval)))
+                        aliased=(al := folds_vibration(imu_time, gyro, imu_interval)),
+                        ambiguity=mixed)
     if "time_offset" in estimate and offset_search > 0:
         grid = tau + np.arange(-offset_search, offset_search + OFFSET_SEARCH_STEP / 2,
                                OFFSET_SEARCH_STEP)
         few = slice(0, SEARCH_FRAMES_AVERAGED if imu_interval > 0 or al else SEARCH_FRAMES)
         def misfit(cand):
             ms = integrate_record(imu_time, gyro, accel, frames[few], time_offset=cand, **options)
-            y = _beams(rcs[few], positions, ms := seen(ms), scatterers, proj)
-            return clock_misfit(phase_tracks(y, ms, scatterers, lam), imu_time, cand,
+            y = _beams(rcs[few], positions, ms := seen(ms), timed, proj)
+            return clock_misfit(phase_tracks(y, ms, timed, lam), imu_time, cand,
                                 imu_interval, al)
         tau, clock_fit = coarse_offset(grid, [misfit(c) for c in grid], clock_fit)   # warned
         motions = integrate()
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):
         if "time_offset" in estimate:
-            y = _beams(rcs, positions, seen(motions), scatterers, proj)
-            clock = clock_fit(phase_tracks(y, seen(motions), scatterers, lam), time_offset=tau)
+            y = _beams(rcs, positions, seen(motions), timed, proj)
+            clock = clock_fit(phase_tracks(y, seen(motions), timed, lam), time_offset=tau)
             tau += clock.offset
             motions = integrate()
         if "gyro_bias" in estimate and len(frames) >= 2 and any(has := _apertures(positions, lam)):
@@ -677,10 +676,10 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
         if clock is not None:
             # the fits above saw the per-frame velocities' motion, its acceleration error bends
             # the phase tracks like an offset: fit again, estimate again where it moves
-            y = _beams(rcs, positions, ms := seen(ri.motions), scatterers, proj)
+            y = _beams(rcs, positions, ms := seen(ri.motions), timed, proj)
             t0 = frames[0][0] + ri.time_offset   # the log placed with the estimate's drift
             t_imu = t0 + (np.asarray(imu_time, dtype=float) - t0) / (1.0 + float(ri.state[13]))
-            refit = clock_fit(phase_tracks(y, ms, scatterers, lam), time_offset=ri.time_offset,
+            refit = clock_fit(phase_tracks(y, ms, timed, lam), time_offset=ri.time_offset,
                               imu_time=t_imu)
             if abs(refit.offset) > refit.offset_sigma:
                 clock, ri = refit, radar_inertial(ri.time_offset + refit.offset, refit.offset_sigma)

@@ -23,10 +23,10 @@ import numpy as np
 
 from .geometry import direction
 
-__all__ = ["beam_offset_doppler", "refined_directions"]
+__all__ = ["beam_offset_doppler", "parabola_vertex", "refined_directions"]
 
 
-def _vertex(lo: np.ndarray, mid: np.ndarray, hi: np.ndarray) -> np.ndarray:
+def parabola_vertex(lo: np.ndarray, mid: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Offset [steps] of the vertex of the parabola through three equally spaced samples
     from the middle one (0 where the three do not bend down)."""
     den = lo - 2 * mid + hi
@@ -40,7 +40,7 @@ def _refine(db_line: np.ndarray, idx: np.ndarray, grid: np.ndarray) -> np.ndarra
     so a peak beyond the last beam is reached), within a step of the beam."""
     mid = np.clip(idx, 1, grid.size - 2)
     rows = np.arange(idx.size)
-    f = _vertex(db_line[rows, mid - 1], db_line[rows, mid], db_line[rows, mid + 1])
+    f = parabola_vertex(db_line[rows, mid - 1], db_line[rows, mid], db_line[rows, mid + 1])
     step = np.where(f >= 0, grid[mid + 1] - grid[mid], grid[mid] - grid[mid - 1])
     pitch = np.abs(np.diff(grid)).max()
     return np.clip(grid[mid] + f * step, grid[idx] - pitch, grid[idx] + pitch)

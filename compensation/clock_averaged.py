@@ -465,4 +465,6 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
                   f"leaves the offset ambiguous; the first is kept and its spread "
                   f"states {1e3 * gap:.2f} ms; give the offset from a time sync "
                   f"(--time-offset, docs/recordings.md)", CompensationWarning, stacklevel=2)
-    return float(grid[best]), partial(fit, ambiguity=gap)
+    # a spread the fit states already (mixed cells, compensation.point_tracks) is kept
+    given = fit.keywords.get("ambiguity", 0.0) if isinstance(fit, partial) else 0.0
+    return float(grid[best]), partial(fit, ambiguity=max(gap, given))
