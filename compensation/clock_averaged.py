@@ -417,8 +417,9 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
         Offsets tried, increasing [s].
     misfits : sequence of Misfit, length ``offset``
         Cost of each (:func:`clock_misfit`). Per-chirp misfits are passed over
-        where some offsets have interval misfits; those without degrees of freedom
-        are not tested for ambiguity.
+        where some offsets have interval misfits. Where the best has no degrees of
+        freedom (no frame holds three of the log's samples) no test tells the local
+        minima apart, and every other one counts as fitted about as well.
     fit : callable
         The clock fit (:func:`fit_clock` with its log).
 
@@ -441,13 +442,17 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
     cost = np.array([m.cost if not m.per_chirp or per_chirp.all() else np.inf
                      for m in misfits], dtype=float)
     best = int(np.argmin(cost))
-    if grid.size < 3 or dof[best] <= 0:
+    if grid.size < 3:
         return float(grid[best]), fit
+    # without degrees of freedom no test tells the minima apart: every one is a rival
+    untested = dof[best] <= 0
     padded = np.concatenate([[np.inf], cost, [np.inf]])
-    local = (cost <= padded[:-2]) & (cost <= padded[2:]) & (dof > 0) & np.isfinite(cost)
+    local = ((cost <= padded[:-2]) & (cost <= padded[2:]) & ((dof > 0) | untested)
+             & np.isfinite(cost))
     far = np.abs(grid - grid[best]) > AMBIGUITY_MIN_SEPARATION
     rivals = np.flatnonzero(local & far)
-    limit = np.array([fisher_f.ppf(AMBIGUITY_LEVEL, dof[r], dof[best]) for r in rivals])
+    limit = np.array([np.inf if untested else fisher_f.ppf(AMBIGUITY_LEVEL, dof[r], dof[best])
+                      for r in rivals])
     rivals, limit = rivals[cost[rivals] / cost[best] < limit], limit[cost[rivals] / cost[best]
                                                                       < limit]
     if rivals.size == 0:
@@ -456,13 +461,19 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
     k = int(np.argmax(np.abs(grid[rivals] - grid[best])))
     other, ratio = int(rivals[k]), float(cost[rivals[k]] / cost[best])
     gap = abs(float(grid[other] - grid[best]))
-    cause = ("a vibration's period repeats within the search" if misfits[best].per_chirp
-             else "the log's averages")
-    warnings.warn(f"clock: the radar fits offsets {1e3 * grid[best]:+.2f} ms and "
-                  f"{1e3 * grid[other]:+.2f} ms about as well (misfit ratio {ratio:.2f}, "
-                  f"below {limit[k]:.2f}, the {AMBIGUITY_LEVEL:g} quantile of F"
-                  f"{f'; {rivals.size} such minima' if rivals.size > 1 else ''}): {cause} "
-                  f"leaves the offset ambiguous; the first is kept and its spread "
+    if untested:
+        found = ", ".join(f"{1e3 * g:+.2f}" for g in grid[np.sort(np.append(rivals, best))])
+        why = (f"the misfit has minima at {found} ms and no degrees of freedom to tell them "
+               f"apart (no frame holds three of the log's samples)")
+    else:
+        cause = ("a vibration's period repeats within the search" if misfits[best].per_chirp
+                 else "the log's averages")
+        why = (f"the radar fits offsets {1e3 * grid[best]:+.2f} ms and "
+               f"{1e3 * grid[other]:+.2f} ms about as well (misfit ratio {ratio:.2f}, "
+               f"below {limit[k]:.2f}, the {AMBIGUITY_LEVEL:g} quantile of F"
+               f"{f'; {rivals.size} such minima' if rivals.size > 1 else ''}): {cause} "
+               f"leaves the offset ambiguous")
+    warnings.warn(f"clock: {why}; the one at {1e3 * grid[best]:+.2f} ms is kept and its spread "
                   f"states {1e3 * gap:.2f} ms; give the offset from a time sync "
                   f"(--time-offset, docs/recordings.md)", CompensationWarning, stacklevel=2)
     # a spread the fit states already (mixed cells, compensation.point_tracks) is kept
