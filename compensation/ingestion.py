@@ -356,6 +356,53 @@ def frames_in_gaps(fill_time, spans, frames, step: float) -> tuple[str, ...]:
             f"compensated",)
 
 
+def gap_segments(fill_time, spans, step: float, slack: float = 0.0
+                 ) -> list[tuple[list[int], bool]]:
+    """The frames in runs the log's filled gaps do not cross, for estimating each apart.
+
+    Across a filled gap the log's motion is interpolated, not measured: an
+    estimate over the whole record fits the frames inside it to a motion the
+    platform did not make, and carries what the gap left unmeasured into every
+    frame after it. Each run is a record of its own.
+
+    Parameters
+    ----------
+    fill_time : array_like, shape ``[sample_new]``
+        Interpolated sample times [s, IMU clock] (:func:`judge_imu_window`).
+    spans : sequence of (float, float)
+        Each frame's first and last slot time on the IMU clock [s], in time order.
+    step : float
+        Median IMU interval [s]: a gap's extent beyond its first and last filled sample.
+    slack : float
+        How far the frames may lie from ``spans`` [s] (an offset still to be searched):
+        a frame that near a gap counts as in it.
+
+    Returns
+    -------
+    list of (list of int, bool)
+        Frame indices into ``spans`` of each run, in order, and whether the run lies
+        in a gap (its frames' motion interpolated); one run of every frame when no
+        gap touches them.
+    """
+    fill = np.sort(np.asarray(fill_time, dtype=float))
+    if fill.size == 0:
+        return [(list(range(len(spans))), False)]
+    cuts = np.flatnonzero(np.diff(fill) > 2 * step) + 1      # filled samples of one gap abut
+    gaps = [(g[0] - step, g[-1] + step) for g in np.split(fill, cuts)]
+    keys, near = [], step + abs(float(slack))
+    for a, b in spans:
+        inside = [i for i, (lo, hi) in enumerate(gaps) if lo <= b + near and hi >= a - near]
+        keys.append(("in", inside[0]) if inside else
+                    ("after", sum(hi < a - near for _, hi in gaps)))
+    runs: list[tuple[list[int], bool]] = []
+    for k, key in enumerate(keys):
+        if k and key == keys[k - 1]:
+            runs[-1][0].append(k)
+        else:
+            runs.append(([k], key[0] == "in"))
+    return runs
+
+
 def fill_imu_gaps(t: np.ndarray, values: np.ndarray, keep: np.ndarray,
                   fill_time: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Apply the plan of :func:`judge_imu_window` to a record.

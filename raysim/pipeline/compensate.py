@@ -102,6 +102,7 @@ from raysim.io.store_guard import remove_debris, writer_lock
 from raysim.pipeline.chains import project
 from raysim.pipeline.compensate_size import gated_range_compress, output_bytes
 from raysim.pipeline.estimate import estimate_record, ground_retilt, ground_tilt_of_record
+from raysim.pipeline.gap_segments import motions_by_segment
 from raysim.pipeline.imu_inputs import imu_table, imu_window, log_attitude
 from raysim.pipeline.self_calibration import calibrate_record
 from raysim.processing.maps import range_compress
@@ -585,7 +586,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
         window_notes: tuple = ()
         if spec.compensated:
             table, imu_source, interval = imu_table(imu, inp, source, imu_topic, imu_instance)
-            table, window_notes = imu_window(table, inp, time_offset, max_gap)
+            table, window_notes, segments = imu_window(table, inp, time_offset, max_gap)
             if window_notes:
                 from compensation.guards import CompensationWarning
 
@@ -593,14 +594,22 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                     warnings.warn(text, CompensationWarning, stacklevel=2)
             lever = (_vector(lever_arm, 3, "--lever-arm") if lever_arm is not None
                      else inp.lever_arm if inp.lever_arm is not None else np.zeros(3))
-            attitude, track = log_attitude(initial_attitude_deg, imu, inp, time_offset,
-                                            imu_topic, notes)
-            motions, calibration, offset = _motions(
-                inp, table, rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
-                time_offset=time_offset, velocity=velocity, initial_velocity=initial_velocity,
-                initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track,
-                mounting_deg=mounting_deg, ground_doppler=ground_doppler, imu_interval=interval,
-                azimuth=az, offset_search=time_offset_search)
+            def attitude_of(sub, first: bool, clock):    # a later run's: the log's at its start
+                return log_attitude(initial_attitude_deg if first else None, imu, sub,
+                                    time_offset if clock is None else clock, imu_topic,
+                                    notes if first else [])
+
+            def estimate(sub, sub_rcs, attitude, track, clock):
+                return _motions(
+                    sub, table, sub_rcs, r_axis=r_axis, gates=gates, lever_arm=lever,
+                    time_offset=time_offset if clock is None else clock, velocity=velocity,
+                    initial_velocity=initial_velocity,
+                    initial_attitude_deg=attitude, imu_grade=imu_grade, attitude_track=track,
+                    mounting_deg=mounting_deg, ground_doppler=ground_doppler,
+                    imu_interval=interval, azimuth=az, offset_search=time_offset_search)
+            # where filled gaps cross the frames, each run between them is its own record
+            motions, calibration, offset = motions_by_segment(
+                inp, segments if calibrating else [], estimate, attitude_of, rcs, notes)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         if autofocus == "auto":

@@ -48,14 +48,22 @@ def imu_table(imu, inp, source: str, topic=None, instance=None) -> tuple[np.ndar
     return table, "table", 0.0
 
 
-def imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarray, tuple]:
-    """The IMU table judged over the window used (:func:`compensation.ingestion.judge_imu_window`).
+def imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarray, tuple, list]:
+    """The IMU table judged over the window used (:func:`compensation.ingestion.judge_imu_window`),
+    its notes, and the runs of selected frames its filled gaps do not cross
+    (:func:`compensation.ingestion.gap_segments`: indices into the selection, in-gap flag).
 
     The window is every selected chirp and slot on the IMU clock (radar time plus
     the given offset; the first guess 0 of ``"auto"``, whose search stays within
     the margin), plus :data:`compensation.ingestion.WINDOW_MARGIN` on each side.
+    The frames in a gap are those :func:`compensation.ingestion.frames_in_gaps` names.
     """
-    from compensation.ingestion import fill_imu_gaps, frames_in_gaps, judge_imu_window
+    from compensation.ingestion import (
+        fill_imu_gaps,
+        frames_in_gaps,
+        gap_segments,
+        judge_imu_window,
+    )
 
     if max_gap is not None:
         given = max_gap
@@ -67,19 +75,20 @@ def imu_window(table: np.ndarray, inp, time_offset, max_gap) -> tuple[np.ndarray
             raise ValueError(f"--max-gap: got {given!r}, expected a positive number of "
                              f"seconds")
     t = table[:, 0]
+    whole = [(list(range(len(inp.frames))), False)]
     if t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-        return table, ()         # the integration names the bad stamps
+        return table, (), whole          # the integration names the bad stamps
     slots = np.asarray(inp.slot_times, dtype=float)
     shift = 0.0 if isinstance(time_offset, str) else float(time_offset)
     window = (float(slots.min()) + shift, float(slots.max()) + shift)
     keep, fill, notes = judge_imu_window(t, window, max_gap=max_gap,
                                          what=f"the {len(inp.frames)} frame(s) selected")
     if keep.size == t.size and fill.size == 0:
-        return table, notes
-    notes = (*notes, *frames_in_gaps(fill, [(s.min() + shift, s.max() + shift) for s in slots],
-                                     inp.frames, float(np.median(np.diff(t)))))
+        return table, notes, whole
+    spans, step = [(s.min() + shift, s.max() + shift) for s in slots], float(np.median(np.diff(t)))
+    notes = (*notes, *frames_in_gaps(fill, spans, inp.frames, step))
     tt, vals = fill_imu_gaps(t, table[:, 1:], keep, fill)
-    return np.column_stack([tt, vals]), notes
+    return np.column_stack([tt, vals]), notes, gap_segments(fill, spans, step)
 
 
 def log_attitude(value, imu, inp, time_offset, topic, notes: list):

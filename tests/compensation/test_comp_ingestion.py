@@ -132,3 +132,29 @@ def test_record_is_one_integration_split_per_frame():
     acc = accumulate(beams, window=None)
     np.testing.assert_allclose(acc, beams[0].coherent_power() + beams[1].coherent_power(),
                                rtol=1e-12)
+
+
+#: Six 13.2 ms frames every 50 ms from 0.5 s (IMU clock) and a 1 kHz log.
+GAP_SPANS = [(0.5 + 0.05 * k, 0.5132 + 0.05 * k) for k in range(6)]
+GAP_STEP = 1e-3
+
+
+def test_gap_segments_split_the_frames_at_each_filled_gap():
+    from compensation.ingestion import gap_segments
+
+    # a gap over frames 3 and 4: before it, in it, after it
+    over = np.arange(0.628, 0.716, GAP_STEP)
+    assert gap_segments(over, GAP_SPANS, GAP_STEP) == [([0, 1, 2], False), ([3, 4], True),
+                                                       ([5], False)]
+    # a gap between frames 0 and 1 touches neither: two runs, none in a gap
+    between = np.arange(0.521, 0.540, GAP_STEP)
+    assert gap_segments(between, GAP_SPANS, GAP_STEP) == [([0], False), ([1, 2, 3, 4, 5], False)]
+    # two gaps: each splits, frames in different gaps are different runs
+    two = np.concatenate([np.arange(0.521, 0.540, GAP_STEP), np.arange(0.655, 0.66, GAP_STEP)])
+    assert gap_segments(two, GAP_SPANS, GAP_STEP) == [([0], False), ([1, 2], False),
+                                                      ([3], True), ([4, 5], False)]
+    # none: one run of every frame; a frame within the slack of a gap counts as in it
+    assert gap_segments([], GAP_SPANS, GAP_STEP) == [(list(range(6)), False)]
+    near = np.arange(0.631, 0.6475, GAP_STEP)               # ends 1.5 ms before frame 3
+    assert gap_segments(near, GAP_SPANS, GAP_STEP)[1] == ([3, 4, 5], False)
+    assert gap_segments(near, GAP_SPANS, GAP_STEP, slack=2e-3)[1] == ([3], True)
