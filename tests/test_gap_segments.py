@@ -87,3 +87,19 @@ def test_one_run_is_the_record_itself():
     estimate, attitude_of = _runner(calls)
     motions_by_segment(_input(), [(list(range(6)), False)], estimate, attitude_of, rcs, notes)
     assert calls == [([0, 1, 2, 3, 4, 5], None)] and notes == []
+
+
+def test_a_run_that_cannot_be_estimated_alone_leaves_the_record_whole():
+    calls, rcs, notes = [], [], []
+    estimate, attitude_of = _runner(calls)
+
+    def picky(sub, sub_rcs, attitude, trk, clock):
+        if len(sub.frames) == 1:
+            raise ValueError("scatterers: none given and none detected")
+        return estimate(sub, sub_rcs, attitude, trk, clock)
+    motions, report, _ = motions_by_segment(
+        _input(), [(list(range(5)), False), ([5], False)], picky, attitude_of, rcs, notes)
+    assert [c[0] for c in calls] == [[0, 1, 2, 3, 4], [0, 1, 2, 3, 4, 5]]
+    assert len(motions) == 6 and rcs == [f"rc{k}" for k in range(6)]
+    assert "frame 5 between its gaps could not be estimated alone (scatterers: none" \
+        in notes[0] and "segments" not in report

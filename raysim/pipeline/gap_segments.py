@@ -67,13 +67,13 @@ def motions_by_segment(inp, segments, estimate, attitude_of, rcs: list, notes: l
         ``segments`` (each run's frames, clock offset and initial velocity) and every
         run's warnings; that run's offset [s].
     """
-    later = len(segments) > 1 and attitude_of(frame_subset(inp, segments[-1][0]), False,
-                                              None)[1] is not None
-    if not later:        # no attitude in the log to restart from after a gap: one record
-        if len(segments) > 1:
-            notes.append("imu gaps: the log holds no attitude to restart the estimate from "
-                         "after its gaps; the record is estimated whole, across them")
+    def whole(why: str):
+        notes.append(f"imu gaps: {why}; the record is estimated whole, across them")
         return estimate(inp, rcs, *attitude_of(inp, True, None), None)
+    if len(segments) < 2:
+        return estimate(inp, rcs, *attitude_of(inp, True, None), None)
+    if attitude_of(frame_subset(inp, segments[-1][0]), False, None)[1] is None:
+        return whole("the log holds no attitude to restart the estimate from after its gaps")
     # the largest run outside a gap first: its clock offset is the others' (one clock)
     main = max(range(len(segments)), key=lambda j: (not segments[j][1], len(segments[j][0]), -j))
     parts: dict = {}
@@ -81,7 +81,12 @@ def motions_by_segment(inp, segments, estimate, attitude_of, rcs: list, notes: l
         idx, in_gap = segments[j]
         sub, sub_rcs = frame_subset(inp, idx), []
         clock = None if j == main else parts[main][4]
-        m, report, offset = estimate(sub, sub_rcs, *attitude_of(sub, j == 0, clock), clock)
+        try:
+            m, report, offset = estimate(sub, sub_rcs, *attitude_of(sub, j == 0, clock), clock)
+        except ValueError as exc:   # a run too short for its own estimate: as before, whole
+            lo, hi = inp.frames[idx[0]], inp.frames[idx[-1]]
+            return whole(f"{f'frame {lo}' if lo == hi else f'frames {lo}-{hi}'} between its "
+                         f"gaps could not be estimated alone ({exc})")
         parts[j] = (idx, in_gap, report, m, offset, sub_rcs)
     motions = []
     for j in range(len(segments)):
