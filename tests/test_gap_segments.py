@@ -80,6 +80,8 @@ def test_without_an_attitude_in_the_log_the_record_is_estimated_whole():
         _input(), [([0, 1], False), ([2, 3, 4, 5], False)], estimate, attitude_of, rcs, notes)
     assert calls == [([0, 1, 2, 3, 4, 5], None)] and "segments" not in report
     assert "holds no attitude to restart the estimate" in notes[0]
+    assert "(--frames 0:2 and --frames 2:6 compensate the frames outside the gaps apart" \
+        in notes[0]
 
 
 def test_one_run_is_the_record_itself():

@@ -68,7 +68,10 @@ def motions_by_segment(inp, segments, estimate, attitude_of, rcs: list, notes: l
         run's warnings; that run's offset [s].
     """
     def whole(why: str):
-        notes.append(f"imu gaps: {why}; the record is estimated whole, across them")
+        apart = " and ".join(f"--frames {inp.frames[i[0]]}:{inp.frames[i[-1]] + 1}"
+                             for i, gap in segments if not gap)
+        notes.append(f"imu gaps: {why}; the record is estimated whole, across them ({apart} "
+                     f"compensate the frames outside the gaps apart, each from its own start)")
         return estimate(inp, rcs, *attitude_of(inp, True, None), None)
     if len(segments) < 2:
         return estimate(inp, rcs, *attitude_of(inp, True, None), None)
