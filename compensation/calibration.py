@@ -635,7 +635,7 @@ def self_calibrate(rcs: Sequence, frame_times: Sequence, element_positions, imu_
             y = _beams(rcs[few], positions, ms := seen(ms), timed, proj)
             return clock_misfit(phase_tracks(y, ms, timed, lam), imu_time, cand,
                                 imu_interval, al)
-        tau, clock_fit = coarse_offset(grid, [misfit(c) for c in grid], clock_fit)   # warned
+        tau, clock_fit = coarse_offset(grid, [misfit(c) for c in grid], clock_fit, mixed)
         motions = integrate()
     for _ in range(int(iterations) if {"time_offset", "gyro_bias"} & set(estimate) else 0):
         if "time_offset" in estimate:

@@ -408,7 +408,8 @@ def fit_clock(tracks, *, imu_time, time_offset: float, interval: float = 0.0,
     return replace(fit_time_shift(tracks, drift=drift), stamp_sigma=stamp)
 
 
-def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float, Callable]:
+def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable, stated: float = 0.0
+                  ) -> tuple[float, Callable]:
     """The grid offset of least misfit, and the clock fit stating an ambiguity if any.
 
     Parameters
@@ -422,6 +423,9 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
         minima apart, and every other one counts as fitted about as well.
     fit : callable
         The clock fit (:func:`fit_clock` with its log).
+    stated : float
+        Spread [s] the fit states already (its ``ambiguity``; mixed cells,
+        :mod:`compensation.point_tracks`): a rival's distance replaces it only if larger.
 
     Returns
     -------
@@ -476,6 +480,4 @@ def coarse_offset(grid, misfits: Sequence[Misfit], fit: Callable) -> tuple[float
     warnings.warn(f"clock: {why}; the one at {1e3 * grid[best]:+.2f} ms is kept and its spread "
                   f"states {1e3 * gap:.2f} ms; give the offset from a time sync "
                   f"(--time-offset, docs/recordings.md)", CompensationWarning, stacklevel=2)
-    # a spread the fit states already (mixed cells, compensation.point_tracks) is kept
-    given = fit.keywords.get("ambiguity", 0.0) if isinstance(fit, partial) else 0.0
-    return float(grid[best]), partial(fit, ambiguity=max(gap, given))
+    return float(grid[best]), partial(fit, ambiguity=max(gap, float(stated)))

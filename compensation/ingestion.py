@@ -339,16 +339,17 @@ def judge_imu_window(t: np.ndarray, window: tuple[float, float], *,
 
 
 def frames_in_gaps(fill_time, spans, frames, step: float) -> tuple[str, ...]:
-    """``("imu gaps: frame(s) ... lie in a filled gap ...",)`` for the frames whose span
-    holds an interpolated sample, else ``()``.
+    """``("imu gaps: frame(s) ... lie in a filled gap ...",)`` for the frames
+    :func:`gap_segments` places in a gap, else ``()``.
 
     ``fill_time [sample_new]`` [s, IMU clock] from :func:`judge_imu_window`; ``spans``
     each frame's first and last slot time on the IMU clock [s]; ``frames`` their
     numbers in the capture; ``step`` the median IMU interval [s], added on each side.
     """
-    fill = np.asarray(fill_time, dtype=float)
-    hit = [int(k) for k, (a, b) in zip(frames, spans, strict=True)
-           if np.any((fill >= a - step) & (fill <= b + step))]
+    if len(frames) != len(spans):
+        raise ValueError(f"frames: got {len(frames)} for {len(spans)} spans; expected one each")
+    hit = [int(frames[k]) for idx, gap in gap_segments(fill_time, spans, step) if gap
+           for k in idx]
     if not hit:
         return ()
     return (f"imu gaps: frame(s) {', '.join(map(str, hit))} lie in a filled gap: their "

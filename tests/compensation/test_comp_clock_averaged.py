@@ -289,6 +289,20 @@ def test_minima_without_degrees_of_freedom_are_all_stated():
     assert est.stamp_sigma == pytest.approx(np.hypot(plain.stamp_sigma, 20e-3))
 
 
+def test_a_spread_stated_already_is_kept_where_larger_than_the_rival():
+    """Mixed cells state the search's half-width (10 ms): a rival 5.5 ms away does not
+    narrow it; a 3 ms statement gives way to the rival's 5.5 ms."""
+    grid = np.arange(-10e-3, 10.01e-3, 0.5e-3)
+    best, rival, floor = 3e-3, -2.5e-3, 6.0
+    cost = np.minimum(floor + 1e7 * (grid - best) ** 2,
+                      RIVAL_RATIO_AMBIGUOUS * floor + 1e7 * (grid - rival) ** 2)
+    misfits = [Misfit(float(c), 15) for c in cost]
+    for stated, kept in ((10e-3, 10e-3), (3e-3, best - rival)):
+        with pytest.warns(CompensationWarning, match="ambiguous"):
+            _, fit = coarse_offset(grid, misfits, fit_clock, stated)
+        assert fit.keywords["ambiguity"] == pytest.approx(kept)
+
+
 def test_per_chirp_misfits_are_passed_over_where_interval_misfits_exist():
     """Misfits of the two kinds do not compare (rad^2 against rad^2/s^2): the offsets
     whose frames span two intervals alone are searched, those that do not are not."""
