@@ -102,7 +102,7 @@ from raysim.io.store_guard import remove_debris, writer_lock
 from raysim.pipeline.chains import project
 from raysim.pipeline.compensate_size import gated_range_compress, output_bytes
 from raysim.pipeline.estimate import estimate_record, ground_retilt, ground_tilt_of_record
-from raysim.pipeline.gap_segments import motions_by_segment
+from raysim.pipeline.gap_segments import GROUND_ROLE, motions_by_segment
 from raysim.pipeline.imu_inputs import imu_table, imu_window, log_attitude
 from raysim.pipeline.self_calibration import calibrate_record
 from raysim.processing.maps import range_compress
@@ -302,7 +302,7 @@ def _motions(inp, imu: np.ndarray, rcs: list, *, r_axis, gates, lever_arm, time_
 
         ground = ground if retilt is None else retilt.fit
         report["ground_plane"] = {**ground.report(), "role": (
-            "initial roll and pitch" if tilt_cov is not None else "check of the given attitude"
+            GROUND_ROLE if tilt_cov is not None else "check of the given attitude"
             if initial_attitude_deg is not None else "not used")}
         found = ground_check(ground) if initial_attitude_deg is not None else ground.warnings
         for text in found:
@@ -609,7 +609,7 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
                     imu_interval=interval, azimuth=az, offset_search=time_offset_search)
             # where filled gaps cross the frames, each run between them is its own record
             motions, calibration, offset = motions_by_segment(
-                inp, segments if calibrating else [], estimate, attitude_of, rcs, notes)
+                inp, segments if calibrating else [], estimate, attitude_of, table, rcs, notes)
             if mounted:          # beams in the nominal radar frame
                 motions = [mount_motion(m, mounting_deg) for m in motions]
         if autofocus == "auto":
