@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from compensation.strapdown import STANDARD_GRAVITY, PlatformMotion
 from raysim.pipeline.gap_segments import GROUND_ROLE, motions_by_segment
+
+#: The stand-in estimates each say which frames they estimated (checked where it matters).
+pytestmark = pytest.mark.filterwarnings("ignore:estimated frames")
 
 #: Chirps per frame of the stand-in motions, frame period [s] and chirp interval [s].
 CHIRPS, PERIOD, DT = 4, 0.05, 1e-3
@@ -54,6 +59,7 @@ def _motion(t, v, yaw_rate=0.0):
 def _runner(calls, track=True, yaw_rate=0.0, ground=()):
     def estimate(sub, sub_rcs, attitude, trk, clock):
         calls.append((list(sub.frames), clock))
+        warnings.warn(f"estimated frames {sub.frames}", UserWarning, stacklevel=2)
         v = np.array([0.1 * (1 + sub.frames[0]), 0.0, 0.0])
         # each run's positions start at 0 and its heading at 0: the segmenting carries
         # them on
@@ -101,9 +107,13 @@ def test_without_an_attitude_each_run_takes_the_heading_the_log_carried_to_it():
     calls, rcs, notes = [], [], []
     estimate, attitude_of = _runner(calls, track=False, yaw_rate=YAW_RATE, ground=(0, 1, 3))
     segments = [([0], False), ([1, 2], True), ([3, 4, 5], False)]
-    motions, report, _ = motions_by_segment(_input(), segments, estimate, attitude_of,
-                                            _log(YAW_RATE), rcs, notes)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        motions, report, _ = motions_by_segment(_input(), segments, estimate, attitude_of,
+                                                _log(YAW_RATE), rcs, notes)
     assert [c[0] for c in calls] == [[3, 4, 5], [0], [1, 2]]
+    assert [str(w.message) for w in said] == [f"estimated frames {f}" for f in
+                                              ([3, 4, 5], [0], [1, 2])]   # each run's, once
     t0 = motions[0].time[0]
     for k, m in enumerate(motions):   # every chirp at the heading turned since the start
         yaw = Rotation.from_matrix(m.attitude).as_euler("ZYX")[:, 0]
@@ -122,12 +132,16 @@ def test_without_an_attitude_each_run_takes_the_heading_the_log_carried_to_it():
 def test_without_an_attitude_or_the_ground_after_a_gap_the_record_is_estimated_whole():
     calls, rcs, notes = [], [], []
     estimate, attitude_of = _runner(calls, track=False, ground=(0,))
-    motions, report, _ = motions_by_segment(
-        _input(), [([0, 1], False), ([2, 3, 4, 5], False)], estimate, attitude_of, _log(),
-        rcs, notes)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        motions, report, _ = motions_by_segment(
+            _input(), [([0, 1], False), ([2, 3, 4, 5], False)], estimate, attitude_of, _log(),
+            rcs, notes)
     assert calls[-1] == ([0, 1, 2, 3, 4, 5], None) and "segments" not in report
+    # the runs given up say nothing: the one estimate over the record speaks for it
+    assert [str(w.message) for w in said] == ["estimated frames [0, 1, 2, 3, 4, 5]"]
     assert "holds no attitude and the ground gave no roll and pitch to restart from at " \
-        "frame(s) 2" in notes[0]
+        "frame 2" in notes[0]
     assert "(--frames 0:2 and --frames 2:6 compensate the frames outside the gaps apart" \
         in notes[0]
     assert len(motions) == 6 and rcs == [f"rc{k}" for k in range(6)]

@@ -19,6 +19,7 @@ largest run outside a gap is estimated first and its offset given to the others
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -130,23 +131,34 @@ def motions_by_segment(inp, segments, estimate, attitude_of, imu, rcs: list, not
     # the largest run outside a gap first: its clock offset is the others' (one clock)
     main = max(range(len(segments)), key=lambda j: (not segments[j][1], len(segments[j][0]), -j))
     parts: dict = {}
-    for j in [main, *(j for j in range(len(segments)) if j != main)]:
-        idx, in_gap = segments[j]
-        sub, sub_rcs = frame_subset(inp, idx), []
-        clock = None if j == main else parts[main][4]
-        try:
-            m, report, offset = estimate(sub, sub_rcs, *attitude_of(sub, j == 0, clock), clock)
-        except ValueError as exc:   # a run too short for its own estimate: as before, whole
+    # the runs' warnings wait: where the record falls back to one estimate, that one's
+    # speak for it, not those of the runs it replaced
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        for j in [main, *(j for j in range(len(segments)) if j != main)]:
+            idx, in_gap = segments[j]
+            sub, sub_rcs = frame_subset(inp, idx), []
+            clock = None if j == main else parts[main][4]
             lo, hi = inp.frames[idx[0]], inp.frames[idx[-1]]
-            return whole(f"{f'frame {lo}' if lo == hi else f'frames {lo}-{hi}'} between its "
-                         f"gaps could not be estimated alone ({exc})")
-        parts[j] = (idx, in_gap, report, m, offset, sub_rcs)
-    if carry:
-        level = [inp.frames[parts[j][0][0]] for j in range(1, len(segments))
-                 if parts[j][2].get("ground_plane", {}).get("role") != GROUND_ROLE]
-        if level:          # a level restart would drop the tilt the gyro carried to it
-            return whole(f"the log holds no attitude and the ground gave no roll and pitch "
-                         f"to restart from at frame(s) {', '.join(map(str, level))}")
+            try:
+                m, report, offset = estimate(sub, sub_rcs, *attitude_of(sub, j == 0, clock),
+                                             clock)
+            except ValueError as exc:   # a run too short for its own estimate: whole
+                why = (f"{f'frame {lo}' if lo == hi else f'frames {lo}-{hi}'} between its "
+                       f"gaps could not be estimated alone ({exc})")
+                break
+            if carry and j > 0 and report.get("ground_plane", {}).get("role") != GROUND_ROLE:
+                # a level restart would drop the tilt the gyro carried to it
+                why = (f"the log holds no attitude and the ground gave no roll and pitch to "
+                       f"restart from at frame {lo}")
+                break
+            parts[j] = (idx, in_gap, report, m, offset, sub_rcs)
+        else:
+            why = None
+    if why is not None:
+        return whole(why)
+    for w in said:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
     motions = []
     for j in range(len(segments)):
         ms = parts[j][3]
