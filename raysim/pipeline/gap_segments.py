@@ -162,7 +162,7 @@ def motions_by_segment(inp, segments, estimate, attitude_of, imu, rcs: list, not
     motions = []
     for j in range(len(segments)):
         ms = parts[j][3]
-        if motions and carry:   # heading: the last run's, turned on by its last rate
+        if motions and carry:   # heading: the last run's, turned on by the log's gyro
             ms = turned(ms, heading_step(motions[-1], ms[0], body_turn(
                 imu, motions[-1].time[-1], ms[0].time[0], parts[main][4])))
         if motions:        # positions from the record's start: the last run's, extrapolated
