@@ -103,6 +103,7 @@ from raysim.pipeline.chains import project
 from raysim.pipeline.compensate_size import gated_range_compress, output_bytes
 from raysim.pipeline.estimate import estimate_record, ground_retilt, ground_tilt_of_record
 from raysim.pipeline.gap_segments import GROUND_ROLE, motions_by_segment
+from raysim.pipeline.grid_miss import grid_miss_warning
 from raysim.pipeline.imu_inputs import imu_table, imu_window, log_attitude
 from raysim.pipeline.self_calibration import calibrate_record
 from raysim.processing.maps import range_compress
@@ -616,6 +617,10 @@ def compensate(source, imu=None, *, out, chain="exact", frames=None,
             autofocus = _autofocus_needed(motions, calibration, notes)
         doppler = "stationary" if autofocus in ("stationary", "displacement") else "keep"
         results, found, focus = [], list(window_notes), [] if autofocus else None
+        if motions is not None:       # what the grid leaves a scatterer between its beams
+            miss = grid_miss_warning(az, el, [np.mean(m.radar_velocity, axis=0)
+                                              for m in motions], cfg.velocity_resolution)
+            found.extend([miss] if miss else [])
         array: dict = {}
         if calibration is not None:   # what the scene leaves unconstrained (also warned)
             found.extend(w for w in calibration.get("warnings", ()) if w not in found)
