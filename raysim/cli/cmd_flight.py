@@ -200,8 +200,12 @@ def run(args) -> int:
     from raysim.pipeline.flight import board_resolves_elevation
 
     r = [t[0] for t in f.targets]
+    # the elevations the beams of the first frame see: a platform drifting 0.3 m/s is
+    # 15 cm off the hover point at a 0.5 s start, 2 deg at 4.5 m, and a scatterer a grid
+    # step off its beam keeps the drift's Doppler across it (raysim.pipeline.grid_miss)
+    seen = [f.apparent_direction(0, j)[1] for j in range(len(f.targets))]
     cells = ("--range-m", f"{min(r) - 0.5}:{max(r) + 0.5}", "--el-deg",
-             elevation_grid([t[2] for t in f.targets], board_resolves_elevation(f.board)))
+             elevation_grid(seen, board_resolves_elevation(f.board)))
     wide = max(abs(t[1]) for t in f.targets) + AZIMUTH_GRID_MARGIN_DEG
     if wide > DEFAULT_ANGLES_DEG.max():       # past compensate's default grid
         cells += ("--az-deg", f"{-math.ceil(wide):d}:{math.ceil(wide):d}:1")

@@ -226,22 +226,28 @@ def test_flight_command_prints_a_working_compensate(tmp_path, capsys):
 
 def test_flight_prints_a_beam_grid_through_every_target(tmp_path, capsys):
     """Targets at -10, 0, 5 and 10 deg elevation: the printed beam grid holds each of
-    them (a fixed -5:5:5 measured the one at 10 deg 5 deg off its beam, 0.8 deg off in
-    azimuth at 50 deg)."""
+    them where the first frame sees them, the platform off the hover point, within half
+    its step (a fixed -5:5:5 measured the one at 10 deg 5 deg off its beam, 0.8 deg off
+    in azimuth at 50 deg; a grid of the nominal elevations missed a drifting platform's
+    targets by up to 2.6 deg, 0.094 bin of the drift's Doppler)."""
     import shlex
 
     from raysim.cli.cmd_flight import elevation_grid
     from raysim.cli.options import span_grid
+    from raysim.pipeline.flight_truth import read_truth
 
     els = [10.0, -10.0, 5.0, 0.0]
     assert main(["flight", str(tmp_path / "fl"), "--frames", "1", "--imu", "ideal",
                  *(a for e in els for a in ("--target", f"8,{4 * e},{e}")),
                  "--no-progress"]) == 0
+    seen = [read_truth(tmp_path / "fl").apparent_direction(0, j)[1] for j in range(4)]
+    assert max(abs(a - e) for a, e in zip(seen, els, strict=True)) > 0.05   # moved
     for line in capsys.readouterr().out.splitlines():
         if line.strip().startswith("raysim compensate"):
             c = shlex.split(line.strip())
             grid = span_grid(c[c.index("--el-deg") + 1], "--el-deg")
-            assert all(np.min(np.abs(grid - e)) <= 1e-9 for e in els), grid
+            half = 0.5 * np.max(np.diff(grid))
+            assert all(np.min(np.abs(grid - e)) <= half + 1e-9 for e in seen), (grid, seen)
     for els, worst in (([3.7, -2.0], 0.0), ([0.0], 0.0), ([-30.0, 30.0, 0.3], 0.75)):
         grid = span_grid(elevation_grid(els), "--el-deg")
         assert grid.size <= 41                        # a beam grid a flight can afford
@@ -345,3 +351,34 @@ def test_the_autofocus_runs_by_default_where_the_chain_says_it_leaves_motion(tmp
     err = capsys.readouterr().err
     assert "applied" not in err and "note: --autofocus displacement estimates" in err
     assert "autofocus" not in open_store(tmp_path / "off.zarr").attrs
+
+
+def test_flight_prints_the_elevations_a_drifting_platform_sees(tmp_path, capsys, monkeypatch):
+    """A platform drifting 0.3 m/s east (across the array's elevation axis) is 15 cm off
+    the hover point when the capture starts: the default5 targets are seen up to 2.6 deg
+    off their nominal -5/0/+5 deg. The printed grid holds where they are seen, within
+    half its step; the nominal grid missed them (0.094 bin of the drift's Doppler and
+    0.34 deg on such a flight; 0.010 bin, 0.073 deg on the grid of the seen ones)."""
+    import shlex
+
+    import raysim.platform.motion as motion
+    from raysim.cli.options import span_grid
+    from raysim.pipeline.flight_truth import read_truth
+
+    jitter = motion.hover_jitter
+    monkeypatch.setattr(motion, "hover_jitter", lambda seed, spec=None: jitter(
+        seed, spec) + motion.constant_velocity([0.0, 0.3, 0.0]))
+    assert main(["flight", str(tmp_path / "fl"), "--frames", "1", "--imu", "ideal",
+                 "--targets", "default5", "--no-progress"]) == 0
+    flight = read_truth(tmp_path / "fl")
+    seen = np.array([flight.apparent_direction(0, j)[1] for j in range(5)])
+    nominal = np.array([t[2] for t in flight.targets])
+    assert np.abs(seen - nominal).max() > 1.0                      # the drift moved them
+    printed = [shlex.split(ln.strip()) for ln in capsys.readouterr().out.splitlines()
+               if ln.strip().startswith("raysim compensate")]
+    assert printed
+    for c in printed:
+        grid = span_grid(c[c.index("--el-deg") + 1], "--el-deg")
+        miss = np.abs(grid[None, :] - seen[:, None]).min(axis=1)
+        assert miss.max() <= 0.5 * np.max(np.diff(grid)) + 1e-9 and miss.max() <= 0.3, (
+            grid, seen)
