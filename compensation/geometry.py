@@ -28,6 +28,21 @@ def direction(az, el) -> np.ndarray:
     return np.stack([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)], axis=-1)
 
 
+def direction_tangents(az, el) -> tuple[np.ndarray, np.ndarray]:
+    """Derivatives ``du/daz`` and ``du/del`` of :func:`direction`, each ``[..., 3]`` [1/rad]:
+    ``(cos el cos az, 0, -cos el sin az)`` and ``(-sin el sin az, cos el, -sin el cos az)``.
+
+    Parameters
+    ----------
+    az, el : float or ndarray (broadcastable)
+        Azimuth and elevation [rad].
+    """
+    az, el = np.broadcast_arrays(np.asarray(az, dtype=float), np.asarray(el, dtype=float))
+    d_az = np.stack([np.cos(el) * np.cos(az), np.zeros_like(az), -np.cos(el) * np.sin(az)], -1)
+    d_el = np.stack([-np.sin(el) * np.sin(az), np.cos(el), -np.sin(el) * np.cos(az)], -1)
+    return d_az, d_el
+
+
 def az_el(u) -> tuple[np.ndarray, np.ndarray]:
     """Azimuth and elevation [rad] of unit vectors ``u`` of shape ``[..., 3]``."""
     u = np.asarray(u, dtype=float)

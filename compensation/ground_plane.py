@@ -44,7 +44,7 @@ from scipy.spatial.transform import Rotation
 
 from ._checks import finite_array
 from .calibration import DIRECTION_SIGMA, UNRESOLVED_DIRECTION_SIGMA, detect_scatterers
-from .geometry import direction
+from .geometry import direction, direction_tangents
 from .ground_dbs import DOPPLER_BELOW_POINTS, doppler_ground_directions, unseen
 from .ground_dense import (
     DENSE_ANGLE_SIGMA,
@@ -213,8 +213,7 @@ def point_covariance(ranges, azimuth, elevation, range_sigma, azimuth_sigma,
     sr, sa, se = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in
                                        (range_sigma, azimuth_sigma, elevation_sigma)), r)[:3]
     u = direction(az, el)
-    da = np.stack([np.cos(el) * np.cos(az), np.zeros_like(az), -np.cos(el) * np.sin(az)], -1)
-    de = np.stack([-np.sin(el) * np.sin(az), np.cos(el), -np.sin(el) * np.cos(az)], -1)
+    da, de = direction_tangents(az, el)
     return ((sr ** 2)[:, None, None] * np.einsum("ni,nj->nij", u, u)
             + (r ** 2 * sa ** 2)[:, None, None] * np.einsum("ni,nj->nij", da, da)
             + (r ** 2 * se ** 2)[:, None, None] * np.einsum("ni,nj->nij", de, de))

@@ -5,10 +5,23 @@ from __future__ import annotations
 
 import numpy as np
 
+from compensation.geometry import direction, direction_tangents
 from raysim.pipeline.grid_miss import GRID_MISS_BINS, grid_miss_warning
 
 #: One Doppler bin of the stand-in radar [m/s].
 BIN = 0.05
+#: Central-difference step [rad] and the agreement it allows (its error is h^2 / 6).
+H, DERIVATIVE_TOL = 1e-5, 1e-9
+
+
+def test_direction_tangents_are_the_derivatives_of_the_direction():
+    az, el = np.meshgrid(np.deg2rad(np.arange(-60.0, 61.0, 15.0)),
+                         np.deg2rad(np.arange(-40.0, 41.0, 20.0)), indexing="ij")
+    d_az, d_el = direction_tangents(az, el)
+    np.testing.assert_allclose(d_az, (direction(az + H, el) - direction(az - H, el)) / (2 * H),
+                               rtol=0, atol=DERIVATIVE_TOL)
+    np.testing.assert_allclose(d_el, (direction(az, el + H) - direction(az, el - H)) / (2 * H),
+                               rtol=0, atol=DERIVATIVE_TOL)
 
 
 def test_half_a_step_times_the_velocity_across_the_axis():

@@ -64,10 +64,9 @@ def heading_step(end, start, turn) -> float:
     ``[3, 3]`` over that interval). Across a filled gap those rates are interpolated:
     the heading is the one an estimate over the whole record would carry, and what the
     platform turned inside the gap beyond them stays unknown (warned with the gap)."""
-    from scipy.spatial.transform import Rotation
+    from compensation.geometry import euler_zyx
 
-    ahead = Rotation.from_matrix(end.attitude[-1] @ turn)
-    d = ahead.as_euler("ZYX")[0] - Rotation.from_matrix(start.attitude[0]).as_euler("ZYX")[0]
+    d = euler_zyx(end.attitude[-1] @ turn)[0] - euler_zyx(start.attitude[0])[0]
     return float(np.angle(np.exp(1j * d)))
 
 
@@ -76,9 +75,9 @@ def turned(motions, angle: float) -> list:
     attitude, position and velocity. A hover estimate that starts level is the same
     estimate at any heading (gravity and the ground are vertical), so this is its start
     at that heading."""
-    from scipy.spatial.transform import Rotation
+    from compensation.geometry import yaw_matrices
 
-    rz = Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix()
+    rz = yaw_matrices(angle)[0]
     return [replace(m, attitude=rz @ m.attitude, position=m.position @ rz.T,
                     velocity=m.velocity @ rz.T) for m in motions]
 

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from compensation.geometry import direction_tangents
+
 __all__ = ["grid_miss_warning", "GRID_MISS_BINS"]
 
 #: Largest pseudo-velocity a half-step miss may leave before a warning [Doppler bins]
@@ -37,10 +39,7 @@ def grid_miss_warning(azimuth, elevation, velocity, velocity_resolution: float) 
     """
     az, el = (np.asarray(a, dtype=float).ravel() for a in (azimuth, elevation))
     v = np.atleast_2d(np.asarray(velocity, dtype=float))
-    a, e = np.meshgrid(az, el, indexing="ij")
-    # d u / d az and d u / d el of u = (cos el sin az, sin el, cos el cos az)
-    d_az = np.stack([np.cos(e) * np.cos(a), np.zeros_like(a), -np.cos(e) * np.sin(a)], -1)
-    d_el = np.stack([-np.sin(e) * np.sin(a), np.cos(e), -np.sin(e) * np.cos(a)], -1)
+    d_az, d_el = direction_tangents(*np.meshgrid(az, el, indexing="ij"))
     said = []
     for name, grid, deriv in (("azimuth", az, d_az), ("elevation", el, d_el)):
         if grid.size < 2:
